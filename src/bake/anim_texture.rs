@@ -1,0 +1,200 @@
+//! The animation texture: every clip of a model resampled at a fixed rate into the bone matrices
+//! `G_i` of Merry et al. §2.1.1, for the vertex shader to read with `textureLoad`.
+//!
+//! Layout, by linear texel index (see [`super::texels`]):
+//! - texel 0: `(clip count, bone count, first frame texel, 0)`;
+//! - texel `1 + c`: clip `c` as `(first frame, frame count, duration in seconds, 0)`;
+//! - from the first frame texel on, frame `f` (counted over all clips) and bone `b` occupy three
+//!   texels `base + 3 (f B + b) + r`, row `r` of the 3×4 matrix `G_b`.
+//!
+//! Clip `c` of duration `d` is sampled at `n = round(d · rate) + 1` evenly spaced times covering
+//! `[0, d]` inclusive, so the last frame lands exactly on the clip's end and a looping clip wraps
+//! without a jump. The shader reads the two frames around the current time and blends them; the
+//! CPU mirror [`AnimationTexture::sample`] does the same arithmetic.
+
+use super::texels::TexelGrid;
+use crate::model::Model;
+use glam::{Affine3A, Mat3A, Vec3A, Vec4};
+use serde::{Deserialize, Serialize};
+
+/// Default resampling rate in frames per second.
+pub const DEFAULT_RATE: f32 = 30.0;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClipFrames {
+    pub name: String,
+    pub first_frame: u32,
+    pub frame_count: u32,
+    pub duration: f32,
+    pub ground_speed: f32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AnimationTexture {
+    pub bones: u32,
+    pub rate: f32,
+    pub clips: Vec<ClipFrames>,
+    pub grid: TexelGrid,
+}
+
+impl AnimationTexture {
+    /// Resamples every clip of `model` (or its rest pose, if it has none) at `rate` Hz.
+    pub fn bake(model: &Model, rate: f32) -> Self {
+        let skel = &model.skeleton;
+        let bones = skel.bone_count() as u32;
+        let mut clips = Vec::new();
+        let mut frames: Vec<Vec<Affine3A>> = Vec::new();
+        let sources: Vec<Option<&crate::model::Clip>> = if model.clips.is_empty() {
+            vec![None]
+        } else {
+            model.clips.iter().map(Some).collect()
+        };
+        for clip in sources {
+            let duration = clip.map_or(0.0, |c| c.duration.max(0.0));
+            let count = if duration > 0.0 {
+                (duration * rate).round().max(1.0) as u32 + 1
+            } else {
+                1
+            };
+            clips.push(ClipFrames {
+                name: clip.map_or_else(|| "rest".to_string(), |c| c.name.clone()),
+                first_frame: frames.len() as u32,
+                frame_count: count,
+                duration,
+                ground_speed: clip.map_or(0.0, |c| c.ground_speed),
+            });
+            for k in 0..count {
+                let t = if count > 1 {
+                    duration * k as f32 / (count - 1) as f32
+                } else {
+                    0.0
+                };
+                frames.push(crate::anim::bone_matrices(skel, clip, t));
+            }
+        }
+        let base = 1 + clips.len() as u32;
+        let mut texels = Vec::with_capacity(base as usize + frames.len() * bones as usize * 3);
+        texels.push([clips.len() as f32, bones as f32, base as f32, 0.0]);
+        for c in &clips {
+            texels.push([c.first_frame as f32, c.frame_count as f32, c.duration, 0.0]);
+        }
+        for frame in &frames {
+            for g in frame {
+                texels.extend(matrix_rows(g));
+            }
+        }
+        AnimationTexture {
+            bones,
+            rate,
+            clips,
+            grid: TexelGrid::from_linear(texels),
+        }
+    }
+
+    fn base(&self) -> usize {
+        1 + self.clips.len()
+    }
+
+    /// The stored `G_b` of global frame `frame`.
+    pub fn matrix(&self, frame: u32, bone: u32) -> Affine3A {
+        let i = self.base() + 3 * (frame as usize * self.bones as usize + bone as usize);
+        rows_to_affine([self.grid.get(i), self.grid.get(i + 1), self.grid.get(i + 2)])
+    }
+
+    /// The bone matrices the vertex shader uses at `time` seconds into `clip` (looping): the
+    /// two frames around the time, blended linearly, exactly as `shaders/skinning.wgsl` does.
+    pub fn sample(&self, clip: usize, time: f32) -> Vec<Affine3A> {
+        let c = &self.clips[clip];
+        let (f0, f1, a) = frame_pair(c.frame_count, c.duration, time);
+        (0..self.bones)
+            .map(|b| {
+                let m0 = self.matrix(c.first_frame + f0, b);
+                let m1 = self.matrix(c.first_frame + f1, b);
+                Affine3A {
+                    matrix3: Mat3A::from_cols(
+                        m0.matrix3.x_axis.lerp(m1.matrix3.x_axis, a),
+                        m0.matrix3.y_axis.lerp(m1.matrix3.y_axis, a),
+                        m0.matrix3.z_axis.lerp(m1.matrix3.z_axis, a),
+                    ),
+                    translation: m0.translation.lerp(m1.translation, a),
+                }
+            })
+            .collect()
+    }
+
+    pub fn byte_size(&self) -> usize {
+        self.grid.bytes().len()
+    }
+}
+
+/// Frame indices (within the clip) and blend factor for `time`, wrapping the clip. Mirrors the
+/// WGSL in `shaders/skinning.wgsl`.
+pub fn frame_pair(frame_count: u32, duration: f32, time: f32) -> (u32, u32, f32) {
+    if frame_count <= 1 || duration <= 0.0 {
+        return (0, 0, 0.0);
+    }
+    let u = time / duration;
+    let u = u - u.floor();
+    let f = u * (frame_count - 1) as f32;
+    let f0 = (f.floor() as u32).min(frame_count - 1);
+    let f1 = (f0 + 1).min(frame_count - 1);
+    (f0, f1, f - f0 as f32)
+}
+
+fn matrix_rows(g: &Affine3A) -> [[f32; 4]; 3] {
+    let m = g.matrix3;
+    let t = g.translation;
+    [
+        [m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x],
+        [m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y],
+        [m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z],
+    ]
+}
+
+fn rows_to_affine(r: [[f32; 4]; 3]) -> Affine3A {
+    let col = |k: usize| Vec3A::new(r[0][k], r[1][k], r[2][k]);
+    Affine3A {
+        matrix3: Mat3A::from_cols(col(0), col(1), col(2)),
+        translation: col(3),
+    }
+}
+
+/// Row `r` of `G` as a 4-vector, so that `G p = (row0·p, row1·p, row2·p)`.
+pub fn row(g: &Affine3A, r: usize) -> Vec4 {
+    Vec4::from(matrix_rows(g)[r])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_round_trip() {
+        let g = Affine3A::from_scale_rotation_translation(
+            glam::Vec3::new(1.0, 2.0, 3.0),
+            glam::Quat::from_rotation_y(0.3),
+            glam::Vec3::new(4.0, 5.0, 6.0),
+        );
+        let back = rows_to_affine(matrix_rows(&g));
+        assert!(back.abs_diff_eq(g, 1e-7));
+        let p = glam::Vec3::new(0.5, -1.0, 2.0);
+        let via_rows = glam::Vec3::new(
+            row(&g, 0).dot(p.extend(1.0)),
+            row(&g, 1).dot(p.extend(1.0)),
+            row(&g, 2).dot(p.extend(1.0)),
+        );
+        assert!((via_rows - g.transform_point3(p)).length() < 1e-5);
+    }
+
+    #[test]
+    fn frame_pair_wraps_and_blends() {
+        // 1 s clip with 31 frames: frame k at k/30 s.
+        assert_eq!(frame_pair(31, 1.0, 0.0), (0, 1, 0.0));
+        let (a, b, f) = frame_pair(31, 1.0, 0.5 + 1.0 / 60.0);
+        assert_eq!((a, b), (15, 16));
+        assert!((f - 0.5).abs() < 1e-3);
+        let (a, _, _) = frame_pair(31, 1.0, 2.25);
+        assert_eq!(a, 7);
+        assert_eq!(frame_pair(1, 0.0, 3.0), (0, 0, 0.0));
+    }
+}

@@ -1,0 +1,122 @@
+//! The vertex texture: the animation-space influences of every vertex, which the vertex shader
+//! reads by `vertex_index` (Merry et al. §6.4 keep them in textures for the same reason: the
+//! number of influences per vertex is not bounded by the vertex attribute slots).
+//!
+//! Layout, by linear texel index (see [`super::texels`]):
+//! - texel `v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
+//! - each influence two texels: `p_i` as `(x, y, z, w)`, then `(n_i.x, n_i.y, n_i.z, bone)`.
+//!
+//! Integers are stored as floats, exact up to 2^24 texels. Several meshes (the levels of detail of
+//! later stages) can share one texture: each gets a base vertex, which the draw passes as
+//! `base_vertex` so that `vertex_index` lands on its headers.
+
+use super::animation_space::AnimationSpaceMesh;
+use super::texels::TexelGrid;
+use serde::{Deserialize, Serialize};
+
+/// Influence counts are packed below this; materials above.
+pub const MATERIAL_STRIDE: u32 = 256;
+
+/// Largest index a texel can address exactly in an `f32`.
+const MAX_EXACT: usize = 1 << 24;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VertexTexture {
+    pub grid: TexelGrid,
+    /// Base vertex of each packed mesh.
+    pub base_vertices: Vec<u32>,
+    pub vertex_count: u32,
+    pub influence_count: u32,
+}
+
+impl VertexTexture {
+    /// Packs meshes one after another: all headers first, then all influences.
+    pub fn pack(meshes: &[&AnimationSpaceMesh]) -> Result<Self, String> {
+        let vertex_count: usize = meshes.iter().map(|m| m.vertex_count()).sum();
+        let influence_count: usize = meshes.iter().map(|m| m.influences.len()).sum();
+        let total = vertex_count + 2 * influence_count;
+        if total >= MAX_EXACT {
+            return Err(format!(
+                "too large for the vertex texture: {vertex_count} vertices, {influence_count} influences"
+            ));
+        }
+        let mut headers = Vec::with_capacity(vertex_count);
+        let mut body = Vec::with_capacity(2 * influence_count);
+        let mut base_vertices = Vec::with_capacity(meshes.len());
+        for mesh in meshes {
+            base_vertices.push(headers.len() as u32);
+            for v in 0..mesh.vertex_count() {
+                let infs = mesh.influences_of(v);
+                if infs.len() >= MATERIAL_STRIDE as usize {
+                    return Err(format!(
+                        "vertex {v} has {} influences (at most 255)",
+                        infs.len()
+                    ));
+                }
+                let first = vertex_count + body.len();
+                let packed = infs.len() as u32 + MATERIAL_STRIDE * mesh.materials[v] as u32;
+                let uv = mesh.uvs[v];
+                headers.push([first as f32, packed as f32, uv.x, uv.y]);
+                for inf in infs {
+                    body.push(inf.p.to_array());
+                    body.push([inf.n.x, inf.n.y, inf.n.z, inf.bone as f32]);
+                }
+            }
+        }
+        headers.extend(body);
+        Ok(VertexTexture {
+            grid: TexelGrid::from_linear(headers),
+            base_vertices,
+            vertex_count: vertex_count as u32,
+            influence_count: influence_count as u32,
+        })
+    }
+
+    pub fn byte_size(&self) -> usize {
+        self.grid.bytes().len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bake::animation_space::AsInfluence;
+    use glam::{Vec2, Vec3, Vec4};
+
+    #[test]
+    fn headers_point_at_their_influences() {
+        let mesh = AnimationSpaceMesh {
+            offsets: vec![0, 1, 3],
+            influences: vec![
+                AsInfluence {
+                    bone: 4,
+                    p: Vec4::new(1.0, 2.0, 3.0, 1.0),
+                    n: Vec3::X,
+                },
+                AsInfluence {
+                    bone: 1,
+                    p: Vec4::new(0.0, 1.0, 0.0, 0.25),
+                    n: Vec3::Y,
+                },
+                AsInfluence {
+                    bone: 2,
+                    p: Vec4::new(0.0, 3.0, 0.0, 0.75),
+                    n: Vec3::Z,
+                },
+            ],
+            uvs: vec![Vec2::new(0.1, 0.2), Vec2::new(0.3, 0.4)],
+            materials: vec![0, 3],
+            indices: vec![],
+        };
+        let t = VertexTexture::pack(&[&mesh, &mesh]).unwrap();
+        assert_eq!(t.base_vertices, vec![0, 2]);
+        let h = t.grid.get(3);
+        assert_eq!(h[1] as u32 % MATERIAL_STRIDE, 2);
+        assert_eq!(h[1] as u32 / MATERIAL_STRIDE, 3);
+        assert_eq!([h[2], h[3]], [0.3, 0.4]);
+        let first = h[0] as usize;
+        assert_eq!(t.grid.get(first), [0.0, 1.0, 0.0, 0.25]);
+        assert_eq!(t.grid.get(first + 1)[3], 1.0);
+        assert_eq!(t.grid.get(first + 3)[3], 2.0);
+    }
+}

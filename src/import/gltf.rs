@@ -1,0 +1,721 @@
+//! glTF 2.0 import of one skinned character: `.glb`, and `.gltf` with embedded or external
+//! buffers.
+//!
+//! What is read: the first skin that a mesh uses, every primitive of every mesh bound to it (merged
+//! into one [`SkinnedMesh`]), all JOINTS_n / WEIGHTS_n sets (so any number of influences per
+//! vertex), the node hierarchy above the joints, the inverse bind matrices, every animation clip
+//! (translation, rotation and scale; STEP, LINEAR and CUBICSPLINE) and the base colour of each
+//! material. Everything the renderer and the bakes rely on is validated here, so that a bad file
+//! stops with one line naming the file and the problem instead of a panic further down.
+
+use super::weld::{compute_normals, weld_map};
+use crate::error::InputError;
+use crate::model::{
+    Bounds, Channel, ChannelTarget, Clip, Influence, Interpolation, Material, Model, Node,
+    Rgba8Image, Skeleton, SkinnedMesh, Trs,
+};
+use glam::{Affine3A, Mat4, Quat, Vec2, Vec3, Vec4};
+use gltf::animation::util::ReadOutputs;
+use gltf::mesh::Mode;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Models whose rest pose is taller than this, or shorter than [`MIN_PLAUSIBLE_HEIGHT`], are in
+/// units other than metres (centimetres, say) and get scaled to [`DEFAULT_HEIGHT`].
+const MAX_PLAUSIBLE_HEIGHT: f32 = 10.0;
+const MIN_PLAUSIBLE_HEIGHT: f32 = 0.1;
+const DEFAULT_HEIGHT: f32 = 1.0;
+
+/// Loads a skinned model from a `.glb` or `.gltf` file.
+pub fn load(path: &Path) -> Result<Model, InputError> {
+    let fail = |p: String| InputError::new(path, p);
+    let meta = std::fs::metadata(path).map_err(|e| fail(io_problem(&e)))?;
+    if meta.is_dir() {
+        return Err(fail("is a directory, not a glTF file".into()));
+    }
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| fail(gltf_problem(&e)))?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "model".into());
+    build(&name, &doc, &buffers, &images).map_err(fail)
+}
+
+/// Loads a skinned model from the bytes of a self-contained `.glb` or `.gltf` (no external
+/// files), reporting problems against `label`.
+pub fn load_slice(label: &str, bytes: &[u8]) -> Result<Model, InputError> {
+    let fail = |p: String| InputError::new(label, p);
+    let (doc, buffers, images) = gltf::import_slice(bytes).map_err(|e| fail(gltf_problem(&e)))?;
+    let name = Path::new(label)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| label.to_string());
+    build(&name, &doc, &buffers, &images).map_err(fail)
+}
+
+fn io_problem(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".into(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".into(),
+        _ => format!("cannot read: {e}"),
+    }
+}
+
+fn gltf_problem(e: &gltf::Error) -> String {
+    match e {
+        gltf::Error::Io(io) => format!("cannot read a file it refers to: {}", io_problem(io)),
+        gltf::Error::Deserialize(d) => format!("not a glTF file (invalid JSON: {d})"),
+        gltf::Error::Binary(b) => format!("not a valid binary glTF (truncated or corrupt: {b})"),
+        gltf::Error::Validation(errors) => {
+            let first = errors
+                .first()
+                .map(|(path, err)| format!("{}: {err}", path))
+                .unwrap_or_default();
+            format!(
+                "invalid glTF ({} problem{}; first: {first})",
+                errors.len(),
+                if errors.len() == 1 { "" } else { "s" }
+            )
+        }
+        gltf::Error::BufferLength {
+            buffer,
+            expected,
+            actual,
+        } => format!("buffer {buffer} is truncated: expected {expected} bytes, found {actual}"),
+        gltf::Error::MissingBlob => "refers to a binary chunk that is missing".into(),
+        gltf::Error::Image(i) => format!("cannot decode an image: {i}"),
+        other => format!("cannot load: {other}"),
+    }
+}
+
+/// Per-primitive vertex data before welding.
+struct RawPrimitive {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Vec<Vec2>,
+    influences: Vec<Vec<Influence>>,
+    triangles: Vec<[u32; 3]>,
+    indexed: bool,
+}
+
+fn build(
+    name: &str,
+    doc: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    images: &[gltf::image::Data],
+) -> Result<Model, String> {
+    let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+
+    // The skin: the first one a mesh node uses.
+    if doc.skins().len() == 0 {
+        return Err("has no skin: lodlab needs a skinned (rigged) mesh".into());
+    }
+    let skin_user = doc
+        .nodes()
+        .find(|n| n.skin().is_some() && n.mesh().is_some())
+        .ok_or("has a skin but no mesh uses it")?;
+    let skin = skin_user.skin().expect("checked above");
+    let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+    if joints.is_empty() {
+        return Err(format!("skin {} has no joints", skin.index()));
+    }
+
+    // Node hierarchy: the joints and all their ancestors, parents first.
+    let node_count = doc.nodes().len();
+    let mut parent = vec![None; node_count];
+    for n in doc.nodes() {
+        for c in n.children() {
+            if parent[c.index()].is_some() {
+                return Err(format!("node {} has two parents", c.index()));
+            }
+            parent[c.index()] = Some(n.index());
+        }
+    }
+    let depth_of = |mut n: usize| -> Result<usize, String> {
+        let mut d = 0;
+        while let Some(p) = parent[n] {
+            n = p;
+            d += 1;
+            if d > node_count {
+                return Err("the node hierarchy has a cycle".to_string());
+            }
+        }
+        Ok(d)
+    };
+    let mut keep = vec![false; node_count];
+    for &j in &joints {
+        let mut n = Some(j);
+        while let Some(i) = n {
+            keep[i] = true;
+            n = parent[i];
+        }
+    }
+    let mut order: Vec<(usize, usize)> = Vec::new();
+    for (i, &k) in keep.iter().enumerate() {
+        if k {
+            order.push((depth_of(i)?, i));
+        }
+    }
+    order.sort();
+    let mut remap = vec![u32::MAX; node_count];
+    for (new, &(_, old)) in order.iter().enumerate() {
+        remap[old] = new as u32;
+    }
+    let gltf_nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut nodes = Vec::with_capacity(order.len());
+    for &(_, old) in &order {
+        let n = &gltf_nodes[old];
+        let (t, r, s) = n.transform().decomposed();
+        let rest = Trs {
+            translation: Vec3::from(t),
+            rotation: Quat::from_array(r).normalize(),
+            scale: Vec3::from(s),
+        };
+        if !(rest.translation.is_finite() && rest.rotation.is_finite() && rest.scale.is_finite()) {
+            return Err(format!("node {old} has a non-finite transform"));
+        }
+        nodes.push(Node {
+            name: n
+                .name()
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("node{old}")),
+            parent: parent[old].map(|p| remap[p]),
+            rest,
+        });
+    }
+
+    let inverse_bind: Vec<Mat4> = match skin.reader(buffer).read_inverse_bind_matrices() {
+        Some(it) => it.map(|m| Mat4::from_cols_array_2d(&m)).collect(),
+        None => vec![Mat4::IDENTITY; joints.len()],
+    };
+    if inverse_bind.len() < joints.len() {
+        return Err(format!(
+            "skin {} has {} inverse bind matrices for {} joints",
+            skin.index(),
+            inverse_bind.len(),
+            joints.len()
+        ));
+    }
+    let inverse_bind: Vec<Mat4> = inverse_bind[..joints.len()].to_vec();
+    if let Some(i) = inverse_bind
+        .iter()
+        .position(|m| !m.is_finite() || m.determinant().abs() < 1e-12)
+    {
+        return Err(format!(
+            "inverse bind matrix of joint {i} is not finite or not invertible"
+        ));
+    }
+
+    let mut skeleton = Skeleton {
+        nodes,
+        joints: joints.iter().map(|&j| remap[j]).collect(),
+        inverse_bind,
+        root_transform: Affine3A::IDENTITY,
+    };
+
+    // Meshes bound to this skin, each once, all primitives merged.
+    let mut material_slots: BTreeMap<Option<usize>, u16> = BTreeMap::new();
+    let mut materials: Vec<Material> = Vec::new();
+    let mut mesh = SkinnedMesh::default();
+    let mut needs_normals: Vec<bool> = Vec::new();
+    let mut seen_meshes = Vec::new();
+    for node in doc.nodes() {
+        let (Some(m), Some(s)) = (node.mesh(), node.skin()) else {
+            continue;
+        };
+        if s.index() != skin.index() || seen_meshes.contains(&m.index()) {
+            continue;
+        }
+        seen_meshes.push(m.index());
+        for prim in m.primitives() {
+            let label = format!("mesh {} primitive {}", m.index(), prim.index());
+            let material = prim.material();
+            let slot = match material_slots.get(&material.index()) {
+                Some(&s) => s,
+                None => {
+                    let s = u16::try_from(materials.len())
+                        .map_err(|_| "more than 65535 materials".to_string())?;
+                    materials.push(convert_material(&material, images)?);
+                    material_slots.insert(material.index(), s);
+                    s
+                }
+            };
+            let uv_set = material
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .map(|t| t.tex_coord())
+                .unwrap_or(0);
+            let raw = read_primitive(&prim, buffer, uv_set, joints.len(), &label)?;
+            append_primitive(&mut mesh, &mut needs_normals, raw, slot);
+        }
+    }
+    if mesh.triangle_count() == 0 {
+        return Err("the skinned mesh has no triangles".into());
+    }
+    if needs_normals.iter().any(|&n| n) {
+        compute_normals(&mut mesh, &needs_normals);
+    }
+
+    // Clips.
+    let mut clips = Vec::new();
+    for anim in doc.animations() {
+        if let Some(clip) = read_clip(&anim, buffer, &remap)? {
+            clips.push(clip);
+        }
+    }
+
+    // Scene units: metres, standing on the ground, centred.
+    let rest = crate::bake::animation_space::linear_blend_skinning(
+        &mesh,
+        &skeleton,
+        &crate::anim::bone_matrices(&skeleton, None, 0.0),
+    );
+    let bounds = Bounds::of(rest.iter().copied()).ok_or("the skinned mesh has no vertices")?;
+    let height = bounds.size().y.max(bounds.size().x).max(bounds.size().z);
+    if !height.is_finite() || height <= 0.0 {
+        return Err("the skinned mesh has zero size in its rest pose".into());
+    }
+    let scale = if (MIN_PLAUSIBLE_HEIGHT..=MAX_PLAUSIBLE_HEIGHT).contains(&bounds.size().y) {
+        1.0
+    } else {
+        DEFAULT_HEIGHT / height
+    };
+    let anchor = Vec3::new(bounds.center().x, bounds.min.y, bounds.center().z);
+    skeleton.root_transform =
+        Affine3A::from_translation(-anchor * scale) * Affine3A::from_scale(Vec3::splat(scale));
+    let scaled_height = bounds.size().y * scale;
+    for clip in &mut clips {
+        if clip.ground_speed < 0.0 {
+            clip.ground_speed = guess_ground_speed(&clip.name, scaled_height);
+        } else {
+            clip.ground_speed *= scale;
+        }
+    }
+
+    Ok(Model {
+        name: name.to_string(),
+        mesh,
+        skeleton,
+        clips,
+        materials,
+    })
+}
+
+/// Travel speed for clips whose file does not say: a guess from the clip's name, in body
+/// heights per second. A walk covers about 0.8 heights a second, a run about 2.5.
+fn guess_ground_speed(name: &str, height: f32) -> f32 {
+    let n = name.to_ascii_lowercase();
+    let per_height = if ["gallop", "run", "sprint", "canter"]
+        .iter()
+        .any(|k| n.contains(k))
+    {
+        2.5
+    } else if n.contains("trot") {
+        1.6
+    } else if n.contains("walk") {
+        0.8
+    } else {
+        0.0
+    };
+    per_height * height
+}
+
+fn read_primitive<'a, 's, F>(
+    prim: &'a gltf::Primitive<'a>,
+    buffer: F,
+    uv_set: u32,
+    joint_count: usize,
+    label: &str,
+) -> Result<RawPrimitive, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    if prim.morph_targets().len() > 0 {
+        return Err(format!("{label}: morph targets are not supported"));
+    }
+    let reader = prim.reader(buffer);
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or_else(|| format!("{label}: has no POSITION attribute"))?
+        .map(Vec3::from)
+        .collect();
+    let n = positions.len();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("{label}: vertex {i} has a non-finite position"));
+    }
+    let normals: Option<Vec<Vec3>> = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+    if let Some(ns) = &normals {
+        if ns.len() != n {
+            return Err(format!("{label}: NORMAL count differs from POSITION count"));
+        }
+        if let Some(i) = ns.iter().position(|v| !v.is_finite()) {
+            return Err(format!("{label}: vertex {i} has a non-finite normal"));
+        }
+    }
+    let uvs: Vec<Vec2> = match reader.read_tex_coords(uv_set) {
+        Some(it) => it.into_f32().map(Vec2::from).collect(),
+        None => vec![Vec2::ZERO; n],
+    };
+    if uvs.len() != n {
+        return Err(format!(
+            "{label}: TEXCOORD_{uv_set} count differs from POSITION count"
+        ));
+    }
+    if let Some(i) = uvs.iter().position(|v| !v.is_finite()) {
+        return Err(format!(
+            "{label}: vertex {i} has a non-finite texture coordinate"
+        ));
+    }
+
+    // Skin influences from every JOINTS_n / WEIGHTS_n pair.
+    let mut influences: Vec<Vec<Influence>> = vec![Vec::new(); n];
+    let mut set = 0;
+    loop {
+        let (j, w) = (reader.read_joints(set), reader.read_weights(set));
+        let (j, w) = match (j, w) {
+            (None, None) => break,
+            (Some(j), Some(w)) => (j, w),
+            _ => {
+                return Err(format!(
+                    "{label}: JOINTS_{set} and WEIGHTS_{set} must come together"
+                ));
+            }
+        };
+        let j: Vec<[u16; 4]> = j.into_u16().collect();
+        let w: Vec<[f32; 4]> = w.into_f32().collect();
+        if j.len() != n || w.len() != n {
+            return Err(format!(
+                "{label}: JOINTS_{set}/WEIGHTS_{set} count differs from POSITION count"
+            ));
+        }
+        for v in 0..n {
+            for k in 0..4 {
+                let (bone, weight) = (j[v][k] as u32, w[v][k]);
+                if weight.is_nan() {
+                    return Err(format!("{label}: vertex {v} has a NaN weight"));
+                }
+                if !weight.is_finite() || weight < 0.0 {
+                    return Err(format!(
+                        "{label}: vertex {v} has an invalid weight {weight}"
+                    ));
+                }
+                if weight == 0.0 {
+                    continue;
+                }
+                if bone as usize >= joint_count {
+                    return Err(format!(
+                        "{label}: vertex {v} uses joint index {bone}, but the skin has only {joint_count} joints"
+                    ));
+                }
+                match influences[v].iter_mut().find(|i| i.bone == bone) {
+                    Some(i) => i.weight += weight,
+                    None => influences[v].push(Influence { bone, weight }),
+                }
+            }
+        }
+        set += 1;
+    }
+    if set == 0 {
+        return Err(format!(
+            "{label}: has no JOINTS_0/WEIGHTS_0 skin attributes"
+        ));
+    }
+    for (v, inf) in influences.iter_mut().enumerate() {
+        let total: f32 = inf.iter().map(|i| i.weight).sum();
+        if total <= 0.0 {
+            return Err(format!("{label}: vertex {v} has all-zero skin weights"));
+        }
+        for i in inf.iter_mut() {
+            i.weight /= total;
+        }
+        inf.sort_by_key(|i| i.bone);
+    }
+
+    let indices: Option<Vec<u32>> = reader.read_indices().map(|i| i.into_u32().collect());
+    let indexed = indices.is_some();
+    let index_list: Vec<u32> = indices.unwrap_or_else(|| (0..n as u32).collect());
+    if let Some(&bad) = index_list.iter().find(|&&i| i as usize >= n) {
+        return Err(format!(
+            "{label}: index {bad} is out of range ({n} vertices)"
+        ));
+    }
+    let triangles: Vec<[u32; 3]> = match prim.mode() {
+        Mode::Triangles => index_list
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
+        Mode::TriangleStrip => (0..index_list.len().saturating_sub(2))
+            .map(|i| {
+                let (a, b, c) = (index_list[i], index_list[i + 1], index_list[i + 2]);
+                if i % 2 == 0 { [a, b, c] } else { [b, a, c] }
+            })
+            .collect(),
+        Mode::TriangleFan => (1..index_list.len().saturating_sub(1))
+            .map(|i| [index_list[0], index_list[i], index_list[i + 1]])
+            .collect(),
+        other => {
+            return Err(format!(
+                "{label}: primitive mode {other:?} is not supported (triangles only)"
+            ));
+        }
+    };
+    Ok(RawPrimitive {
+        positions,
+        normals,
+        uvs,
+        influences,
+        triangles,
+        indexed,
+    })
+}
+
+/// Merges unindexed vertices that share position, normal, UV and influences (see `weld`).
+fn weld(raw: RawPrimitive) -> RawPrimitive {
+    let rep = weld_map(&raw.positions, |a, b| {
+        raw.uvs[a] == raw.uvs[b]
+            && raw.influences[a] == raw.influences[b]
+            && raw
+                .normals
+                .as_ref()
+                .is_none_or(|n| n[a].normalize_or_zero().dot(n[b].normalize_or_zero()) > 0.9999)
+    });
+    let mut new_index = vec![u32::MAX; rep.len()];
+    let mut kept = Vec::new();
+    for (v, &r) in rep.iter().enumerate() {
+        if r as usize == v {
+            new_index[v] = kept.len() as u32;
+            kept.push(v);
+        }
+    }
+    let pick = |v: u32| new_index[rep[v as usize] as usize];
+    RawPrimitive {
+        positions: kept.iter().map(|&v| raw.positions[v]).collect(),
+        normals: raw
+            .normals
+            .as_ref()
+            .map(|n| kept.iter().map(|&v| n[v]).collect()),
+        uvs: kept.iter().map(|&v| raw.uvs[v]).collect(),
+        influences: kept.iter().map(|&v| raw.influences[v].clone()).collect(),
+        triangles: raw.triangles.iter().map(|t| t.map(pick)).collect(),
+        indexed: true,
+    }
+}
+
+fn append_primitive(
+    mesh: &mut SkinnedMesh,
+    needs_normals: &mut Vec<bool>,
+    raw: RawPrimitive,
+    material: u16,
+) {
+    let raw = if raw.indexed { raw } else { weld(raw) };
+    let base = mesh.positions.len() as u32;
+    let has_normals = raw.normals.is_some();
+    if mesh.influence_offsets.is_empty() {
+        mesh.influence_offsets.push(0);
+    }
+    for v in 0..raw.positions.len() {
+        mesh.positions.push(raw.positions[v]);
+        mesh.normals.push(
+            raw.normals
+                .as_ref()
+                .map(|n| n[v].normalize_or(Vec3::Y))
+                .unwrap_or(Vec3::Y),
+        );
+        mesh.uvs.push(raw.uvs[v]);
+        mesh.materials.push(material);
+        mesh.influences.extend_from_slice(&raw.influences[v]);
+        mesh.influence_offsets.push(mesh.influences.len() as u32);
+        needs_normals.push(!has_normals);
+    }
+    for t in raw.triangles {
+        // Triangles that welding (or the file) made degenerate draw nothing.
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            continue;
+        }
+        mesh.indices.extend(t.iter().map(|&i| i + base));
+    }
+}
+
+fn convert_material(
+    material: &gltf::Material,
+    images: &[gltf::image::Data],
+) -> Result<Material, String> {
+    let pbr = material.pbr_metallic_roughness();
+    let texture = match pbr.base_color_texture() {
+        Some(info) => {
+            let index = info.texture().source().index();
+            let data = images
+                .get(index)
+                .ok_or_else(|| format!("material refers to missing image {index}"))?;
+            Some(to_rgba8(data)?)
+        }
+        None => None,
+    };
+    let base_color = pbr.base_color_factor();
+    if base_color.iter().any(|c| !c.is_finite()) {
+        return Err("a material has a non-finite base colour".into());
+    }
+    Ok(Material {
+        name: material
+            .name()
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("material{}", material.index().unwrap_or(0))),
+        base_color,
+        texture,
+    })
+}
+
+/// Converts any glTF image format to 8-bit RGBA.
+fn to_rgba8(data: &gltf::image::Data) -> Result<Rgba8Image, String> {
+    use gltf::image::Format;
+    let px = (data.width * data.height) as usize;
+    let src = &data.pixels;
+    let u16_at = |i: usize| (u16::from_le_bytes([src[2 * i], src[2 * i + 1]]) >> 8) as u8;
+    let f32_at = |i: usize| {
+        let v = f32::from_le_bytes([src[4 * i], src[4 * i + 1], src[4 * i + 2], src[4 * i + 3]]);
+        (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+    };
+    let (channels, get): (usize, Box<dyn Fn(usize) -> u8>) = match data.format {
+        Format::R8 => (1, Box::new(|i| src[i])),
+        Format::R8G8 => (2, Box::new(|i| src[i])),
+        Format::R8G8B8 => (3, Box::new(|i| src[i])),
+        Format::R8G8B8A8 => (4, Box::new(|i| src[i])),
+        Format::R16 => (1, Box::new(u16_at)),
+        Format::R16G16 => (2, Box::new(u16_at)),
+        Format::R16G16B16 => (3, Box::new(u16_at)),
+        Format::R16G16B16A16 => (4, Box::new(u16_at)),
+        Format::R32G32B32FLOAT => (3, Box::new(f32_at)),
+        Format::R32G32B32A32FLOAT => (4, Box::new(f32_at)),
+    };
+    let bytes_per_channel = match data.format {
+        Format::R16 | Format::R16G16 | Format::R16G16B16 | Format::R16G16B16A16 => 2,
+        Format::R32G32B32FLOAT | Format::R32G32B32A32FLOAT => 4,
+        _ => 1,
+    };
+    if src.len() < px * channels * bytes_per_channel || px == 0 {
+        return Err("a texture image is truncated or empty".into());
+    }
+    let mut pixels = Vec::with_capacity(px * 4);
+    for p in 0..px {
+        let c = |k: usize| get(p * channels + k);
+        let rgba = match channels {
+            1 => [c(0), c(0), c(0), 255],
+            2 => [c(0), c(0), c(0), c(1)],
+            3 => [c(0), c(1), c(2), 255],
+            _ => [c(0), c(1), c(2), c(3)],
+        };
+        pixels.extend_from_slice(&rgba);
+    }
+    Ok(Rgba8Image {
+        width: data.width,
+        height: data.height,
+        pixels,
+    })
+}
+
+fn read_clip<'a, 's, F>(
+    anim: &'a gltf::Animation<'a>,
+    buffer: F,
+    remap: &[u32],
+) -> Result<Option<Clip>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let name = anim
+        .name()
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("clip{}", anim.index()));
+    let mut channels = Vec::new();
+    for ch in anim.channels() {
+        let node = ch.target().node().index();
+        if remap[node] == u32::MAX {
+            continue; // animates something that is not part of this skeleton
+        }
+        let target = match ch.target().property() {
+            gltf::animation::Property::Translation => ChannelTarget::Translation,
+            gltf::animation::Property::Rotation => ChannelTarget::Rotation,
+            gltf::animation::Property::Scale => ChannelTarget::Scale,
+            gltf::animation::Property::MorphTargetWeights => continue,
+        };
+        let interpolation = match ch.sampler().interpolation() {
+            gltf::animation::Interpolation::Step => Interpolation::Step,
+            gltf::animation::Interpolation::Linear => Interpolation::Linear,
+            gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
+        };
+        let reader = ch.reader(buffer.clone());
+        let times: Vec<f32> = reader
+            .read_inputs()
+            .ok_or_else(|| format!("clip '{name}': a channel has no key times"))?
+            .collect();
+        let values: Vec<Vec4> = match reader.read_outputs() {
+            Some(ReadOutputs::Translations(it)) => it.map(|v| Vec3::from(v).extend(0.0)).collect(),
+            Some(ReadOutputs::Scales(it)) => it.map(|v| Vec3::from(v).extend(0.0)).collect(),
+            Some(ReadOutputs::Rotations(it)) => it.into_f32().map(Vec4::from).collect(),
+            _ => return Err(format!("clip '{name}': a channel has no key values")),
+        };
+        if times.is_empty() {
+            return Err(format!("clip '{name}': a channel has no keys"));
+        }
+        if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(format!(
+                "clip '{name}': key times are not finite and strictly increasing"
+            ));
+        }
+        let per_key = if interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+        if values.len() != times.len() * per_key {
+            return Err(format!(
+                "clip '{name}': {} key values for {} key times",
+                values.len(),
+                times.len()
+            ));
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(format!("clip '{name}': a key value is not finite"));
+        }
+        channels.push(Channel {
+            node: remap[node],
+            target,
+            interpolation,
+            times,
+            values,
+        });
+    }
+    if channels.is_empty() {
+        return Ok(None);
+    }
+    let duration = channels
+        .iter()
+        .map(|c| *c.times.last().expect("non-empty"))
+        .fold(0.0f32, f32::max);
+    // `-1` marks "not given in the file": the caller guesses once the model's size is known.
+    let ground_speed = anim
+        .extras()
+        .as_ref()
+        .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
+        .and_then(|v| v.get("ground_speed").and_then(|s| s.as_f64()))
+        .map(|s| s as f32)
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .unwrap_or(-1.0);
+    Ok(Some(Clip {
+        name,
+        duration,
+        channels,
+        ground_speed,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speed_guess_uses_clip_names() {
+        assert_eq!(guess_ground_speed("Survey", 1.0), 0.0);
+        assert!(guess_ground_speed("Walk", 1.0) > 0.0);
+        assert!(guess_ground_speed("Run", 1.0) > guess_ground_speed("Walk", 1.0));
+    }
+}

@@ -1,0 +1,20 @@
+//! Import: turning glTF files into [`crate::model::Model`]s.
+
+pub mod gltf;
+pub mod weld;
+
+use crate::error::InputError;
+use crate::model::Model;
+use std::path::Path;
+
+/// Loads a model given on the command line: the name of a built-in asset (`horse`, `walker`)
+/// or a path to a glTF file.
+pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
+    match crate::assets::builtin(name_or_path) {
+        Some(asset) => gltf::load(&asset.path()).map(|mut m| {
+            m.name = asset.name.to_string();
+            m
+        }),
+        None => gltf::load(Path::new(name_or_path)),
+    }
+}

@@ -1,0 +1,209 @@
+//! The plain data every stage shares: a skinned character as imported, before any baking.
+//!
+//! A [`Model`] is one skinned mesh (all primitives of one glTF skin merged), its skeleton and its
+//! animation clips. It is produced by `import` (glTF files) and `generate` (the project's own demo
+//! creatures) and consumed by `bake`. Nothing here knows about the GPU.
+
+use glam::{Affine3A, Mat4, Quat, Vec2, Vec3, Vec4};
+
+/// A translation / rotation / scale triple, as glTF stores a node's local transform.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Trs {
+    pub const IDENTITY: Trs = Trs {
+        translation: Vec3::ZERO,
+        rotation: Quat::IDENTITY,
+        scale: Vec3::ONE,
+    };
+
+    pub fn matrix(&self) -> Affine3A {
+        Affine3A::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// One node of the skeleton hierarchy. Nodes are stored parents first, so a single forward pass
+/// computes global transforms.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    pub name: String,
+    pub parent: Option<u32>,
+    pub rest: Trs,
+}
+
+/// The skeleton: the node hierarchy that holds the joints, and the skin's bind data.
+///
+/// In the notation of Merry et al. §2.1.1, bone `i` has the pose matrix `G_i` (bone space to model
+/// space) and the rest-pose matrix `Ĝ_i`; glTF stores `Ĝ_i⁻¹` directly as the inverse bind matrix.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skeleton {
+    /// All joints and their ancestors, parents before children.
+    pub nodes: Vec<Node>,
+    /// Bone `i` is node `joints[i]`.
+    pub joints: Vec<u32>,
+    /// `Ĝ_i⁻¹` for every bone.
+    pub inverse_bind: Vec<Mat4>,
+    /// Applied on top of every bone's global transform: brings the model from its file's units
+    /// and placement to the scene's (metres, standing on y = 0, centred on the origin).
+    pub root_transform: Affine3A,
+}
+
+impl Skeleton {
+    pub fn bone_count(&self) -> usize {
+        self.joints.len()
+    }
+}
+
+/// How a channel's keyframes are interpolated (glTF 2.0 §3.11).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    Step,
+    Linear,
+    CubicSpline,
+}
+
+/// Which part of a node's transform a channel drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChannelTarget {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+/// One animated property of one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub node: u32,
+    pub target: ChannelTarget,
+    pub interpolation: Interpolation,
+    /// Key times in seconds, strictly increasing.
+    pub times: Vec<f32>,
+    /// One value per key (translation and scale in xyz, rotation as a quaternion xyzw); for
+    /// [`Interpolation::CubicSpline`] three per key: in-tangent, value, out-tangent.
+    pub values: Vec<Vec4>,
+}
+
+/// A named animation clip. Clips loop: time is taken modulo `duration`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    pub name: String,
+    pub duration: f32,
+    pub channels: Vec<Channel>,
+    /// Speed at which the character travels over the ground while the clip plays, in scene
+    /// units per second (0 for clips played on the spot).
+    pub ground_speed: f32,
+}
+
+/// One bone's share of a vertex in classic linear blend skinning.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Influence {
+    pub bone: u32,
+    pub weight: f32,
+}
+
+/// An indexed triangle mesh with per-vertex skin influences of any count.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SkinnedMesh {
+    /// Rest (bind) positions `v̂`, in the mesh space the inverse bind matrices expect.
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    /// Index into [`Model::materials`] for every vertex.
+    pub materials: Vec<u16>,
+    /// Influences of vertex `v` are `influences[influence_offsets[v]..influence_offsets[v + 1]]`,
+    /// weights positive and summing to one.
+    pub influence_offsets: Vec<u32>,
+    pub influences: Vec<Influence>,
+    pub indices: Vec<u32>,
+}
+
+impl SkinnedMesh {
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    pub fn influences_of(&self, vertex: usize) -> &[Influence] {
+        let a = self.influence_offsets[vertex] as usize;
+        let b = self.influence_offsets[vertex + 1] as usize;
+        &self.influences[a..b]
+    }
+}
+
+/// An 8-bit RGBA image, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rgba8Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<u8>,
+}
+
+/// The part of a glTF material lodlab renders: the base colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGBA factor, multiplied with the texture.
+    pub base_color: [f32; 4],
+    /// sRGB-encoded base colour texture.
+    pub texture: Option<Rgba8Image>,
+}
+
+/// A skinned, animated character.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    pub name: String,
+    pub mesh: SkinnedMesh,
+    pub skeleton: Skeleton,
+    pub clips: Vec<Clip>,
+    pub materials: Vec<Material>,
+}
+
+impl Model {
+    pub fn clip_index(&self, name: &str) -> Option<usize> {
+        self.clips
+            .iter()
+            .position(|c| c.name.eq_ignore_ascii_case(name))
+    }
+}
+
+/// Axis-aligned bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Bounds {
+    pub fn of(points: impl IntoIterator<Item = Vec3>) -> Option<Bounds> {
+        let mut it = points.into_iter();
+        let first = it.next()?;
+        let mut b = Bounds {
+            min: first,
+            max: first,
+        };
+        for p in it {
+            b.min = b.min.min(p);
+            b.max = b.max.max(p);
+        }
+        Some(b)
+    }
+
+    pub fn size(&self) -> Vec3 {
+        self.max - self.min
+    }
+
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    pub fn diagonal(&self) -> f32 {
+        self.size().length()
+    }
+}
