@@ -8,8 +8,11 @@
 //! - [`app`]: the front ends (viewer, `shot`, `gen-assets`).
 
 pub mod anim;
+pub mod app;
 pub mod assets;
 pub mod bake;
 pub mod error;
 pub mod import;
 pub mod model;
+pub mod render;
+pub mod scene;

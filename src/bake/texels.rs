@@ -1,8 +1,10 @@
 //! Flat arrays of RGBA32F texels laid out row by row in a 2D texture.
 //!
 //! Both GPU data textures (animation and vertex) are addressed by a linear texel index `i`; the
-//! shader finds it at `(i % width, i / width)` with `width = textureDimensions(t).x`. Keeping
-//! the layout here, in one place, keeps the CPU writer and the WGSL reader in step.
+//! shader finds it at `(i % width, i / width)` with `width = textureDimensions(t).x`. The width
+//! is always a power of two, so the shader does that with a mask and a shift instead of an
+//! integer division per texel. Keeping the layout here, in one place, keeps the CPU writer and
+//! the WGSL reader (`texel()` in `shaders/skinning.wgsl`) in step.
 
 use serde::{Deserialize, Serialize};
 
@@ -19,10 +21,10 @@ pub struct TexelGrid {
 }
 
 impl TexelGrid {
-    /// Lays `texels` out in rows of at most [`MAX_WIDTH`].
+    /// Lays `texels` out in rows of a power-of-two width, at most [`MAX_WIDTH`].
     pub fn from_linear(mut texels: Vec<[f32; 4]>) -> Self {
         let n = texels.len().max(1) as u32;
-        let width = n.min(MAX_WIDTH);
+        let width = n.next_power_of_two().min(MAX_WIDTH);
         let height = n.div_ceil(width);
         texels.resize((width * height) as usize, [0.0; 4]);
         TexelGrid {
@@ -51,6 +53,6 @@ mod tests {
         assert_eq!((g.width, g.height), (MAX_WIDTH, 2));
         assert_eq!(g.texels.len(), 2 * MAX_WIDTH as usize);
         let small = TexelGrid::from_linear(vec![[1.0; 4]; 7]);
-        assert_eq!((small.width, small.height), (7, 1));
+        assert_eq!((small.width, small.height), (8, 1));
     }
 }

@@ -1,0 +1,48 @@
+// Per-frame uniforms and lighting shared by every pass. Composed in front of the other shader
+// files by `render::shaders`.
+
+struct Frame {
+    view_proj: mat4x4<f32>,
+    inv_view_proj: mat4x4<f32>,
+    // xyz: eye position.
+    camera_pos: vec4<f32>,
+    // xyz: unit vector towards the sun; w: sun intensity.
+    sun_dir: vec4<f32>,
+    sun_color: vec4<f32>,
+    sky_zenith: vec4<f32>,
+    sky_horizon: vec4<f32>,
+    // rgb: ambient bounce from the ground.
+    ground_bounce: vec4<f32>,
+    // x: fog density per metre; y: fog start distance.
+    fog: vec4<f32>,
+    // x: scene time in seconds.
+    time: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+// Sky colour seen along a unit direction.
+fn sky_color(dir: vec3<f32>) -> vec3<f32> {
+    let up = clamp(dir.y, -1.0, 1.0);
+    let t = pow(clamp(up, 0.0, 1.0), 0.45);
+    var c = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, t);
+    // Below the horizon the haze thickens towards the ground colour.
+    c = mix(c, frame.sky_horizon.rgb * 0.9, clamp(-up * 4.0, 0.0, 1.0));
+    let sun = max(dot(dir, frame.sun_dir.xyz), 0.0);
+    c += frame.sun_color.rgb * (pow(sun, 900.0) * 6.0 + pow(sun, 12.0) * 0.12);
+    return c;
+}
+
+// Lambert sun plus a sky/ground hemisphere ambient.
+fn shade(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let sun = max(dot(n, frame.sun_dir.xyz), 0.0) * frame.sun_dir.w;
+    let hemi = mix(frame.ground_bounce.rgb, frame.sky_zenith.rgb * 0.9 + vec3<f32>(0.08), n.y * 0.5 + 0.5);
+    return albedo * (frame.sun_color.rgb * sun + hemi);
+}
+
+// Exponential distance fog towards the horizon colour.
+fn apply_fog(color: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
+    let d = max(distance(world, frame.camera_pos.xyz) - frame.fog.y, 0.0);
+    let f = 1.0 - exp(-d * frame.fog.x);
+    return mix(color, frame.sky_horizon.rgb, clamp(f, 0.0, 1.0));
+}

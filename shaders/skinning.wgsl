@@ -1,0 +1,108 @@
+// Animation-space skinning from textures (Merry, Marais & Gain §2.1.2 and §6.4).
+//
+// v = Σ_i G_i p_i and n = Σ_i G_i n_i, where the p_i / n_i of a vertex come from the vertex
+// texture (read by vertex_index) and the bone matrices G_i from the animation texture, blended
+// between the two frames around the current time. Layouts are documented in
+// src/bake/anim_texture.rs and src/bake/vertex_texture.rs; `AnimationTexture::sample` is the CPU
+// mirror of `clip_frames` below.
+
+@group(1) @binding(0) var anim_tex: texture_2d<f32>;
+@group(1) @binding(1) var vertex_tex: texture_2d<f32>;
+
+// Texel i of a data texture whose width is a power of two.
+fn texel(t: texture_2d<f32>, i: u32) -> vec4<f32> {
+    let w = textureDimensions(t).x;
+    return textureLoad(t, vec2<u32>(i & (w - 1u), i >> countTrailingZeros(w)), 0);
+}
+
+struct ClipFrames {
+    // Texel index of bone 0, row 0 of the earlier and the later frame.
+    row0: u32,
+    row1: u32,
+    // Blend factor towards the later frame.
+    blend: f32,
+    bones: u32,
+};
+
+fn clip_frames(clip: u32, time: f32) -> ClipFrames {
+    let header = texel(anim_tex, 0u);
+    let clip_count = u32(header.x);
+    let bones = u32(header.y);
+    let base = u32(header.z);
+    let info = texel(anim_tex, 1u + min(clip, clip_count - 1u));
+    let first = u32(info.x);
+    let count = u32(info.y);
+    let duration = info.z;
+    var f0 = 0u;
+    var f1 = 0u;
+    var a = 0.0;
+    if (count > 1u && duration > 0.0) {
+        let f = fract(time / duration) * f32(count - 1u);
+        f0 = min(u32(floor(f)), count - 1u);
+        f1 = min(f0 + 1u, count - 1u);
+        a = f - f32(f0);
+    }
+    var out: ClipFrames;
+    out.row0 = base + 3u * (first + f0) * bones;
+    out.row1 = base + 3u * (first + f1) * bones;
+    out.blend = a;
+    out.bones = bones;
+    return out;
+}
+
+struct SkinnedVertex {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    uv: vec2<f32>,
+    material: u32,
+    influences: u32,
+};
+
+fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
+    let header = texel(vertex_tex, vertex_index);
+    let first = u32(header.x);
+    let packed = u32(header.y);
+    let count = packed % 256u;
+    var pos = vec3<f32>(0.0);
+    var nrm = vec3<f32>(0.0);
+    for (var i = 0u; i < count; i = i + 1u) {
+        let p = texel(vertex_tex, first + 2u * i);
+        let nb = texel(vertex_tex, first + 2u * i + 1u);
+        let bone = 3u * u32(nb.w);
+        let r0 = mix(texel(anim_tex, frames.row0 + bone), texel(anim_tex, frames.row1 + bone), frames.blend);
+        let r1 = mix(texel(anim_tex, frames.row0 + bone + 1u), texel(anim_tex, frames.row1 + bone + 1u), frames.blend);
+        let r2 = mix(texel(anim_tex, frames.row0 + bone + 2u), texel(anim_tex, frames.row1 + bone + 2u), frames.blend);
+        pos += vec3<f32>(dot(r0, p), dot(r1, p), dot(r2, p));
+        nrm += vec3<f32>(dot(r0.xyz, nb.xyz), dot(r1.xyz, nb.xyz), dot(r2.xyz, nb.xyz));
+    }
+    var out: SkinnedVertex;
+    out.position = pos;
+    out.normal = nrm;
+    out.uv = header.zw;
+    out.material = packed / 256u;
+    out.influences = count;
+    return out;
+}
+
+// Per-instance data: a 3x4 transform (rows), animation and tint.
+struct Instance {
+    @location(0) row0: vec4<f32>,
+    @location(1) row1: vec4<f32>,
+    @location(2) row2: vec4<f32>,
+    // x: clip index; y: time offset in seconds; z: playback speed.
+    @location(3) anim: vec4<f32>,
+    @location(4) tint: vec4<f32>,
+};
+
+fn instance_point(inst: Instance, p: vec3<f32>) -> vec3<f32> {
+    let h = vec4<f32>(p, 1.0);
+    return vec3<f32>(dot(inst.row0, h), dot(inst.row1, h), dot(inst.row2, h));
+}
+
+fn instance_vector(inst: Instance, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(inst.row0.xyz, v), dot(inst.row1.xyz, v), dot(inst.row2.xyz, v));
+}
+
+fn instance_frames(inst: Instance) -> ClipFrames {
+    return clip_frames(u32(inst.anim.x), frame.time.x * inst.anim.z + inst.anim.y);
+}

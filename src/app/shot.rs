@@ -1,0 +1,143 @@
+//! `lodlab shot`: render a scene headless and deterministically to a PNG.
+
+use super::world::{SceneSpec, World};
+use crate::render::targets::Offscreen;
+use crate::render::{CharacterShader, FrameStats, Gpu};
+use crate::scene::Camera;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct ShotOptions {
+    pub spec: SceneSpec,
+    pub out: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub time: f32,
+    pub samples: u32,
+    /// Overrides the scene's default camera.
+    pub camera: Option<Camera>,
+    /// Timed frames after one warm-up frame.
+    pub timed_frames: usize,
+    /// Also time the same triangles drawn by the trivial unskinned shader.
+    pub calibrate: bool,
+}
+
+/// The JSON line `shot` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShotReport {
+    pub out: String,
+    pub scene: String,
+    pub adapter: String,
+    pub backend: String,
+    pub size: [u32; 2],
+    pub time: f32,
+    pub instances: u64,
+    pub triangles: u64,
+    pub vertices: u64,
+    pub influences: u64,
+    pub draw_calls: u32,
+    /// Median over the timed frames, submit to GPU completion.
+    pub frame_ms: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plain_frame_ms: Option<f64>,
+    /// `frame_ms / plain_frame_ms`: what skinning costs over a plain draw of the same triangles.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skinning_ratio: Option<f64>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Renders `frames` times and returns the median frame time in milliseconds.
+fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> Result<f64> {
+    let mut times = Vec::with_capacity(frames);
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        world.renderer.render_to(gpu, &target.targets, &target.view);
+        gpu.wait()?;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(median(times))
+}
+
+pub fn run(options: &ShotOptions) -> Result<ShotReport> {
+    let gpu = Gpu::headless()?;
+    eprintln!("lodlab: adapter {}", gpu.describe());
+    let target = Offscreen::new(&gpu, options.width, options.height, options.samples);
+    let mut world = World::new(
+        &gpu,
+        options.spec.clone(),
+        crate::render::targets::OFFSCREEN_FORMAT,
+        options.samples,
+    )?;
+    if let Some(c) = options.camera {
+        world.camera = c;
+    }
+    let aspect = options.width as f32 / options.height as f32;
+    let stats: FrameStats = world.prepare(&gpu, aspect, options.time);
+
+    // Warm-up (pipeline creation, first uploads), then timed frames.
+    time_frames(&gpu, &world, &target, 1)?;
+    let frame_ms = time_frames(&gpu, &world, &target, options.timed_frames)?;
+    let image = target.read_rgba(&gpu)?;
+
+    let plain_frame_ms = if options.calibrate {
+        world.renderer.shader = CharacterShader::Plain;
+        time_frames(&gpu, &world, &target, 1)?;
+        let ms = time_frames(&gpu, &world, &target, options.timed_frames)?;
+        world.renderer.shader = CharacterShader::Skinned;
+        Some(ms)
+    } else {
+        None
+    };
+
+    write_png(&options.out, &image)?;
+    Ok(ShotReport {
+        out: options.out.display().to_string(),
+        scene: options.spec.scene.clone(),
+        adapter: gpu.info.name.clone(),
+        backend: gpu.backend_name(),
+        size: [options.width, options.height],
+        time: options.time,
+        instances: stats.instances,
+        triangles: stats.triangles,
+        vertices: stats.vertices,
+        influences: stats.influences,
+        draw_calls: stats.draw_calls,
+        frame_ms,
+        plain_frame_ms,
+        skinning_ratio: plain_frame_ms.map(|p| frame_ms / p.max(1e-9)),
+    })
+}
+
+/// Writes a PNG via a temporary file and a rename, so an interrupted write never leaves half a
+/// file under the final name.
+pub fn write_png(path: &Path, image: &image::RgbaImage) -> Result<()> {
+    let tmp = temp_path(path);
+    image
+        .save_with_format(&tmp, image::ImageFormat::Png)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
+
+/// `DIR/.NAME.tmp` beside `path`.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    path.with_file_name(format!(".{name}.tmp"))
+}

@@ -1,0 +1,186 @@
+//! Building a scene for the front ends: load the models, bake them, lay out the crowd, place the
+//! camera. Shared by the viewer, `shot` and the tests, so they all show the same thing.
+
+use crate::bake::CharacterBake;
+use crate::import::load_model;
+use crate::model::Model;
+use crate::render::{Gpu, SceneRenderer};
+use crate::scene::{Camera, Crowd, CrowdConfig, CrowdModel, Instance};
+use anyhow::{Result, bail};
+use glam::Vec3;
+
+/// Scenes lodlab knows.
+pub const SCENES: &[&str] = &["crowd"];
+
+/// Models of the default crowd.
+pub const DEFAULT_MODELS: &[&str] = &["horse", "walker"];
+
+/// What to show.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneSpec {
+    pub scene: String,
+    /// Built-in asset names or glTF paths; empty means the scene's default.
+    pub models: Vec<String>,
+    pub count: usize,
+    /// Play this clip (by name) on every model that has it.
+    pub clip: Option<String>,
+    pub seed: u64,
+}
+
+impl Default for SceneSpec {
+    fn default() -> Self {
+        SceneSpec {
+            scene: "crowd".into(),
+            models: Vec::new(),
+            count: 300,
+            clip: None,
+            seed: 1,
+        }
+    }
+}
+
+/// Loads and bakes the models a spec names, in order.
+pub fn load_characters(spec: &SceneSpec) -> Result<(Vec<Model>, Vec<CharacterBake>)> {
+    if !SCENES.contains(&spec.scene.as_str()) {
+        bail!(
+            "unknown scene '{}' (scenes: {})",
+            spec.scene,
+            SCENES.join(", ")
+        );
+    }
+    let names: Vec<String> = if spec.models.is_empty() {
+        DEFAULT_MODELS.iter().map(|s| s.to_string()).collect()
+    } else {
+        spec.models.clone()
+    };
+    let mut models = Vec::new();
+    let mut bakes = Vec::new();
+    for name in &names {
+        let model = load_model(name)?;
+        let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        models.push(model);
+        bakes.push(bake);
+    }
+    Ok((models, bakes))
+}
+
+/// The crowd for a spec over already-loaded characters.
+pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
+    let crowd_models: Vec<CrowdModel> = bakes
+        .iter()
+        .map(|b| CrowdModel {
+            name: b.name.clone(),
+            clip_speeds: b.animation.clips.iter().map(|c| c.ground_speed).collect(),
+            bounds: b.bounds,
+        })
+        .collect();
+    let clip = spec.clip.as_ref().and_then(|wanted| {
+        bakes.iter().find_map(|b| {
+            b.animation
+                .clips
+                .iter()
+                .position(|c| c.name.eq_ignore_ascii_case(wanted))
+        })
+    });
+    Crowd::layout(
+        &crowd_models,
+        &CrowdConfig {
+            count: spec.count,
+            seed: spec.seed,
+            clip,
+        },
+    )
+}
+
+/// Checks that a requested clip exists on at least one model.
+pub fn check_clip(spec: &SceneSpec, bakes: &[CharacterBake]) -> Result<()> {
+    if let Some(wanted) = &spec.clip {
+        let found = bakes.iter().any(|b| {
+            b.animation
+                .clips
+                .iter()
+                .any(|c| c.name.eq_ignore_ascii_case(wanted))
+        });
+        if !found {
+            let all: Vec<String> = bakes
+                .iter()
+                .flat_map(|b| {
+                    b.clip_names()
+                        .into_iter()
+                        .map(|c| format!("{}/{c}", b.name))
+                })
+                .collect();
+            bail!(
+                "no model has a clip named '{wanted}' (clips: {})",
+                all.join(", ")
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A camera that shows the crowd: from the south-east, slightly above, the near edge of the
+/// crowd filling the lower part of the view.
+pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
+    let height = characters
+        .iter()
+        .map(|b| b.bounds.size().y)
+        .fold(0.5f32, f32::max);
+    if crowd.agents.len() <= 1 {
+        return Camera::new(Vec3::new(0.0, height * 0.5, 0.0), 35.0, 12.0, height * 2.6);
+    }
+    let r = crowd.radius.max(height * 3.0);
+    Camera::new(Vec3::new(0.0, height * 0.4, 0.0), 35.0, 24.0, r * 1.35)
+}
+
+/// A loaded scene: the renderer with its characters, the crowd and a camera.
+pub struct World {
+    pub spec: SceneSpec,
+    pub models: Vec<Model>,
+    pub bakes: Vec<CharacterBake>,
+    pub crowd: Crowd,
+    pub camera: Camera,
+    pub renderer: SceneRenderer,
+    instances: Vec<Instance>,
+}
+
+impl World {
+    pub fn new(
+        gpu: &Gpu,
+        spec: SceneSpec,
+        color_format: wgpu::TextureFormat,
+        sample_count: u32,
+    ) -> Result<World> {
+        let (models, bakes) = load_characters(&spec)?;
+        check_clip(&spec, &bakes)?;
+        let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
+        for b in &bakes {
+            renderer.add_character(gpu, b)?;
+        }
+        let crowd = layout_crowd(&spec, &bakes);
+        let camera = default_camera(&crowd, &bakes);
+        Ok(World {
+            spec,
+            models,
+            bakes,
+            crowd,
+            camera,
+            renderer,
+            instances: Vec::new(),
+        })
+    }
+
+    /// Re-lays the crowd for a new count, clip or seed without reloading anything.
+    pub fn relayout(&mut self, count: usize, clip: Option<String>) {
+        self.spec.count = count;
+        self.spec.clip = clip;
+        self.crowd = layout_crowd(&self.spec, &self.bakes);
+    }
+
+    /// Uploads everything for a frame at scene time `time` and returns what it will draw.
+    pub fn prepare(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> crate::render::FrameStats {
+        self.crowd.instances_at(time, &mut self.instances);
+        let view = crate::render::FrameView::from_camera(&self.camera, aspect, time);
+        self.renderer.prepare(gpu, &view, &self.instances)
+    }
+}

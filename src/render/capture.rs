@@ -1,0 +1,140 @@
+//! A debug pass that reads back what the GPU skinning computes.
+//!
+//! Every vertex of a character is drawn as one point into its own texel of an `Rgba32Float`
+//! target (vertex `i` at `(i % width, i / width)`), coloured with its skinned position and its
+//! influence count. The vertex shader is `skin_vertex` from `shaders/skinning.wgsl`, the same
+//! function the character pipeline uses, so tests can compare the GPU's result with the CPU
+//! reference in [`crate::bake::animation_space`].
+
+use super::gpu::Gpu;
+use super::renderer::SceneRenderer;
+use super::shaders;
+use super::targets::read_texture;
+use super::uniforms::{FrameUniforms, FrameView, GpuInstance};
+use anyhow::{Result, bail};
+use glam::{Affine3A, Mat4, Vec3, Vec4};
+use wgpu::util::DeviceExt;
+
+const WIDTH: u32 = 256;
+
+/// Skinned positions (xyz, scene space) and influence counts (w) of every vertex of character
+/// `model`, at `time` seconds into `clip`, placed by `transform`.
+pub fn capture_skinned(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    model: usize,
+    clip: u32,
+    time: f32,
+    transform: Affine3A,
+) -> Result<Vec<Vec4>> {
+    let Some(character) = renderer.characters().get(model) else {
+        bail!("no character {model}");
+    };
+    let device = &gpu.device;
+    let n = character.vertex_count;
+    let height = n.div_ceil(WIDTH).max(1);
+    let format = wgpu::TextureFormat::Rgba32Float;
+    let target = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("capture"),
+        size: wgpu::Extent3d {
+            width: WIDTH,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = FrameView {
+        view: Mat4::IDENTITY,
+        proj: Mat4::IDENTITY,
+        eye: Vec3::ZERO,
+        time,
+    };
+    let uniforms = FrameUniforms::new(
+        &view,
+        &renderer.lighting,
+        [0.0, WIDTH as f32, height as f32],
+    );
+    let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("capture frame"),
+        contents: bytemuck::bytes_of(&uniforms),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let frame_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("capture frame"),
+        layout: &renderer.frame_layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: frame_buffer.as_entire_binding(),
+        }],
+    });
+    let instance = GpuInstance::new(&transform, clip, 0.0, 1.0, Vec4::ONE);
+    let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("capture instance"),
+        contents: bytemuck::bytes_of(&instance),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("capture"),
+        bind_group_layouts: &[
+            Some(&renderer.frame_layout),
+            Some(&renderer.character_layout),
+        ],
+        immediate_size: 0,
+    });
+    let module = shaders::CAPTURE_SHADER.create(device);
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("capture"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(GpuInstance::layout())],
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::PointList,
+            ..Default::default()
+        },
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let target_view = target.create_view(&Default::default());
+    let mut enc = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("capture"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &target_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &frame_bind_group, &[]);
+        pass.set_bind_group(1, &character.bind_group, &[]);
+        pass.set_vertex_buffer(0, instance_buffer.slice(..));
+        pass.draw(0..n, 0..1);
+    }
+    gpu.queue.submit([enc.finish()]);
+    let bytes = read_texture(gpu, &target)?;
+    let texels: &[Vec4] = bytemuck::cast_slice(&bytes);
+    Ok(texels[..n as usize].to_vec())
+}

@@ -1,0 +1,13 @@
+//! Render: everything that talks to wgpu. It sees the bake's outputs only as plain data.
+
+pub mod capture;
+pub mod character;
+pub mod gpu;
+pub mod renderer;
+pub mod shaders;
+pub mod targets;
+pub mod uniforms;
+
+pub use gpu::Gpu;
+pub use renderer::{CharacterShader, FrameStats, SceneRenderer};
+pub use uniforms::{FrameView, Lighting};

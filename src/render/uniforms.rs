@@ -1,0 +1,163 @@
+//! CPU mirrors of the WGSL structs: the per-frame uniform block and the per-instance data.
+
+use glam::{Affine3A, Mat4, Vec3, Vec4};
+
+/// Mirror of `Frame` in `shaders/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FrameUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub camera_pos: [f32; 4],
+    pub sun_dir: [f32; 4],
+    pub sun_color: [f32; 4],
+    pub sky_zenith: [f32; 4],
+    pub sky_horizon: [f32; 4],
+    pub ground_bounce: [f32; 4],
+    pub fog: [f32; 4],
+    pub time: [f32; 4],
+}
+
+/// Light and atmosphere of the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lighting {
+    /// Unit vector towards the sun.
+    pub sun_dir: Vec3,
+    pub sun_intensity: f32,
+    pub sun_color: Vec3,
+    pub sky_zenith: Vec3,
+    pub sky_horizon: Vec3,
+    pub ground_bounce: Vec3,
+    /// Fog density per metre beyond `fog_start` metres.
+    pub fog_density: f32,
+    pub fog_start: f32,
+}
+
+impl Default for Lighting {
+    fn default() -> Self {
+        Lighting {
+            sun_dir: Vec3::new(-0.45, 0.75, 0.5).normalize(),
+            sun_intensity: 1.0,
+            sun_color: Vec3::new(1.0, 0.93, 0.82) * 1.15,
+            sky_zenith: Vec3::new(0.24, 0.42, 0.72),
+            sky_horizon: Vec3::new(0.70, 0.78, 0.86),
+            ground_bounce: Vec3::new(0.22, 0.21, 0.18),
+            fog_density: 0.004,
+            fog_start: 30.0,
+        }
+    }
+}
+
+/// What one frame looks at: camera and time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameView {
+    pub view: Mat4,
+    pub proj: Mat4,
+    pub eye: Vec3,
+    /// Scene time in seconds; instance animation time is `time · speed + offset`.
+    pub time: f32,
+}
+
+impl FrameView {
+    pub fn from_camera(camera: &crate::scene::Camera, aspect: f32, time: f32) -> Self {
+        FrameView {
+            view: camera.view(),
+            proj: camera.proj(aspect),
+            eye: camera.eye(),
+            time,
+        }
+    }
+}
+
+impl FrameUniforms {
+    pub fn new(view: &FrameView, light: &Lighting, extra: [f32; 3]) -> Self {
+        let vp = view.proj * view.view;
+        let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
+        FrameUniforms {
+            view_proj: vp.to_cols_array_2d(),
+            inv_view_proj: vp.inverse().to_cols_array_2d(),
+            camera_pos: v4(view.eye, 1.0),
+            sun_dir: v4(light.sun_dir, light.sun_intensity),
+            sun_color: v4(light.sun_color, 0.0),
+            sky_zenith: v4(light.sky_zenith, 0.0),
+            sky_horizon: v4(light.sky_horizon, 0.0),
+            ground_bounce: v4(light.ground_bounce, 0.0),
+            fog: [light.fog_density, light.fog_start, 0.0, 0.0],
+            time: [view.time, extra[0], extra[1], extra[2]],
+        }
+    }
+}
+
+/// Mirror of `Instance` in `shaders/skinning.wgsl`: 80 bytes per instance.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuInstance {
+    pub rows: [[f32; 4]; 3],
+    /// Clip index, time offset in seconds, playback speed, unused.
+    pub anim: [f32; 4],
+    pub tint: [f32; 4],
+}
+
+impl GpuInstance {
+    pub fn new(transform: &Affine3A, clip: u32, time_offset: f32, speed: f32, tint: Vec4) -> Self {
+        let m = transform.matrix3;
+        let t = transform.translation;
+        GpuInstance {
+            rows: [
+                [m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x],
+                [m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y],
+                [m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z],
+            ],
+            anim: [clip as f32, time_offset, speed, 0.0],
+            tint: tint.to_array(),
+        }
+    }
+
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+        0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Float32x4
+    ];
+
+    pub fn layout() -> wgpu::VertexBufferLayout<'static> {
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<GpuInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &Self::ATTRIBUTES,
+        }
+    }
+}
+
+/// Vertex layout of [`crate::bake::StaticVertex`] for the plain calibration shader.
+pub const STATIC_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
+    wgpu::vertex_attr_array![5 => Float32x3, 6 => Float32x3, 7 => Float32x2];
+
+pub fn static_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<crate::bake::StaticVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &STATIC_VERTEX_ATTRIBUTES,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_match_wgsl() {
+        assert_eq!(std::mem::size_of::<FrameUniforms>(), 2 * 64 + 8 * 16);
+        assert_eq!(std::mem::size_of::<GpuInstance>(), 80);
+    }
+
+    #[test]
+    fn instance_rows_transform_like_the_affine() {
+        let a = Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_y(0.7),
+            Vec3::new(1.0, 2.0, 3.0),
+        );
+        let i = GpuInstance::new(&a, 0, 0.0, 1.0, Vec4::ONE);
+        let p = Vec3::new(0.3, -0.2, 0.9);
+        let r = |k: usize| Vec4::from(i.rows[k]).dot(p.extend(1.0));
+        let q = Vec3::new(r(0), r(1), r(2));
+        assert!((q - a.transform_point3(p)).length() < 1e-6);
+    }
+}

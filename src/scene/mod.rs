@@ -1,0 +1,7 @@
+//! Scene: what is in the world and where the camera is. Plain data and arithmetic, no GPU.
+
+pub mod camera;
+pub mod crowd;
+
+pub use camera::Camera;
+pub use crowd::{Agent, Crowd, CrowdConfig, CrowdModel, Instance, Path};
