@@ -60,9 +60,9 @@ fn fs_ground(in: GroundOut) -> @location(0) vec4<f32> {
     let p = in.world.xz;
     // Low-contrast checker of 10 m tiles, grid lines every metre and every 10 m.
     let tile = (i32(floor(p.x / 10.0)) + i32(floor(p.y / 10.0))) & 1;
-    var albedo = select(vec3<f32>(0.40, 0.43, 0.36), vec3<f32>(0.37, 0.40, 0.33), tile == 1);
-    albedo = mix(albedo, vec3<f32>(0.28, 0.30, 0.25), grid(p, 1.0, 0.02) * 0.5);
-    albedo = mix(albedo, vec3<f32>(0.22, 0.24, 0.20), grid(p, 10.0, 0.06) * 0.7);
+    var albedo = select(vec3<f32>(0.33, 0.37, 0.25), vec3<f32>(0.30, 0.34, 0.23), tile == 1);
+    albedo = mix(albedo, vec3<f32>(0.24, 0.27, 0.19), grid(p, 1.0, 0.02) * 0.45);
+    albedo = mix(albedo, vec3<f32>(0.19, 0.21, 0.15), grid(p, 10.0, 0.06) * 0.7);
     let c = shade(albedo, vec3<f32>(0.0, 1.0, 0.0));
     return vec4<f32>(apply_fog(c, in.world), 1.0);
 }

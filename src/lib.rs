@@ -12,6 +12,7 @@ pub mod app;
 pub mod assets;
 pub mod bake;
 pub mod error;
+pub mod generate;
 pub mod import;
 pub mod model;
 pub mod render;

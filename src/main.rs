@@ -24,6 +24,18 @@ struct Cli {
 enum Command {
     /// Render a scene headless to a PNG and print one JSON line of figures.
     Shot(ShotArgs),
+    /// Regenerate the demo creatures (horse, walker) as .glb files.
+    GenAssets(GenAssetsArgs),
+}
+
+#[derive(Args, Debug)]
+struct GenAssetsArgs {
+    /// Folder to write into (default: the project's assets/ folder).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Only these assets.
+    #[arg(long = "only", value_name = "NAME")]
+    only: Vec<String>,
 }
 
 /// Which scene and which characters.
@@ -143,6 +155,13 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 calibrate: a.calibrate,
             })?;
             println!("{}", serde_json::to_string(&report)?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::GenAssets(a)) => {
+            let dir = a.out.unwrap_or_else(lodlab::assets::assets_dir);
+            for w in lodlab::app::gen_assets::run(&dir, &a.only)? {
+                println!("{}", serde_json::to_string(&w)?);
+            }
             Ok(ExitCode::SUCCESS)
         }
         None => {

@@ -1,4 +1,5 @@
 //! Front ends: the command-line tools and the viewer.
 
+pub mod gen_assets;
 pub mod shot;
 pub mod world;

@@ -119,8 +119,8 @@ pub fn check_clip(spec: &SceneSpec, bakes: &[CharacterBake]) -> Result<()> {
     Ok(())
 }
 
-/// A camera that shows the crowd: from the south-east, slightly above, the near edge of the
-/// crowd filling the lower part of the view.
+/// A camera that shows the crowd: standing a little above head height at its south-east edge
+/// and looking across it, so that characters are seen at every distance from near to far.
 pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
     let height = characters
         .iter()
@@ -130,7 +130,7 @@ pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
         return Camera::new(Vec3::new(0.0, height * 0.5, 0.0), 35.0, 12.0, height * 2.6);
     }
     let r = crowd.radius.max(height * 3.0);
-    Camera::new(Vec3::new(0.0, height * 0.4, 0.0), 35.0, 24.0, r * 1.35)
+    Camera::new(Vec3::new(0.0, height * 0.3, 0.0), 35.0, 14.0, r * 1.12)
 }
 
 /// A loaded scene: the renderer with its characters, the crowd and a camera.

@@ -39,11 +39,11 @@ impl Default for Lighting {
             sun_dir: Vec3::new(-0.45, 0.75, 0.5).normalize(),
             sun_intensity: 1.0,
             sun_color: Vec3::new(1.0, 0.93, 0.82) * 1.15,
-            sky_zenith: Vec3::new(0.24, 0.42, 0.72),
+            sky_zenith: Vec3::new(0.20, 0.40, 0.74),
             sky_horizon: Vec3::new(0.70, 0.78, 0.86),
             ground_bounce: Vec3::new(0.22, 0.21, 0.18),
-            fog_density: 0.004,
-            fog_start: 30.0,
+            fog_density: 0.003,
+            fog_start: 40.0,
         }
     }
 }

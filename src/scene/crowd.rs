@@ -229,21 +229,23 @@ impl Crowd {
         let mut outermost = plaza_radius;
         for (m, clip, members) in groups {
             let (width, length) = footprint(m);
-            let lane_gap = width.max(0.6) * 2.2;
-            let spacing = length * 1.8;
+            let lane_gap = width.max(0.6) * 2.5 + 0.6;
+            // Lanes are filled to about a third, at random spacings no shorter than `min_gap`.
+            let min_gap = length * 1.6 + 0.4;
             let ground_speed = models[m].clip_speeds[clip];
             // Everyone on a lane plays at the same speed, so nobody catches anybody up.
             let speed = 0.95 + 0.1 * rng.f32();
             let mut left = members.as_slice();
             radius += lane_gap * 0.5;
             while !left.is_empty() {
-                let capacity = ((std::f32::consts::TAU * radius / spacing).floor() as usize).max(1);
+                let circumference = std::f32::consts::TAU * radius;
+                let capacity = ((circumference / min_gap / 3.0).floor() as usize).max(1);
                 let take = capacity.min(left.len());
                 let direction = if lane_index % 2 == 0 { 1.0 } else { -1.0 };
-                let offset = rng.f32() * std::f32::consts::TAU;
-                for (k, _) in left[..take].iter().enumerate() {
-                    let slot = std::f32::consts::TAU / take as f32;
-                    let angle = offset + k as f32 * slot + (rng.f32() - 0.5) * slot * 0.3;
+                for (angle, _) in lane_angles(take, circumference, min_gap, &mut rng)
+                    .into_iter()
+                    .zip(&left[..take])
+                {
                     agents.push(Agent {
                         model: m,
                         clip,
@@ -275,6 +277,29 @@ impl Crowd {
         out.clear();
         out.extend(self.agents.iter().map(|a| a.instance_at(time)));
     }
+}
+
+/// `count` angles round a circle of the given circumference, randomly spaced but never closer
+/// than `min_gap` along it: the gaps get `min_gap` each plus a random share of the rest.
+fn lane_angles(
+    count: usize,
+    circumference: f32,
+    min_gap: f32,
+    rng: &mut fastrand::Rng,
+) -> Vec<f32> {
+    let slack = (circumference - count as f32 * min_gap).max(0.0);
+    let shares: Vec<f32> = (0..count).map(|_| 0.2 + rng.f32()).collect();
+    let total: f32 = shares.iter().sum();
+    let start = rng.f32() * std::f32::consts::TAU;
+    let mut at = 0.0;
+    shares
+        .iter()
+        .map(|share| {
+            let a = start + at / circumference * std::f32::consts::TAU;
+            at += min_gap + slack * share / total;
+            a
+        })
+        .collect()
 }
 
 /// Travelling clips three times as likely as clips played on the spot.

@@ -1,0 +1,22 @@
+//! The project's own demo creatures, generated procedurally: box-modelled control cages smoothed
+//! by Catmull–Clark subdivision, automatic skin weights, painted textures and keyframed clips.
+//! `lodlab gen-assets` writes them to `assets/` as `.glb`; everything else reads those files.
+
+pub mod build;
+pub mod cage;
+pub mod finish;
+pub mod glb;
+pub mod horse;
+pub mod rig;
+pub mod walker;
+
+use crate::model::Model;
+
+/// Generates a built-in creature by asset name.
+pub fn generate(name: &str) -> Option<Model> {
+    match name {
+        "horse" => Some(horse::horse()),
+        "walker" => Some(walker::walker()),
+        _ => None,
+    }
+}
