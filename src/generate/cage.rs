@@ -369,6 +369,15 @@ impl Cage {
         Extrusion { sides, cap }
     }
 
+    /// Replaces the weights of every vertex for which `f` returns new ones.
+    pub fn reweight(&mut self, vertices: &[u32], f: impl Fn(Vec3, &Weights) -> Option<Weights>) {
+        for &v in vertices {
+            if let Some(w) = f(self.positions[v as usize], &self.weights[v as usize]) {
+                self.weights[v as usize] = w;
+            }
+        }
+    }
+
     /// Faces still in the cage.
     pub fn live_faces(&self) -> impl Iterator<Item = &Face> {
         self.faces.iter().filter(|f| f.alive)

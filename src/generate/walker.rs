@@ -147,6 +147,23 @@ fn cage(r: &Rig, l: &Limbs) -> Cage {
         },
     );
 
+    // Shoulders: the torso's upper rings share their outer vertices between the chest and the
+    // clavicle of that side, so raising an arm lifts the shoulder with it.
+    let chest = r.index("chest") as u32;
+    let clavicles = [r.index("clavicle_l") as u32, r.index("clavicle_r") as u32];
+    let shoulder_ring_vertices: Vec<u32> = tube.rings[ARM_SEGMENT..=ARM_SEGMENT + 2].concat();
+    cage.reweight(&shoulder_ring_vertices, |p, w| {
+        let k = 0.5 * smooth(0.07, 0.17, p.x.abs());
+        if k <= 0.0 || !w.iter().any(|e| e.0 == chest) {
+            return None;
+        }
+        let clavicle = clavicles[if p.x > 0.0 { 0 } else { 1 }];
+        let mut out: Vec<(u32, f32)> = w.iter().map(|&(b, x)| (b, x * (1.0 - k))).collect();
+        out.push((clavicle, k));
+        out.sort_by_key(|e| e.0);
+        Some(out)
+    });
+
     for (i, s) in [1.0f32, -1.0].into_iter().enumerate() {
         // Arm, from the side of the chest below the shoulder.
         let face = cage.face_towards(&tube.sides[ARM_SEGMENT], Vec3::new(s, 0.0, 0.0));
@@ -311,6 +328,7 @@ fn clips(r: &Rig, l: &Limbs) -> Vec<crate::model::Clip> {
         // The right arm waves, the left hangs.
         let (s, i) = (-1.0f32, 1usize);
         let [upper, fore, hand, fingers] = l.arms[i];
+        p.rotate(b("clavicle_r"), euler(0.0, 0.0, s * 12.0));
         p.rotate(upper, euler(0.0, 0.0, s * 52.0));
         p.rotate(upper, euler(-18.0, 0.0, 0.0));
         p.rotate(
