@@ -1,6 +1,5 @@
 //! The importer on models nobody on this project made (`../shared/models/`).
 
-use lodlab::bake::animation_space::{AnimationSpaceMesh, linear_blend_skinning};
 use lodlab::import::gltf::load;
 use std::path::PathBuf;
 
@@ -52,35 +51,4 @@ fn simple_skin_loads() {
     assert_eq!(m.mesh.triangle_count(), 8);
     assert_eq!(m.clips.len(), 1);
     assert!((m.clips[0].duration - 5.5).abs() < 1e-4);
-}
-
-#[test]
-fn animation_space_equals_linear_blend_skinning_on_shared_models() {
-    for file in ["Fox.glb", "SimpleSkin.gltf"] {
-        let m = load(&shared(file)).unwrap();
-        let am = AnimationSpaceMesh::from_skinned(&m.mesh, &m.skeleton);
-        let size = lodlab::model::Bounds::of(
-            m.mesh
-                .positions
-                .iter()
-                .map(|p| m.skeleton.root_transform.transform_point3(*p)),
-        )
-        .unwrap()
-        .diagonal();
-        for clip in &m.clips {
-            for k in 0..5 {
-                let t = clip.duration * k as f32 / 4.0;
-                let g = lodlab::anim::bone_matrices(&m.skeleton, Some(clip), t);
-                let (as_pos, _) = am.evaluate(&g);
-                let lbs = linear_blend_skinning(&m.mesh, &m.skeleton, &g);
-                for (a, b) in as_pos.iter().zip(&lbs) {
-                    assert!(
-                        (*a - *b).length() <= 1e-5 * size,
-                        "{file} {} t={t}: {a} vs {b}",
-                        clip.name
-                    );
-                }
-            }
-        }
-    }
 }

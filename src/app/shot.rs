@@ -1,6 +1,6 @@
 //! `lodlab shot`: render a scene headless and deterministically to a PNG.
 
-use super::world::{SceneSpec, World};
+use super::world::{Loaded, SceneSpec, World};
 use crate::render::targets::Offscreen;
 use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::scene::Camera;
@@ -73,12 +73,13 @@ fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> R
 }
 
 pub fn run(options: &ShotOptions) -> Result<ShotReport> {
+    let loaded = Loaded::new(options.spec.clone())?;
     let gpu = Gpu::headless()?;
     eprintln!("lodlab: adapter {}", gpu.describe());
     let target = Offscreen::new(&gpu, options.width, options.height, options.samples);
     let mut world = World::new(
         &gpu,
-        options.spec.clone(),
+        loaded,
         crate::render::targets::OFFSCREEN_FORMAT,
         options.samples,
     )?;

@@ -144,15 +144,38 @@ pub struct World {
     instances: Vec<Instance>,
 }
 
+/// Models loaded and baked for a spec, checked, before any GPU work: bad input fails the same
+/// way with or without a GPU.
+pub struct Loaded {
+    pub spec: SceneSpec,
+    pub models: Vec<Model>,
+    pub bakes: Vec<CharacterBake>,
+}
+
+impl Loaded {
+    pub fn new(spec: SceneSpec) -> Result<Loaded> {
+        let (models, bakes) = load_characters(&spec)?;
+        check_clip(&spec, &bakes)?;
+        Ok(Loaded {
+            spec,
+            models,
+            bakes,
+        })
+    }
+}
+
 impl World {
     pub fn new(
         gpu: &Gpu,
-        spec: SceneSpec,
+        loaded: Loaded,
         color_format: wgpu::TextureFormat,
         sample_count: u32,
     ) -> Result<World> {
-        let (models, bakes) = load_characters(&spec)?;
-        check_clip(&spec, &bakes)?;
+        let Loaded {
+            spec,
+            models,
+            bakes,
+        } = loaded;
         let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
         for b in &bakes {
             renderer.add_character(gpu, b)?;

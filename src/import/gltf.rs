@@ -33,7 +33,16 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
     if meta.is_dir() {
         return Err(fail("is a directory, not a glTF file".into()));
     }
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| fail(gltf_problem(&e)))?;
+    if meta.len() == 0 {
+        return Err(fail("is empty, not a glTF file".into()));
+    }
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| match e {
+        gltf::Error::Io(_) => match missing_reference(path) {
+            Some(missing) => fail(format!("refers to {missing}, which cannot be read")),
+            None => fail(gltf_problem(&e)),
+        },
+        e => fail(gltf_problem(&e)),
+    })?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -51,6 +60,24 @@ pub fn load_slice(label: &str, bytes: &[u8]) -> Result<Model, InputError> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| label.to_string());
     build(&name, &doc, &buffers, &images).map_err(fail)
+}
+
+/// The first external buffer or image a `.gltf` names that is not there to read.
+fn missing_reference(path: &Path) -> Option<String> {
+    let doc = gltf::Gltf::open(path).ok()?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffer_uris = doc.buffers().filter_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(u) => Some(u.to_string()),
+        gltf::buffer::Source::Bin => None,
+    });
+    let image_uris = doc.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => Some(uri.to_string()),
+        gltf::image::Source::View { .. } => None,
+    });
+    buffer_uris
+        .chain(image_uris)
+        .filter(|u| !u.starts_with("data:"))
+        .find(|u| std::fs::metadata(base.join(u)).is_err())
 }
 
 fn io_problem(e: &std::io::Error) -> String {

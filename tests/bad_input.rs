@@ -1,0 +1,206 @@
+//! Bad input gets one line naming the file and the problem, exit code 1, and no panic.
+
+mod common;
+
+use common::{edit_glb, tiny_model};
+use lodlab::generate::glb::to_glb;
+use lodlab::import::gltf::load;
+use lodlab::model::Influence;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Loads `path`, expecting an error that names the file, says `problem`, on one line.
+fn expect_error(path: &Path, problem: &str) -> String {
+    let err = load(path)
+        .expect_err("broken input must not load")
+        .to_string();
+    assert!(err.starts_with(&path.display().to_string()), "{err}");
+    assert!(err.contains(problem), "expected '{problem}' in: {err}");
+    assert!(!err.contains('\n'), "{err}");
+    eprintln!("{err}");
+    err
+}
+
+#[test]
+fn the_tiny_model_itself_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "tiny.glb", &to_glb(&tiny_model()));
+    let m = load(&p).unwrap();
+    assert_eq!(m.mesh.vertex_count(), 10);
+    assert_eq!(m.clips[0].name, "bend");
+}
+
+#[test]
+fn missing_file_and_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    expect_error(&dir.path().join("nope.glb"), "no such file");
+    expect_error(dir.path(), "is a directory");
+}
+
+#[test]
+fn truncated_and_non_gltf_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = to_glb(&tiny_model());
+    expect_error(
+        &write(dir.path(), "cut.glb", &glb[..glb.len() / 2]),
+        "truncated or corrupt",
+    );
+    expect_error(
+        &write(dir.path(), "notes.gltf", b"these are my notes, not a model"),
+        "not a glTF file",
+    );
+    expect_error(
+        &write(dir.path(), "empty.glb", b""),
+        "is empty, not a glTF file",
+    );
+}
+
+#[test]
+fn gltf_without_a_skin() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = edit_glb(&to_glb(&tiny_model()), |j| {
+        j.as_object_mut().unwrap().remove("skins");
+        for n in j["nodes"].as_array_mut().unwrap() {
+            n.as_object_mut().unwrap().remove("skin");
+        }
+    });
+    expect_error(&write(dir.path(), "static.glb", &glb), "has no skin");
+}
+
+#[test]
+fn bad_joint_indices_and_weights() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, Influence, &str); 4] = [
+        (
+            "range.glb",
+            Influence {
+                bone: 7,
+                weight: 1.0,
+            },
+            "uses joint index 7, but the skin has only 2 joints",
+        ),
+        (
+            "nan.glb",
+            Influence {
+                bone: 0,
+                weight: f32::NAN,
+            },
+            "has a NaN weight",
+        ),
+        (
+            "negative.glb",
+            Influence {
+                bone: 0,
+                weight: -0.5,
+            },
+            "has an invalid weight -0.5",
+        ),
+        (
+            "zero.glb",
+            Influence {
+                bone: 0,
+                weight: 0.0,
+            },
+            "has all-zero skin weights",
+        ),
+    ];
+    for (name, bad, problem) in cases {
+        let mut m = tiny_model();
+        // Vertex 0 gets the bad influence as its only one.
+        m.mesh.influences[0] = bad;
+        let err = expect_error(&write(dir.path(), name, &to_glb(&m)), problem);
+        assert!(err.contains("vertex 0"), "{err}");
+    }
+}
+
+#[test]
+fn unsupported_features() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = to_glb(&tiny_model());
+    let draco = edit_glb(&glb, |j| {
+        j["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+        j["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    });
+    expect_error(
+        &write(dir.path(), "draco.glb", &draco),
+        "KHR_draco_mesh_compression",
+    );
+    let lines = edit_glb(&glb, |j| {
+        j["meshes"][0]["primitives"][0]["mode"] = serde_json::json!(1)
+    });
+    expect_error(
+        &write(dir.path(), "lines.glb", &lines),
+        "not supported (triangles only)",
+    );
+}
+
+#[test]
+fn gltf_with_a_missing_external_buffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = to_glb(&tiny_model());
+    let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    json["buffers"][0]["uri"] = serde_json::json!("tiny.bin");
+    let p = write(
+        dir.path(),
+        "external.gltf",
+        &serde_json::to_vec(&json).unwrap(),
+    );
+    expect_error(&p, "refers to tiny.bin, which cannot be read");
+}
+
+#[test]
+fn gltf_with_an_external_buffer_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = to_glb(&tiny_model());
+    let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    json["buffers"][0]["uri"] = serde_json::json!("tiny.bin");
+    write(dir.path(), "tiny.bin", glb.bin.as_ref().unwrap());
+    let p = write(
+        dir.path(),
+        "external.gltf",
+        &serde_json::to_vec(&json).unwrap(),
+    );
+    assert_eq!(load(&p).unwrap().mesh.triangle_count(), 8);
+}
+
+/// The command line: one line on stderr, exit code 1, no panic, for every broken file.
+#[test]
+fn cli_reports_bad_models_in_one_line_with_exit_code_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = to_glb(&tiny_model());
+    let mut nan = tiny_model();
+    nan.mesh.influences[0].weight = f32::NAN;
+    let files = [
+        dir.path().join("missing.glb"),
+        write(dir.path(), "cut.glb", &glb[..40]),
+        write(dir.path(), "nan.glb", &to_glb(&nan)),
+    ];
+    let out_png = dir.path().join("out.png");
+    for f in &files {
+        let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+            .args(["shot", "--count", "3", "--out"])
+            .arg(&out_png)
+            .arg("--model")
+            .arg(f)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{}: {stderr}", f.display());
+        let lines: Vec<&str> = stderr
+            .lines()
+            .filter(|l| !l.contains("XDG_RUNTIME_DIR"))
+            .collect();
+        assert_eq!(lines.len(), 1, "{stderr}");
+        assert!(lines[0].contains(&*f.display().to_string()), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!out_png.exists(), "no output may be written for bad input");
+    }
+}

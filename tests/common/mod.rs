@@ -1,0 +1,87 @@
+//! Helpers the integration tests share: a tiny skinned model, and editing a `.glb`'s JSON to
+//! make broken files.
+#![allow(dead_code)]
+
+use glam::{Vec2, Vec3};
+use lodlab::generate::rig::{Pose, Rig, bake_clip, euler, wave};
+use lodlab::model::{Influence, Material, Model, SkinnedMesh};
+use serde_json::Value;
+use std::borrow::Cow;
+
+/// A strip of four quads bent by two bones over one clip.
+pub fn tiny_model() -> Model {
+    let mut rig = Rig::default();
+    let root = rig.bone("root", None, Vec3::ZERO);
+    rig.bone("tip", Some(root), Vec3::new(0.0, 1.0, 0.0));
+    let mut mesh = SkinnedMesh::default();
+    mesh.influence_offsets.push(0);
+    for row in 0..5 {
+        for col in 0..2 {
+            let y = row as f32 * 0.5;
+            mesh.positions
+                .push(Vec3::new(col as f32 * 0.5 - 0.25, y, 0.0));
+            mesh.normals.push(Vec3::Z);
+            mesh.uvs.push(Vec2::new(col as f32, y / 2.0));
+            mesh.materials.push(0);
+            let w = (y / 2.0).clamp(0.0, 1.0);
+            if w > 0.0 {
+                mesh.influences.push(Influence {
+                    bone: 0,
+                    weight: 1.0 - w,
+                });
+                mesh.influences.push(Influence { bone: 1, weight: w });
+            } else {
+                mesh.influences.push(Influence {
+                    bone: 0,
+                    weight: 1.0,
+                });
+            }
+            mesh.influences.retain(|i| i.weight > 0.0);
+            mesh.influence_offsets.push(mesh.influences.len() as u32);
+        }
+    }
+    for row in 0..4u32 {
+        let a = row * 2;
+        mesh.indices.extend([a, a + 1, a + 3, a, a + 3, a + 2]);
+    }
+    let clip = bake_clip("bend", 1.0, 0.0, &rig, root, |ph| {
+        let mut p = Pose::rest(2);
+        p.rotate(1, euler(0.0, 0.0, 40.0 * wave(ph, 1.0, 0.0)));
+        p
+    });
+    Model {
+        name: "tiny".into(),
+        mesh,
+        skeleton: rig.skeleton(),
+        clips: vec![clip],
+        materials: vec![Material {
+            name: "grey".into(),
+            base_color: [0.6, 0.6, 0.6, 1.0],
+            texture: None,
+        }],
+    }
+}
+
+/// Rewrites the JSON chunk of a `.glb`.
+pub fn edit_glb(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+    let glb = gltf::binary::Glb::from_slice(bytes).expect("valid glb");
+    let mut json: Value = serde_json::from_slice(&glb.json).unwrap();
+    edit(&mut json);
+    let mut j = serde_json::to_vec(&json).unwrap();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let bin = glb.bin.map(|b| b.into_owned());
+    let length = 12 + 8 + j.len() + bin.as_ref().map_or(0, |b| 8 + b.len());
+    gltf::binary::Glb {
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: length as u32,
+        },
+        json: Cow::Owned(j),
+        bin: bin.map(Cow::Owned),
+    }
+    .to_vec()
+    .unwrap()
+}

@@ -1,0 +1,137 @@
+//! Headless rendering on whatever adapter wgpu finds (Mesa lavapipe in CI, where
+//! `WGPU_BACKEND=vulkan` makes a missing driver fail loudly instead of falling back).
+
+use glam::{Affine3A, Quat, Vec3};
+use lodlab::app::shot::{ShotOptions, run as shot};
+use lodlab::app::world::{Loaded, SceneSpec, World};
+use lodlab::render::Gpu;
+use lodlab::render::capture::capture_skinned;
+use lodlab::render::targets::OFFSCREEN_FORMAT;
+use lodlab::scene::Camera;
+
+fn spec(models: &[&str], count: usize, clip: Option<&str>) -> SceneSpec {
+    SceneSpec {
+        models: models.iter().map(|s| s.to_string()).collect(),
+        count,
+        clip: clip.map(str::to_string),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn gpu_skinning_matches_the_cpu_reference() {
+    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let fox = format!("{}/../shared/models/Fox.glb", env!("CARGO_MANIFEST_DIR"));
+    let world = World::new(
+        &gpu,
+        Loaded::new(spec(&["horse", "walker", &fox], 3, None)).unwrap(),
+        OFFSCREEN_FORMAT,
+        1,
+    )
+    .unwrap();
+    let place =
+        Affine3A::from_rotation_translation(Quat::from_rotation_y(0.7), Vec3::new(3.0, 0.0, -2.0));
+    for (m, bake) in world.bakes.iter().enumerate() {
+        for clip in 0..bake.animation.clips.len() {
+            for time in [0.0f32, 0.37, 1.91] {
+                let gpu_pos =
+                    capture_skinned(&gpu, &world.renderer, m, clip as u32, time, place).unwrap();
+                let g = bake.animation.sample(clip, time);
+                let (cpu_pos, _) = bake.animation_space.evaluate(&g);
+                let size = bake.bounds.diagonal();
+                assert_eq!(gpu_pos.len(), cpu_pos.len());
+                let mut worst = 0.0f32;
+                for (v, (a, b)) in gpu_pos.iter().zip(&cpu_pos).enumerate() {
+                    let expected = place.transform_point3(*b);
+                    let err = a.truncate().distance(expected);
+                    worst = worst.max(err);
+                    assert!(
+                        err <= 1e-4 * size,
+                        "{} clip {clip} t={time} vertex {v}: GPU {} CPU {expected}",
+                        bake.name,
+                        a.truncate()
+                    );
+                    assert_eq!(
+                        a.w as usize,
+                        bake.animation_space.influences_of(v).len(),
+                        "influence count of vertex {v}"
+                    );
+                }
+                assert!(worst.is_finite());
+            }
+        }
+    }
+}
+
+fn render(
+    spec: SceneSpec,
+    time: f32,
+    size: (u32, u32),
+    camera: Option<Camera>,
+) -> (image::RgbaImage, lodlab::app::shot::ShotReport) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("shot.png");
+    let report = shot(&ShotOptions {
+        spec,
+        out: out.clone(),
+        width: size.0,
+        height: size.1,
+        time,
+        samples: 4,
+        camera,
+        timed_frames: 1,
+        calibrate: false,
+    })
+    .unwrap();
+    (image::open(&out).unwrap().to_rgba8(), report)
+}
+
+/// Share of pixels that differ by more than a few levels in any channel.
+fn changed(a: &image::RgbaImage, b: &image::RgbaImage) -> f32 {
+    let n = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(x, y)| x.abs_diff(*y) > 6))
+        .count();
+    n as f32 / (a.width() * a.height()) as f32
+}
+
+#[test]
+fn two_times_of_a_clip_render_differently() {
+    let close = Some(Camera::new(Vec3::new(0.0, 0.9, 0.0), 90.0, 5.0, 3.4));
+    let (a, _) = render(spec(&["walker"], 1, Some("walk")), 0.1, (96, 96), close);
+    let (b, _) = render(spec(&["walker"], 1, Some("walk")), 0.45, (96, 96), close);
+    let d = changed(&a, &b);
+    assert!(d > 0.01, "the legs must have moved: {d}");
+}
+
+#[test]
+fn a_crowd_covers_a_sensible_share_of_the_image() {
+    let (empty, r0) = render(spec(&[], 0, None), 1.0, (320, 180), None);
+    assert_eq!((r0.instances, r0.triangles), (0, 0));
+    let (crowd, r) = render(spec(&[], 60, None), 1.0, (320, 180), None);
+    assert_eq!(r.instances, 60);
+    assert!(r.triangles > 60 * 8_000);
+    let share = changed(&empty, &crowd);
+    assert!(
+        (0.02..0.6).contains(&share),
+        "crowd covers {share} of the image"
+    );
+}
+
+#[test]
+fn the_empty_scene_is_sky_over_ground() {
+    let (img, _) = render(spec(&[], 0, None), 0.0, (64, 64), None);
+    let top = img.get_pixel(32, 1).0;
+    let bottom = img.get_pixel(32, 62).0;
+    assert!(top[2] > top[0], "sky is blue: {top:?}");
+    assert!(bottom[1] > bottom[2], "ground is green-grey: {bottom:?}");
+    assert_ne!(top, bottom);
+}
+
+#[test]
+fn shots_are_deterministic() {
+    let (a, _) = render(spec(&["horse", "walker"], 12, None), 2.5, (200, 120), None);
+    let (b, _) = render(spec(&["horse", "walker"], 12, None), 2.5, (200, 120), None);
+    assert!(a == b, "same arguments, same picture");
+}
