@@ -22,6 +22,8 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Open the viewer on a scene (the default command).
+    View(ViewArgs),
     /// Render a scene headless to a PNG and print one JSON line of figures.
     Shot(ShotArgs),
     /// Regenerate the demo creatures (horse, walker) as .glb files.
@@ -68,6 +70,24 @@ impl SceneArgs {
             seed: self.seed,
         }
     }
+}
+
+#[derive(Args, Debug)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Window size.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Multisampling: 1 (off) or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_samples)]
+    msaa: u32,
+    /// Render --frames frames of the window, write the last one to this PNG and exit.
+    #[arg(long, value_name = "FILE.png")]
+    screenshot: Option<PathBuf>,
+    /// Frames to render before the screenshot.
+    #[arg(long, default_value_t = 30, requires = "screenshot")]
+    frames: usize,
 }
 
 #[derive(Args, Debug)]
@@ -164,11 +184,27 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
+        Some(Command::View(a)) => view(a),
         None => {
-            eprintln!("lodlab: the viewer is not built into this binary yet; use `lodlab shot`");
-            Ok(ExitCode::from(2))
+            // `lodlab` alone is `lodlab view` with its defaults.
+            let cli = Cli::parse_from(["lodlab", "view"]);
+            match cli.command {
+                Some(Command::View(a)) => view(a),
+                _ => unreachable!("parsed as view"),
+            }
         }
     }
+}
+
+fn view(a: ViewArgs) -> anyhow::Result<ExitCode> {
+    lodlab::app::viewer::run(lodlab::app::viewer::ViewOptions {
+        spec: a.scene.spec(),
+        width: a.size.0,
+        height: a.size.1,
+        samples: a.msaa,
+        screenshot: a.screenshot,
+        frames: a.frames,
+    })
 }
 
 fn main() -> ExitCode {

@@ -2,4 +2,5 @@
 
 pub mod gen_assets;
 pub mod shot;
+pub mod viewer;
 pub mod world;

@@ -64,32 +64,45 @@ pub fn load_characters(spec: &SceneSpec) -> Result<(Vec<Model>, Vec<CharacterBak
     Ok((models, bakes))
 }
 
-/// The crowd for a spec over already-loaded characters.
-pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
-    let crowd_models: Vec<CrowdModel> = bakes
+/// The crowd for a spec over already-loaded characters: all of them, or only character
+/// `only`. Agents refer to characters by their index in `bakes`.
+pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usize>) -> Crowd {
+    let chosen: Vec<usize> = match only {
+        Some(m) if m < bakes.len() => vec![m],
+        _ => (0..bakes.len()).collect(),
+    };
+    let crowd_models: Vec<CrowdModel> = chosen
         .iter()
-        .map(|b| CrowdModel {
-            name: b.name.clone(),
-            clip_speeds: b.animation.clips.iter().map(|c| c.ground_speed).collect(),
-            bounds: b.bounds,
+        .map(|&m| {
+            let b = &bakes[m];
+            CrowdModel {
+                name: b.name.clone(),
+                clip_speeds: b.animation.clips.iter().map(|c| c.ground_speed).collect(),
+                bounds: b.bounds,
+            }
         })
         .collect();
     let clip = spec.clip.as_ref().and_then(|wanted| {
-        bakes.iter().find_map(|b| {
-            b.animation
+        chosen.iter().find_map(|&m| {
+            bakes[m]
+                .animation
                 .clips
                 .iter()
                 .position(|c| c.name.eq_ignore_ascii_case(wanted))
         })
     });
-    Crowd::layout(
+    let mut crowd = Crowd::layout(
         &crowd_models,
         &CrowdConfig {
             count: spec.count,
             seed: spec.seed,
             clip,
         },
-    )
+    );
+    for a in &mut crowd.agents {
+        a.model = chosen[a.model];
+    }
+    crowd
 }
 
 /// Checks that a requested clip exists on at least one model.
@@ -180,7 +193,7 @@ impl World {
         for b in &bakes {
             renderer.add_character(gpu, b)?;
         }
-        let crowd = layout_crowd(&spec, &bakes);
+        let crowd = layout_crowd(&spec, &bakes, None);
         let camera = default_camera(&crowd, &bakes);
         Ok(World {
             spec,
@@ -193,11 +206,16 @@ impl World {
         })
     }
 
-    /// Re-lays the crowd for a new count, clip or seed without reloading anything.
-    pub fn relayout(&mut self, count: usize, clip: Option<String>) {
+    /// Re-lays the crowd for a new count, clip or model choice without reloading anything:
+    /// every character stays on the GPU.
+    pub fn relayout(&mut self, only: Option<usize>, count: usize, clip: Option<String>) {
         self.spec.count = count;
         self.spec.clip = clip;
-        self.crowd = layout_crowd(&self.spec, &self.bakes);
+        self.crowd = layout_crowd(&self.spec, &self.bakes, only);
+    }
+
+    pub fn reset_camera(&mut self) {
+        self.camera = default_camera(&self.crowd, &self.bakes);
     }
 
     /// Uploads everything for a frame at scene time `time` and returns what it will draw.

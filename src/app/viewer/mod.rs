@@ -1,0 +1,470 @@
+//! `lodlab view`: the interactive viewer. A winit window, the scene renderer in the area right of
+//! an egui side panel, and the camera controls of [`controls`].
+//!
+//! `--screenshot FILE --frames N` renders N frames of the real window, panel included, writes
+//! the last one to FILE and exits: how the window itself is tested under Xvfb.
+
+mod controls;
+mod panel;
+
+use super::shot::write_png;
+use super::world::{Loaded, SceneSpec, World};
+use crate::render::targets::{Offscreen, RenderTargets};
+use crate::render::{FrameStats, Gpu};
+use anyhow::{Context, Result, anyhow};
+use controls::{Controls, KeyAction};
+use panel::{FrameHistory, Info, Settings};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::window::{Window, WindowId};
+
+/// Width of the side panel in points.
+const PANEL_WIDTH: f32 = 270.0;
+
+/// Printed, with exit code 2, where no window can be opened.
+pub const NO_DISPLAY: &str = "lodlab: no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset); \
+     to render without one use `lodlab shot --out FILE.png`";
+
+#[derive(Clone, Debug)]
+pub struct ViewOptions {
+    pub spec: SceneSpec,
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+    pub screenshot: Option<PathBuf>,
+    pub frames: usize,
+}
+
+/// Is there a display server to talk to? On Linux and the BSDs that means X11 or Wayland.
+fn display_available() -> bool {
+    if cfg!(all(unix, not(target_os = "macos"))) {
+        std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
+            || std::env::var_os("WAYLAND_DISPLAY").is_some_and(|d| !d.is_empty())
+    } else {
+        true
+    }
+}
+
+pub fn run(options: ViewOptions) -> Result<ExitCode> {
+    if !display_available() {
+        eprintln!("{NO_DISPLAY}");
+        return Ok(ExitCode::from(2));
+    }
+    let loaded = Loaded::new(options.spec.clone())?;
+    let event_loop = match EventLoop::new() {
+        Ok(el) => el,
+        Err(e) => {
+            eprintln!("{NO_DISPLAY} ({e})");
+            return Ok(ExitCode::from(2));
+        }
+    };
+    let mut app = App {
+        options,
+        loaded: Some(loaded),
+        viewer: None,
+        error: None,
+    };
+    event_loop.run_app(&mut app).context("window event loop")?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(ExitCode::SUCCESS),
+    }
+}
+
+struct App {
+    options: ViewOptions,
+    loaded: Option<Loaded>,
+    viewer: Option<Viewer>,
+    error: Option<anyhow::Error>,
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.viewer.is_some() {
+            return;
+        }
+        let Some(loaded) = self.loaded.take() else {
+            return;
+        };
+        match Viewer::new(event_loop, &self.options, loaded) {
+            Ok(v) => self.viewer = Some(v),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(viewer) = &mut self.viewer else {
+            return;
+        };
+        match viewer.handle(&event, &self.options) {
+            Ok(true) => {}
+            Ok(false) => event_loop.exit(),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        // Always animating: ask for the next frame straight away.
+        if let Some(v) = &self.viewer {
+            v.window.request_redraw();
+        }
+    }
+}
+
+struct Viewer {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    gpu: Gpu,
+    world: World,
+    targets: RenderTargets,
+    egui: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    controls: Controls,
+    settings: Settings,
+    history: FrameHistory,
+    adapter: String,
+    backend: String,
+    model_names: Vec<String>,
+    clip_names: Vec<Vec<String>>,
+    started: Instant,
+    last_frame: Option<Instant>,
+    time: f32,
+    stats: FrameStats,
+    /// The 3D view in physical pixels: x, y, width, height.
+    view: [u32; 4],
+    frames: usize,
+}
+
+impl Viewer {
+    fn new(event_loop: &ActiveEventLoop, options: &ViewOptions, loaded: Loaded) -> Result<Viewer> {
+        let attributes = Window::default_attributes()
+            .with_title("lodlab")
+            .with_inner_size(winit::dpi::PhysicalSize::new(options.width, options.height));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .context("cannot open a window")?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance
+            .create_surface(window.clone())
+            .context("cannot draw into the window")?;
+        let gpu = Gpu::with_instance(instance, Some(&surface))?;
+        eprintln!("lodlab: adapter {}", gpu.describe());
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
+            config.format = srgb;
+        }
+        config.present_mode = wgpu::PresentMode::AutoVsync;
+        surface.configure(&gpu.device, &config);
+
+        let world = World::new(&gpu, loaded, config.format, options.samples)?;
+        let targets = RenderTargets::new(
+            &gpu.device,
+            config.width,
+            config.height,
+            config.format,
+            options.samples,
+        );
+        let context = egui::Context::default();
+        let egui = egui_winit::State::new(
+            context,
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(
+            &gpu.device,
+            config.format,
+            egui_wgpu::RendererOptions::default(),
+        );
+        let settings = Settings {
+            count: world.spec.count,
+            model: None,
+            clip: world.spec.clip.clone(),
+            playing: true,
+            speed: 1.0,
+            shadows: true,
+        };
+        Ok(Viewer {
+            adapter: gpu.info.name.clone(),
+            backend: gpu.backend_name(),
+            model_names: world.bakes.iter().map(|b| b.name.clone()).collect(),
+            clip_names: world.bakes.iter().map(|b| b.clip_names()).collect(),
+            window,
+            surface,
+            config,
+            gpu,
+            world,
+            targets,
+            egui,
+            egui_renderer,
+            controls: Controls::default(),
+            settings,
+            history: FrameHistory::default(),
+            started: Instant::now(),
+            last_frame: None,
+            time: 0.0,
+            stats: FrameStats::default(),
+            view: [0, 0, 1, 1],
+            frames: 0,
+        })
+    }
+
+    /// Handles one window event; `Ok(false)` ends the viewer.
+    fn handle(&mut self, event: &WindowEvent, options: &ViewOptions) -> Result<bool> {
+        let response = self.egui.on_window_event(&self.window, event);
+        match event {
+            WindowEvent::CloseRequested => return Ok(false),
+            WindowEvent::Resized(size) => self.resize(size.width, size.height),
+            WindowEvent::RedrawRequested => return self.redraw(options),
+            _ => {
+                let ctx = self.egui.egui_ctx();
+                let pointer_free = !response.consumed
+                    && (!ctx.egui_wants_pointer_input() || self.controls.is_dragging());
+                let keyboard_free = !ctx.egui_wants_keyboard_input();
+                let action = self.controls.on_event(
+                    event,
+                    &mut self.world.camera,
+                    self.view[3] as f32,
+                    pointer_free,
+                    keyboard_free,
+                );
+                match action {
+                    Some(KeyAction::TogglePlay) => self.settings.playing = !self.settings.playing,
+                    Some(KeyAction::ResetCamera) => self.world.reset_camera(),
+                    None => {}
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    fn resize(&mut self, width: u32, height: u32) {
+        self.config.width = width.max(1);
+        self.config.height = height.max(1);
+        self.surface.configure(&self.gpu.device, &self.config);
+        self.targets = RenderTargets::new(
+            &self.gpu.device,
+            self.config.width,
+            self.config.height,
+            self.config.format,
+            self.targets.sample_count,
+        );
+    }
+
+    fn redraw(&mut self, options: &ViewOptions) -> Result<bool> {
+        let now = Instant::now();
+        let dt = self
+            .last_frame
+            .map_or(0.0, |t| (now - t).as_secs_f32())
+            .min(0.25);
+        if self.last_frame.is_some() {
+            self.history
+                .push((now - self.started).as_secs_f64(), dt * 1000.0);
+        }
+        self.last_frame = Some(now);
+        if self.settings.playing {
+            self.time += dt * self.settings.speed;
+        }
+        self.controls.fly(&mut self.world.camera, dt);
+
+        // The panel.
+        let raw = self.egui.take_egui_input(&self.window);
+        let mut requests = panel::Requests::default();
+        let mut central = egui::Rect::NOTHING;
+        let info = Info {
+            adapter: &self.adapter,
+            backend: &self.backend,
+            models: &self.model_names,
+            clips: &self.clip_names,
+            stats: self.stats,
+            time: self.time,
+        };
+        let (settings, history) = (&mut self.settings, &self.history);
+        let output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
+            egui::Panel::left("lodlab panel")
+                .resizable(false)
+                .exact_size(PANEL_WIDTH)
+                .show(ui, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        requests = panel::show(ui, settings, history, &info);
+                    });
+                });
+            central = ui.available_rect_before_wrap();
+        });
+        self.egui
+            .handle_platform_output(&self.window, output.platform_output);
+        let ppp = output.pixels_per_point;
+        let primitives = self.egui.egui_ctx().tessellate(output.shapes, ppp);
+        if requests.relayout {
+            self.world.relayout(
+                self.settings.model,
+                self.settings.count,
+                self.settings.clip.clone(),
+            );
+        }
+        if requests.reset_camera {
+            self.world.reset_camera();
+        }
+        self.world.renderer.shadows = self.settings.shadows;
+
+        // The 3D view: what the panel leaves.
+        let (w, h) = (self.config.width, self.config.height);
+        let x0 = ((central.min.x * ppp).round().max(0.0) as u32).min(w - 1);
+        let y0 = ((central.min.y * ppp).round().max(0.0) as u32).min(h - 1);
+        let x1 = ((central.max.x * ppp).round() as u32).clamp(x0 + 1, w);
+        let y1 = ((central.max.y * ppp).round() as u32).clamp(y0 + 1, h);
+        self.view = [x0, y0, x1 - x0, y1 - y0];
+        let aspect = self.view[2] as f32 / self.view[3] as f32;
+        self.stats = self.world.prepare(&self.gpu, aspect, self.time);
+
+        let frame = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(f)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(true);
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.resize(w, h);
+                return Ok(true);
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                return Err(anyhow!("the window's surface failed validation"));
+            }
+        };
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [w, h],
+            pixels_per_point: ppp,
+        };
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                self.egui_renderer
+                    .update_texture(&self.gpu.device, &self.gpu.queue, *id, delta);
+            }
+        }
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut buffers = self.egui_renderer.update_buffers(
+            &self.gpu.device,
+            &self.gpu.queue,
+            &mut encoder,
+            &primitives,
+            &screen,
+        );
+        let view = frame.texture.create_view(&Default::default());
+        self.encode(&mut encoder, &self.targets, &view, &primitives, &screen);
+
+        // The screenshot: the same frame once more into a texture that can be read back.
+        let last = options.screenshot.is_some() && self.frames + 1 >= options.frames.max(1);
+        let capture = last.then(|| {
+            let shot = Offscreen::with_format(
+                &self.gpu,
+                w,
+                h,
+                self.targets.sample_count,
+                self.config.format,
+            );
+            self.encode(
+                &mut encoder,
+                &shot.targets,
+                &shot.view,
+                &primitives,
+                &screen,
+            );
+            shot
+        });
+        buffers.push(encoder.finish());
+        self.gpu.queue.submit(buffers);
+        self.window.pre_present_notify();
+        self.gpu.queue.present(frame);
+        for id in &output.textures_delta.free {
+            self.egui_renderer.free_texture(id);
+        }
+        self.frames += 1;
+
+        if let (Some(shot), Some(path)) = (capture, &options.screenshot) {
+            let mut bytes = shot.read_bytes(&self.gpu)?;
+            if matches!(
+                self.config.format,
+                wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+            ) {
+                for px in bytes.chunks_exact_mut(4) {
+                    px.swap(0, 2);
+                }
+            }
+            let image = image::RgbaImage::from_raw(w, h, bytes)
+                .ok_or_else(|| anyhow!("screenshot size mismatch"))?;
+            write_png(path, &image)?;
+            eprintln!(
+                "lodlab: wrote {} after {} frames ({:.1} fps)",
+                path.display(),
+                self.frames,
+                self.history.fps()
+            );
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    /// Records the scene into the 3D view and the panel over it.
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &RenderTargets,
+        view: &wgpu::TextureView,
+        primitives: &[egui::ClippedPrimitive],
+        screen: &egui_wgpu::ScreenDescriptor,
+    ) {
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("scene"),
+                color_attachments: &[Some(
+                    targets.color(view, wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
+                )],
+                depth_stencil_attachment: Some(targets.depth()),
+                ..Default::default()
+            });
+            let [x, y, vw, vh] = self.view;
+            pass.set_viewport(x as f32, y as f32, vw as f32, vh as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, vw, vh);
+            self.world.renderer.draw(&mut pass);
+        }
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("panel"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            })
+            .forget_lifetime();
+        self.egui_renderer.render(&mut pass, primitives, screen);
+    }
+}

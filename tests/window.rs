@@ -1,0 +1,102 @@
+//! The real window, egui panel included, rendered under Xvfb (or the display there is) and read
+//! back through `lodlab view --screenshot`.
+
+use std::path::Path;
+use std::process::Command;
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
+}
+
+/// Mean and standard deviation of the luma of a region.
+fn luma_stats(img: &image::RgbaImage, x0: u32, y0: u32, x1: u32, y1: u32) -> (f32, f32) {
+    let mut v = Vec::new();
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let p = img.get_pixel(x, y).0;
+            v.push(0.299 * p[0] as f32 + 0.587 * p[1] as f32 + 0.114 * p[2] as f32);
+        }
+    }
+    let mean = v.iter().sum::<f32>() / v.len() as f32;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / v.len() as f32;
+    (mean, var.sqrt())
+}
+
+#[test]
+fn viewer_window_shows_the_scene_and_the_panel() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("window.png");
+    let exe = env!("CARGO_BIN_EXE_lodlab");
+    let args = [
+        "view",
+        "--count",
+        "24",
+        "--size",
+        "960x540",
+        "--frames",
+        "3",
+        "--screenshot",
+    ];
+    let mut cmd = if on_path("xvfb-run") {
+        let mut c = Command::new("xvfb-run");
+        c.args(["-a", "-s", "-screen 0 960x540x24", exe]);
+        c
+    } else if std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some()
+    {
+        Command::new(exe)
+    } else {
+        panic!("this test needs xvfb-run (apt-get install xvfb) or a display");
+    };
+    let out = cmd.args(args).arg(&shot).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "viewer failed: {stderr}");
+    check_screenshot(&shot);
+}
+
+fn check_screenshot(path: &Path) {
+    let img = image::open(path).expect("a PNG").to_rgba8();
+    assert_eq!((img.width(), img.height()), (960, 540));
+    // Not blank.
+    let (_, all_sd) = luma_stats(&img, 0, 0, 960, 540);
+    assert!(all_sd > 10.0, "the window is blank (luma sd {all_sd})");
+    // The panel: a dark strip on the left with light text on it.
+    let (panel_mean, _) = luma_stats(&img, 0, 0, 250, 540);
+    assert!(
+        panel_mean < 70.0,
+        "no dark panel on the left (mean luma {panel_mean})"
+    );
+    let bright_text = (0..250)
+        .flat_map(|x| (0..300).map(move |y| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x, y).0[0] > 150)
+        .count();
+    assert!(
+        bright_text > 200,
+        "the panel shows no text ({bright_text} light pixels)"
+    );
+    // The scene right of it: sky above ground.
+    let sky = img.get_pixel(700, 10).0;
+    assert!(
+        sky[2] > sky[0] + 20,
+        "no sky at the top of the 3D view: {sky:?}"
+    );
+    let (scene_mean, scene_sd) = luma_stats(&img, 300, 0, 960, 540);
+    assert!(
+        scene_mean > 90.0 && scene_sd > 8.0,
+        "3D view looks wrong: {scene_mean} {scene_sd}"
+    );
+}
+
+#[test]
+fn viewer_without_a_display_points_to_shot_and_exits_2() {
+    let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(lines[0].contains("lodlab shot"), "{stderr}");
+}
