@@ -1,11 +1,13 @@
 //! lodlab: a real-time viewer for comparing level-of-detail methods on animated crowds.
 //!
 //! Data flows through the modules in this order:
-//! - [`import`]: glTF files and the project's own generators ([`generate`]) → [`model::Model`];
-//! - [`bake`]: pure CPU code → animation textures, vertex textures (plain data);
-//! - [`scene`]: instances, cameras, paths;
-//! - [`render`]: wgpu;
-//! - [`app`]: the front ends (viewer, `shot`, `gen-assets`).
+//!
+//! 1. [`import`]: glTF files and the project's own generators ([`generate`]) to
+//!    [`model::Model`];
+//! 2. [`bake`]: pure CPU code to animation textures and vertex textures (plain data);
+//! 3. [`scene`]: instances, cameras, paths;
+//! 4. [`render`]: everything wgpu;
+//! 5. [`app`]: the front ends (viewer, `shot`, `gen-assets`).
 
 pub mod anim;
 pub mod app;

@@ -147,8 +147,8 @@ fn seams_cannot_open_under_skinning() {
     for m in generated() {
         let groups = lodlab::import::weld::position_groups(&m.mesh.positions, 1e-7);
         let mut first: HashMap<u32, usize> = HashMap::new();
-        for v in 0..m.mesh.vertex_count() {
-            let f = *first.entry(groups[v]).or_insert(v);
+        for (v, &g) in groups.iter().enumerate() {
+            let f = *first.entry(g).or_insert(v);
             assert_eq!(
                 m.mesh.influences_of(f),
                 m.mesh.influences_of(v),

@@ -165,7 +165,7 @@ impl Cage {
         end: Cap,
     ) -> Tube {
         let n = rings[0].points.len();
-        assert!(n >= 4 && n % 2 == 0 && rings.iter().all(|r| r.points.len() == n));
+        assert!(n >= 4 && n.is_multiple_of(2) && rings.iter().all(|r| r.points.len() == n));
         assert!(rings.len() >= 2 && sections.first().map(|s| s.0) == Some(0));
         let ids: Vec<Vec<u32>> = rings
             .iter()
@@ -408,7 +408,7 @@ impl Cage {
         let mut face_edges: Vec<[usize; 4]> = Vec::with_capacity(faces.len());
         for (fi, f) in faces.iter().enumerate() {
             let mut fe = [0; 4];
-            for k in 0..4 {
+            for (k, slot) in fe.iter_mut().enumerate() {
                 let (a, b) = (f.v[k], f.v[(k + 1) % 4]);
                 let key = (a.min(b), a.max(b));
                 let e = *edge_index.entry(key).or_insert_with(|| {
@@ -417,7 +417,7 @@ impl Cage {
                     edge_ends.len() - 1
                 });
                 edge_faces[e].push(fi);
-                fe[k] = e;
+                *slot = e;
             }
             face_edges.push(fe);
         }

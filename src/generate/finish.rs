@@ -97,11 +97,11 @@ pub fn finish(cage: &Cage, size: u32) -> Finished {
     for f in cage.live_faces() {
         let place = &placements[f.chart as usize];
         let mut corner = [0u32; 4];
-        for k in 0..4 {
+        for (k, slot) in corner.iter_mut().enumerate() {
             let texel = place.origin + (f.uv[k] - place.min) * density;
             let uv = texel / size as f32;
             let key = (f.v[k], uv.x.to_bits(), uv.y.to_bits());
-            corner[k] = *vertex_of.entry(key).or_insert_with(|| {
+            *slot = *vertex_of.entry(key).or_insert_with(|| {
                 mesh.positions.push(cage.positions[f.v[k] as usize]);
                 mesh.uvs.push(uv);
                 position_of.push(f.v[k]);

@@ -22,7 +22,7 @@ struct Builder {
 
 impl Builder {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
@@ -277,7 +277,7 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
         // Linear filtering with trilinear mipmaps, repeat wrapping.
         doc["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987}]);
     }
-    while b.bin.len() % 4 != 0 {
+    while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
     doc["accessors"] = json!(b.accessors);
@@ -285,7 +285,7 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
     doc["buffers"] = json!([{"byteLength": b.bin.len()}]);
 
     let mut json_bytes = serde_json::to_vec(&doc).expect("serialising JSON into memory");
-    while json_bytes.len() % 4 != 0 {
+    while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
     let glb = gltf::binary::Glb {

@@ -112,18 +112,17 @@ impl Chain {
             self.parent.map(|p| p as u32)
         };
         let above = self.bones.get(i + 1).map(|&b| b as u32);
-        let mut w: Weights = Vec::new();
-        if t < BLEND && below.is_some() {
-            let k = 0.5 + 0.5 * t / BLEND;
-            w.push((bone, k));
-            w.push((below.unwrap(), 1.0 - k));
-        } else if t > 1.0 - BLEND && above.is_some() {
-            let k = 0.5 + 0.5 * (1.0 - t) / BLEND;
-            w.push((bone, k));
-            w.push((above.unwrap(), 1.0 - k));
-        } else {
-            w.push((bone, 1.0));
-        }
+        let mut w: Weights = match (below, above) {
+            (Some(b), _) if t < BLEND => {
+                let k = 0.5 + 0.5 * t / BLEND;
+                vec![(bone, k), (b, 1.0 - k)]
+            }
+            (_, Some(a)) if t > 1.0 - BLEND => {
+                let k = 0.5 + 0.5 * (1.0 - t) / BLEND;
+                vec![(bone, k), (a, 1.0 - k)]
+            }
+            _ => vec![(bone, 1.0)],
+        };
         w.retain(|e| e.1 > 1e-6);
         w.sort_by_key(|e| e.0);
         w

@@ -285,11 +285,11 @@ fn clips(r: &Rig, l: &Limbs) -> Vec<crate::model::Clip> {
     let walk = bake_clip("walk", 1.1, 1.35, r, hips, |ph| {
         let mut p = Pose::rest(r.len());
         let mut hip_angle = [0.0f32; 2];
-        for i in 0..2 {
+        for (i, hip_out) in hip_angle.iter_mut().enumerate() {
             // Leg phase 0 is heel strike; stance to 0.6, swing after.
             let q = (ph + 0.5 * i as f32).rem_euclid(1.0);
             let hip = 21.0 * (std::f32::consts::TAU * q).cos() + 3.0;
-            hip_angle[i] = hip;
+            *hip_out = hip;
             let knee = 12.0 * bump(q, 0.1, 0.12) + 58.0 * bump(q, 0.72, 0.2) + 4.0;
             let ankle =
                 20.0 * bump(q, 0.57, 0.1) - 10.0 * bump(q, 0.8, 0.15) - 5.0 * bump(q, 0.0, 0.08);
@@ -320,7 +320,7 @@ fn clips(r: &Rig, l: &Limbs) -> Vec<crate::model::Clip> {
         p.rotate(hips, euler(0.0, -5.0 * c, 2.5 * wave(ph, 1.0, 0.0)));
         p.rotate(b("spine"), euler(2.0, 2.0 * c, -1.5 * wave(ph, 1.0, 0.0)));
         p.rotate(b("chest"), euler(0.0, 4.0 * c, 0.0));
-        p.rotate(b("neck"), euler(-1.0, -1.0 * c, 0.0));
+        p.rotate(b("neck"), euler(-1.0, -c, 0.0));
         p
     });
     let wave_clip = bake_clip("wave", 2.4, 0.0, r, hips, |ph| {

@@ -209,8 +209,7 @@ impl Crowd {
 
         // Lanes: one (model, clip) group after another, slowest innermost.
         let mut groups: Vec<(usize, usize, Vec<usize>)> = Vec::new();
-        for i in 0..cast.len() {
-            let (m, clip) = cast[i];
+        for (i, &(m, clip)) in cast.iter().enumerate() {
             if models[m].clip_speeds[clip] <= 0.0 {
                 continue;
             }

@@ -68,7 +68,7 @@ pub fn edit_glb(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     let mut json: Value = serde_json::from_slice(&glb.json).unwrap();
     edit(&mut json);
     let mut j = serde_json::to_vec(&json).unwrap();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let bin = glb.bin.map(|b| b.into_owned());

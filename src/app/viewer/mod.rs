@@ -303,7 +303,7 @@ impl Viewer {
             time: self.time,
         };
         let (settings, history) = (&mut self.settings, &self.history);
-        let output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
+        let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
             egui::Panel::left("lodlab panel")
                 .resizable(false)
                 .exact_size(PANEL_WIDTH)
@@ -340,13 +340,24 @@ impl Viewer {
         let aspect = self.view[2] as f32 / self.view[3] as f32;
         self.stats = self.world.prepare(&self.gpu, aspect, self.time);
 
+        // egui's texture uploads go in whether or not this frame reaches the screen; its frees
+        // once the frame no longer needs the textures.
+        for (id, deltas) in output.textures_delta.set.drain() {
+            for delta in &deltas {
+                self.egui_renderer
+                    .update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+            }
+        }
+        let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
         let frame = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(f)
             | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
             wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                self.free_egui_textures(&frees);
                 return Ok(true);
             }
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.free_egui_textures(&frees);
                 self.resize(w, h);
                 return Ok(true);
             }
@@ -358,12 +369,6 @@ impl Viewer {
             size_in_pixels: [w, h],
             pixels_per_point: ppp,
         };
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                self.egui_renderer
-                    .update_texture(&self.gpu.device, &self.gpu.queue, *id, delta);
-            }
-        }
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         let mut buffers = self.egui_renderer.update_buffers(
             &self.gpu.device,
@@ -398,9 +403,7 @@ impl Viewer {
         self.gpu.queue.submit(buffers);
         self.window.pre_present_notify();
         self.gpu.queue.present(frame);
-        for id in &output.textures_delta.free {
-            self.egui_renderer.free_texture(id);
-        }
+        self.free_egui_textures(&frees);
         self.frames += 1;
 
         if let (Some(shot), Some(path)) = (capture, &options.screenshot) {
@@ -425,6 +428,12 @@ impl Viewer {
             return Ok(false);
         }
         Ok(true)
+    }
+
+    fn free_egui_textures(&mut self, ids: &[egui::TextureId]) {
+        for id in ids {
+            self.egui_renderer.free_texture(id);
+        }
     }
 
     /// Records the scene into the 3D view and the panel over it.
