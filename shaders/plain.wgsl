@@ -15,9 +15,9 @@ struct VsOut {
 
 @vertex
 fn vs_main(
-    @location(5) position: vec3<f32>,
-    @location(6) normal: vec3<f32>,
-    @location(7) uv: vec2<f32>,
+    @location(6) position: vec3<f32>,
+    @location(7) normal: vec3<f32>,
+    @location(8) uv: vec2<f32>,
     inst: Instance,
 ) -> VsOut {
     let world = instance_point(inst, position);

@@ -9,30 +9,38 @@
 @group(1) @binding(0) var anim_tex: texture_2d<f32>;
 @group(1) @binding(1) var vertex_tex: texture_2d<f32>;
 
-// Texel i of a data texture whose width is a power of two.
-fn texel(t: texture_2d<f32>, i: u32) -> vec4<f32> {
+// Addressing of a data texture whose width is a power of two: texel i is at
+// (i & mask, i >> shift). Worked out once per vertex, not once per load.
+struct Layout {
+    mask: u32,
+    shift: u32,
+};
+
+fn layout_of(t: texture_2d<f32>) -> Layout {
     let w = textureDimensions(t).x;
-    return textureLoad(t, vec2<u32>(i & (w - 1u), i >> countTrailingZeros(w)), 0);
+    return Layout(w - 1u, countTrailingZeros(w));
+}
+
+fn texel(t: texture_2d<f32>, l: Layout, i: u32) -> vec4<f32> {
+    return textureLoad(t, vec2<u32>(i & l.mask, i >> l.shift), 0);
 }
 
 struct ClipFrames {
+    anim: Layout,
     // Texel index of bone 0, row 0 of the earlier and the later frame.
     row0: u32,
     row1: u32,
     // Blend factor towards the later frame.
     blend: f32,
-    bones: u32,
 };
 
-fn clip_frames(clip: u32, time: f32) -> ClipFrames {
-    let header = texel(anim_tex, 0u);
-    let clip_count = u32(header.x);
-    let bones = u32(header.y);
-    let base = u32(header.z);
-    let info = texel(anim_tex, 1u + min(clip, clip_count - 1u));
-    let first = u32(info.x);
-    let count = u32(info.y);
-    let duration = info.z;
+// `clip`: texel of the clip's first frame, frame count, duration, texels per frame (see
+// `AnimationTexture::clip_rows`).
+fn clip_frames(clip: vec4<f32>, time: f32) -> ClipFrames {
+    let first = u32(clip.x);
+    let count = u32(clip.y);
+    let duration = clip.z;
+    let stride = u32(clip.w);
     var f0 = 0u;
     var f1 = 0u;
     var a = 0.0;
@@ -43,10 +51,10 @@ fn clip_frames(clip: u32, time: f32) -> ClipFrames {
         a = f - f32(f0);
     }
     var out: ClipFrames;
-    out.row0 = base + 3u * (first + f0) * bones;
-    out.row1 = base + 3u * (first + f1) * bones;
+    out.anim = layout_of(anim_tex);
+    out.row0 = first + f0 * stride;
+    out.row1 = first + f1 * stride;
     out.blend = a;
-    out.bones = bones;
     return out;
 }
 
@@ -59,19 +67,23 @@ struct SkinnedVertex {
 };
 
 fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
-    let header = texel(vertex_tex, vertex_index);
+    let vl = layout_of(vertex_tex);
+    let al = frames.anim;
+    let header = texel(vertex_tex, vl, vertex_index);
     let first = u32(header.x);
     let packed = u32(header.y);
     let count = packed % 256u;
     var pos = vec3<f32>(0.0);
     var nrm = vec3<f32>(0.0);
     for (var i = 0u; i < count; i = i + 1u) {
-        let p = texel(vertex_tex, first + 2u * i);
-        let nb = texel(vertex_tex, first + 2u * i + 1u);
+        let p = texel(vertex_tex, vl, first + 2u * i);
+        let nb = texel(vertex_tex, vl, first + 2u * i + 1u);
         let bone = 3u * u32(nb.w);
-        let r0 = mix(texel(anim_tex, frames.row0 + bone), texel(anim_tex, frames.row1 + bone), frames.blend);
-        let r1 = mix(texel(anim_tex, frames.row0 + bone + 1u), texel(anim_tex, frames.row1 + bone + 1u), frames.blend);
-        let r2 = mix(texel(anim_tex, frames.row0 + bone + 2u), texel(anim_tex, frames.row1 + bone + 2u), frames.blend);
+        let a = frames.row0 + bone;
+        let b = frames.row1 + bone;
+        let r0 = mix(texel(anim_tex, al, a), texel(anim_tex, al, b), frames.blend);
+        let r1 = mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), frames.blend);
+        let r2 = mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), frames.blend);
         pos += vec3<f32>(dot(r0, p), dot(r1, p), dot(r2, p));
         nrm += vec3<f32>(dot(r0.xyz, nb.xyz), dot(r1.xyz, nb.xyz), dot(r2.xyz, nb.xyz));
     }
@@ -84,14 +96,16 @@ fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
     return out;
 }
 
-// Per-instance data: a 3x4 transform (rows), animation and tint.
+// Per-instance data: a 3x4 transform (rows), the clip, its timing and a tint.
 struct Instance {
     @location(0) row0: vec4<f32>,
     @location(1) row1: vec4<f32>,
     @location(2) row2: vec4<f32>,
-    // x: clip index; y: time offset in seconds; z: playback speed.
-    @location(3) anim: vec4<f32>,
-    @location(4) tint: vec4<f32>,
+    // The clip as a frame range of the animation texture (see `clip_frames`).
+    @location(3) clip: vec4<f32>,
+    // x: time offset in seconds; y: playback speed.
+    @location(4) timing: vec4<f32>,
+    @location(5) tint: vec4<f32>,
 };
 
 fn instance_point(inst: Instance, p: vec3<f32>) -> vec3<f32> {
@@ -104,5 +118,5 @@ fn instance_vector(inst: Instance, v: vec3<f32>) -> vec3<f32> {
 }
 
 fn instance_frames(inst: Instance) -> ClipFrames {
-    return clip_frames(u32(inst.anim.x), frame.time.x * inst.anim.z + inst.anim.y);
+    return clip_frames(inst.clip, frame.time.x * inst.timing.y + inst.timing.x);
 }

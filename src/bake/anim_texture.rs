@@ -1,11 +1,11 @@
 //! The animation texture: every clip of a model resampled at a fixed rate into the bone matrices
 //! `G_i` of Merry et al. §2.1.1, for the vertex shader to read with `textureLoad`.
 //!
-//! Layout, by linear texel index (see [`super::texels`]):
-//! - texel 0: `(clip count, bone count, first frame texel, 0)`;
-//! - texel `1 + c`: clip `c` as `(first frame, frame count, duration in seconds, 0)`;
-//! - from the first frame texel on, frame `f` (counted over all clips) and bone `b` occupy three
-//!   texels `base + 3 (f B + b) + r`, row `r` of the 3×4 matrix `G_b`.
+//! Layout, by linear texel index (see [`super::texels`]): frame `f` (counted over all clips)
+//! and bone `b` occupy the three texels `3 (f B + b) + r`, row `r` of the 3×4 matrix `G_b`.
+//! Which frames belong to which clip is in [`AnimationTexture::clips`]; the renderer hands the
+//! vertex shader each instance's clip as a frame range ([`AnimationTexture::clip_rows`]), so
+//! the shader reads nothing but matrices.
 //!
 //! Clip `c` of duration `d` is sampled at `n = round(d · rate) + 1` evenly spaced times covering
 //! `[0, d]` inclusive, so the last frame lands exactly on the clip's end and a looping clip wraps
@@ -72,12 +72,7 @@ impl AnimationTexture {
                 frames.push(crate::anim::bone_matrices(skel, clip, t));
             }
         }
-        let base = 1 + clips.len() as u32;
-        let mut texels = Vec::with_capacity(base as usize + frames.len() * bones as usize * 3);
-        texels.push([clips.len() as f32, bones as f32, base as f32, 0.0]);
-        for c in &clips {
-            texels.push([c.first_frame as f32, c.frame_count as f32, c.duration, 0.0]);
-        }
+        let mut texels = Vec::with_capacity(frames.len() * bones as usize * 3);
         for frame in &frames {
             for g in frame {
                 texels.extend(matrix_rows(g));
@@ -91,13 +86,22 @@ impl AnimationTexture {
         }
     }
 
-    fn base(&self) -> usize {
-        1 + self.clips.len()
+    /// Clip `clip` as the vertex shader receives it: texel of its first frame's first row,
+    /// frame count, duration in seconds, and texels per frame.
+    pub fn clip_rows(&self, clip: usize) -> [f32; 4] {
+        let c = &self.clips[clip.min(self.clips.len() - 1)];
+        let stride = 3 * self.bones;
+        [
+            (c.first_frame * stride) as f32,
+            c.frame_count as f32,
+            c.duration,
+            stride as f32,
+        ]
     }
 
     /// The stored `G_b` of global frame `frame`.
     pub fn matrix(&self, frame: u32, bone: u32) -> Affine3A {
-        let i = self.base() + 3 * (frame as usize * self.bones as usize + bone as usize);
+        let i = 3 * (frame as usize * self.bones as usize + bone as usize);
         rows_to_affine([self.grid.get(i), self.grid.get(i + 1), self.grid.get(i + 2)])
     }
 

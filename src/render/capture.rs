@@ -72,7 +72,14 @@ pub fn capture_skinned(
             resource: frame_buffer.as_entire_binding(),
         }],
     });
-    let instance = GpuInstance::new(&transform, clip, 0.0, 1.0, Vec4::ONE);
+    let rows = &character.clip_rows;
+    let instance = GpuInstance::new(
+        &transform,
+        rows[(clip as usize).min(rows.len() - 1)],
+        0.0,
+        1.0,
+        Vec4::ONE,
+    );
     let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("capture instance"),
         contents: bytemuck::bytes_of(&instance),

@@ -25,6 +25,8 @@ pub struct ClipInfo {
 pub struct GpuCharacter {
     pub name: String,
     pub clips: Vec<ClipInfo>,
+    /// Every clip as the instance data carries it.
+    pub clip_rows: Vec<[f32; 4]>,
     pub bounds: Bounds,
     pub triangle_count: u32,
     pub vertex_count: u32,
@@ -228,6 +230,9 @@ impl GpuCharacter {
                     duration: c.duration,
                     ground_speed: c.ground_speed,
                 })
+                .collect(),
+            clip_rows: (0..bake.animation.clips.len())
+                .map(|c| bake.animation.clip_rows(c))
                 .collect(),
             bounds: bake.bounds,
             triangle_count: bake.triangle_count() as u32,

@@ -54,6 +54,7 @@ pub struct SceneRenderer {
     instance_buffer: wgpu::Buffer,
     staging: Vec<GpuInstance>,
     counts: Vec<u32>,
+    cursor: Vec<u32>,
     draws: Vec<(usize, Range<u32>)>,
 }
 
@@ -289,6 +290,7 @@ impl SceneRenderer {
             instance_buffer,
             staging: Vec::new(),
             counts: Vec::new(),
+            cursor: Vec::new(),
             draws: Vec::new(),
         }
     }
@@ -345,12 +347,14 @@ impl SceneRenderer {
                 self.draws.push((m, self.counts[m]..self.counts[m + 1]));
             }
         }
-        let mut next = self.counts.clone();
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.counts);
         for inst in instances.iter().filter(|i| i.model < models) {
-            let slot = &mut next[inst.model];
+            let slot = &mut self.cursor[inst.model];
+            let rows = &self.characters[inst.model].clip_rows;
             self.staging[*slot as usize] = GpuInstance::new(
                 &inst.transform,
-                inst.clip,
+                rows[(inst.clip as usize).min(rows.len() - 1)],
                 inst.time_offset,
                 inst.speed,
                 inst.tint,

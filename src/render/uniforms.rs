@@ -88,18 +88,26 @@ impl FrameUniforms {
     }
 }
 
-/// Mirror of `Instance` in `shaders/skinning.wgsl`: 80 bytes per instance.
+/// Mirror of `Instance` in `shaders/skinning.wgsl`: 96 bytes per instance.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuInstance {
     pub rows: [[f32; 4]; 3],
-    /// Clip index, time offset in seconds, playback speed, unused.
-    pub anim: [f32; 4],
+    /// The clip as a frame range: [`crate::bake::anim_texture::AnimationTexture::clip_rows`].
+    pub clip: [f32; 4],
+    /// Time offset in seconds, playback speed, two spare.
+    pub timing: [f32; 4],
     pub tint: [f32; 4],
 }
 
 impl GpuInstance {
-    pub fn new(transform: &Affine3A, clip: u32, time_offset: f32, speed: f32, tint: Vec4) -> Self {
+    pub fn new(
+        transform: &Affine3A,
+        clip_rows: [f32; 4],
+        time_offset: f32,
+        speed: f32,
+        tint: Vec4,
+    ) -> Self {
         let m = transform.matrix3;
         let t = transform.translation;
         GpuInstance {
@@ -108,13 +116,15 @@ impl GpuInstance {
                 [m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y],
                 [m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z],
             ],
-            anim: [clip as f32, time_offset, speed, 0.0],
+            clip: clip_rows,
+            timing: [time_offset, speed, 0.0, 0.0],
             tint: tint.to_array(),
         }
     }
 
-    pub const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
-        0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Float32x4
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+        0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Float32x4,
+        5 => Float32x4
     ];
 
     pub fn layout() -> wgpu::VertexBufferLayout<'static> {
@@ -128,7 +138,7 @@ impl GpuInstance {
 
 /// Vertex layout of [`crate::bake::StaticVertex`] for the plain calibration shader.
 pub const STATIC_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
-    wgpu::vertex_attr_array![5 => Float32x3, 6 => Float32x3, 7 => Float32x2];
+    wgpu::vertex_attr_array![6 => Float32x3, 7 => Float32x3, 8 => Float32x2];
 
 pub fn static_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
@@ -145,7 +155,7 @@ mod tests {
     #[test]
     fn sizes_match_wgsl() {
         assert_eq!(std::mem::size_of::<FrameUniforms>(), 2 * 64 + 8 * 16);
-        assert_eq!(std::mem::size_of::<GpuInstance>(), 80);
+        assert_eq!(std::mem::size_of::<GpuInstance>(), 96);
     }
 
     #[test]
@@ -154,7 +164,7 @@ mod tests {
             glam::Quat::from_rotation_y(0.7),
             Vec3::new(1.0, 2.0, 3.0),
         );
-        let i = GpuInstance::new(&a, 0, 0.0, 1.0, Vec4::ONE);
+        let i = GpuInstance::new(&a, [0.0; 4], 0.0, 1.0, Vec4::ONE);
         let p = Vec3::new(0.3, -0.2, 0.9);
         let r = |k: usize| Vec4::from(i.rows[k]).dot(p.extend(1.0));
         let q = Vec3::new(r(0), r(1), r(2));
