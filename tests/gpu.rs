@@ -1,6 +1,8 @@
 //! Headless rendering on whatever adapter wgpu finds (Mesa lavapipe in CI, where
 //! `WGPU_BACKEND=vulkan` makes a missing driver fail loudly instead of falling back).
 
+mod common;
+
 use glam::{Affine3A, Quat, Vec3};
 use lodlab::app::shot::{ShotOptions, run as shot};
 use lodlab::app::world::{Loaded, SceneSpec, World};
@@ -22,9 +24,18 @@ fn spec(models: &[&str], count: usize, clip: Option<&str>) -> SceneSpec {
 fn gpu_skinning_matches_the_cpu_reference() {
     let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let fox = format!("{}/../shared/models/Fox.glb", env!("CARGO_MANIFEST_DIR"));
+    // Six influences per vertex: more than any fixed-attribute skinning would take.
+    let dir = tempfile::tempdir().unwrap();
+    let six = dir.path().join("six.glb");
+    std::fs::write(
+        &six,
+        lodlab::generate::glb::to_glb(&common::six_influence_model()),
+    )
+    .unwrap();
+    let six = six.display().to_string();
     let world = World::new(
         &gpu,
-        Loaded::new(spec(&["horse", "walker", &fox], 3, None)).unwrap(),
+        Loaded::new(spec(&["horse", "walker", &fox, &six], 4, None)).unwrap(),
         OFFSCREEN_FORMAT,
         1,
     )
@@ -134,4 +145,45 @@ fn shots_are_deterministic() {
     let (a, _) = render(spec(&["horse", "walker"], 12, None), 2.5, (200, 120), None);
     let (b, _) = render(spec(&["horse", "walker"], 12, None), 2.5, (200, 120), None);
     assert!(a == b, "same arguments, same picture");
+}
+
+/// `WGPU_ADAPTER_NAME` picks the adapter by a piece of its name; a name that matches nothing is
+/// an error that lists what there is.
+#[test]
+fn adapter_is_chosen_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    let run = |name: Option<&str>| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"));
+        c.args(["shot", "--count", "0", "--size", "32x32", "--out"])
+            .arg(&out);
+        match name {
+            Some(n) => c.env("WGPU_ADAPTER_NAME", n),
+            None => c.env_remove("WGPU_ADAPTER_NAME"),
+        };
+        c.output().unwrap()
+    };
+    let default = run(None);
+    assert!(default.status.success());
+    let report: serde_json::Value = serde_json::from_slice(&default.stdout).unwrap();
+    let adapter = report["adapter"].as_str().unwrap().to_string();
+    let stderr = String::from_utf8_lossy(&default.stderr);
+    assert!(
+        stderr.contains(&adapter),
+        "the chosen adapter is printed at start: {stderr}"
+    );
+
+    let word = adapter.split_whitespace().next().unwrap().to_uppercase();
+    let named = run(Some(&word));
+    assert!(named.status.success());
+    let report: serde_json::Value = serde_json::from_slice(&named.stdout).unwrap();
+    assert_eq!(report["adapter"].as_str(), Some(adapter.as_str()));
+
+    let bogus = run(Some("no-such-gpu-anywhere"));
+    assert_eq!(bogus.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&bogus.stderr);
+    assert!(
+        stderr.contains("no-such-gpu-anywhere") && stderr.contains(&adapter),
+        "{stderr}"
+    );
 }

@@ -85,3 +85,63 @@ pub fn edit_glb(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     .to_vec()
     .unwrap()
 }
+
+/// A strip bent by a chain of six bones, every vertex weighted by all six (so the file needs
+/// JOINTS_1/WEIGHTS_1 as well as JOINTS_0/WEIGHTS_0).
+pub fn six_influence_model() -> Model {
+    let mut rig = Rig::default();
+    let mut parent = None;
+    for k in 0..6 {
+        parent = Some(rig.bone(
+            &format!("b{k}"),
+            parent,
+            Vec3::new(0.0, 0.4 * k as f32, 0.0),
+        ));
+    }
+    let mut mesh = SkinnedMesh::default();
+    mesh.influence_offsets.push(0);
+    let rows = 13;
+    for row in 0..rows {
+        for col in 0..2 {
+            let y = row as f32 * 0.2;
+            mesh.positions
+                .push(Vec3::new(col as f32 * 0.3 - 0.15, y, 0.0));
+            mesh.normals.push(Vec3::Z);
+            mesh.uvs.push(Vec2::new(col as f32, y / 2.4));
+            mesh.materials.push(0);
+            let raw: Vec<f32> = (0..6)
+                .map(|k| (-((y - 0.4 * k as f32) / 0.5).powi(2)).exp() + 0.01)
+                .collect();
+            let total: f32 = raw.iter().sum();
+            for (k, w) in raw.iter().enumerate() {
+                mesh.influences.push(Influence {
+                    bone: k as u32,
+                    weight: w / total,
+                });
+            }
+            mesh.influence_offsets.push(mesh.influences.len() as u32);
+        }
+    }
+    for row in 0..rows as u32 - 1 {
+        let a = row * 2;
+        mesh.indices.extend([a, a + 1, a + 3, a, a + 3, a + 2]);
+    }
+    let clip = bake_clip("curl", 2.0, 0.0, &rig, 0, |ph| {
+        let mut p = Pose::rest(6);
+        for k in 1..6 {
+            p.rotate(k, euler(0.0, 0.0, 20.0 * wave(ph, 1.0, 0.1 * k as f32)));
+        }
+        p
+    });
+    Model {
+        name: "six".into(),
+        mesh,
+        skeleton: rig.skeleton(),
+        clips: vec![clip],
+        materials: vec![Material {
+            name: "white".into(),
+            base_color: [1.0; 4],
+            texture: None,
+        }],
+    }
+}

@@ -1,0 +1,165 @@
+//! glTF features end to end through files: several JOINTS_n/WEIGHTS_n sets, STEP and
+//! CUBICSPLINE and scale channels, several primitives merged, UV seams kept when welding.
+
+mod common;
+
+use common::{edit_glb, six_influence_model, tiny_model};
+use glam::{Quat, Vec3, Vec4};
+use lodlab::bake::animation_space::{AnimationSpaceMesh, linear_blend_skinning};
+use lodlab::generate::glb::to_glb;
+use lodlab::import::gltf::load;
+use lodlab::model::{Channel, ChannelTarget, Interpolation};
+
+fn write(bytes: &[u8], name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join(name);
+    std::fs::write(&p, bytes).unwrap();
+    (dir, p)
+}
+
+#[test]
+fn more_than_four_influences_through_two_sets() {
+    let original = six_influence_model();
+    let bytes = to_glb(&original);
+    let json = gltf::binary::Glb::from_slice(&bytes)
+        .unwrap()
+        .json
+        .into_owned();
+    let text = String::from_utf8(json).unwrap();
+    assert!(text.contains("JOINTS_1") && text.contains("WEIGHTS_1"));
+    let (_dir, p) = write(&bytes, "six.glb");
+    let m = load(&p).unwrap();
+    for v in 0..m.mesh.vertex_count() {
+        let inf = m.mesh.influences_of(v);
+        assert_eq!(inf.len(), 6, "vertex {v}");
+        let sum: f32 = inf.iter().map(|i| i.weight).sum();
+        assert!((sum - 1.0).abs() < 1e-5);
+    }
+    let am = AnimationSpaceMesh::from_skinned(&m.mesh, &m.skeleton);
+    let g = lodlab::anim::bone_matrices(&m.skeleton, Some(&m.clips[0]), 0.7);
+    let (a, _) = am.evaluate(&g);
+    for (x, y) in a
+        .iter()
+        .zip(linear_blend_skinning(&m.mesh, &m.skeleton, &g))
+    {
+        assert!(x.distance(y) < 1e-5);
+    }
+}
+
+#[test]
+fn step_cubic_spline_and_scale_channels_from_a_file() {
+    let mut m = tiny_model();
+    let step = Channel {
+        node: 1,
+        target: ChannelTarget::Translation,
+        interpolation: Interpolation::Step,
+        times: vec![0.0, 0.5, 1.0],
+        values: vec![
+            Vec4::new(0.0, 1.0, 0.0, 0.0),
+            Vec4::new(0.3, 1.0, 0.0, 0.0),
+            Vec4::new(0.0, 1.0, 0.0, 0.0),
+        ],
+    };
+    let q0 = Quat::IDENTITY;
+    let q1 = Quat::from_rotation_z(0.8);
+    let cubic = Channel {
+        node: 1,
+        target: ChannelTarget::Rotation,
+        interpolation: Interpolation::CubicSpline,
+        times: vec![0.0, 1.0],
+        values: vec![
+            Vec4::ZERO,
+            Vec4::from(q0),
+            Vec4::ZERO,
+            Vec4::ZERO,
+            Vec4::from(q1),
+            Vec4::ZERO,
+        ],
+    };
+    let scale = Channel {
+        node: 0,
+        target: ChannelTarget::Scale,
+        interpolation: Interpolation::Linear,
+        times: vec![0.0, 1.0],
+        values: vec![Vec4::new(1.0, 1.0, 1.0, 0.0), Vec4::new(1.0, 2.0, 1.0, 0.0)],
+    };
+    m.clips[0].channels = vec![step, cubic, scale];
+    m.clips[0].duration = 1.0;
+    let (_dir, p) = write(&to_glb(&m), "channels.glb");
+    let back = load(&p).unwrap();
+    let c = &back.clips[0];
+    let kinds: Vec<(ChannelTarget, Interpolation)> = c
+        .channels
+        .iter()
+        .map(|ch| (ch.target, ch.interpolation))
+        .collect();
+    assert_eq!(
+        kinds,
+        vec![
+            (ChannelTarget::Translation, Interpolation::Step),
+            (ChannelTarget::Rotation, Interpolation::CubicSpline),
+            (ChannelTarget::Scale, Interpolation::Linear),
+        ]
+    );
+    let pose = |t: f32| lodlab::anim::local_pose(&back.skeleton, Some(c), t);
+    // STEP holds the key before.
+    assert_eq!(pose(0.49)[1].translation, Vec3::new(0.0, 1.0, 0.0));
+    assert_eq!(pose(0.51)[1].translation, Vec3::new(0.3, 1.0, 0.0));
+    // CUBICSPLINE with zero tangents eases: at a quarter of the way it has turned less than a
+    // quarter of the angle, and it ends exactly on the key.
+    let (_, angle) = pose(0.25)[1].rotation.to_axis_angle();
+    assert!(angle > 0.01 && angle < 0.8 * 0.25, "{angle}");
+    assert!(pose(1.0)[1].rotation.angle_between(q1) < 1e-5);
+    // Scale interpolates linearly.
+    assert!((pose(0.5)[0].scale.y - 1.5).abs() < 1e-6);
+}
+
+#[test]
+fn primitives_of_one_skin_are_merged_with_their_materials() {
+    let bytes = edit_glb(&to_glb(&tiny_model()), |j| {
+        let prim = j["meshes"][0]["primitives"][0].clone();
+        let mut second = prim.clone();
+        second["material"] = serde_json::json!(1);
+        j["meshes"][0]["primitives"] = serde_json::json!([prim, second]);
+        let red = serde_json::json!({"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.0, 0.0, 1.0]}});
+        j["materials"].as_array_mut().unwrap().push(red);
+    });
+    let (_dir, p) = write(&bytes, "two.glb");
+    let m = load(&p).unwrap();
+    assert_eq!(m.mesh.vertex_count(), 20);
+    assert_eq!(m.mesh.triangle_count(), 16);
+    assert_eq!(m.materials.len(), 2);
+    assert_eq!(m.materials[1].base_color, [1.0, 0.0, 0.0, 1.0]);
+    assert!(m.mesh.materials[..10].iter().all(|&x| x == 0));
+    assert!(m.mesh.materials[10..].iter().all(|&x| x == 1));
+    assert!(m.mesh.indices[24..].iter().all(|&i| i >= 10));
+}
+
+#[test]
+fn welding_keeps_uv_seams_split() {
+    let shared =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/Fox.glb");
+    let m = load(&shared).unwrap();
+    let groups = lodlab::import::weld::position_groups(&m.mesh.positions, 1e-6);
+    let positions = *groups.iter().max().unwrap() as usize + 1;
+    // Fewer positions than vertices: the extra vertices are the two sides of UV seams.
+    assert!(positions < m.mesh.vertex_count());
+    let mut uv_of: std::collections::HashMap<u32, glam::Vec2> = Default::default();
+    let mut seam_vertices = 0;
+    for (v, &g) in groups.iter().enumerate() {
+        match uv_of.get(&g) {
+            Some(uv) if *uv != m.mesh.uvs[v] => seam_vertices += 1,
+            Some(_) => panic!("vertex {v} duplicates another with the same UV: not welded"),
+            None => {
+                uv_of.insert(g, m.mesh.uvs[v]);
+            }
+        }
+    }
+    assert!(seam_vertices > 0);
+    // Both sides of a seam got the same computed normal.
+    let mut normal_of: std::collections::HashMap<u32, glam::Vec3> = Default::default();
+    for (v, &g) in groups.iter().enumerate() {
+        let n = *normal_of.entry(g).or_insert(m.mesh.normals[v]);
+        assert!(n.dot(m.mesh.normals[v]) > 0.9999);
+    }
+}
