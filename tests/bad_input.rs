@@ -171,6 +171,18 @@ fn gltf_with_an_external_buffer_loads() {
     assert_eq!(load(&p).unwrap().mesh.triangle_count(), 8);
 }
 
+#[test]
+fn cli_refuses_an_unwritable_output_before_rendering() {
+    let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(["shot", "--count", "1", "--out", "/no/such/folder/x.png"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("/no/such/folder/x.png") && stderr.contains("does not exist"), "{stderr}");
+    assert!(!stderr.contains("adapter"), "it must fail before opening the GPU: {stderr}");
+}
+
 /// The command line: one line on stderr, exit code 1, no panic, for every broken file.
 #[test]
 fn cli_reports_bad_models_in_one_line_with_exit_code_1() {

@@ -73,6 +73,7 @@ fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> R
 }
 
 pub fn run(options: &ShotOptions) -> Result<ShotReport> {
+    check_writable(&options.out)?;
     let loaded = Loaded::new(options.spec.clone())?;
     let gpu = Gpu::headless()?;
     eprintln!("lodlab: adapter {}", gpu.describe());
@@ -121,6 +122,22 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         plain_frame_ms,
         skinning_ratio: plain_frame_ms.map(|p| frame_ms / p.max(1e-9)),
     })
+}
+
+/// Fails early, before any rendering, if `path` cannot be written: its folder is missing or it
+/// is a folder itself.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        anyhow::bail!("{}: cannot write: folder {} does not exist", path.display(), parent.display());
+    }
+    if path.is_dir() {
+        anyhow::bail!("{}: cannot write: is a folder", path.display());
+    }
+    Ok(())
 }
 
 /// Writes a PNG via a temporary file and a rename, so an interrupted write never leaves half a

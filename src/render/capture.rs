@@ -9,7 +9,7 @@
 use super::gpu::Gpu;
 use super::renderer::SceneRenderer;
 use super::shaders;
-use super::targets::read_texture;
+use super::targets::Offscreen;
 use super::uniforms::{FrameUniforms, FrameView, GpuInstance};
 use anyhow::{Result, bail};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
@@ -34,20 +34,7 @@ pub fn capture_skinned(
     let n = character.vertex_count;
     let height = n.div_ceil(WIDTH).max(1);
     let format = wgpu::TextureFormat::Rgba32Float;
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("capture"),
-        size: wgpu::Extent3d {
-            width: WIDTH,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let target = Offscreen::with_format(gpu, WIDTH, height, 1, format);
     let view = FrameView {
         view: Mat4::IDENTITY,
         proj: Mat4::IDENTITY,
@@ -118,13 +105,12 @@ pub fn capture_skinned(
         multiview_mask: None,
         cache: None,
     });
-    let target_view = target.create_view(&Default::default());
     let mut enc = device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("capture"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target_view,
+                view: &target.view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
@@ -141,7 +127,7 @@ pub fn capture_skinned(
         pass.draw(0..n, 0..1);
     }
     gpu.queue.submit([enc.finish()]);
-    let bytes = read_texture(gpu, &target)?;
+    let bytes = target.read_bytes(gpu)?;
     let texels: &[Vec4] = bytemuck::cast_slice(&bytes);
     Ok(texels[..n as usize].to_vec())
 }

@@ -428,6 +428,30 @@ impl SceneRenderer {
         }
     }
 
+    /// Records the scene pass into `target` through `targets`, drawing only inside `viewport`
+    /// (x, y, width, height in pixels) when one is given.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &super::targets::RenderTargets,
+        target: &wgpu::TextureView,
+        viewport: Option<[u32; 4]>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("scene"),
+            color_attachments: &[Some(
+                targets.color(target, wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
+            )],
+            depth_stencil_attachment: Some(targets.depth()),
+            ..Default::default()
+        });
+        if let Some([x, y, w, h]) = viewport {
+            pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, w, h);
+        }
+        self.draw(&mut pass);
+    }
+
     /// Renders one complete frame into `target` through `targets` and submits it.
     pub fn render_to(
         &self,
@@ -436,17 +460,7 @@ impl SceneRenderer {
         target: &wgpu::TextureView,
     ) -> wgpu::SubmissionIndex {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("scene"),
-                color_attachments: &[Some(
-                    targets.color(target, wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
-                )],
-                depth_stencil_attachment: Some(targets.depth()),
-                ..Default::default()
-            });
-            self.draw(&mut pass);
-        }
+        self.encode(&mut enc, targets, target, None);
         gpu.queue.submit([enc.finish()])
     }
 }

@@ -55,6 +55,9 @@ pub fn run(options: ViewOptions) -> Result<ExitCode> {
         eprintln!("{NO_DISPLAY}");
         return Ok(ExitCode::from(2));
     }
+    if let Some(path) = &options.screenshot {
+        super::shot::check_writable(path)?;
+    }
     let loaded = Loaded::new(options.spec.clone())?;
     let event_loop = match EventLoop::new() {
         Ok(el) => el,
@@ -445,20 +448,9 @@ impl Viewer {
         primitives: &[egui::ClippedPrimitive],
         screen: &egui_wgpu::ScreenDescriptor,
     ) {
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("scene"),
-                color_attachments: &[Some(
-                    targets.color(view, wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
-                )],
-                depth_stencil_attachment: Some(targets.depth()),
-                ..Default::default()
-            });
-            let [x, y, vw, vh] = self.view;
-            pass.set_viewport(x as f32, y as f32, vw as f32, vh as f32, 0.0, 1.0);
-            pass.set_scissor_rect(x, y, vw, vh);
-            self.world.renderer.draw(&mut pass);
-        }
+        self.world
+            .renderer
+            .encode(encoder, targets, view, Some(self.view));
         let mut pass = encoder
             .begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("panel"),
