@@ -179,8 +179,14 @@ fn cli_refuses_an_unwritable_output_before_rendering() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("/no/such/folder/x.png") && stderr.contains("does not exist"), "{stderr}");
-    assert!(!stderr.contains("adapter"), "it must fail before opening the GPU: {stderr}");
+    assert!(
+        stderr.contains("/no/such/folder/x.png") && stderr.contains("does not exist"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("adapter"),
+        "it must fail before opening the GPU: {stderr}"
+    );
 }
 
 /// The command line: one line on stderr, exit code 1, no panic, for every broken file.

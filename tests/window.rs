@@ -31,7 +31,7 @@ fn viewer_window_shows_the_scene_and_the_panel() {
     let args = [
         "view",
         "--count",
-        "24",
+        "12",
         "--size",
         "960x540",
         "--frames",

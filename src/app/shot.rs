@@ -132,7 +132,11 @@ pub fn check_writable(path: &Path) -> Result<()> {
         _ => Path::new("."),
     };
     if !parent.is_dir() {
-        anyhow::bail!("{}: cannot write: folder {} does not exist", path.display(), parent.display());
+        anyhow::bail!(
+            "{}: cannot write: folder {} does not exist",
+            path.display(),
+            parent.display()
+        );
     }
     if path.is_dir() {
         anyhow::bail!("{}: cannot write: is a folder", path.display());

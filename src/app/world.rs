@@ -82,21 +82,25 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
             }
         })
         .collect();
-    let clip = spec.clip.as_ref().and_then(|wanted| {
-        chosen.iter().find_map(|&m| {
-            bakes[m]
-                .animation
-                .clips
-                .iter()
-                .position(|c| c.name.eq_ignore_ascii_case(wanted))
+    // A clip is chosen by name, model by model: models without it play a mix.
+    let clips = chosen
+        .iter()
+        .map(|&m| {
+            spec.clip.as_ref().and_then(|wanted| {
+                bakes[m]
+                    .animation
+                    .clips
+                    .iter()
+                    .position(|c| c.name.eq_ignore_ascii_case(wanted))
+            })
         })
-    });
+        .collect();
     let mut crowd = Crowd::layout(
         &crowd_models,
         &CrowdConfig {
             count: spec.count,
             seed: spec.seed,
-            clip,
+            clips,
         },
     );
     for a in &mut crowd.agents {
@@ -223,5 +227,46 @@ impl World {
         self.crowd.instances_at(time, &mut self.instances);
         let view = crate::render::FrameView::from_camera(&self.camera, aspect, time);
         self.renderer.prepare(gpu, &view, &self.instances)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_clip_is_chosen_by_name_model_by_model() {
+        let spec = SceneSpec {
+            count: 40,
+            clip: Some("gallop".into()),
+            ..Default::default()
+        };
+        let (_, bakes) = load_characters(&spec).unwrap();
+        let crowd = layout_crowd(&spec, &bakes, None);
+        let horse = bakes.iter().position(|b| b.name == "horse").unwrap();
+        let gallop = bakes[horse]
+            .animation
+            .clips
+            .iter()
+            .position(|c| c.name == "gallop")
+            .unwrap();
+        for a in &crowd.agents {
+            if a.model == horse {
+                assert_eq!(a.clip, gallop);
+            } else {
+                // Walkers have no gallop: they keep a mix of their own clips.
+                assert!(a.clip < bakes[a.model].animation.clips.len());
+            }
+        }
+        let walker_clips: std::collections::HashSet<usize> = crowd
+            .agents
+            .iter()
+            .filter(|a| a.model != horse)
+            .map(|a| a.clip)
+            .collect();
+        assert!(
+            walker_clips.len() > 1,
+            "walkers must not all be forced onto one clip"
+        );
     }
 }

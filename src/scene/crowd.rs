@@ -22,8 +22,8 @@ pub struct CrowdModel {
 pub struct CrowdConfig {
     pub count: usize,
     pub seed: u64,
-    /// Play this clip index on every character of every model that has it.
-    pub clip: Option<usize>,
+    /// Per model, the clip every character of it plays; `None` (or a missing entry): a mix.
+    pub clips: Vec<Option<usize>>,
 }
 
 impl Default for CrowdConfig {
@@ -31,8 +31,18 @@ impl Default for CrowdConfig {
         CrowdConfig {
             count: 300,
             seed: 1,
-            clip: None,
+            clips: Vec::new(),
         }
+    }
+}
+
+impl CrowdConfig {
+    fn forced_clip(&self, model: usize, clip_count: usize) -> Option<usize> {
+        self.clips
+            .get(model)
+            .copied()
+            .flatten()
+            .filter(|&c| c < clip_count)
     }
 }
 
@@ -125,11 +135,9 @@ impl Crowd {
         let mut rng = fastrand::Rng::with_seed(config.seed);
         if config.count == 1 {
             // A single character is being inspected: it plays on the spot at the origin.
-            let speeds = &models[0].clip_speeds;
-            let clip = match config.clip {
-                Some(c) if c < speeds.len() => c,
-                _ => 0,
-            };
+            let clip = config
+                .forced_clip(0, models[0].clip_speeds.len())
+                .unwrap_or(0);
             return Crowd {
                 agents: vec![Agent {
                     model: 0,
@@ -151,9 +159,9 @@ impl Crowd {
         for i in 0..config.count {
             let m = i % models.len();
             let speeds = &models[m].clip_speeds;
-            let clip = match config.clip {
-                Some(c) if c < speeds.len() => c,
-                _ => pick_clip(speeds, &mut rng),
+            let clip = match config.forced_clip(m, speeds.len()) {
+                Some(c) => c,
+                None => pick_clip(speeds, &mut rng),
             };
             cast.push((m, clip));
         }
@@ -379,7 +387,7 @@ mod tests {
             &models(),
             &CrowdConfig {
                 count: 20,
-                clip: Some(0),
+                clips: vec![Some(0), Some(0)],
                 ..Default::default()
             },
         );

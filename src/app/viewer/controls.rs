@@ -116,7 +116,7 @@ impl Controls {
         } else {
             1.0
         };
-        let speed = (camera.distance * 0.8).max(2.0) * fast * dt;
+        let speed = (camera.distance * 0.5).max(2.0) * fast * dt;
         camera.fly(forward * speed, right * speed, up * speed);
     }
 
