@@ -44,7 +44,7 @@ pub struct CharacterBake {
 impl CharacterBake {
     pub fn new(model: &Model) -> Result<Self, String> {
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
-        let am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
+        let am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
         let vertices = VertexTexture::pack(&[&am])?;
         let materials = MaterialLayers::bake(&model.materials);
 
