@@ -2,8 +2,43 @@
 //! bone chain, nearest-point queries on chains.
 
 use super::cage::{Cage, ExtrudeRing, Extrusion, FaceId, Ring, Weights};
-use super::rig::Chain;
+use super::finish::{finish, paint};
+use super::rig::{Chain, Rig};
+use crate::model::{Clip, Material, Model};
 use glam::{Vec2, Vec3};
+
+/// Side of the square texture every creature is painted into.
+const TEXTURE_SIZE: u32 = 512;
+
+/// A colour function of (part, rest position, normal), as [`paint`] takes it.
+pub type Painter = Box<dyn Fn(u32, Vec3, Vec3) -> Vec3>;
+
+/// The last steps every creature shares: two levels of Catmull–Clark, the triangle mesh with its
+/// atlas, the texture painted by the painter `coat` makes once it can see the finished surface
+/// (to put eyes on it), and the model.
+pub fn assemble(
+    name: &str,
+    material: &str,
+    rig: &Rig,
+    cage: Cage,
+    clips: Vec<Clip>,
+    coat: impl FnOnce(&[Vec3]) -> Painter,
+) -> Model {
+    let finished = finish(&cage.subdivide().subdivide(), TEXTURE_SIZE);
+    let painter = coat(&finished.mesh.positions);
+    let texture = paint(&finished, TEXTURE_SIZE, &*painter);
+    Model {
+        name: name.into(),
+        mesh: finished.mesh,
+        skeleton: rig.skeleton(),
+        clips,
+        materials: vec![Material {
+            name: material.into(),
+            base_color: [1.0; 4],
+            texture: Some(texture),
+        }],
+    }
+}
 
 /// A cross-section of a body tube: centre, and half extents across (lateral) and up.
 #[derive(Clone, Copy, Debug)]

@@ -4,12 +4,13 @@
 //! Metres, facing +z, standing on y = 0, left side at +x.
 
 use super::build::{
-    DECAGON, Section, body_rings, extrude_limb, extrude_rigid, limb, nearest_surface_point, section,
+    DECAGON, Section, assemble, body_rings, extrude_limb, extrude_rigid, limb,
+    nearest_surface_point, section,
 };
 use super::cage::{Cage, Cap};
-use super::finish::{fbm, finish, noise, paint, smooth};
+use super::finish::{fbm, noise, smooth};
 use super::rig::{Chain, Pose, Rig, bake_clip, bump, euler, rigid, wave};
-use crate::model::{Material, Model};
+use crate::model::Model;
 use glam::{Vec2, Vec3};
 
 // Parts, for the painter.
@@ -22,8 +23,6 @@ const EAR: u32 = 5;
 const TAIL: u32 = 6;
 const REAR: u32 = 7;
 const NOSE: u32 = 8;
-
-const TEXTURE_SIZE: u32 = 512;
 
 struct Legs {
     /// Bones of each leg, top to bottom: [front left, front right, hind left, hind right].
@@ -421,25 +420,16 @@ fn coat(eyes: [Vec3; 2], nostrils: [Vec3; 2]) -> impl Fn(u32, Vec3, Vec3) -> Vec
 
 pub fn horse() -> Model {
     let (r, legs) = rig();
-    let fine = cage(&r, &legs).subdivide().subdivide();
-    let finished = finish(&fine, TEXTURE_SIZE);
-    let surface = &finished.mesh.positions;
-    let eye = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.14, 1.77, 1.27));
-    let nostril = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.05, 1.42, 1.72));
-    let texture = paint(
-        &finished,
-        TEXTURE_SIZE,
-        &coat([eye(1.0), eye(-1.0)], [nostril(1.0), nostril(-1.0)]),
-    );
-    Model {
-        name: "horse".into(),
-        mesh: finished.mesh,
-        skeleton: r.skeleton(),
-        clips: clips(&r, &legs),
-        materials: vec![Material {
-            name: "bay coat".into(),
-            base_color: [1.0; 4],
-            texture: Some(texture),
-        }],
-    }
+    assemble(
+        "horse",
+        "bay coat",
+        &r,
+        cage(&r, &legs),
+        clips(&r, &legs),
+        |surface| {
+            let eye = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.14, 1.77, 1.27));
+            let nostril = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.05, 1.42, 1.72));
+            Box::new(coat([eye(1.0), eye(-1.0)], [nostril(1.0), nostril(-1.0)]))
+        },
+    )
 }

@@ -5,12 +5,13 @@
 //! horizontal (a rest pose that skins better than a T-pose when the arms hang).
 
 use super::build::{
-    OCTAGON, Section, body_rings, extrude_limb, extrude_rigid, limb, nearest_surface_point, section,
+    OCTAGON, Section, assemble, body_rings, extrude_limb, extrude_rigid, limb,
+    nearest_surface_point, section,
 };
 use super::cage::{Cage, Cap};
-use super::finish::{fbm, finish, noise, paint, smooth};
+use super::finish::{fbm, noise, smooth};
 use super::rig::{Chain, Pose, Rig, bake_clip, bump, euler, rigid, wave};
-use crate::model::{Material, Model};
+use crate::model::Model;
 use glam::{Vec2, Vec3};
 
 // Parts, for the painter.
@@ -22,7 +23,6 @@ const LEG: u32 = 4;
 const SOLE: u32 = 5;
 const SKIN: u32 = 6;
 
-const TEXTURE_SIZE: u32 = 512;
 /// Arms hang this many degrees below the horizontal in the rest pose.
 const A_POSE: f32 = 40.0;
 
@@ -364,7 +364,7 @@ fn clips(r: &Rig, l: &Limbs) -> Vec<crate::model::Clip> {
 }
 
 /// Blue shirt with short sleeves, charcoal trousers, brown shoes and belt, dark hair.
-fn clothes(r: &Rig, l: &Limbs, eyes: [Vec3; 2]) -> impl Fn(u32, Vec3, Vec3) -> Vec3 {
+fn clothes(r: &Rig, l: &Limbs, eyes: [Vec3; 2]) -> impl Fn(u32, Vec3, Vec3) -> Vec3 + use<> {
     let shoulders = [r.heads[l.arms[0][0]], r.heads[l.arms[1][0]]];
     let wrists = [r.heads[l.arms[0][2]], r.heads[l.arms[1][2]]];
     move |part, p, n| {
@@ -435,24 +435,16 @@ fn clothes(r: &Rig, l: &Limbs, eyes: [Vec3; 2]) -> impl Fn(u32, Vec3, Vec3) -> V
 
 pub fn walker() -> Model {
     let (r, l) = rig();
-    let fine = cage(&r, &l).subdivide().subdivide();
-    let finished = finish(&fine, TEXTURE_SIZE);
-    let surface = &finished.mesh.positions;
-    let eye = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.034, 1.752, 0.12));
-    let texture = paint(
-        &finished,
-        TEXTURE_SIZE,
-        &clothes(&r, &l, [eye(1.0), eye(-1.0)]),
-    );
-    Model {
-        name: "walker".into(),
-        mesh: finished.mesh,
-        skeleton: r.skeleton(),
-        clips: clips(&r, &l),
-        materials: vec![Material {
-            name: "clothes".into(),
-            base_color: [1.0; 4],
-            texture: Some(texture),
-        }],
-    }
+    let eyes = |surface: &[Vec3]| {
+        let eye = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.034, 1.752, 0.12));
+        [eye(1.0), eye(-1.0)]
+    };
+    assemble(
+        "walker",
+        "clothes",
+        &r,
+        cage(&r, &l),
+        clips(&r, &l),
+        |surface| Box::new(clothes(&r, &l, eyes(surface))),
+    )
 }
