@@ -1,8 +1,5 @@
 // Skinned characters: GPU skinning from the animation and vertex textures, lit base colour.
 
-@group(1) @binding(2) var material_tex: texture_2d_array<f32>;
-@group(1) @binding(3) var material_sampler: sampler;
-
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,

@@ -2,7 +2,7 @@
 //! matrices `G_i` of Merry et al. §2.1.1.
 
 use crate::model::{Channel, ChannelTarget, Clip, Interpolation, Skeleton, Trs};
-use glam::{Affine3A, Quat, Vec3, Vec4};
+use glam::{Affine3A, Quat, Vec4};
 
 /// Wraps a time into a clip of the given duration. Time exactly at the end of a positive-length
 /// clip stays at the end, so resampling `[0, duration]` inclusive sees the last key.
@@ -141,19 +141,11 @@ pub fn bone_matrices(skeleton: &Skeleton, clip: Option<&Clip>, t: f32) -> Vec<Af
         .collect()
 }
 
-/// World-space joint positions (the origin of every bone), handy for debug drawing and tests.
-pub fn joint_positions(skeleton: &Skeleton, clip: Option<&Clip>, t: f32) -> Vec<Vec3> {
-    bone_matrices(skeleton, clip, t)
-        .iter()
-        .map(|g| Vec3::from(g.translation))
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::Node;
-    use glam::Mat4;
+    use glam::{Mat4, Vec3};
 
     fn channel(
         target: ChannelTarget,

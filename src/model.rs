@@ -165,14 +165,6 @@ pub struct Model {
     pub materials: Vec<Material>,
 }
 
-impl Model {
-    pub fn clip_index(&self, name: &str) -> Option<usize> {
-        self.clips
-            .iter()
-            .position(|c| c.name.eq_ignore_ascii_case(name))
-    }
-}
-
 /// Axis-aligned bounds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {

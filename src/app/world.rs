@@ -3,7 +3,6 @@
 
 use crate::bake::CharacterBake;
 use crate::import::load_model;
-use crate::model::Model;
 use crate::render::{Gpu, SceneRenderer};
 use crate::scene::{Camera, Crowd, CrowdConfig, CrowdModel, Instance};
 use anyhow::{Result, bail};
@@ -40,7 +39,7 @@ impl Default for SceneSpec {
 }
 
 /// Loads and bakes the models a spec names, in order.
-pub fn load_characters(spec: &SceneSpec) -> Result<(Vec<Model>, Vec<CharacterBake>)> {
+pub fn load_characters(spec: &SceneSpec) -> Result<Vec<CharacterBake>> {
     if !SCENES.contains(&spec.scene.as_str()) {
         bail!(
             "unknown scene '{}' (scenes: {})",
@@ -53,15 +52,13 @@ pub fn load_characters(spec: &SceneSpec) -> Result<(Vec<Model>, Vec<CharacterBak
     } else {
         spec.models.clone()
     };
-    let mut models = Vec::new();
-    let mut bakes = Vec::new();
-    for name in &names {
-        let model = load_model(name)?;
-        let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-        models.push(model);
-        bakes.push(bake);
-    }
-    Ok((models, bakes))
+    names
+        .iter()
+        .map(|name| {
+            let model = load_model(name)?;
+            CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))
+        })
+        .collect()
 }
 
 /// The crowd for a spec over already-loaded characters: all of them, or only character
@@ -76,7 +73,6 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
         .map(|&m| {
             let b = &bakes[m];
             CrowdModel {
-                name: b.name.clone(),
                 clip_speeds: b.animation.clips.iter().map(|c| c.ground_speed).collect(),
                 bounds: b.bounds,
             }
@@ -153,7 +149,6 @@ pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
 /// A loaded scene: the renderer with its characters, the crowd and a camera.
 pub struct World {
     pub spec: SceneSpec,
-    pub models: Vec<Model>,
     pub bakes: Vec<CharacterBake>,
     pub crowd: Crowd,
     pub camera: Camera,
@@ -165,19 +160,14 @@ pub struct World {
 /// way with or without a GPU.
 pub struct Loaded {
     pub spec: SceneSpec,
-    pub models: Vec<Model>,
     pub bakes: Vec<CharacterBake>,
 }
 
 impl Loaded {
     pub fn new(spec: SceneSpec) -> Result<Loaded> {
-        let (models, bakes) = load_characters(&spec)?;
+        let bakes = load_characters(&spec)?;
         check_clip(&spec, &bakes)?;
-        Ok(Loaded {
-            spec,
-            models,
-            bakes,
-        })
+        Ok(Loaded { spec, bakes })
     }
 }
 
@@ -188,11 +178,7 @@ impl World {
         color_format: wgpu::TextureFormat,
         sample_count: u32,
     ) -> Result<World> {
-        let Loaded {
-            spec,
-            models,
-            bakes,
-        } = loaded;
+        let Loaded { spec, bakes } = loaded;
         let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
         for b in &bakes {
             renderer.add_character(gpu, b)?;
@@ -201,7 +187,6 @@ impl World {
         let camera = default_camera(&crowd, &bakes);
         Ok(World {
             spec,
-            models,
             bakes,
             crowd,
             camera,
@@ -241,7 +226,7 @@ mod tests {
             clip: Some("gallop".into()),
             ..Default::default()
         };
-        let (_, bakes) = load_characters(&spec).unwrap();
+        let bakes = load_characters(&spec).unwrap();
         let crowd = layout_crowd(&spec, &bakes, None);
         let horse = bakes.iter().position(|b| b.name == "horse").unwrap();
         let gallop = bakes[horse]

@@ -14,7 +14,7 @@
 
 use super::texels::TexelGrid;
 use crate::model::Model;
-use glam::{Affine3A, Mat3A, Vec3A, Vec4};
+use glam::{Affine3A, Mat3A, Vec3A};
 use serde::{Deserialize, Serialize};
 
 /// Default resampling rate in frames per second.
@@ -125,10 +125,6 @@ impl AnimationTexture {
             })
             .collect()
     }
-
-    pub fn byte_size(&self) -> usize {
-        self.grid.bytes().len()
-    }
 }
 
 /// Frame indices (within the clip) and blend factor for `time`, wrapping the clip. Mirrors the
@@ -163,11 +159,6 @@ fn rows_to_affine(r: [[f32; 4]; 3]) -> Affine3A {
     }
 }
 
-/// Row `r` of `G` as a 4-vector, so that `G p = (row0·p, row1·p, row2·p)`.
-pub fn row(g: &Affine3A, r: usize) -> Vec4 {
-    Vec4::from(matrix_rows(g)[r])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -182,10 +173,11 @@ mod tests {
         let back = rows_to_affine(matrix_rows(&g));
         assert!(back.abs_diff_eq(g, 1e-7));
         let p = glam::Vec3::new(0.5, -1.0, 2.0);
+        let rows = matrix_rows(&g).map(glam::Vec4::from);
         let via_rows = glam::Vec3::new(
-            row(&g, 0).dot(p.extend(1.0)),
-            row(&g, 1).dot(p.extend(1.0)),
-            row(&g, 2).dot(p.extend(1.0)),
+            rows[0].dot(p.extend(1.0)),
+            rows[1].dot(p.extend(1.0)),
+            rows[2].dot(p.extend(1.0)),
         );
         assert!((via_rows - g.transform_point3(p)).length() < 1e-5);
     }

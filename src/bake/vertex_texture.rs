@@ -71,10 +71,6 @@ impl VertexTexture {
             influence_count: influence_count as u32,
         })
     }
-
-    pub fn byte_size(&self) -> usize {
-        self.grid.bytes().len()
-    }
 }
 
 #[cfg(test)]

@@ -121,10 +121,6 @@ impl Cage {
         FaceId(self.faces.len() - 1)
     }
 
-    pub fn face(&self, f: FaceId) -> &Face {
-        &self.faces[f.0]
-    }
-
     pub fn face_center(&self, f: FaceId) -> Vec3 {
         self.faces[f.0]
             .v

@@ -73,7 +73,7 @@ fn pack(cage: &Cage, size: u32) -> (Vec<Placement>, f32) {
     }
     let placements = (0..charts)
         .map(|c| Placement {
-            min: lo[c].min(Vec2::splat(f32::MAX)),
+            min: lo[c],
             origin: best[c],
         })
         .collect();

@@ -4,7 +4,6 @@
 use super::gpu::Gpu;
 use crate::bake::CharacterBake;
 use crate::bake::texels::TexelGrid;
-use crate::model::Bounds;
 use wgpu::util::DeviceExt;
 
 /// Shadow ellipse of a character, mirror of `Shadow` in `shaders/shadow.wgsl`.
@@ -14,20 +13,9 @@ struct ShadowUniform {
     ellipse: [f32; 4],
 }
 
-/// Clip facts the front ends need (names for menus, speeds for paths).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ClipInfo {
-    pub name: String,
-    pub duration: f32,
-    pub ground_speed: f32,
-}
-
 pub struct GpuCharacter {
-    pub name: String,
-    pub clips: Vec<ClipInfo>,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
-    pub bounds: Bounds,
     pub triangle_count: u32,
     pub vertex_count: u32,
     pub influence_count: u32,
@@ -35,8 +23,6 @@ pub struct GpuCharacter {
     pub index_count: u32,
     pub static_vertices: wgpu::Buffer,
     pub bind_group: wgpu::BindGroup,
-    /// Bytes of GPU memory held by this character's textures and buffers.
-    pub gpu_bytes: usize,
 }
 
 /// Layout of group 1: animation texture, vertex texture, material layers, sampler, shadow.
@@ -214,27 +200,10 @@ impl GpuCharacter {
                 },
             ],
         });
-        let gpu_bytes = bake.animation.byte_size()
-            + bake.vertices.byte_size()
-            + material_data.len()
-            + bake.indices.len() * 4
-            + std::mem::size_of_val(bake.static_vertices.as_slice());
         GpuCharacter {
-            name: bake.name.clone(),
-            clips: bake
-                .animation
-                .clips
-                .iter()
-                .map(|c| ClipInfo {
-                    name: c.name.clone(),
-                    duration: c.duration,
-                    ground_speed: c.ground_speed,
-                })
-                .collect(),
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),
-            bounds: bake.bounds,
             triangle_count: bake.triangle_count() as u32,
             vertex_count: bake.vertices.vertex_count,
             influence_count: bake.vertices.influence_count,
@@ -242,7 +211,6 @@ impl GpuCharacter {
             index_count: bake.indices.len() as u32,
             static_vertices,
             bind_group,
-            gpu_bytes,
         }
     }
 }

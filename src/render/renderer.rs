@@ -35,8 +35,6 @@ pub struct FrameStats {
 }
 
 pub struct SceneRenderer {
-    pub color_format: wgpu::TextureFormat,
-    pub sample_count: u32,
     pub lighting: Lighting,
     pub shader: CharacterShader,
     pub shadows: bool,
@@ -271,8 +269,6 @@ impl SceneRenderer {
         );
         let instance_buffer = Self::instance_buffer(device, 256);
         SceneRenderer {
-            color_format,
-            sample_count,
             lighting: Lighting::default(),
             shader: CharacterShader::Skinned,
             shadows: true,

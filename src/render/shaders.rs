@@ -4,6 +4,7 @@
 
 const COMMON: &str = include_str!("../../shaders/common.wgsl");
 const SKINNING: &str = include_str!("../../shaders/skinning.wgsl");
+const MATERIAL: &str = include_str!("../../shaders/material.wgsl");
 const CHARACTER: &str = include_str!("../../shaders/character.wgsl");
 const PLAIN: &str = include_str!("../../shaders/plain.wgsl");
 const CAPTURE: &str = include_str!("../../shaders/capture.wgsl");
@@ -31,11 +32,11 @@ impl ShaderSource {
 
 pub const CHARACTER_SHADER: ShaderSource = ShaderSource {
     name: "character",
-    parts: &[COMMON, SKINNING, CHARACTER],
+    parts: &[COMMON, SKINNING, MATERIAL, CHARACTER],
 };
 pub const PLAIN_SHADER: ShaderSource = ShaderSource {
     name: "plain",
-    parts: &[COMMON, SKINNING, PLAIN],
+    parts: &[COMMON, SKINNING, MATERIAL, PLAIN],
 };
 pub const CAPTURE_SHADER: ShaderSource = ShaderSource {
     name: "capture",

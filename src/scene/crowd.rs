@@ -11,7 +11,6 @@ use glam::{Affine3A, Quat, Vec2, Vec3, Vec4};
 /// What the layout needs to know about a model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CrowdModel {
-    pub name: String,
     /// Ground speed of every clip in metres per second (0: played on the spot).
     pub clip_speeds: Vec<f32>,
     /// Animated bounds, model space.
@@ -334,12 +333,10 @@ mod tests {
         };
         vec![
             CrowdModel {
-                name: "horse".into(),
                 clip_speeds: vec![1.6, 8.0],
                 bounds: b(0.7, 2.0, 2.4),
             },
             CrowdModel {
-                name: "walker".into(),
                 clip_speeds: vec![1.3, 0.0],
                 bounds: b(0.6, 1.8, 0.4),
             },
