@@ -13,11 +13,16 @@ use std::process::ExitCode;
     version,
     about = "Compare level-of-detail methods on animated crowds",
     long_about = "Compare level-of-detail methods on animated crowds.\n\n\
-                  Without a subcommand, lodlab opens the viewer (`lodlab view`)."
+                  Without a subcommand, lodlab opens the viewer: `lodlab [OPTIONS]` is \
+                  `lodlab view [OPTIONS]`.",
+    args_conflicts_with_subcommands = true
 )]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// The viewer's options, for `lodlab` without a subcommand.
+    #[command(flatten)]
+    view: ViewArgs,
 }
 
 #[derive(Subcommand, Debug)]
@@ -185,14 +190,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::View(a)) => view(a),
-        None => {
-            // `lodlab` alone is `lodlab view` with its defaults.
-            let cli = Cli::parse_from(["lodlab", "view"]);
-            match cli.command {
-                Some(Command::View(a)) => view(a),
-                _ => unreachable!("parsed as view"),
-            }
-        }
+        None => view(cli.view),
     }
 }
 

@@ -89,14 +89,23 @@ fn check_screenshot(path: &Path) {
 
 #[test]
 fn viewer_without_a_display_points_to_shot_and_exits_2() {
-    let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{stderr}");
-    assert!(lines[0].contains("lodlab shot"), "{stderr}");
+    // `lodlab`, `lodlab view` and `lodlab` with the viewer's options are the same command.
+    let forms: [&[&str]; 3] = [
+        &[],
+        &["view", "--count", "5"],
+        &["--count", "5", "--model", "walker"],
+    ];
+    for args in forms {
+        let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+            .args(args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {stderr}");
+        assert!(lines[0].contains("lodlab shot"), "{args:?}: {stderr}");
+    }
 }
