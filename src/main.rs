@@ -33,6 +33,63 @@ enum Command {
     Shot(ShotArgs),
     /// Regenerate the demo creatures (horse, walker) as .glb files.
     GenAssets(GenAssetsArgs),
+    /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS),
+    /// or fetch them from the cache, and print them as a table.
+    Bake(BakeArgs),
+    /// Measure a model's levels of detail: error curves (report.json, error.png, as in
+    /// Merry et al. Figure 7) and bake timings (timings.md, as in their Table 1).
+    Report(ReportArgs),
+}
+
+#[derive(Args, Debug)]
+struct ReportArgs {
+    /// A built-in asset name (horse, walker) or a glTF path.
+    #[arg(value_name = "MODEL")]
+    model: String,
+    /// Folder to write report.json, error.png and timings.md into (created if needed).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Also measure this simplifier on the rest pose at the same triangle counts.
+    #[arg(long, value_parser = ["meshopt"])]
+    baseline: Option<String>,
+}
+
+#[derive(Args, Debug)]
+struct BakeArgs {
+    /// Models: built-in asset names (horse, walker) or glTF paths.
+    #[arg(required = true, value_name = "MODEL")]
+    models: Vec<String>,
+    /// Simplification methods, comma separated.
+    #[arg(long, default_value = "rest-pose,as,as+is", value_parser = parse_methods)]
+    methods: Methods,
+    /// Error bound of LOD 1 in pixels, for the model filling 1000 pixels of screen height;
+    /// each further level doubles it.
+    #[arg(long, default_value_t = 0.5)]
+    tolerance: f32,
+    /// Cut levels by triangle budgets instead of errors, e.g. 4000,2000,1000.
+    #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
+    triangles: Option<Vec<u32>>,
+    /// Cache folder (default: the platform cache folder's lodlab/).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug)]
+struct Methods(Vec<lodlab::bake::simplify::Method>);
+
+fn parse_methods(s: &str) -> Result<Methods, String> {
+    let mut out = Vec::new();
+    for part in s.split(',').filter(|p| !p.trim().is_empty()) {
+        let m = lodlab::bake::simplify::Method::parse(part)
+            .ok_or_else(|| format!("'{part}' is not a method (rest-pose, as, as+is)"))?;
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    }
+    if out.is_empty() {
+        return Err("no method given".into());
+    }
+    Ok(Methods(out))
 }
 
 #[derive(Args, Debug)]
@@ -187,6 +244,38 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             for w in lodlab::app::gen_assets::run(&dir, &a.only)? {
                 println!("{}", serde_json::to_string(&w)?);
             }
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Bake(a)) => {
+            if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
+                anyhow::bail!("--tolerance must be a positive number of pixels");
+            }
+            let results = lodlab::app::bake::run(&lodlab::app::bake::BakeOptions {
+                models: a.models,
+                methods: a.methods.0,
+                tolerance_px: a.tolerance,
+                budgets: a.triangles,
+                cache_dir: a.cache,
+            })?;
+            print!("{}", lodlab::app::bake::table(&results));
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Report(a)) => {
+            let report = lodlab::app::report::run(&lodlab::app::report::ReportOptions {
+                model: a.model,
+                out: a.out.clone(),
+                baseline_meshopt: a.baseline.is_some(),
+                progress: true,
+            })?;
+            let c = &report.comparison;
+            let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
+            println!(
+                "{}: AS <= rest-pose on {} of the curve, AS+IS <= AS on {}; wrote {}",
+                report.model,
+                pct(c.as_le_rest_pose),
+                pct(c.as_is_le_as),
+                a.out.display()
+            );
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::View(a)) => view(a),

@@ -1,6 +1,8 @@
 //! Front ends: the command-line tools and the viewer.
 
+pub mod bake;
 pub mod gen_assets;
+pub mod report;
 pub mod shot;
 pub mod viewer;
 pub mod world;

@@ -80,6 +80,11 @@ impl AnimationSpaceMesh {
     /// one and a half times, and neighbouring vertices sit next to each other in the vertex
     /// texture.
     pub fn optimized_for_gpu(&self) -> AnimationSpaceMesh {
+        self.optimized_for_gpu_with_order().0
+    }
+
+    /// [`Self::optimized_for_gpu`], also returning which old vertex each new one is.
+    pub fn optimized_for_gpu_with_order(&self) -> (AnimationSpaceMesh, Vec<usize>) {
         let n = self.vertex_count();
         let indices = meshopt::optimize_vertex_cache(&self.indices, n);
         let remap = meshopt::optimize_vertex_fetch_remap(&indices, n);
@@ -101,7 +106,7 @@ impl AnimationSpaceMesh {
             out.influences.extend_from_slice(self.influences_of(v));
             out.offsets.push(out.influences.len() as u32);
         }
-        out
+        (out, order)
     }
 
     /// The CPU reference of animation-space skinning: `v = Σ G_i p_i` and `n = Σ G_i n_i`

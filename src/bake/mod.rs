@@ -5,7 +5,11 @@
 
 pub mod anim_texture;
 pub mod animation_space;
+pub mod cache;
+pub mod lod;
+pub mod lod_error;
 pub mod materials;
+pub mod simplify;
 pub mod texels;
 pub mod vertex_texture;
 

@@ -5,7 +5,7 @@ pub mod weld;
 
 use crate::error::InputError;
 use crate::model::Model;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Loads a model given on the command line: the name of a built-in asset (`horse`, `walker`)
 /// or a path to a glTF file.
@@ -16,5 +16,13 @@ pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
             m
         }),
         None => gltf::load(Path::new(name_or_path)),
+    }
+}
+
+/// The file a model name or path given on the command line refers to.
+pub fn source_path(name_or_path: &str) -> PathBuf {
+    match crate::assets::builtin(name_or_path) {
+        Some(asset) => asset.path(),
+        None => PathBuf::from(name_or_path),
     }
 }

@@ -1,0 +1,528 @@
+//! `lodlab report`: the evidence about a model's levels of detail. Error curves for every
+//! method (Merry et al. Figure 7), bake timings (Table 1), and optionally meshoptimizer as
+//! the baseline a user would otherwise reach for.
+
+use crate::bake::animation_space::{AnimationSpaceMesh, transform_homogeneous};
+use crate::bake::lod::{Replay, progressive_mesh};
+use crate::bake::lod_error::{ErrorProbe, MeshError};
+use crate::bake::simplify::{Method, Sequence, SimplifyInput};
+use crate::error::InputError;
+use crate::import::{load_model, source_path};
+use crate::model::Model;
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use plotters::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Points per curve, spaced evenly in log(influences) from full detail to the coarsest mesh.
+pub const CURVE_POINTS: usize = 40;
+/// Errors below this (in scene units) are rounding, not simplification: full detail.
+const NEGLIGIBLE: f64 = 1e-9;
+/// Surface samples the error is averaged over.
+pub const SAMPLES: usize = 6000;
+
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    pub model: String,
+    pub out: PathBuf,
+    pub baseline_meshopt: bool,
+    pub progress: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CurvePoint {
+    pub influences: u32,
+    pub triangles: u32,
+    pub rms_error: f64,
+    pub max_error: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodReport {
+    pub bake_seconds: f64,
+    pub cache_hit_rate: Option<f64>,
+    pub curve: Vec<CurvePoint>,
+}
+
+/// How the methods compare at equal influence counts (the issue's acceptance figures).
+#[derive(Clone, Debug, Serialize)]
+pub struct Comparison {
+    /// Fraction of the AS curve (where the rest-pose curve covers it) with AS ≤ rest-pose.
+    pub as_le_rest_pose: Option<f64>,
+    /// Fraction of the AS+IS curve (where the AS curve covers it) with AS+IS ≤ AS.
+    pub as_is_le_as: Option<f64>,
+    /// Fraction of the meshopt curve with meshopt ≤ rest-pose.
+    pub meshopt_le_rest_pose: Option<f64>,
+    /// The fewest total influences each method reaches.
+    pub min_influences: BTreeMap<String, u32>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub model: String,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub bones: usize,
+    pub methods: BTreeMap<String, MethodReport>,
+    pub comparison: Comparison,
+    /// How the error was measured.
+    pub samples: usize,
+    pub frames: usize,
+    pub units: String,
+}
+
+/// Runs the whole report and writes `report.json`, `error.png` and `timings.md` into `out`.
+pub fn run(opts: &ReportOptions) -> Result<Report> {
+    let model = load_model(&opts.model)?;
+    std::fs::create_dir_all(&opts.out)
+        .map_err(|e| InputError::new(&opts.out, format!("cannot create the folder ({e})")))?;
+    let base = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
+    let probe = ErrorProbe::new(&model, &base, SAMPLES)
+        .map_err(|e| InputError::new(source_path(&opts.model), e))?;
+
+    let mut methods = BTreeMap::new();
+    let mut sequences: Vec<(Method, Sequence)> = Vec::new();
+    for method in Method::ALL {
+        let bar = bar(opts.progress, &format!("{} {method}", model.name));
+        let progress = |f: f32| bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+        let (base, seq, seconds) = progressive_mesh(&model, method, &progress);
+        bar.set_message("measuring");
+        let curve = measure_sequence(&probe, &base, &seq);
+        bar.finish_with_message(format!("{seconds:.2} s"));
+        methods.insert(
+            method.name().to_string(),
+            MethodReport {
+                bake_seconds: seconds,
+                cache_hit_rate: match method {
+                    Method::InfluenceSimplification => seq.stats.cache_hit_rate(),
+                    _ => None,
+                },
+                curve,
+            },
+        );
+        sequences.push((method, seq));
+    }
+    if opts.baseline_meshopt {
+        let triangles: Vec<u32> = methods["rest-pose"]
+            .curve
+            .iter()
+            .map(|p| p.triangles)
+            .collect();
+        let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
+        methods.insert(
+            "meshopt".into(),
+            meshopt_curve(&probe, &base, &rest_bones, &triangles),
+        );
+    }
+
+    let comparison = compare(&methods);
+    let report = Report {
+        model: model.name.clone(),
+        vertices: model.mesh.vertex_count(),
+        triangles: model.mesh.triangle_count(),
+        bones: model.skeleton.bone_count(),
+        methods,
+        comparison,
+        samples: SAMPLES,
+        frames: probe.frame_count(),
+        units: "scene units (metres)".into(),
+    };
+    write_atomic(
+        &opts.out.join("report.json"),
+        serde_json::to_string_pretty(&report)?.as_bytes(),
+    )?;
+    plot(&report, &opts.out.join("error.png"))?;
+    write_atomic(
+        &opts.out.join("timings.md"),
+        timings_markdown(&report, &model, &sequences).as_bytes(),
+    )?;
+    Ok(report)
+}
+
+fn bar(show: bool, prefix: &str) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(prefix.to_string());
+    bar
+}
+
+/// The error along a sequence at [`CURVE_POINTS`] prefixes spaced evenly in log(influences).
+pub fn measure_sequence(
+    probe: &ErrorProbe,
+    base: &AnimationSpaceMesh,
+    seq: &Sequence,
+) -> Vec<CurvePoint> {
+    let first = seq.influences_after(0).max(1) as f64;
+    let last = seq.influences_after(seq.steps.len()).max(1) as f64;
+    let mut prefixes: Vec<usize> = (0..CURVE_POINTS)
+        .map(|j| {
+            let t = j as f64 / (CURVE_POINTS - 1) as f64;
+            let target = (first.ln() + t * (last.ln() - first.ln())).exp();
+            // The first prefix at or below the target influence count.
+            (0..=seq.steps.len())
+                .find(|&p| seq.influences_after(p) as f64 <= target + 0.5)
+                .unwrap_or(seq.steps.len())
+        })
+        .collect();
+    prefixes.dedup();
+    let mut replay = Replay::new(base, seq);
+    prefixes
+        .into_iter()
+        .map(|p| {
+            replay.advance_to(p);
+            let tris: Vec<[u32; 3]> = replay.triangles().collect();
+            let MeshError { rms, max } = probe.measure(&tris, |r| replay.influences_of(r));
+            CurvePoint {
+                influences: seq.influences_after(p),
+                triangles: seq.triangles_after(p),
+                rms_error: rms,
+                max_error: max,
+            }
+        })
+        .collect()
+}
+
+/// meshoptimizer's simplifier on the rest pose, to each triangle count.
+fn meshopt_curve(
+    probe: &ErrorProbe,
+    base: &AnimationSpaceMesh,
+    rest_bones: &[glam::Affine3A],
+    triangles: &[u32],
+) -> MethodReport {
+    // Rest positions: Σ Ĝ_i p_i = Σ w_i v̂ = v̂, in scene units.
+    let positions: Vec<[f32; 3]> = (0..base.vertex_count())
+        .map(|v| {
+            base.influences_of(v)
+                .iter()
+                .map(|i| transform_homogeneous(&rest_bones[i.bone as usize], i.p))
+                .sum::<glam::Vec3>()
+                .to_array()
+        })
+        .collect();
+    let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&positions), 12, 0)
+        .expect("tightly packed positions");
+    let mut curve = Vec::new();
+    let mut seconds = 0.0;
+    let full = base.triangle_count() as u32;
+    for &target in triangles {
+        let start = std::time::Instant::now();
+        let indices = if target >= full {
+            base.indices.clone()
+        } else {
+            meshopt::simplify(
+                &base.indices,
+                &adapter,
+                target as usize * 3,
+                f32::MAX,
+                meshopt::SimplifyOptions::None,
+                None,
+            )
+        };
+        seconds = start.elapsed().as_secs_f64();
+        let tris: Vec<[u32; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        let mut used = vec![false; base.vertex_count()];
+        tris.iter().flatten().for_each(|&v| used[v as usize] = true);
+        let influences = (0..base.vertex_count())
+            .filter(|&v| used[v])
+            .map(|v| base.influences_of(v).len() as u32)
+            .sum();
+        let MeshError { rms, max } = probe.measure(&tris, |r| base.influences_of(r as usize));
+        curve.push(CurvePoint {
+            influences,
+            triangles: tris.len() as u32,
+            rms_error: rms,
+            max_error: max,
+        });
+    }
+    MethodReport {
+        // One call to the coarsest target: what building a level costs.
+        bake_seconds: seconds,
+        cache_hit_rate: None,
+        curve,
+    }
+}
+
+/// `y` of a curve at `x`, interpolated linearly in log–log; `None` outside its range.
+fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
+    let mut pts: Vec<(f64, f64)> = curve.iter().copied().filter(|p| p.1 > NEGLIGIBLE).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let i = pts.partition_point(|p| p.0 < x);
+    if i < pts.len() && pts[i].0 == x {
+        return Some(pts[i].1);
+    }
+    if i == 0 || i == pts.len() {
+        return None;
+    }
+    let (a, b) = (pts[i - 1], pts[i]);
+    let t = (x.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
+    Some((a.1.ln() + t * (b.1.ln() - a.1.ln())).exp())
+}
+
+fn points(r: &MethodReport) -> Vec<(f64, f64)> {
+    r.curve
+        .iter()
+        .map(|p| (p.influences as f64, p.rms_error))
+        .collect()
+}
+
+/// Fraction of `a`'s points (with error, within `b`'s range) where `a ≤ b`.
+fn fraction_below(a: &MethodReport, b: &MethodReport) -> Option<f64> {
+    let reference = points(b);
+    let mut total = 0;
+    let mut below = 0;
+    for p in &a.curve {
+        if p.rms_error <= NEGLIGIBLE {
+            continue;
+        }
+        if let Some(r) = interpolate(&reference, p.influences as f64) {
+            total += 1;
+            if p.rms_error <= r * (1.0 + 1e-9) {
+                below += 1;
+            }
+        }
+    }
+    (total > 0).then(|| below as f64 / total as f64)
+}
+
+fn compare(methods: &BTreeMap<String, MethodReport>) -> Comparison {
+    let get = |n: &str| methods.get(n);
+    let pair = |a: &str, b: &str| match (get(a), get(b)) {
+        (Some(a), Some(b)) => fraction_below(a, b),
+        _ => None,
+    };
+    Comparison {
+        as_le_rest_pose: pair("as", "rest-pose"),
+        as_is_le_as: pair("as+is", "as"),
+        meshopt_le_rest_pose: pair("meshopt", "rest-pose"),
+        min_influences: methods
+            .iter()
+            .map(|(k, v)| {
+                let min = v.curve.iter().map(|p| p.influences).min().unwrap_or(0);
+                (k.clone(), min)
+            })
+            .collect(),
+    }
+}
+
+/// A named, coloured line of (x, y) points.
+type Series = (&'static str, RGBColor, Vec<(f64, f64)>);
+
+/// Figure 7 redrawn: each method's RMS error divided by rest-pose's at the same influence
+/// count, against total influences, both on log scales.
+pub fn plot(report: &Report, path: &Path) -> Result<()> {
+    register_font();
+    let (w, h) = (1000u32, 640u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let rest = points(&report.methods["rest-pose"]);
+    let series: Vec<Series> = [
+        ("rest-pose", RGBColor(40, 40, 40)),
+        ("as", RGBColor(30, 100, 220)),
+        ("as+is", RGBColor(220, 50, 40)),
+        ("meshopt", RGBColor(40, 160, 70)),
+    ]
+    .into_iter()
+    .filter_map(|(name, colour)| {
+        let m = report.methods.get(name)?;
+        let pts: Vec<(f64, f64)> = m
+            .curve
+            .iter()
+            .filter(|p| p.rms_error > NEGLIGIBLE)
+            .filter_map(|p| {
+                let r = interpolate(&rest, p.influences as f64)?;
+                Some((p.influences as f64, p.rms_error / r))
+            })
+            .collect();
+        Some((name, colour, pts))
+    })
+    .collect();
+    // Both axes are drawn as log10 of the value on a linear axis, labelled with the value:
+    // plotters' own log axes leave a narrow range (a few hundred influences) unlabelled.
+    let series: Vec<Series> = series
+        .into_iter()
+        .map(|(n, c, pts)| {
+            (
+                n,
+                c,
+                pts.iter().map(|&(x, y)| (x.log10(), y.log10())).collect(),
+            )
+        })
+        .collect();
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in series.iter().flat_map(|s| s.2.iter()) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if x0 >= x1 {
+        (x0, x1) = (0.0, 1.0);
+    }
+    let pad = 0.03 * (x1 - x0);
+    let (x0, x1) = (x0 - pad, x1 + pad);
+    let (y0, y1) = ((y0.min(-0.3) - 0.1).max(-4.0), (y1.max(0.3) + 0.1).min(4.0));
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "{}: RMS error relative to rest-pose simplification",
+                    report.model
+                ),
+                ("sans-serif", 26),
+            )
+            .margin(20)
+            .x_label_area_size(55)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(plot_error)?;
+        chart
+            .configure_mesh()
+            .x_desc("total influences (log scale)")
+            .x_labels(10)
+            .x_label_formatter(&|x| format!("{:.0}", 10f64.powf(*x)))
+            .y_desc("RMS error / rest-pose RMS error (log scale)")
+            .y_labels(12)
+            .y_label_formatter(&|y| {
+                let v = 10f64.powf(*y);
+                if v >= 10.0 {
+                    format!("{v:.0}")
+                } else {
+                    format!("{:.2}", v)
+                }
+            })
+            .label_style(("sans-serif", 16))
+            .axis_desc_style(("sans-serif", 19))
+            .draw()
+            .map_err(plot_error)?;
+        for (name, colour, pts) in &series {
+            let style = ShapeStyle::from(colour).stroke_width(2);
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), style))
+                .map_err(plot_error)?
+                .label(*name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+            chart
+                .draw_series(
+                    pts.iter()
+                        .map(|&p| Circle::new(p, 3, ShapeStyle::from(colour).filled())),
+                )
+                .map_err(plot_error)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font(("sans-serif", 18))
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .draw()
+            .map_err(plot_error)?;
+        root.present().map_err(plot_error)?;
+    }
+    let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
+    let rgba = image::DynamicImage::ImageRgb8(rgb).to_rgba8();
+    super::shot::write_png(path, &rgba)
+}
+
+fn plot_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow::anyhow!("cannot draw the plot: {e}")
+}
+
+/// plotters draws text with fonts registered by name; lodlab brings its own (the one egui
+/// ships), so plots look the same on every machine and need no system fonts.
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            epaint_default_fonts::UBUNTU_LIGHT,
+        );
+    });
+}
+
+/// Table 1 of the paper for this model.
+fn timings_markdown(report: &Report, model: &Model, sequences: &[(Method, Sequence)]) -> String {
+    let t = |n: &str| report.methods.get(n).map(|m| m.bake_seconds);
+    let (rest, asm, asis) = (t("rest-pose"), t("as"), t("as+is"));
+    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
+        _ => "–".into(),
+    };
+    let secs = |x: Option<f64>| x.map_or("–".into(), |x| format!("{x:.3}"));
+    let is_stats = sequences
+        .iter()
+        .find(|(m, _)| *m == Method::InfluenceSimplification)
+        .map(|(_, s)| &s.stats);
+    let miss = is_stats
+        .and_then(|s| s.cache_hit_rate())
+        .map_or("–".into(), |h| format!("{:.4}%", (1.0 - h) * 100.0));
+    let influences_per_vertex =
+        model.mesh.influences.len() as f64 / model.mesh.vertex_count().max(1) as f64;
+    let mut md = format!(
+        "# Bake timings for {} (Table 1 of Merry et al.)\n\n\
+         Memoryless simplification, release build, one method at a time on one thread.\n\
+         3D is simplification of the rest pose; AS uses the L2,2 metric; AS+IS adds influence\n\
+         simplification. Cache miss rate: influence-simplification factorisations not found in\n\
+         the {}-entry cache.\n\n\
+         | Model | Vertices | Bones | Influences per vertex | 3D (s) | AS (s) | AS+IS (s) | AS/3D | AS+IS/3D | Cache miss rate |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n\
+         | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {} |\n",
+        report.model,
+        crate::bake::simplify::influence::CACHE_SIZE,
+        report.model,
+        report.vertices,
+        report.bones,
+        influences_per_vertex,
+        secs(rest),
+        secs(asm),
+        secs(asis),
+        ratio(asm, rest),
+        ratio(asis, rest),
+        miss
+    );
+    if let Some(m) = report.methods.get("meshopt") {
+        md += &format!(
+            "\nmeshoptimizer (`meshopt::simplify` on the rest pose) takes {:.3} s for one level at \
+             the coarsest triangle count.\n",
+            m.bake_seconds
+        );
+    }
+    let c = &report.comparison;
+    let pct = |x: Option<f64>| x.map_or("–".into(), |x| format!("{:.0}%", x * 100.0));
+    md += &format!(
+        "\n## Error at equal influence counts\n\n\
+         - AS ≤ rest-pose on {} of the AS curve\n\
+         - AS+IS ≤ AS on {} of the AS+IS curve\n\
+         - meshopt ≤ rest-pose on {} of the meshopt curve\n\
+         - fewest total influences reached: {}\n",
+        pct(c.as_le_rest_pose),
+        pct(c.as_is_le_as),
+        pct(c.meshopt_le_rest_pose),
+        c.min_influences
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    md
+}
+
+/// Writes a file through a temporary name, so a reader never sees half of it.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = super::shot::temp_path(path);
+    std::fs::write(&tmp, bytes).with_context(|| format!("{}: cannot write", path.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
+}

@@ -1,0 +1,195 @@
+//! The on-disk cache of level-of-detail bakes, so the viewer starts fast.
+//!
+//! One file per (model, method, parameters). Its name carries a key: a hash of the source
+//! file's bytes (and of the external buffers a `.gltf` names), the bake parameters and
+//! [`FORMAT_VERSION`]. A changed model or parameter therefore looks for another file. Inside,
+//! a header repeats the version and the key and holds a hash of the payload, so a file from
+//! another version, cut short or damaged is recognised, reported in one line and rebuilt,
+//! never trusted.
+//!
+//! Layout: `LODLABLC` | format version (u32 LE) | key (32 bytes) | payload hash (32 bytes) |
+//! payload length (u64 LE) | payload (postcard-encoded [`SkinnedLods`]).
+
+use super::lod::{LodOptions, SkinnedLods};
+use super::simplify::Method;
+use super::simplify::expectation::MIN_SAMPLES;
+use std::path::{Path, PathBuf};
+
+/// Bump whenever the bake's output or its encoding changes.
+pub const FORMAT_VERSION: u32 = 1;
+const MAGIC: &[u8; 8] = b"LODLABLC";
+const HEADER: usize = 8 + 4 + 32 + 32 + 8;
+
+/// Where cached bakes live.
+#[derive(Clone, Debug)]
+pub struct LodCache {
+    pub dir: PathBuf,
+}
+
+/// What looking a bake up found.
+#[derive(Debug)]
+pub enum Lookup {
+    Hit(Box<SkinnedLods>),
+    Miss,
+    /// A file was there but cannot be used; the reason is one line.
+    Unusable(String),
+}
+
+impl LodCache {
+    /// `dir`, or the platform cache folder's `lodlab/` (`$XDG_CACHE_HOME/lodlab`,
+    /// `~/.cache/lodlab` on Linux), or the system temporary folder if there is none.
+    pub fn new(dir: Option<PathBuf>) -> LodCache {
+        let dir = dir.unwrap_or_else(|| {
+            dirs::cache_dir()
+                .unwrap_or_else(std::env::temp_dir)
+                .join("lodlab")
+        });
+        LodCache { dir }
+    }
+
+    /// The cache file for a bake.
+    pub fn path(&self, model: &str, method: Method, key: &[u8; 32]) -> PathBuf {
+        let name: String = model
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .take(40)
+            .collect();
+        let method = match method {
+            Method::RestPose => "rest-pose",
+            Method::AnimationSpace => "as",
+            Method::InfluenceSimplification => "as-is",
+        };
+        let hex: String = key[..8].iter().map(|b| format!("{b:02x}")).collect();
+        self.dir.join(format!("{name}-{method}-{hex}.lods"))
+    }
+
+    /// Reads a cached bake, checking its version, key and integrity.
+    pub fn load(&self, path: &Path, key: &[u8; 32]) -> Lookup {
+        let bytes = match std::fs::read(path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Lookup::Miss,
+            Err(e) => return Lookup::Unusable(format!("cannot read it ({e})")),
+        };
+        if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+            return Lookup::Unusable("not a lodlab cache file".into());
+        }
+        let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+        if version != FORMAT_VERSION {
+            return Lookup::Unusable(format!(
+                "written in cache format {version}, this lodlab uses {FORMAT_VERSION}"
+            ));
+        }
+        if &bytes[12..44] != key {
+            return Lookup::Unusable("made from another source or other parameters".into());
+        }
+        let len = u64::from_le_bytes(bytes[76..84].try_into().expect("8 bytes")) as usize;
+        let payload = &bytes[HEADER..];
+        if payload.len() != len {
+            return Lookup::Unusable(format!(
+                "truncated: {} of {len} payload bytes",
+                payload.len()
+            ));
+        }
+        if blake3::hash(payload).as_bytes() != &bytes[44..76] {
+            return Lookup::Unusable("corrupt: its checksum does not match".into());
+        }
+        match postcard::from_bytes::<SkinnedLods>(payload) {
+            Ok(lods) => Lookup::Hit(Box::new(lods)),
+            Err(e) => Lookup::Unusable(format!("cannot decode it ({e})")),
+        }
+    }
+
+    /// Writes a bake atomically: a temporary file in the same folder, renamed into place.
+    pub fn store(&self, path: &Path, key: &[u8; 32], lods: &SkinnedLods) -> std::io::Result<()> {
+        std::fs::create_dir_all(&self.dir)?;
+        let payload = postcard::to_stdvec(lods).map_err(std::io::Error::other)?;
+        let mut bytes = Vec::with_capacity(HEADER + payload.len());
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend_from_slice(key);
+        bytes.extend_from_slice(blake3::hash(&payload).as_bytes());
+        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+        std::fs::write(&tmp, &bytes)?;
+        std::fs::rename(&tmp, path).inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })
+    }
+}
+
+/// The cache key of a bake: the source's hash, the method, the parameters and the format.
+pub fn key(source: &[u8; 32], method: Method, options: &LodOptions) -> [u8; 32] {
+    let mut h = blake3::Hasher::new();
+    h.update(b"lodlab skinned lods");
+    h.update(&FORMAT_VERSION.to_le_bytes());
+    h.update(&(MIN_SAMPLES as u64).to_le_bytes());
+    h.update(source);
+    h.update(method.name().as_bytes());
+    h.update(&postcard::to_stdvec(options).unwrap_or_default());
+    *h.finalize().as_bytes()
+}
+
+/// A hash of a model's source: the file's bytes, and for a `.gltf` the external files its
+/// buffers and images name (those that exist; a missing one fails the import anyway).
+pub fn source_hash(path: &Path) -> std::io::Result<[u8; 32]> {
+    let bytes = std::fs::read(path)?;
+    let mut h = blake3::Hasher::new();
+    h.update(&bytes);
+    if let Ok(json) = serde_json::from_slice::<serde_json::Value>(&bytes) {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for list in ["buffers", "images"] {
+            for item in json[list].as_array().into_iter().flatten() {
+                if let Some(uri) = item["uri"].as_str().filter(|u| !u.starts_with("data:"))
+                    && let Ok(extra) = std::fs::read(dir.join(uri))
+                {
+                    h.update(uri.as_bytes());
+                    h.update(&extra);
+                }
+            }
+        }
+    }
+    Ok(*h.finalize().as_bytes())
+}
+
+/// Where a bake came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Origin {
+    Cache,
+    /// Baked now; `warning` says why a cache file there was not used, or could not be written.
+    Baked {
+        warning: Option<String>,
+    },
+}
+
+impl LodCache {
+    /// The bake from the cache if a good one is there, else baked now and stored.
+    pub fn load_or_bake(
+        &self,
+        model: &crate::model::Model,
+        source: &[u8; 32],
+        method: Method,
+        options: &LodOptions,
+        progress: &dyn Fn(f32),
+    ) -> (SkinnedLods, Origin) {
+        let key = key(source, method, options);
+        let path = self.path(&model.name, method, &key);
+        let mut warning = None;
+        match self.load(&path, &key) {
+            Lookup::Hit(lods) => return (*lods, Origin::Cache),
+            Lookup::Miss => {}
+            Lookup::Unusable(why) => {
+                warning = Some(format!("{}: {why}; rebuilding it", path.display()));
+            }
+        }
+        let lods = super::lod::bake_lods(model, method, options, progress);
+        if let Err(e) = self.store(&path, &key, &lods) {
+            let w = format!("{}: cannot write the cache ({e})", path.display());
+            warning = Some(match warning {
+                Some(first) => format!("{first}; {w}"),
+                None => w,
+            });
+        }
+        (lods, Origin::Baked { warning })
+    }
+}

@@ -1,0 +1,372 @@
+//! The simplifier's view of a mesh: flat arrays, no pointer graph (after meshoptimizer's
+//! `simplifier.cpp`).
+//!
+//! A *render vertex* is what the GPU draws: a position with one texture coordinate and one
+//! material. Render vertices at the same animation-space position are the *wedges* of one
+//! *position*; a UV seam is where two wedges meet. Topology (neighbours, borders, seams,
+//! manifoldness) is worked out on positions, so a seam never looks like a hole, while the
+//! parameter-space tests work on each wedge's own chart.
+//!
+//! Each position gets a [`Kind`], and [`CAN_COLLAPSE`] says which kind may collapse onto which.
+
+use super::influence::Influence64;
+use std::collections::HashMap;
+
+/// What a position is, topologically. Decides which half-edge collapses may remove it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Inside one chart, one closed fan of triangles.
+    Manifold,
+    /// On an open border of the mesh: exactly two border edges, one wedge.
+    Border,
+    /// On a UV (or material) seam: exactly two seam edges, two wedges, no border.
+    Seam,
+    /// Anything else that is still a valid surface point: where seams or borders meet, a
+    /// bow-tie of two fans, more than two wedges. Collapsing it would tear or reshape a chart.
+    Complex,
+    /// Cannot be handled safely: a non-manifold edge, inconsistent winding, wedges whose
+    /// influences differ.
+    Locked,
+}
+
+impl Kind {
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// Which kind of vertex v1 may collapse onto which kind of v2 in a half-edge collapse v1 → v2
+/// (rows: v1, columns: v2, in [`Kind`] order). A manifold vertex may go anywhere: its whole fan
+/// lies in one chart. A border or seam vertex may only slide along its own border or seam onto
+/// the next vertex there (checked in the cost evaluation, with the parameter-area rule), so the
+/// mesh's outline and its charts' outlines keep their shape. Complex and locked vertices stay.
+pub const CAN_COLLAPSE: [[bool; 5]; 5] = [
+    // Manifold Border Seam   Complex Locked     v1 ↓  v2 →
+    [true, true, true, true, true],      // Manifold
+    [false, true, false, false, true],   // Border
+    [false, false, true, false, true],   // Seam
+    [false, false, false, false, false], // Complex
+    [false, false, false, false, false], // Locked
+];
+
+pub fn can_collapse(from: Kind, to: Kind) -> bool {
+    CAN_COLLAPSE[from.index()][to.index()]
+}
+
+/// How the edge between two positions sits in the mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeKind {
+    /// One triangle: an open border.
+    Border,
+    /// Two triangles that use the same wedges at both ends.
+    Interior,
+    /// Two triangles that use different wedges at one end at least.
+    Seam,
+    /// More than two triangles.
+    NonManifold,
+}
+
+/// The mutable mesh being simplified.
+pub struct Mesh {
+    /// Triangles as render vertices.
+    pub tris: Vec<[u32; 3]>,
+    pub tri_alive: Vec<bool>,
+    /// Render vertex → its position (the lowest render vertex with the same influences).
+    pub position: Vec<u32>,
+    /// Position → its render vertices (empty for ids that are not positions).
+    pub wedges: Vec<Vec<u32>>,
+    /// Position → its alive triangles.
+    pub incident: Vec<Vec<u32>>,
+    pub kind: Vec<Kind>,
+    /// Positions still in the mesh.
+    pub alive: Vec<bool>,
+    /// Render vertex → how many alive triangles use it.
+    pub refs: Vec<u32>,
+    pub alive_triangles: usize,
+    /// Triangles dropped before simplifying: repeated positions, duplicates.
+    pub dropped_triangles: usize,
+}
+
+impl Mesh {
+    /// Builds the mesh from indexed triangles and per-render-vertex influences. Wedges are
+    /// render vertices whose influences are bit-for-bit equal, i.e. the same animation-space
+    /// point. Triangles that repeat a position or duplicate another triangle are dropped: they
+    /// cover no area and would make edges look non-manifold.
+    pub fn new(indices: &[u32], influences: &[Vec<Influence64>]) -> Mesh {
+        let n = influences.len();
+        let mut position = vec![0u32; n];
+        let mut first: HashMap<Vec<u64>, u32> = HashMap::with_capacity(n);
+        for (v, infl) in influences.iter().enumerate() {
+            let key: Vec<u64> = infl
+                .iter()
+                .flat_map(|i| std::iter::once(i.bone as u64).chain(i.p.iter().map(|x| x.to_bits())))
+                .collect();
+            position[v] = *first.entry(key).or_insert(v as u32);
+        }
+        let mut wedges = vec![Vec::new(); n];
+        let mut tris = Vec::with_capacity(indices.len() / 3);
+        let mut seen = std::collections::HashSet::with_capacity(indices.len() / 3);
+        let mut dropped = 0;
+        for t in indices.chunks_exact(3) {
+            let tri = [t[0], t[1], t[2]];
+            if tri.iter().any(|&v| v as usize >= n) {
+                dropped += 1;
+                continue;
+            }
+            let mut p = tri.map(|v| position[v as usize]);
+            if p[0] == p[1] || p[1] == p[2] || p[0] == p[2] {
+                dropped += 1;
+                continue;
+            }
+            p.sort_unstable();
+            if !seen.insert(p) {
+                dropped += 1;
+                continue;
+            }
+            tris.push(tri);
+        }
+        let mut incident = vec![Vec::new(); n];
+        let mut refs = vec![0u32; n];
+        for (i, t) in tris.iter().enumerate() {
+            for &v in t {
+                incident[position[v as usize] as usize].push(i as u32);
+                refs[v as usize] += 1;
+            }
+        }
+        for v in 0..n {
+            if refs[v] > 0 {
+                wedges[position[v] as usize].push(v as u32);
+            }
+        }
+        let alive: Vec<bool> = (0..n).map(|u| !incident[u].is_empty()).collect();
+        let mut mesh = Mesh {
+            tri_alive: vec![true; tris.len()],
+            alive_triangles: tris.len(),
+            tris,
+            position,
+            wedges,
+            incident,
+            kind: vec![Kind::Locked; n],
+            alive,
+            refs,
+            dropped_triangles: dropped,
+        };
+        for u in 0..n {
+            if mesh.alive[u] {
+                mesh.kind[u] = mesh.classify(u as u32);
+            }
+        }
+        mesh
+    }
+
+    pub fn pos(&self, r: u32) -> u32 {
+        self.position[r as usize]
+    }
+
+    /// The triangle's corner at position `u` and the other two corners in winding order.
+    pub fn corners_from(&self, t: u32, u: u32) -> [u32; 3] {
+        let tri = self.tris[t as usize];
+        let k = (0..3).find(|&k| self.pos(tri[k]) == u).unwrap_or(0);
+        [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]]
+    }
+
+    pub fn contains_position(&self, t: u32, u: u32) -> bool {
+        self.tris[t as usize].iter().any(|&r| self.pos(r) == u)
+    }
+
+    /// Distinct neighbouring positions of `u`, in first-seen order.
+    pub fn neighbours(&self, u: u32, out: &mut Vec<u32>) {
+        out.clear();
+        for &t in &self.incident[u as usize] {
+            for r in self.tris[t as usize] {
+                let x = self.pos(r);
+                if x != u && !out.contains(&x) {
+                    out.push(x);
+                }
+            }
+        }
+    }
+
+    /// Classifies the edge between positions `u` and `x` (which must share a triangle).
+    pub fn edge_kind(&self, u: u32, x: u32) -> EdgeKind {
+        let mut count = 0;
+        let mut ends: Option<(u32, u32)> = None;
+        let mut seam = false;
+        for &t in &self.incident[u as usize] {
+            let tri = self.tris[t as usize];
+            let ru = tri.iter().copied().find(|&r| self.pos(r) == u);
+            let rx = tri.iter().copied().find(|&r| self.pos(r) == x);
+            if let (Some(ru), Some(rx)) = (ru, rx) {
+                count += 1;
+                match ends {
+                    None => ends = Some((ru, rx)),
+                    Some(e) => seam |= e != (ru, rx),
+                }
+            }
+        }
+        match count {
+            0 | 1 => EdgeKind::Border,
+            2 if seam => EdgeKind::Seam,
+            2 => EdgeKind::Interior,
+            _ => EdgeKind::NonManifold,
+        }
+    }
+
+    fn classify(&self, u: u32) -> Kind {
+        let fan = &self.incident[u as usize];
+        let mut neighbours = Vec::new();
+        self.neighbours(u, &mut neighbours);
+        let (mut border, mut seam) = (0, 0);
+        for &x in &neighbours {
+            match self.edge_kind(u, x) {
+                EdgeKind::NonManifold => return Kind::Locked,
+                EdgeKind::Border => border += 1,
+                EdgeKind::Seam => seam += 1,
+                EdgeKind::Interior => {}
+            }
+            // Two triangles on an edge must run along it in opposite directions, or the surface
+            // is not orientable here and "fold-over" means nothing.
+            let mut forward = 0;
+            let mut backward = 0;
+            for &t in fan {
+                let [_, a, b] = self.corners_from(t, u);
+                if self.pos(a) == x {
+                    forward += 1;
+                }
+                if self.pos(b) == x {
+                    backward += 1;
+                }
+            }
+            if forward > 1 || backward > 1 {
+                return Kind::Locked;
+            }
+        }
+        // The fan must be one connected piece (else it is a bow-tie).
+        let mut reached = vec![false; fan.len()];
+        let mut stack = vec![0usize];
+        reached[0] = true;
+        while let Some(i) = stack.pop() {
+            let ti = self.tris[fan[i] as usize].map(|r| self.pos(r));
+            for (j, &tj) in fan.iter().enumerate() {
+                if reached[j] {
+                    continue;
+                }
+                let tj = self.tris[tj as usize].map(|r| self.pos(r));
+                let shared = ti.iter().filter(|&&p| p != u && tj.contains(&p)).count();
+                if shared > 0 {
+                    reached[j] = true;
+                    stack.push(j);
+                }
+            }
+        }
+        if reached.iter().any(|r| !r) {
+            return Kind::Complex;
+        }
+        match (self.wedges[u as usize].len(), border, seam) {
+            (1, 0, 0) => Kind::Manifold,
+            (1, 2, 0) => Kind::Border,
+            (2, 0, 2) => Kind::Seam,
+            _ => Kind::Complex,
+        }
+    }
+
+    /// For a collapse of position `u1` onto `u2`: which wedge of `u2` each wedge of `u1` becomes.
+    /// A wedge of `u1` goes to the wedge of `u2` it shares a triangle with; `None` if a wedge
+    /// shares none or more than one (the collapse would tear a chart).
+    pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<Vec<[u32; 2]>> {
+        let mut map = Vec::with_capacity(2);
+        for &r1 in &self.wedges[u1 as usize] {
+            let mut target: Option<u32> = None;
+            for &t in &self.incident[u1 as usize] {
+                let tri = self.tris[t as usize];
+                if !tri.contains(&r1) {
+                    continue;
+                }
+                if let Some(r2) = tri.iter().copied().find(|&r| self.pos(r) == u2) {
+                    match target {
+                        None => target = Some(r2),
+                        Some(x) if x != r2 => return None,
+                        _ => {}
+                    }
+                }
+            }
+            map.push([r1, target?]);
+        }
+        Some(map)
+    }
+
+    /// Hoppe's link condition for a manifold result: the positions adjacent to both ends must
+    /// be exactly the apexes of the triangles on the edge. Otherwise the collapse would glue two
+    /// sheets together along an edge.
+    pub fn link_condition(&self, u1: u32, u2: u32, scratch: &mut [Vec<u32>; 2]) -> bool {
+        let [n1, n2] = scratch;
+        self.neighbours(u1, n1);
+        self.neighbours(u2, n2);
+        let mut apexes = 0;
+        for &t in &self.incident[u1 as usize] {
+            if self.contains_position(t, u2) {
+                apexes += 1;
+            }
+        }
+        let common = n1.iter().filter(|x| n2.contains(x)).count();
+        if common != apexes {
+            return false;
+        }
+        // Every common neighbour must be an apex.
+        n1.iter().filter(|x| n2.contains(x)).all(|&x| {
+            self.incident[u1 as usize]
+                .iter()
+                .any(|&t| self.contains_position(t, u2) && self.contains_position(t, x))
+        })
+    }
+
+    /// Applies the half-edge collapse `u1 → u2` with the given wedge map. Returns how many
+    /// triangles died, and the render vertices that stopped being used.
+    pub fn collapse(&mut self, u1: u32, u2: u32, map: &[[u32; 2]]) -> (usize, Vec<u32>) {
+        let fan = std::mem::take(&mut self.incident[u1 as usize]);
+        let mut died = 0;
+        let mut released = Vec::new();
+        for t in fan {
+            let tri = self.tris[t as usize];
+            if tri.iter().any(|&r| self.pos(r) == u2) {
+                self.tri_alive[t as usize] = false;
+                died += 1;
+                for r in tri {
+                    self.refs[r as usize] -= 1;
+                    if self.refs[r as usize] == 0 {
+                        released.push(r);
+                    }
+                    let p = self.pos(r);
+                    if p != u1 {
+                        self.incident[p as usize].retain(|&x| x != t);
+                    }
+                }
+            } else {
+                let tri = &mut self.tris[t as usize];
+                for r in tri.iter_mut() {
+                    if let Some(&[from, to]) = map.iter().find(|m| m[0] == *r) {
+                        debug_assert_eq!(from, *r);
+                        self.refs[from as usize] -= 1;
+                        self.refs[to as usize] += 1;
+                        if self.refs[from as usize] == 0 {
+                            released.push(from);
+                        }
+                        *r = to;
+                    }
+                }
+                self.incident[u2 as usize].push(t);
+            }
+        }
+        self.alive_triangles -= died;
+        self.alive[u1 as usize] = false;
+        // A wedge of u2 can drop to no triangles midway and gain some back.
+        released.retain(|&r| self.refs[r as usize] == 0);
+        released.sort_unstable();
+        released.dedup();
+        for &r in &released {
+            let p = self.pos(r) as usize;
+            self.wedges[p].retain(|&w| w != r);
+        }
+        (died, released)
+    }
+}
