@@ -4,6 +4,7 @@
 
 pub mod build;
 pub mod cage;
+pub mod cylinder;
 pub mod finish;
 pub mod glb;
 pub mod horse;

@@ -1,0 +1,280 @@
+//! `lodlab bake` and `lodlab report` as a user runs them, and the on-disk cache behind them.
+
+use lodlab::bake::cache::{LodCache, Origin, key, source_hash};
+use lodlab::bake::lod::LodOptions;
+use lodlab::bake::simplify::Method;
+use lodlab::generate::cylinder::bent_cylinder;
+use lodlab::generate::glb::to_glb;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+fn cylinder_glb(dir: &Path) -> PathBuf {
+    let p = dir.join("cylinder.glb");
+    std::fs::write(&p, to_glb(&bent_cylinder(12, 10))).unwrap();
+    p
+}
+
+fn options() -> LodOptions {
+    LodOptions {
+        base_error: 1e-3,
+        floor_triangles: 20,
+        budgets: None,
+    }
+}
+
+#[test]
+fn cache_hits_and_rebuilds_what_it_cannot_trust() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = LodCache::new(Some(dir.path().join("cache")));
+    let model = bent_cylinder(8, 8);
+    let source = [7u8; 32];
+    let (first, origin) =
+        cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+    assert_eq!(origin, Origin::Baked { warning: None });
+    let (again, origin) =
+        cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+    assert_eq!(origin, Origin::Cache);
+    assert_eq!(again, first);
+
+    let path = cache.path(
+        &model.name,
+        Method::AnimationSpace,
+        &key(&source, Method::AnimationSpace, &options()),
+    );
+    let good = std::fs::read(&path).unwrap();
+    let damaged: Vec<(&str, Vec<u8>)> = vec![
+        ("corrupt", {
+            let mut b = good.clone();
+            let last = b.len() - 10;
+            b[last] ^= 0x55;
+            b
+        }),
+        ("truncated", good[..good.len() / 2].to_vec()),
+        ("cache format", {
+            let mut b = good.clone();
+            b[8] = b[8].wrapping_add(1);
+            b
+        }),
+        ("not a lodlab cache file", b"hello".to_vec()),
+    ];
+    for (why, bytes) in damaged {
+        std::fs::write(&path, &bytes).unwrap();
+        let (lods, origin) =
+            cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+        match origin {
+            Origin::Baked { warning: Some(w) } => {
+                assert!(w.contains(why), "expected '{why}' in: {w}");
+                assert!(w.contains(&path.display().to_string()), "{w}");
+                assert!(!w.contains('\n'));
+            }
+            other => panic!("{why}: {other:?}"),
+        }
+        assert_eq!(lods.levels, first.levels);
+        // Rebuilt and rewritten: the next lookup hits.
+        let (_, origin) =
+            cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+        assert_eq!(origin, Origin::Cache, "{why}");
+    }
+    // Other parameters, another source or another method: another file.
+    let mut other = options();
+    other.base_error *= 2.0;
+    assert_ne!(
+        key(&source, Method::AnimationSpace, &options()),
+        key(&source, Method::AnimationSpace, &other)
+    );
+    assert_ne!(
+        key(&source, Method::AnimationSpace, &options()),
+        key(&[8u8; 32], Method::AnimationSpace, &options())
+    );
+    assert_ne!(
+        key(&source, Method::AnimationSpace, &options()),
+        key(&source, Method::RestPose, &options())
+    );
+}
+
+#[test]
+fn source_hash_follows_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = cylinder_glb(dir.path());
+    let a = source_hash(&p).unwrap();
+    assert_eq!(a, source_hash(&p).unwrap());
+    std::fs::write(&p, to_glb(&bent_cylinder(12, 11))).unwrap();
+    assert_ne!(a, source_hash(&p).unwrap());
+}
+
+#[test]
+fn bake_prints_levels_and_uses_the_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = cylinder_glb(dir.path());
+    let cache = dir.path().join("cache");
+    let args = [
+        "bake",
+        model.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ];
+    let out = lodlab(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    for method in ["rest-pose", "as", "as+is"] {
+        assert!(
+            table
+                .lines()
+                .any(|l| l.starts_with(&format!("{method:<10}   1"))),
+            "no LOD 1 row for {method}:\n{table}"
+        );
+    }
+    assert!(table.contains("240 triangles"), "{table}");
+    assert_eq!(std::fs::read_dir(&cache).unwrap().count(), 3);
+    let again = lodlab(&args);
+    assert!(again.status.success());
+    let table2 = String::from_utf8_lossy(&again.stdout);
+    assert_eq!(table2.matches("cached").count(), 3, "{table2}");
+
+    // One method, budgets instead of errors.
+    let out = lodlab(&[
+        "bake",
+        model.to_str().unwrap(),
+        "--methods",
+        "as+is",
+        "--triangles",
+        "120,60",
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let t = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        t.lines().filter(|l| l.starts_with("as+is")).count(),
+        3,
+        "{t}"
+    );
+}
+
+#[test]
+fn bake_and_report_reject_bad_input_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.glb");
+    for args in [
+        vec!["bake", missing.to_str().unwrap()],
+        vec!["report", missing.to_str().unwrap(), "--out", "/tmp"],
+    ] {
+        let out = lodlab(&args);
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains("missing.glb"), "{err}");
+    }
+    // A model without texture coordinates has no parameterisation to measure through.
+    let mut flat = bent_cylinder(6, 6);
+    flat.mesh.uvs.iter_mut().for_each(|u| *u = glam::Vec2::ZERO);
+    let p = dir.path().join("no-uv.glb");
+    std::fs::write(&p, to_glb(&flat)).unwrap();
+    let out = lodlab(&[
+        "report",
+        p.to_str().unwrap(),
+        "--out",
+        dir.path().join("r").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no-uv.glb") && err.contains("texture coordinates"),
+        "{err}"
+    );
+    // ... but it bakes, flattening each neighbourhood instead.
+    let out = lodlab(&[
+        "bake",
+        p.to_str().unwrap(),
+        "--cache",
+        dir.path().join("c").to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The output folder is a file.
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"mine").unwrap();
+    let model = cylinder_glb(dir.path());
+    let out = lodlab(&[
+        "report",
+        model.to_str().unwrap(),
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read(&file).unwrap(), b"mine");
+    // An unknown method is a usage error.
+    let out = lodlab(&["bake", "horse", "--methods", "fast"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn report_writes_curves_plot_and_timings() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = cylinder_glb(dir.path());
+    let out_dir = dir.path().join("report");
+    let out = lodlab(&[
+        "report",
+        model.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--baseline",
+        "meshopt",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["model"], "cylinder");
+    assert_eq!(json["triangles"], 240);
+    assert_eq!(json["bones"], 2);
+    for method in ["rest-pose", "as", "as+is", "meshopt"] {
+        let m = &json["methods"][method];
+        assert!(m["bake_seconds"].as_f64().unwrap() >= 0.0, "{method}");
+        let curve = m["curve"].as_array().unwrap();
+        assert!(curve.len() >= 30, "{method}: {} points", curve.len());
+        assert_eq!(curve[0]["triangles"], 240, "{method} starts at full detail");
+        assert!(curve[0]["rms_error"].as_f64().unwrap() < 1e-9);
+        let last = curve.last().unwrap();
+        assert!(last["rms_error"].as_f64().unwrap() > 0.0);
+        assert!(last["max_error"].as_f64().unwrap() >= last["rms_error"].as_f64().unwrap());
+        // Coarser along the curve.
+        for w in curve.windows(2) {
+            assert!(w[1]["influences"].as_u64() <= w[0]["influences"].as_u64());
+        }
+    }
+    assert!(json["methods"]["as+is"]["cache_hit_rate"].as_f64().unwrap() > 0.0);
+    assert!(json["methods"]["as"]["cache_hit_rate"].is_null());
+    let png = image::open(out_dir.join("error.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (1000, 640));
+    // Not blank: the curves' colours are there.
+    let rgb = png.to_rgb8();
+    let red = rgb
+        .pixels()
+        .filter(|p| p[0] > 180 && p[1] < 90 && p[2] < 90)
+        .count();
+    let blue = rgb.pixels().filter(|p| p[2] > 180 && p[0] < 80).count();
+    assert!(red > 100 && blue > 100, "red {red}, blue {blue}");
+    let md = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
+    assert!(
+        md.contains("| cylinder |") && md.contains("AS+IS/3D"),
+        "{md}"
+    );
+}
