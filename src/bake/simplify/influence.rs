@@ -286,7 +286,11 @@ mod tests {
             assert!((w - 1.0).abs() < 1e-9, "homogeneous sum {w}");
             // The deviation the factor predicts is the one the vertex sees.
             let optimal = pm.norm2(&difference(&next, &v)).sqrt();
-            assert!((optimal - f.deviation(&v[removed].p)).abs() < 1e-9);
+            let predicted = f.deviation(&v[removed].p);
+            assert!(
+                (optimal - predicted).abs() < 1e-7,
+                "removing {removed}: {optimal} vs predicted {predicted}"
+            );
             // The trivial removal: drop the weight and renormalise the rest.
             let wk = v[removed].p[3];
             let trivial: Vec<Influence64> = v
