@@ -64,9 +64,7 @@ pub fn run(opts: &BakeOptions) -> Result<Vec<Baked>, InputError> {
     }
     let cache = LodCache::new(opts.cache_dir.clone());
     let bars = MultiProgress::new();
-    let style = ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")
-        .expect("valid template")
-        .progress_chars("=> ");
+    let style = bar_style();
     let jobs: Vec<(usize, Method, ProgressBar)> = models
         .iter()
         .enumerate()
@@ -109,6 +107,13 @@ pub fn run(opts: &BakeOptions) -> Result<Vec<Baked>, InputError> {
         })
         .collect();
     Ok(results)
+}
+
+/// The progress bar of one (model, method) job, shared by `bake` and `report`.
+pub fn bar_style() -> ProgressStyle {
+    ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")
+        .expect("valid template")
+        .progress_chars("=> ")
 }
 
 /// The table `lodlab bake` prints: one block per model, one row per level and method.

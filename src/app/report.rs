@@ -2,7 +2,7 @@
 //! method (Merry et al. Figure 7), bake timings (Table 1), and optionally meshoptimizer as
 //! the baseline a user would otherwise reach for.
 
-use crate::bake::animation_space::{AnimationSpaceMesh, transform_homogeneous};
+use crate::bake::animation_space::AnimationSpaceMesh;
 use crate::bake::lod::{Replay, progressive_mesh};
 use crate::bake::lod_error::{ErrorProbe, MeshError};
 use crate::bake::simplify::{Method, Sequence, SimplifyInput};
@@ -10,7 +10,7 @@ use crate::error::InputError;
 use crate::import::{load_model, source_path};
 use crate::model::Model;
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use plotters::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -146,11 +146,7 @@ fn bar(show: bool, prefix: &str) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(1000);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
+    bar.set_style(super::bake::bar_style());
     bar.set_prefix(prefix.to_string());
     bar
 }
@@ -198,15 +194,10 @@ fn meshopt_curve(
     rest_bones: &[glam::Affine3A],
     triangles: &[u32],
 ) -> MethodReport {
-    // Rest positions: Σ Ĝ_i p_i = Σ w_i v̂ = v̂, in scene units.
-    let positions: Vec<[f32; 3]> = (0..base.vertex_count())
-        .map(|v| {
-            base.influences_of(v)
-                .iter()
-                .map(|i| transform_homogeneous(&rest_bones[i.bone as usize], i.p))
-                .sum::<glam::Vec3>()
-                .to_array()
-        })
+    let positions: Vec<[f32; 3]> = base
+        .rest_positions(rest_bones)
+        .iter()
+        .map(|p| p.to_array())
         .collect();
     let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&positions), 12, 0)
         .expect("tightly packed positions");

@@ -109,6 +109,19 @@ impl AnimationSpaceMesh {
         (out, order)
     }
 
+    /// Rest-pose positions `Σ Ĝ_i p_i` (which is `Σ w_i v̂ = v̂`) for rest bone matrices
+    /// `rest_bones`.
+    pub fn rest_positions(&self, rest_bones: &[Affine3A]) -> Vec<Vec3> {
+        (0..self.vertex_count())
+            .map(|v| {
+                self.influences_of(v)
+                    .iter()
+                    .map(|i| transform_homogeneous(&rest_bones[i.bone as usize], i.p))
+                    .sum()
+            })
+            .collect()
+    }
+
     /// The CPU reference of animation-space skinning: `v = Σ G_i p_i` and `n = Σ G_i n_i`
     /// (normals not renormalised), for bone matrices `g`.
     pub fn evaluate(&self, g: &[Affine3A]) -> (Vec<Vec3>, Vec<Vec3>) {

@@ -73,19 +73,7 @@ impl ErrorProbe {
         // Rest-pose areas, for area-weighted sampling; triangles flat in texture space have no
         // parameterisation to correspond through and are left out.
         let rest_bones = super::simplify::SimplifyInput::rest_bones(&model.skeleton);
-        let rest: Vec<glam::Vec3> = (0..n)
-            .map(|v| {
-                base.influences_of(v)
-                    .iter()
-                    .map(|i| {
-                        crate::bake::animation_space::transform_homogeneous(
-                            &rest_bones[i.bone as usize],
-                            i.p,
-                        )
-                    })
-                    .sum()
-            })
-            .collect();
+        let rest = base.rest_positions(&rest_bones);
         let mut cumulative = Vec::with_capacity(base.triangle_count());
         let mut total = 0.0f64;
         let mut with_uv_area = 0usize;

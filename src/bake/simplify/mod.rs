@@ -563,16 +563,7 @@ impl Simplifier<'_> {
         if self.method != Method::InfluenceSimplification || self.infl[ui].len() < 2 {
             return;
         }
-        let bones: Vec<u32> = self.infl[ui].iter().map(|i| i.bone).collect();
-        let mut best: Option<f64> = None;
-        for (k, inf) in self.infl[ui].iter().enumerate() {
-            if let Some(f) = self.cache.get(self.pm, &bones, k) {
-                let c = f.deviation(&inf.p);
-                if best.is_none_or(|b| c < b) {
-                    best = Some(c);
-                }
-            }
-        }
+        let best = self.best_removal(u).map(|(cost, _)| cost);
         if let Some(cost) = best {
             self.heap.push(Reverse(Entry {
                 cost,
@@ -583,6 +574,22 @@ impl Simplifier<'_> {
         }
     }
 
+    /// The cheapest influence of `u` to remove: its deviation and its index.
+    fn best_removal(&mut self, u: u32) -> Option<(f64, usize)> {
+        let infl = &self.infl[u as usize];
+        let bones: Vec<u32> = infl.iter().map(|i| i.bone).collect();
+        let mut best: Option<(f64, usize)> = None;
+        for (k, inf) in infl.iter().enumerate() {
+            if let Some(f) = self.cache.get(self.pm, &bones, k) {
+                let c = f.deviation(&inf.p);
+                if best.is_none_or(|(b, _)| c < b) {
+                    best = Some((c, k));
+                }
+            }
+        }
+        best
+    }
+
     fn apply_collapse(&mut self, u1: u32, u2: u32) -> StepKind {
         let map = self
             .mesh
@@ -590,15 +597,9 @@ impl Simplifier<'_> {
             .expect("checked by collapse_cost");
         let mut ring = Vec::new();
         self.mesh.neighbours(u1, &mut ring);
-        let k = self.infl[u1 as usize].len() as u64;
         let (_, released) = self.mesh.collapse(u1, u2, &map);
         for r in released {
-            let p = self.mesh.pos(r);
-            self.influences -= if p == u1 {
-                k
-            } else {
-                self.infl[p as usize].len() as u64
-            };
+            self.influences -= self.infl[self.mesh.pos(r) as usize].len() as u64;
         }
         self.influence_version[u1 as usize] += 1;
         self.collapse_version[u1 as usize] += 1;
@@ -612,16 +613,7 @@ impl Simplifier<'_> {
     fn apply_influence(&mut self, u: u32) -> StepKind {
         let ui = u as usize;
         let bones: Vec<u32> = self.infl[ui].iter().map(|i| i.bone).collect();
-        let mut best: Option<(f64, usize)> = None;
-        for (k, inf) in self.infl[ui].iter().enumerate() {
-            if let Some(f) = self.cache.get(self.pm, &bones, k) {
-                let c = f.deviation(&inf.p);
-                if best.is_none_or(|(b, _)| c < b) {
-                    best = Some((c, k));
-                }
-            }
-        }
-        let (_, k) = best.expect("queued with a solvable factor");
+        let (_, k) = self.best_removal(u).expect("queued with a solvable factor");
         let factor = self
             .cache
             .get(self.pm, &bones, k)
