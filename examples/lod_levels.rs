@@ -8,11 +8,12 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use lodlab::app::bake::lod_options;
 use lodlab::bake::CharacterBake;
 use lodlab::bake::lod::bake_lods;
+use lodlab::bake::lod_pack::LodPack;
 use lodlab::bake::simplify::Method;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-use lodlab::render::{FrameView, Gpu, SceneRenderer};
-use lodlab::scene::Camera;
+use lodlab::render::{FrameView, Gpu, Region, SceneRenderer, Side};
 use lodlab::scene::crowd::Instance;
+use lodlab::scene::{Camera, LodDraw, LodMethod};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -24,17 +25,21 @@ fn main() -> Result<()> {
     let lods = bake_lods(&model, method, &lod_options(&model, 0.5, None), &|_| {});
     let gpu = Gpu::headless()?;
     let mut renderer = SceneRenderer::new(&gpu, OFFSCREEN_FORMAT, 4);
+    let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!(e))?;
+    renderer.add_character(&gpu, &bake)?;
+    let slot = LodMethod::Simplified(method).index();
+    let pack = LodPack::from_levels(&lods.levels).map_err(|e| anyhow::anyhow!(e))?;
+    renderer.add_levels(&gpu, 0, slot, &pack)?;
     let mut instances = Vec::new();
+    let mut draws = Vec::new();
     let height = lodlab::app::bake::model_height(&model);
     let spacing = height * 0.9;
     let n = lods.levels.len();
     for (k, level) in lods.levels.iter().enumerate() {
-        let bake =
-            CharacterBake::with_mesh(&model, level.mesh.clone()).map_err(|e| anyhow::anyhow!(e))?;
-        renderer.add_character(&gpu, &bake)?;
+        draws.push(LodDraw::Level(k as u8));
         let x = (k as f32 - (n - 1) as f32 / 2.0) * spacing;
         instances.push(Instance {
-            model: k,
+            model: 0,
             transform: Affine3A::from_rotation_translation(
                 Quat::from_rotation_y(1.2),
                 Vec3::new(x, 0.0, 0.0),
@@ -60,7 +65,16 @@ fn main() -> Result<()> {
         n as f32 * spacing * 0.45,
     );
     let view = FrameView::from_camera(&camera, w as f32 / h as f32, 0.0);
-    renderer.prepare(&gpu, &view, &instances);
+    renderer.prepare(
+        &gpu,
+        &view,
+        &[Side {
+            method: slot,
+            instances: &instances,
+            draws: &draws,
+            region: Region::Full,
+        }],
+    );
     renderer.render_to(&gpu, &target.targets, &target.view);
     target.read_rgba(&gpu)?.save(out)?;
     Ok(())

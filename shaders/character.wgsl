@@ -1,35 +1,114 @@
 // Skinned characters: GPU skinning from the animation and vertex textures, lit base colour.
+//
+// `vs_main` draws a level of detail as it is. `vs_morph` draws the finer level of a transition
+// geomorphed towards the coarser one (Merry et al. §6.4, Houle & Poulin §5.1): every vertex is
+// skinned twice, as itself and as its geomorph target `hops` levels coarser, each with its own
+// animation-space influences (after influence simplification the two may differ), and the
+// skinned results are blended, v = (1 − t)·Σ G_i p_i(fine) + t·Σ G_j p_j(coarse). The blend is
+// written as two products rather than `mix`, so that t = 0 gives exactly the finer vertex and
+// t = 1 exactly the coarser one: the fine triangles then coincide with the coarse ones (the
+// collapsed ones have no area) and the endpoints render as the levels themselves.
+//
+// The clip position is `@invariant`: the alpha-blend transition draws the fading level twice
+// (depth, then colour with an equal depth test) and needs both passes to compute identical depth.
 
 struct VsOut {
-    @builtin(position) clip: vec4<f32>,
+    @invariant @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) @interpolate(flat) material: u32,
     @location(4) tint: vec4<f32>,
+    // x: level coordinate (level + t · hops); y: transition t, or −1 outside transitions;
+    // z: opacity.
+    @location(5) @interpolate(flat) lod: vec4<f32>,
+    @location(6) influences: f32,
 };
+
+fn lod_varying(inst: Instance) -> vec4<f32> {
+    let t = inst.lod.x;
+    return vec4<f32>(inst.lod.w + max(t, 0.0) * inst.lod.y, t, inst.lod.z, 0.0);
+}
+
+fn finish(inst: Instance, position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, material: u32, influences: f32) -> VsOut {
+    let world = instance_point(inst, position);
+    var out: VsOut;
+    out.clip = frame.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.normal = instance_vector(inst, normal);
+    out.uv = uv;
+    out.material = material;
+    out.tint = inst.tint;
+    out.lod = lod_varying(inst);
+    out.influences = influences;
+    return out;
+}
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
     let s = skin_vertex(vi, instance_frames(inst));
-    let world = instance_point(inst, s.position);
-    var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(world, 1.0);
-    out.world = world;
-    out.normal = instance_vector(inst, s.normal);
-    out.uv = s.uv;
-    out.material = s.material;
-    out.tint = inst.tint;
-    return out;
+    return finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+}
+
+@vertex
+fn vs_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
+    let frames = instance_frames(inst);
+    let t = clamp(inst.lod.x, 0.0, 1.0);
+    let u = 1.0 - t;
+    var coarse_vi = vi;
+    for (var h = 0u; h < u32(inst.lod.y); h = h + 1u) {
+        coarse_vi = geomorph_target(coarse_vi);
+    }
+    let fine = skin_vertex(vi, frames);
+    let coarse = skin_vertex(coarse_vi, frames);
+    let material = select(fine.material, coarse.material, t >= 0.5);
+    return finish(
+        inst,
+        u * fine.position + t * coarse.position,
+        u * fine.normal + t * coarse.normal,
+        u * fine.uv + t * coarse.uv,
+        material,
+        u * f32(fine.influences) + t * f32(coarse.influences),
+    );
+}
+
+// Debug colours: one per level of detail (level coordinates between two levels blend).
+fn level_color(level: f32) -> vec3<f32> {
+    var palette = array<vec3<f32>, 12>(
+        vec3<f32>(0.20, 0.75, 0.30), vec3<f32>(0.60, 0.85, 0.20), vec3<f32>(0.95, 0.85, 0.15),
+        vec3<f32>(0.98, 0.62, 0.12), vec3<f32>(0.92, 0.38, 0.12), vec3<f32>(0.85, 0.15, 0.15),
+        vec3<f32>(0.85, 0.20, 0.55), vec3<f32>(0.70, 0.25, 0.85), vec3<f32>(0.42, 0.32, 0.92),
+        vec3<f32>(0.18, 0.45, 0.95), vec3<f32>(0.15, 0.75, 0.90), vec3<f32>(0.55, 0.55, 0.55),
+    );
+    let l = clamp(level, 0.0, 11.0);
+    let a = u32(floor(l));
+    let b = min(a + 1u, 11u);
+    return mix(palette[a], palette[b], l - f32(a));
+}
+
+// Blue (cold) through green and yellow to red (hot) over 0..1.
+fn heat(x: f32) -> vec3<f32> {
+    let v = clamp(x, 0.0, 1.0);
+    return clamp(vec3<f32>(1.5 - abs(4.0 * v - 3.0), 1.5 - abs(4.0 * v - 2.0), 1.5 - abs(4.0 * v - 1.0)), vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
-    let base = textureSample(material_tex, material_sampler, in.uv, in.material) * in.tint;
+    var base = textureSample(material_tex, material_sampler, in.uv, in.material).rgb * in.tint.rgb;
+    // frame.time.y: the debug view (see `DebugView` in src/render/renderer.rs).
+    let view = u32(frame.time.y);
+    if (view == 1u) {
+        base = level_color(in.lod.x);
+    } else if (view == 2u) {
+        base = select(vec3<f32>(0.55), heat(in.lod.y), in.lod.y >= 0.0);
+    } else if (view == 3u) {
+        // One influence is cold, eight or more hot.
+        base = heat((in.influences - 1.0) / 7.0);
+    }
     let n = normalize(in.normal);
-    var c = shade(base.rgb, n);
+    var c = shade(base, n);
     // A touch of rim light separates figures from the ground at a distance.
     let v = normalize(frame.camera_pos.xyz - in.world);
     c += frame.sky_horizon.rgb * pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12;
-    return vec4<f32>(apply_fog(c, in.world), 1.0);
+    return vec4<f32>(apply_fog(c, in.world), in.lod.z);
 }

@@ -12,9 +12,9 @@ struct VsOut {
 
 @vertex
 fn vs_main(
-    @location(6) position: vec3<f32>,
-    @location(7) normal: vec3<f32>,
-    @location(8) uv: vec2<f32>,
+    @location(7) position: vec3<f32>,
+    @location(8) normal: vec3<f32>,
+    @location(9) uv: vec2<f32>,
     inst: Instance,
 ) -> VsOut {
     let world = instance_point(inst, position);

@@ -69,7 +69,7 @@ struct SkinnedVertex {
 fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
     let vl = layout_of(vertex_tex);
     let al = frames.anim;
-    let header = texel(vertex_tex, vl, vertex_index);
+    let header = texel(vertex_tex, vl, 2u * vertex_index);
     let first = u32(header.x);
     let packed = u32(header.y);
     let count = packed % 256u;
@@ -96,7 +96,14 @@ fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
     return out;
 }
 
-// Per-instance data: a 3x4 transform (rows), the clip, its timing and a tint.
+// The vertex a vertex morphs into at the next coarser level (see src/bake/vertex_texture.rs);
+// a vertex of the coarsest level is its own target.
+fn geomorph_target(vertex_index: u32) -> u32 {
+    return u32(texel(vertex_tex, layout_of(vertex_tex), 2u * vertex_index + 1u).x);
+}
+
+// Per-instance data: a 3x4 transform (rows), the clip, its timing, a tint and its level of
+// detail.
 struct Instance {
     @location(0) row0: vec4<f32>,
     @location(1) row1: vec4<f32>,
@@ -106,6 +113,10 @@ struct Instance {
     // x: time offset in seconds; y: playback speed.
     @location(4) timing: vec4<f32>,
     @location(5) tint: vec4<f32>,
+    // x: transition t (geomorph: 0 the drawn level, 1 its target hops levels coarser), −1 when
+    // not in a transition; y: hops;
+    // z: opacity (below 1 only while an alpha transition fades the level); w: the level.
+    @location(6) lod: vec4<f32>,
 };
 
 fn instance_point(inst: Instance, p: vec3<f32>) -> vec3<f32> {

@@ -1,9 +1,10 @@
 //! The `lodlab` command line.
 
 use clap::{Args, Parser, Subcommand};
-use lodlab::app::shot::{self, ShotOptions};
+use lodlab::app::shot::{self, ShotLod, ShotOptions};
 use lodlab::app::world::SceneSpec;
-use lodlab::scene::Camera;
+use lodlab::render::DebugView;
+use lodlab::scene::{Camera, Drive, LodMethod, LodPolicy, Transition};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -120,6 +121,9 @@ struct SceneArgs {
     /// Seed of the crowd layout.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
+    #[arg(long, value_name = "DIR")]
+    cache: Option<PathBuf>,
 }
 
 impl SceneArgs {
@@ -130,14 +134,137 @@ impl SceneArgs {
             count: self.count,
             clip: self.clip.clone(),
             seed: self.seed,
+            cache_dir: self.cache.clone(),
         }
     }
+}
+
+/// Levels of detail: which, how they change, what the view shows.
+#[derive(Args, Debug, Clone)]
+struct LodArgs {
+    /// Level-of-detail method: none, rest-pose, as, as+is.
+    #[arg(long, default_value = "none", value_parser = parse_method)]
+    method: LodMethod,
+    /// Transition between levels: pop, alpha, morph.
+    #[arg(long, default_value = "morph", value_parser = parse_transition)]
+    transition: Transition,
+    /// What drives alpha and morph: time (over --duration) or zone (morph zones over distance).
+    #[arg(long, default_value = "time", value_parser = ["time", "zone"])]
+    drive: String,
+    /// Seconds a time-driven transition takes.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_non_negative)]
+    duration: f32,
+    /// Width of a morph zone, as a fraction of its threshold distance.
+    #[arg(long, default_value_t = 0.25, value_parser = parse_non_negative)]
+    zone_width: f32,
+    /// Largest projected error allowed, in pixels (0.25 to 16).
+    #[arg(long, default_value_t = 1.5, value_parser = parse_tolerance)]
+    tolerance: f32,
+    /// Hysteresis: the fraction of the tolerance a coarser level must undercut (0 to 0.9).
+    #[arg(long, default_value_t = 0.2, value_parser = parse_hysteresis)]
+    hysteresis: f32,
+    /// Debug view: shaded, lod, transition, wireframe, influences.
+    #[arg(long, default_value = "shaded", value_parser = parse_debug_view)]
+    debug_view: DebugView,
+    /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
+    #[arg(long, value_name = "A,B", value_parser = parse_compare)]
+    compare: Option<(LodMethod, LodMethod)>,
+}
+
+impl LodArgs {
+    fn shot_lod(&self) -> ShotLod {
+        let (method, compare) = match self.compare {
+            Some((a, b)) => (a, Some(b)),
+            None => (self.method, None),
+        };
+        ShotLod {
+            method,
+            compare,
+            policy: LodPolicy {
+                tolerance_px: self.tolerance,
+                hysteresis: self.hysteresis,
+                transition: self.transition,
+                drive: if self.drive == "zone" {
+                    Drive::Zone
+                } else {
+                    Drive::Time
+                },
+                duration: self.duration,
+                zone_width: self.zone_width,
+            },
+            debug: self.debug_view,
+            ..Default::default()
+        }
+    }
+}
+
+fn parse_method(s: &str) -> Result<LodMethod, String> {
+    LodMethod::parse(s).ok_or_else(|| format!("'{s}' is not a method (none, rest-pose, as, as+is)"))
+}
+
+fn parse_transition(s: &str) -> Result<Transition, String> {
+    Transition::parse(s).ok_or_else(|| format!("'{s}' is not a transition (pop, alpha, morph)"))
+}
+
+fn parse_debug_view(s: &str) -> Result<DebugView, String> {
+    DebugView::parse(s).ok_or_else(|| {
+        format!("'{s}' is not a debug view (shaded, lod, transition, wireframe, influences)")
+    })
+}
+
+fn parse_compare(s: &str) -> Result<(LodMethod, LodMethod), String> {
+    let (a, b) = s
+        .split_once(',')
+        .ok_or_else(|| format!("'{s}' is not A,B (two methods)"))?;
+    Ok((parse_method(a)?, parse_method(b)?))
+}
+
+fn parse_number(s: &str) -> Result<f32, String> {
+    s.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| format!("'{s}' is not a number"))
+}
+
+fn parse_non_negative(s: &str) -> Result<f32, String> {
+    parse_number(s).and_then(|x| {
+        if x >= 0.0 {
+            Ok(x)
+        } else {
+            Err(format!("'{s}' must not be negative"))
+        }
+    })
+}
+
+fn parse_tolerance(s: &str) -> Result<f32, String> {
+    parse_number(s).and_then(|x| {
+        if (0.25..=16.0).contains(&x) {
+            Ok(x)
+        } else {
+            Err(format!(
+                "tolerance '{s}' must be between 0.25 and 16 pixels"
+            ))
+        }
+    })
+}
+
+fn parse_hysteresis(s: &str) -> Result<f32, String> {
+    parse_number(s).and_then(|x| {
+        if (0.0..=0.9).contains(&x) {
+            Ok(x)
+        } else {
+            Err(format!("hysteresis '{s}' must be between 0 and 0.9"))
+        }
+    })
 }
 
 #[derive(Args, Debug)]
 struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    lod: LodArgs,
     /// Window size.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     size: (u32, u32),
@@ -156,6 +283,8 @@ struct ViewArgs {
 struct ShotArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    lod: LodArgs,
     /// PNG file to write.
     #[arg(long)]
     out: PathBuf,
@@ -235,6 +364,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 camera: a.camera,
                 timed_frames: a.frames,
                 calibrate: a.calibrate,
+                lod: a.lod.shot_lod(),
             })?;
             println!("{}", serde_json::to_string(&report)?);
             Ok(ExitCode::SUCCESS)
@@ -291,6 +421,7 @@ fn view(a: ViewArgs) -> anyhow::Result<ExitCode> {
         samples: a.msaa,
         screenshot: a.screenshot,
         frames: a.frames,
+        lod: a.lod.shot_lod(),
     })
 }
 

@@ -2,6 +2,7 @@
 
 pub mod bake;
 pub mod gen_assets;
+pub mod levels;
 pub mod report;
 pub mod shot;
 pub mod viewer;

@@ -2,8 +2,8 @@
 
 use super::world::{Loaded, SceneSpec, World};
 use crate::render::targets::Offscreen;
-use crate::render::{CharacterShader, FrameStats, Gpu};
-use crate::scene::Camera;
+use crate::render::{CharacterShader, DebugView, FrameStats, Gpu};
+use crate::scene::{Camera, LodMethod, LodPolicy};
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -23,6 +23,32 @@ pub struct ShotOptions {
     pub timed_frames: usize,
     /// Also time the same triangles drawn by the trivial unskinned shader.
     pub calibrate: bool,
+    pub lod: ShotLod,
+}
+
+/// Levels of detail in a shot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShotLod {
+    pub method: LodMethod,
+    /// Compare mode: `method` on the left half, this on the right.
+    pub compare: Option<LodMethod>,
+    pub policy: LodPolicy,
+    pub debug: DebugView,
+    /// Selection runs over this many seconds before the shot's time at 60 Hz, so that the
+    /// frame shows the transitions a viewer would be in the middle of.
+    pub settle_seconds: f32,
+}
+
+impl Default for ShotLod {
+    fn default() -> Self {
+        ShotLod {
+            method: LodMethod::None,
+            compare: None,
+            policy: LodPolicy::default(),
+            debug: DebugView::Shaded,
+            settle_seconds: 1.0,
+        }
+    }
 }
 
 /// The JSON line `shot` prints.
@@ -39,6 +65,17 @@ pub struct ShotReport {
     pub vertices: u64,
     pub influences: u64,
     pub draw_calls: u32,
+    /// The method drawn (on the left half in compare mode) and the one on the right.
+    pub method: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compare: Option<String>,
+    pub transition: String,
+    pub drive: String,
+    pub tolerance_px: f32,
+    pub debug_view: String,
+    /// Instances by level of detail, finest first (the last bin holds coarser ones too).
+    pub levels: Vec<u32>,
+    pub in_transition: u64,
     /// Median over the timed frames, submit to GPU completion.
     pub frame_ms: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -87,13 +124,26 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
     if let Some(c) = options.camera {
         world.camera = c;
     }
+    let lod = &options.lod;
+    world.lod.method = lod.method;
+    world.lod.compare = lod.compare;
+    world.lod.policy = lod.policy;
+    world.renderer.debug = lod.debug;
+    if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
+        anyhow::bail!("--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)");
+    }
+    world.ensure_levels(&gpu)?;
+    world.settle(options.height, options.time, lod.settle_seconds);
     let aspect = options.width as f32 / options.height as f32;
-    let stats: FrameStats = world.prepare(&gpu, aspect, options.time);
+    let stats: FrameStats = world.upload(&gpu, aspect, options.time);
 
     // Warm-up (pipeline creation, first uploads), then timed frames.
     time_frames(&gpu, &world, &target, 1)?;
     let frame_ms = time_frames(&gpu, &world, &target, options.timed_frames)?;
-    let image = target.read_rgba(&gpu)?;
+    let mut image = target.read_rgba(&gpu)?;
+    if lod.compare.is_some() {
+        draw_divider(&mut image);
+    }
 
     let plain_frame_ms = if options.calibrate {
         world.renderer.shader = CharacterShader::Plain;
@@ -118,10 +168,39 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         vertices: stats.vertices,
         influences: stats.influences,
         draw_calls: stats.draw_calls,
+        method: lod.method.name().into(),
+        compare: lod.compare.map(|m| m.name().into()),
+        transition: lod.policy.transition.name().into(),
+        drive: match lod.policy.drive {
+            crate::scene::Drive::Time => "time",
+            crate::scene::Drive::Zone => "zone",
+        }
+        .into(),
+        tolerance_px: lod.policy.tolerance_px,
+        debug_view: lod.debug.name().into(),
+        levels: histogram(&stats.levels),
+        in_transition: stats.in_transition,
         frame_ms,
         plain_frame_ms,
         skinning_ratio: plain_frame_ms.map(|p| frame_ms / p.max(1e-9)),
     })
+}
+
+/// The level histogram without its empty tail.
+pub fn histogram(levels: &[u32]) -> Vec<u32> {
+    let used = levels.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
+    levels[..used].to_vec()
+}
+
+/// The line between the halves of a comparison: two pixels of light grey down the middle.
+fn draw_divider(image: &mut image::RgbaImage) {
+    let (w, h) = image.dimensions();
+    let x0 = (w / 2).saturating_sub(1);
+    for x in x0..(x0 + 2).min(w) {
+        for y in 0..h {
+            image.put_pixel(x, y, image::Rgba([235, 235, 235, 255]));
+        }
+    }
 }
 
 /// Fails early, before any rendering, if `path` cannot be written: its folder is missing or it

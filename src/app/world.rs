@@ -1,12 +1,21 @@
 //! Building a scene for the front ends: load the models, bake them, lay out the crowd, place the
 //! camera. Shared by the viewer, `shot` and the tests, so they all show the same thing.
 
+use super::levels::{LevelSource, bake_all};
 use crate::bake::CharacterBake;
-use crate::import::load_model;
-use crate::render::{Gpu, SceneRenderer};
-use crate::scene::{Camera, Crowd, CrowdConfig, CrowdModel, Instance};
+use crate::bake::cache::{LodCache, source_hash};
+use crate::bake::lod_pack::LodPack;
+use crate::bake::simplify::Method;
+use crate::error::InputError;
+use crate::import::{load_model, source_path};
+use crate::render::{FrameStats, FrameView, Gpu, Region, SceneRenderer, Side};
+use crate::scene::{
+    Camera, Crowd, CrowdConfig, CrowdModel, Instance, LodDraw, LodMethod, LodModel, LodPolicy,
+    LodTracker, ScreenProjection,
+};
 use anyhow::{Result, bail};
 use glam::Vec3;
+use std::path::PathBuf;
 
 /// Scenes lodlab knows.
 pub const SCENES: &[&str] = &["crowd"];
@@ -24,6 +33,8 @@ pub struct SceneSpec {
     /// Play this clip (by name) on every model that has it.
     pub clip: Option<String>,
     pub seed: u64,
+    /// Where baked levels of detail are cached (default: the platform cache folder).
+    pub cache_dir: Option<PathBuf>,
 }
 
 impl Default for SceneSpec {
@@ -34,12 +45,19 @@ impl Default for SceneSpec {
             count: 300,
             clip: None,
             seed: 1,
+            cache_dir: None,
         }
     }
 }
 
 /// Loads and bakes the models a spec names, in order.
 pub fn load_characters(spec: &SceneSpec) -> Result<Vec<CharacterBake>> {
+    Ok(load_sources(spec)?.into_iter().map(|(b, _)| b).collect())
+}
+
+/// Loads the models a spec names, in order: their full-detail bakes, and what baking their
+/// levels of detail later needs.
+fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
     if !SCENES.contains(&spec.scene.as_str()) {
         bail!(
             "unknown scene '{}' (scenes: {})",
@@ -56,7 +74,10 @@ pub fn load_characters(spec: &SceneSpec) -> Result<Vec<CharacterBake>> {
         .iter()
         .map(|name| {
             let model = load_model(name)?;
-            CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))
+            let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+            let path = source_path(name);
+            let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
+            Ok((bake, LevelSource { model, hash }))
         })
         .collect()
 }
@@ -146,14 +167,53 @@ pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
     Camera::new(Vec3::new(0.0, height * 0.3, 0.0), 35.0, 14.0, r * 1.12)
 }
 
-/// A loaded scene: the renderer with its characters, the crowd and a camera.
+/// A loaded scene: the renderer with its characters, the crowd, a camera, and the levels of
+/// detail with their run-time choices.
 pub struct World {
     pub spec: SceneSpec,
     pub bakes: Vec<CharacterBake>,
+    pub sources: Vec<LevelSource>,
     pub crowd: Crowd,
     pub camera: Camera,
     pub renderer: SceneRenderer,
+    pub lod: LodView,
     instances: Vec<Instance>,
+}
+
+/// What levels of detail are shown and how: the user's choices and the per-instance state.
+pub struct LodView {
+    pub policy: LodPolicy,
+    pub method: LodMethod,
+    /// Compare mode: the right half of the view shows this method, the left half `method`.
+    pub compare: Option<LodMethod>,
+    trackers: [LodTracker; 2],
+    draws: [Vec<LodDraw>; 2],
+    /// Per model, per method slot: what selection needs, once the levels are on the GPU.
+    models: Vec<[Option<LodModel>; 4]>,
+}
+
+impl LodView {
+    /// The methods the sides show, left (or only) first.
+    pub fn methods(&self) -> Vec<LodMethod> {
+        std::iter::once(self.method).chain(self.compare).collect()
+    }
+
+    /// Forgets every instance's level and transition: the next frame snaps.
+    pub fn reset(&mut self) {
+        for t in &mut self.trackers {
+            t.reset();
+        }
+    }
+
+    /// Are the levels of `method` uploaded for every model?
+    pub fn has(&self, method: LodMethod) -> bool {
+        method == LodMethod::None || self.models.iter().all(|m| m[method.index()].is_some())
+    }
+
+    /// What the instances drew on each side in the last frame.
+    pub fn draws(&self, side: usize) -> &[LodDraw] {
+        &self.draws[side]
+    }
 }
 
 /// Models loaded and baked for a spec, checked, before any GPU work: bad input fails the same
@@ -161,13 +221,18 @@ pub struct World {
 pub struct Loaded {
     pub spec: SceneSpec,
     pub bakes: Vec<CharacterBake>,
+    pub sources: Vec<LevelSource>,
 }
 
 impl Loaded {
     pub fn new(spec: SceneSpec) -> Result<Loaded> {
-        let bakes = load_characters(&spec)?;
+        let (bakes, sources): (Vec<_>, Vec<_>) = load_sources(&spec)?.into_iter().unzip();
         check_clip(&spec, &bakes)?;
-        Ok(Loaded { spec, bakes })
+        Ok(Loaded {
+            spec,
+            bakes,
+            sources,
+        })
     }
 }
 
@@ -178,21 +243,80 @@ impl World {
         color_format: wgpu::TextureFormat,
         sample_count: u32,
     ) -> Result<World> {
-        let Loaded { spec, bakes } = loaded;
+        let Loaded {
+            spec,
+            bakes,
+            sources,
+        } = loaded;
         let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
         for b in &bakes {
             renderer.add_character(gpu, b)?;
         }
         let crowd = layout_crowd(&spec, &bakes, None);
         let camera = default_camera(&crowd, &bakes);
+        let lod = LodView {
+            policy: LodPolicy::default(),
+            method: LodMethod::None,
+            compare: None,
+            trackers: Default::default(),
+            draws: Default::default(),
+            models: bakes
+                .iter()
+                .map(|b| {
+                    let mut slots: [Option<LodModel>; 4] = Default::default();
+                    slots[0] = Some(lod_model(b, &LodPack::full_detail(b)));
+                    slots
+                })
+                .collect(),
+        };
         Ok(World {
             spec,
             bakes,
+            sources,
             crowd,
             camera,
             renderer,
+            lod,
             instances: Vec::new(),
         })
+    }
+
+    /// The level-of-detail cache this world bakes into.
+    pub fn cache(&self) -> LodCache {
+        LodCache::new(self.spec.cache_dir.clone())
+    }
+
+    /// Uploads the levels of `method` for every model (`packs` in model order) and makes them
+    /// available to selection.
+    pub fn install_levels(
+        &mut self,
+        gpu: &Gpu,
+        method: Method,
+        packs: Vec<Result<LodPack, String>>,
+    ) -> Result<()> {
+        let slot = LodMethod::Simplified(method).index();
+        for (m, pack) in packs.into_iter().enumerate() {
+            let pack = pack.map_err(anyhow::Error::msg)?;
+            self.renderer.add_levels(gpu, m, slot, &pack)?;
+            self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
+        }
+        self.lod.reset();
+        Ok(())
+    }
+
+    /// Bakes (or reads from the cache) and uploads the levels of every method the view shows
+    /// that is not there yet, waiting for them.
+    pub fn ensure_levels(&mut self, gpu: &Gpu) -> Result<()> {
+        for method in self.lod.methods() {
+            if let LodMethod::Simplified(m) = method
+                && !self.lod.has(method)
+            {
+                let warn = |w: String| eprintln!("warning: {w}");
+                let packs = bake_all(&self.sources, m, &self.cache(), &|_, _| {}, &warn);
+                self.install_levels(gpu, m, packs)?;
+            }
+        }
+        Ok(())
     }
 
     /// Re-lays the crowd for a new count, clip or model choice without reloading anything:
@@ -207,11 +331,79 @@ impl World {
         self.camera = default_camera(&self.crowd, &self.bakes);
     }
 
-    /// Uploads everything for a frame at scene time `time` and returns what it will draw.
-    pub fn prepare(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> crate::render::FrameStats {
+    /// Chooses every instance's level for a frame at scene time `time`, `dt` seconds of
+    /// wall time after the last, seen in a view `height` pixels high.
+    pub fn select(&mut self, height: u32, time: f32, dt: f32) {
         self.crowd.instances_at(time, &mut self.instances);
-        let view = crate::render::FrameView::from_camera(&self.camera, aspect, time);
-        self.renderer.prepare(gpu, &view, &self.instances)
+        let screen = ScreenProjection::new(
+            self.camera.eye(),
+            self.camera.fov_y,
+            height as f32,
+            self.camera.near_far().0,
+        );
+        let lod = &mut self.lod;
+        let methods = lod.methods();
+        for (side, method) in methods.into_iter().enumerate() {
+            let slot = if lod.has(method) { method.index() } else { 0 };
+            let models = &lod.models;
+            lod.trackers[side].update_with(
+                &lod.policy,
+                |m| models.get(m).and_then(|s| s[slot].as_ref()),
+                &self.instances,
+                &screen,
+                dt,
+                &mut lod.draws[side],
+            );
+        }
+    }
+
+    /// Runs selection over the `seconds` before `time` at 60 frames per second, so that a
+    /// single rendered frame shows the transitions a viewer would be in the middle of.
+    pub fn settle(&mut self, height: u32, time: f32, seconds: f32) {
+        let dt = 1.0 / 60.0;
+        let frames = (seconds / dt).round() as usize;
+        for k in (0..=frames).rev() {
+            self.select(height, time - k as f32 * dt, dt);
+        }
+    }
+
+    /// Uploads everything for a frame (after [`World::select`]) and returns what it will draw.
+    pub fn upload(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> FrameStats {
+        let view = FrameView::from_camera(&self.camera, aspect, time);
+        let lod = &self.lod;
+        let methods = lod.methods();
+        let regions: &[Region] = if methods.len() == 2 {
+            &[Region::Left, Region::Right]
+        } else {
+            &[Region::Full]
+        };
+        let sides: Vec<Side> = methods
+            .iter()
+            .zip(regions)
+            .enumerate()
+            .map(|(i, (m, &region))| Side {
+                method: if lod.has(*m) { m.index() } else { 0 },
+                instances: &self.instances,
+                draws: &lod.draws[i],
+                region,
+            })
+            .collect();
+        self.renderer.prepare(gpu, &view, &sides)
+    }
+
+    /// Selection and upload for a frame `width`×`height` pixels, `dt` seconds after the last.
+    pub fn prepare(&mut self, gpu: &Gpu, size: [u32; 2], time: f32, dt: f32) -> FrameStats {
+        self.select(size[1], time, dt);
+        self.upload(gpu, size[0] as f32 / size[1].max(1) as f32, time)
+    }
+}
+
+/// What selection needs to know about a character's levels.
+fn lod_model(bake: &CharacterBake, pack: &LodPack) -> LodModel {
+    LodModel {
+        errors: pack.errors(),
+        center: bake.bounds.center(),
+        radius: bake.bounds.diagonal() * 0.5,
     }
 }
 

@@ -8,6 +8,7 @@ pub mod animation_space;
 pub mod cache;
 pub mod lod;
 pub mod lod_error;
+pub mod lod_pack;
 pub mod materials;
 pub mod simplify;
 pub mod texels;
@@ -55,7 +56,7 @@ impl CharacterBake {
     /// same skeleton, clips and materials.
     pub fn with_mesh(model: &Model, am: AnimationSpaceMesh) -> Result<Self, String> {
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
-        let vertices = VertexTexture::pack(&[&am])?;
+        let vertices = VertexTexture::pack(&[&am], &[])?;
         let materials = MaterialLayers::bake(&model.materials);
 
         let (pos, nrm) = am.evaluate(&animation.sample(0, 0.0));

@@ -3,12 +3,15 @@
 //! number of influences per vertex is not bounded by the vertex attribute slots).
 //!
 //! Layout, by linear texel index (see [`super::texels`]):
-//! - texel `v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
+//! - texel `2v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
+//! - texel `2v + 1`: `(geomorph target, 0, 0, 0)`: the vertex (index into this texture) that `v`
+//!   morphs into at the next coarser level (Houle & Poulin §5.1); itself on the coarsest level;
 //! - each influence two texels: `p_i` as `(x, y, z, w)`, then `(n_i.x, n_i.y, n_i.z, bone)`.
 //!
-//! Integers are stored as floats, exact up to 2^24 texels. Several meshes (the levels of detail of
-//! later stages) can share one texture: each gets a base vertex, which the draw passes as
-//! `base_vertex` so that `vertex_index` lands on its headers.
+//! Integers are stored as floats, exact up to 2^24 texels. The levels of detail of a model share
+//! one texture: each level gets a base vertex, which the draw passes as `base_vertex` so that
+//! `vertex_index` lands on its headers, and the geomorph targets of level k are vertices of level
+//! k+1, so a morph over several levels follows the targets hop by hop.
 
 use super::animation_space::AnimationSpaceMesh;
 use super::texels::TexelGrid;
@@ -30,21 +33,40 @@ pub struct VertexTexture {
 }
 
 impl VertexTexture {
-    /// Packs meshes one after another: all headers first, then all influences.
-    pub fn pack(meshes: &[&AnimationSpaceMesh]) -> Result<Self, String> {
+    /// Packs meshes one after another: all headers first, then all influences. `geomorphs[k]`,
+    /// where given, maps every vertex of mesh k to a vertex of mesh k+1; a mesh without one
+    /// morphs into itself.
+    pub fn pack(meshes: &[&AnimationSpaceMesh], geomorphs: &[&[u32]]) -> Result<Self, String> {
         let vertex_count: usize = meshes.iter().map(|m| m.vertex_count()).sum();
         let influence_count: usize = meshes.iter().map(|m| m.influences.len()).sum();
-        let total = vertex_count + 2 * influence_count;
+        let total = 2 * vertex_count + 2 * influence_count;
         if total >= MAX_EXACT {
             return Err(format!(
                 "too large for the vertex texture: {vertex_count} vertices, {influence_count} influences"
             ));
         }
-        let mut headers = Vec::with_capacity(vertex_count);
-        let mut body = Vec::with_capacity(2 * influence_count);
-        let mut base_vertices = Vec::with_capacity(meshes.len());
+        let mut base_vertices = Vec::with_capacity(meshes.len() + 1);
+        let mut base = 0u32;
         for mesh in meshes {
-            base_vertices.push(headers.len() as u32);
+            base_vertices.push(base);
+            base += mesh.vertex_count() as u32;
+        }
+        base_vertices.push(base);
+        let mut headers = Vec::with_capacity(2 * vertex_count);
+        let mut body = Vec::with_capacity(2 * influence_count);
+        for (k, mesh) in meshes.iter().enumerate() {
+            let morph = geomorphs
+                .get(k)
+                .filter(|g| !g.is_empty() && k + 1 < meshes.len());
+            if let Some(g) = morph {
+                let next = meshes[k + 1].vertex_count() as u32;
+                if g.len() != mesh.vertex_count() || g.iter().any(|&t| t >= next) {
+                    return Err(format!(
+                        "level {k}: geomorph map does not fit level {}",
+                        k + 1
+                    ));
+                }
+            }
             for v in 0..mesh.vertex_count() {
                 let infs = mesh.influences_of(v);
                 if infs.len() >= MATERIAL_STRIDE as usize {
@@ -53,10 +75,15 @@ impl VertexTexture {
                         infs.len()
                     ));
                 }
-                let first = vertex_count + body.len();
+                let first = 2 * vertex_count + body.len();
                 let packed = infs.len() as u32 + MATERIAL_STRIDE * mesh.materials[v] as u32;
                 let uv = mesh.uvs[v];
                 headers.push([first as f32, packed as f32, uv.x, uv.y]);
+                let target = match morph {
+                    Some(g) => base_vertices[k + 1] + g[v],
+                    None => base_vertices[k] + v as u32,
+                };
+                headers.push([target as f32, 0.0, 0.0, 0.0]);
                 for inf in infs {
                     body.push(inf.p.to_array());
                     body.push([inf.n.x, inf.n.y, inf.n.z, inf.bone as f32]);
@@ -64,6 +91,7 @@ impl VertexTexture {
             }
         }
         headers.extend(body);
+        base_vertices.pop();
         Ok(VertexTexture {
             grid: TexelGrid::from_linear(headers),
             base_vertices,
@@ -104,9 +132,16 @@ mod tests {
             materials: vec![0, 3],
             indices: vec![],
         };
-        let t = VertexTexture::pack(&[&mesh, &mesh]).unwrap();
+        let t = VertexTexture::pack(&[&mesh, &mesh], &[&[1, 1]]).unwrap();
         assert_eq!(t.base_vertices, vec![0, 2]);
-        let h = t.grid.get(3);
+        // Level 0 morphs into vertex 1 of level 1; level 1, the coarsest, into itself.
+        assert_eq!(t.grid.get(1)[0], 3.0);
+        assert_eq!(t.grid.get(3)[0], 3.0);
+        assert_eq!(t.grid.get(2 * 3 + 1)[0], 3.0);
+        assert_eq!(t.grid.get(2 * 2 + 1)[0], 2.0);
+        // A map that does not fit the next level is refused.
+        assert!(VertexTexture::pack(&[&mesh, &mesh], &[&[0, 2]]).is_err());
+        let h = t.grid.get(2 * 3);
         assert_eq!(h[1] as u32 % MATERIAL_STRIDE, 2);
         assert_eq!(h[1] as u32 / MATERIAL_STRIDE, 3);
         assert_eq!([h[2], h[3]], [0.3, 0.4]);

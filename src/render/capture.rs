@@ -31,7 +31,7 @@ pub fn capture_skinned(
         bail!("no character {model}");
     };
     let device = &gpu.device;
-    let n = character.vertex_count;
+    let n = character.full().levels[0].vertices;
     let height = n.div_ceil(WIDTH).max(1);
     let format = wgpu::TextureFormat::Rgba32Float;
     let target = Offscreen::with_format(gpu, WIDTH, height, 1, format);
@@ -122,7 +122,7 @@ pub fn capture_skinned(
         });
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &frame_bind_group, &[]);
-        pass.set_bind_group(1, &character.bind_group, &[]);
+        pass.set_bind_group(1, &character.full().bind_group, &[]);
         pass.set_vertex_buffer(0, instance_buffer.slice(..));
         pass.draw(0..n, 0..1);
     }

@@ -3,6 +3,7 @@
 
 use super::gpu::Gpu;
 use crate::bake::CharacterBake;
+use crate::bake::lod_pack::{LodPack, PackedLevel};
 use crate::bake::texels::TexelGrid;
 use wgpu::util::DeviceExt;
 
@@ -13,15 +14,27 @@ struct ShadowUniform {
     ellipse: [f32; 4],
 }
 
+/// A character's shared GPU data: animation texture, materials, blob shadow, and one set of
+/// levels of detail per method that has been uploaded.
 pub struct GpuCharacter {
+    pub name: String,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
-    pub triangle_count: u32,
-    pub vertex_count: u32,
-    pub influence_count: u32,
-    pub index_buffer: wgpu::Buffer,
-    pub index_count: u32,
+    /// The full-detail triangles in one fixed pose, for the plain calibration shader.
     pub static_vertices: wgpu::Buffer,
+    anim_view: wgpu::TextureView,
+    materials_view: wgpu::TextureView,
+    shadow_buffer: wgpu::Buffer,
+    /// Indexed by [`crate::scene::LodMethod::index`]; slot 0 (`none`) is always there.
+    sets: Vec<Option<GpuLodSet>>,
+}
+
+/// One method's levels of detail on the GPU, created once (see [`LodPack`]).
+pub struct GpuLodSet {
+    pub levels: Vec<PackedLevel>,
+    pub index_buffer: wgpu::Buffer,
+    /// The number of vertices the vertex texture holds, over all levels.
+    pub vertex_count: u32,
     pub bind_group: wgpu::BindGroup,
 }
 
@@ -95,6 +108,7 @@ fn data_texture(gpu: &Gpu, label: &str, grid: &TexelGrid) -> wgpu::Texture {
 }
 
 impl GpuCharacter {
+    /// Uploads the shared data and the full-detail set of `bake`.
     pub fn upload(
         gpu: &Gpu,
         layout: &wgpu::BindGroupLayout,
@@ -106,7 +120,6 @@ impl GpuCharacter {
             &format!("{} animation", bake.name),
             &bake.animation.grid,
         );
-        let verts = data_texture(gpu, &format!("{} vertices", bake.name), &bake.vertices.grid);
         let m = &bake.materials;
         let material_data: Vec<u8> = m.mips.concat();
         let materials = gpu.device.create_texture_with_data(
@@ -128,13 +141,6 @@ impl GpuCharacter {
             wgpu::util::TextureDataOrder::MipMajor,
             &material_data,
         );
-        let index_buffer = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("indices"),
-                contents: bytemuck::cast_slice(&bake.indices),
-                usage: wgpu::BufferUsages::INDEX,
-            });
         let static_vertices = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -159,36 +165,57 @@ impl GpuCharacter {
                 contents: bytemuck::bytes_of(&shadow),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-        let view = |t: &wgpu::Texture, dim| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(dim),
+        let mut character = GpuCharacter {
+            name: bake.name.clone(),
+            clip_rows: (0..bake.animation.clips.len())
+                .map(|c| bake.animation.clip_rows(c))
+                .collect(),
+            static_vertices,
+            anim_view: anim.create_view(&Default::default()),
+            materials_view: materials.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
                 ..Default::default()
-            })
+            }),
+            shadow_buffer,
+            sets: Vec::new(),
         };
+        character.add_set(gpu, layout, sampler, 0, &LodPack::full_detail(bake));
+        character
+    }
+
+    /// Uploads the levels of one method into `slot`, replacing what was there.
+    pub fn add_set(
+        &mut self,
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        sampler: &wgpu::Sampler,
+        slot: usize,
+        pack: &LodPack,
+    ) {
+        let verts = data_texture(gpu, &format!("{} vertices", self.name), &pack.vertices.grid);
+        let index_buffer = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("indices"),
+                contents: bytemuck::cast_slice(&pack.indices),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+        let verts_view = verts.create_view(&Default::default());
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(&bake.name),
+            label: Some(&self.name),
             layout,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view(
-                        &anim,
-                        wgpu::TextureViewDimension::D2,
-                    )),
+                    resource: wgpu::BindingResource::TextureView(&self.anim_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&view(
-                        &verts,
-                        wgpu::TextureViewDimension::D2,
-                    )),
+                    resource: wgpu::BindingResource::TextureView(&verts_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&view(
-                        &materials,
-                        wgpu::TextureViewDimension::D2Array,
-                    )),
+                    resource: wgpu::BindingResource::TextureView(&self.materials_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
@@ -196,21 +223,29 @@ impl GpuCharacter {
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
-                    resource: shadow_buffer.as_entire_binding(),
+                    resource: self.shadow_buffer.as_entire_binding(),
                 },
             ],
         });
-        GpuCharacter {
-            clip_rows: (0..bake.animation.clips.len())
-                .map(|c| bake.animation.clip_rows(c))
-                .collect(),
-            triangle_count: bake.triangle_count() as u32,
-            vertex_count: bake.vertices.vertex_count,
-            influence_count: bake.vertices.influence_count,
-            index_buffer,
-            index_count: bake.indices.len() as u32,
-            static_vertices,
-            bind_group,
+        if self.sets.len() <= slot {
+            self.sets.resize_with(slot + 1, || None);
         }
+        self.sets[slot] = Some(GpuLodSet {
+            levels: pack.levels.clone(),
+            index_buffer,
+            vertex_count: pack.vertices.vertex_count,
+            bind_group,
+        });
+    }
+
+    /// The set in `slot`, if uploaded.
+    pub fn set(&self, slot: usize) -> Option<&GpuLodSet> {
+        self.sets.get(slot).and_then(Option::as_ref)
+    }
+
+    /// The full-detail set.
+    pub fn full(&self) -> &GpuLodSet {
+        self.set(0)
+            .expect("the full-detail set is uploaded with the character")
     }
 }

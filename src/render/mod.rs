@@ -9,5 +9,5 @@ pub mod targets;
 pub mod uniforms;
 
 pub use gpu::Gpu;
-pub use renderer::{CharacterShader, FrameStats, SceneRenderer};
+pub use renderer::{CharacterShader, DebugView, FrameStats, Region, SceneRenderer, Side};
 pub use uniforms::{FrameView, Lighting};

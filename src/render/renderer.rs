@@ -1,9 +1,23 @@
-//! The scene renderer: sky, ground, blob shadows and instanced skinned characters.
+//! The scene renderer: sky, ground, blob shadows and instanced skinned characters at their
+//! levels of detail.
 //!
-//! Per frame the caller hands over the camera and a list of instances; [`SceneRenderer::prepare`]
-//! groups them by model and uploads them in one buffer write, and [`SceneRenderer::draw`] issues
-//! one instanced draw per model. Nothing is allocated per frame once the instance buffer is big
-//! enough.
+//! Per frame the caller hands over the camera and, for each side of the screen (all of it, or
+//! the two halves of a comparison), the instances with what each draws ([`LodDraw`]).
+//! [`SceneRenderer::prepare`] groups the instances by (side, model, level, transition state) and
+//! uploads them in one buffer write, and [`SceneRenderer::draw`] issues one instanced draw per
+//! group. Nothing is allocated per frame once the buffers are big enough.
+//!
+//! Alpha-blend transitions (Houle & Poulin §3, Figure 1) are drawn so that they neither see
+//! through a character nor depend on triangle order. A transition with progress p draws one level
+//! opaque and fades the other over it: for p < ½ the outgoing level is opaque and the incoming
+//! one fades in with opacity 2p; for p ≥ ½ the incoming one is opaque and the outgoing one fades
+//! out with opacity 2(1 − p). The faded level is drawn after every opaque draw, in two passes:
+//! first depth only, then colour with an *equal* depth test. Only its nearest surface is blended,
+//! once per pixel, so its own overlapping parts (a leg in front of the body) never blend over
+//! each other, and where the opaque level is in front the faded one is hidden. At p = 0 the
+//! faded level has opacity 0 and the image is exactly the outgoing level; at p = 1 exactly the
+//! incoming one; at p = ½ both halves show the depth-nearest of the two levels, so the switch of
+//! roles is seamless.
 
 use super::character::{self, GpuCharacter};
 use super::gpu::Gpu;
@@ -11,7 +25,9 @@ use super::shaders;
 use super::targets::DEPTH_FORMAT;
 use super::uniforms::{FrameUniforms, FrameView, GpuInstance, Lighting, static_vertex_layout};
 use crate::bake::CharacterBake;
-use crate::scene::Instance;
+use crate::bake::lod_pack::LodPack;
+use crate::scene::lod::MAX_LEVELS;
+use crate::scene::{Instance, LodDraw};
 use anyhow::{Result, bail};
 use std::ops::Range;
 
@@ -24,14 +40,141 @@ pub enum CharacterShader {
     Plain,
 }
 
+/// What the characters are coloured by.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum DebugView {
+    /// Their materials.
+    #[default]
+    Shaded,
+    /// One colour per level of detail, blended while morphing.
+    LodTint,
+    /// Transition t from blue (0) to red (1); grey outside transitions.
+    TransitionTint,
+    /// Triangle edges, coloured by level (needs `POLYGON_MODE_LINE`).
+    Wireframe,
+    /// Animation-space influences per vertex, one (blue) to eight or more (red).
+    Influences,
+}
+
+impl DebugView {
+    pub const ALL: [DebugView; 5] = [
+        DebugView::Shaded,
+        DebugView::LodTint,
+        DebugView::TransitionTint,
+        DebugView::Wireframe,
+        DebugView::Influences,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            DebugView::Shaded => "shaded",
+            DebugView::LodTint => "lod",
+            DebugView::TransitionTint => "transition",
+            DebugView::Wireframe => "wireframe",
+            DebugView::Influences => "influences",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<DebugView> {
+        Self::ALL
+            .into_iter()
+            .find(|v| v.name().eq_ignore_ascii_case(s.trim()))
+    }
+
+    /// The mode `fs_main` in `shaders/character.wgsl` switches on.
+    fn shader_mode(self) -> f32 {
+        match self {
+            DebugView::Shaded => 0.0,
+            DebugView::LodTint | DebugView::Wireframe => 1.0,
+            DebugView::TransitionTint => 2.0,
+            DebugView::Influences => 3.0,
+        }
+    }
+}
+
+/// Which part of the view a side covers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Region {
+    #[default]
+    Full,
+    Left,
+    Right,
+}
+
+impl Region {
+    /// The region's rectangle (x, y, width, height) within `view`.
+    pub fn rect(self, [x, y, w, h]: [u32; 4]) -> [u32; 4] {
+        let half = w / 2;
+        match self {
+            Region::Full => [x, y, w, h],
+            Region::Left => [x, y, half.max(1), h],
+            Region::Right => [x + half, y, (w - half).max(1), h],
+        }
+    }
+}
+
+/// What one side of the screen shows: the instances, drawn from one method's levels.
+#[derive(Clone, Copy, Debug)]
+pub struct Side<'a> {
+    /// The method's slot ([`crate::scene::LodMethod::index`]); a model without that set
+    /// uploaded is drawn at full detail.
+    pub method: usize,
+    pub instances: &'a [Instance],
+    /// What each instance draws; empty: full detail for all.
+    pub draws: &'a [LodDraw],
+    pub region: Region,
+}
+
 /// What a frame drew.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameStats {
     pub instances: u64,
     pub triangles: u64,
     pub vertices: u64,
+    /// Animation-space influences skinned: a morphing vertex counts those of both its levels.
     pub influences: u64,
     pub draw_calls: u32,
+    /// Instances by the level they mostly show (the last bin holds the coarser ones too).
+    pub levels: [u32; MAX_LEVELS],
+    pub in_transition: u64,
+}
+
+/// The kinds of draw, in the order they are issued.
+const PASS_OPAQUE: u64 = 0;
+const PASS_MORPH: u64 = 1;
+const PASS_FADE: u64 = 2;
+
+/// A group of instances drawn by one instanced call. The fields are packed into a sort key:
+/// pass, side, model, method slot, level, hops.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct DrawKey(u64);
+
+impl DrawKey {
+    fn new(pass: u64, side: usize, model: usize, slot: usize, level: u8, hops: u8) -> DrawKey {
+        DrawKey(
+            pass << 56
+                | (side as u64 & 0xff) << 48
+                | (model as u64 & 0xffff) << 32
+                | (slot as u64 & 0xff) << 16
+                | (level as u64) << 8
+                | hops as u64,
+        )
+    }
+    fn pass(self) -> u64 {
+        self.0 >> 56
+    }
+    fn side(self) -> usize {
+        (self.0 >> 48 & 0xff) as usize
+    }
+    fn model(self) -> usize {
+        (self.0 >> 32 & 0xffff) as usize
+    }
+    fn slot(self) -> usize {
+        (self.0 >> 16 & 0xff) as usize
+    }
+    fn level(self) -> usize {
+        (self.0 >> 8 & 0xff) as usize
+    }
 }
 
 pub struct SceneRenderer {
@@ -44,16 +187,23 @@ pub struct SceneRenderer {
     pub(crate) character_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     characters: Vec<GpuCharacter>,
+    pub debug: DebugView,
     skinned: wgpu::RenderPipeline,
+    morph: wgpu::RenderPipeline,
+    fade_depth: wgpu::RenderPipeline,
+    fade_color: wgpu::RenderPipeline,
+    /// Line-mode versions of `skinned` and `morph`, where the adapter can draw lines.
+    wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     plain: wgpu::RenderPipeline,
     sky: wgpu::RenderPipeline,
     ground: wgpu::RenderPipeline,
     shadow: wgpu::RenderPipeline,
     instance_buffer: wgpu::Buffer,
+    keyed: Vec<(u64, GpuInstance)>,
     staging: Vec<GpuInstance>,
-    counts: Vec<u32>,
-    cursor: Vec<u32>,
-    draws: Vec<(usize, Range<u32>)>,
+    draws: Vec<(DrawKey, Range<u32>)>,
+    /// Regions of the sides of the current frame.
+    regions: Vec<Region>,
 }
 
 pub(crate) fn frame_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -72,11 +222,13 @@ pub(crate) fn frame_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupL
     })
 }
 
-/// Depth state: test and write, test only, or neither.
+/// Depth state: test and write, test only, equal only (the colour pass of a faded level), or
+/// neither.
 #[derive(Clone, Copy)]
 enum Depth {
     Write,
     TestOnly,
+    Equal,
     Ignore,
 }
 
@@ -89,6 +241,26 @@ struct PipelineSpec<'a> {
     depth: Depth,
     blend: Option<wgpu::BlendState>,
     cull: Option<wgpu::Face>,
+    /// Colour writes off: a depth-only pass.
+    depth_only: bool,
+    polygon_mode: wgpu::PolygonMode,
+}
+
+impl<'a> PipelineSpec<'a> {
+    fn new(label: &'a str, module: &'a wgpu::ShaderModule, vs: &'a str, fs: &'a str) -> Self {
+        PipelineSpec {
+            label,
+            module,
+            vs,
+            fs,
+            buffers: &[],
+            depth: Depth::Write,
+            blend: None,
+            cull: None,
+            depth_only: false,
+            polygon_mode: wgpu::PolygonMode::Fill,
+        }
+    }
 }
 
 fn pipeline(
@@ -101,6 +273,7 @@ fn pipeline(
     let depth_stencil = match spec.depth {
         Depth::Write => Some((true, wgpu::CompareFunction::Less)),
         Depth::TestOnly => Some((false, wgpu::CompareFunction::LessEqual)),
+        Depth::Equal => Some((false, wgpu::CompareFunction::Equal)),
         Depth::Ignore => Some((false, wgpu::CompareFunction::Always)),
     }
     .map(|(write, compare)| wgpu::DepthStencilState {
@@ -121,6 +294,7 @@ fn pipeline(
         },
         primitive: wgpu::PrimitiveState {
             cull_mode: spec.cull,
+            polygon_mode: spec.polygon_mode,
             ..Default::default()
         },
         depth_stencil,
@@ -135,7 +309,11 @@ fn pipeline(
             targets: &[Some(wgpu::ColorTargetState {
                 format,
                 blend: spec.blend,
-                write_mask: wgpu::ColorWrites::ALL,
+                write_mask: if spec.depth_only {
+                    wgpu::ColorWrites::empty()
+                } else {
+                    wgpu::ColorWrites::ALL
+                },
             })],
         }),
         multiview_mask: None,
@@ -187,84 +365,80 @@ impl SceneRenderer {
         let environment_module = shaders::ENVIRONMENT_SHADER.create(device);
         let shadow_module = shaders::SHADOW_SHADER.create(device);
         let (f, s) = (color_format, sample_count);
-        let skinned = pipeline(
-            device,
+        let instances = [Some(GpuInstance::layout())];
+        let plain_buffers = [Some(static_vertex_layout()), Some(GpuInstance::layout())];
+        let character = |label, vs| PipelineSpec {
+            buffers: &instances,
+            cull: Some(wgpu::Face::Back),
+            ..PipelineSpec::new(label, &character_module, vs, "fs_main")
+        };
+        let build = |layout, spec| pipeline(device, layout, f, s, spec);
+        let skinned = build(&with_characters, character("skinned characters", "vs_main"));
+        let morph = build(
             &with_characters,
-            f,
-            s,
+            character("geomorphed characters", "vs_morph"),
+        );
+        let fade_depth = build(
+            &with_characters,
             PipelineSpec {
-                label: "skinned characters",
-                module: &character_module,
-                vs: "vs_main",
-                fs: "fs_main",
-                buffers: &[Some(GpuInstance::layout())],
-                depth: Depth::Write,
-                blend: None,
-                cull: Some(wgpu::Face::Back),
+                depth_only: true,
+                ..character("faded level depth", "vs_main")
             },
         );
-        let plain = pipeline(
-            device,
+        let fade_color = build(
             &with_characters,
-            f,
-            s,
             PipelineSpec {
-                label: "plain characters",
-                module: &plain_module,
-                vs: "vs_main",
-                fs: "fs_main",
-                buffers: &[Some(static_vertex_layout()), Some(GpuInstance::layout())],
-                depth: Depth::Write,
-                blend: None,
-                cull: Some(wgpu::Face::Back),
+                depth: Depth::Equal,
+                blend: Some(wgpu::BlendState {
+                    color: wgpu::BlendComponent {
+                        src_factor: wgpu::BlendFactor::SrcAlpha,
+                        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                        operation: wgpu::BlendOperation::Add,
+                    },
+                    alpha: wgpu::BlendComponent::OVER,
+                }),
+                ..character("faded level colour", "vs_main")
             },
         );
-        let sky = pipeline(
-            device,
+        let wireframe = device
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE)
+            .then(|| {
+                let line = |label, vs| PipelineSpec {
+                    polygon_mode: wgpu::PolygonMode::Line,
+                    ..character(label, vs)
+                };
+                (
+                    build(&with_characters, line("wireframe characters", "vs_main")),
+                    build(&with_characters, line("wireframe geomorphs", "vs_morph")),
+                )
+            });
+        let plain = build(
+            &with_characters,
+            PipelineSpec {
+                buffers: &plain_buffers,
+                cull: Some(wgpu::Face::Back),
+                ..PipelineSpec::new("plain characters", &plain_module, "vs_main", "fs_main")
+            },
+        );
+        let sky = build(
             &frame_only,
-            f,
-            s,
             PipelineSpec {
-                label: "sky",
-                module: &environment_module,
-                vs: "vs_sky",
-                fs: "fs_sky",
-                buffers: &[],
                 depth: Depth::Ignore,
-                blend: None,
-                cull: None,
+                ..PipelineSpec::new("sky", &environment_module, "vs_sky", "fs_sky")
             },
         );
-        let ground = pipeline(
-            device,
+        let ground = build(
             &frame_only,
-            f,
-            s,
-            PipelineSpec {
-                label: "ground",
-                module: &environment_module,
-                vs: "vs_ground",
-                fs: "fs_ground",
-                buffers: &[],
-                depth: Depth::Write,
-                blend: None,
-                cull: None,
-            },
+            PipelineSpec::new("ground", &environment_module, "vs_ground", "fs_ground"),
         );
-        let shadow = pipeline(
-            device,
+        let shadow = build(
             &with_characters,
-            f,
-            s,
             PipelineSpec {
-                label: "blob shadows",
-                module: &shadow_module,
-                vs: "vs_main",
-                fs: "fs_main",
-                buffers: &[Some(GpuInstance::layout())],
+                buffers: &instances,
                 depth: Depth::TestOnly,
                 blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                cull: None,
+                ..PipelineSpec::new("blob shadows", &shadow_module, "vs_main", "fs_main")
             },
         );
         let instance_buffer = Self::instance_buffer(device, 256);
@@ -278,16 +452,21 @@ impl SceneRenderer {
             character_layout,
             sampler,
             characters: Vec::new(),
+            debug: DebugView::Shaded,
             skinned,
+            morph,
+            fade_depth,
+            fade_color,
+            wireframe,
             plain,
             sky,
             ground,
             shadow,
             instance_buffer,
+            keyed: Vec::new(),
             staging: Vec::new(),
-            counts: Vec::new(),
-            cursor: Vec::new(),
             draws: Vec::new(),
+            regions: Vec::new(),
         }
     }
 
@@ -300,7 +479,7 @@ impl SceneRenderer {
         })
     }
 
-    /// Uploads a baked character; returns its index for [`Instance::model`].
+    /// Uploads a baked character at full detail; returns its index for [`Instance::model`].
     pub fn add_character(&mut self, gpu: &Gpu, bake: &CharacterBake) -> Result<usize> {
         let limit = gpu.device.limits().max_texture_dimension_2d;
         if bake.animation.grid.height > limit || bake.vertices.grid.height > limit {
@@ -314,49 +493,129 @@ impl SceneRenderer {
         Ok(self.characters.len() - 1)
     }
 
+    /// Uploads one method's levels of detail of character `model` into `slot`
+    /// ([`crate::scene::LodMethod::index`]). Done once per (model, method).
+    pub fn add_levels(
+        &mut self,
+        gpu: &Gpu,
+        model: usize,
+        slot: usize,
+        pack: &LodPack,
+    ) -> Result<()> {
+        let limit = gpu.device.limits().max_texture_dimension_2d;
+        if pack.vertices.grid.height > limit {
+            bail!("levels of detail exceed this GPU's {limit}-texel texture limit");
+        }
+        let Some(c) = self.characters.get_mut(model) else {
+            bail!("no character {model}");
+        };
+        c.add_set(gpu, &self.character_layout, &self.sampler, slot, pack);
+        Ok(())
+    }
+
     pub fn characters(&self) -> &[GpuCharacter] {
         &self.characters
     }
 
-    /// Uploads the frame's uniforms and instances (one buffer write each) and plans the draws.
-    pub fn prepare(&mut self, gpu: &Gpu, view: &FrameView, instances: &[Instance]) -> FrameStats {
-        let uniforms = FrameUniforms::new(view, &self.lighting, [0.0; 3]);
+    /// Does the adapter draw wireframes?
+    pub fn has_wireframe(&self) -> bool {
+        self.wireframe.is_some()
+    }
+
+    /// Uploads the frame's uniforms and instances (one buffer write each) and plans the draws:
+    /// one per (side, model, level, transition state).
+    pub fn prepare(&mut self, gpu: &Gpu, view: &FrameView, sides: &[Side]) -> FrameStats {
+        let uniforms =
+            FrameUniforms::new(view, &self.lighting, [self.debug.shader_mode(), 0.0, 0.0]);
         gpu.queue
             .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
 
-        // Counting sort by model: instances of one model become one contiguous range.
-        let models = self.characters.len();
-        self.counts.clear();
-        self.counts.resize(models + 1, 0);
-        for inst in instances.iter().filter(|i| i.model < models) {
-            self.counts[inst.model + 1] += 1;
-        }
-        for m in 0..models {
-            self.counts[m + 1] += self.counts[m];
-        }
-        let total = self.counts[models] as usize;
-        self.staging.clear();
-        self.staging.resize(total, bytemuck::Zeroable::zeroed());
-        self.draws.clear();
-        for m in 0..models {
-            if self.counts[m + 1] > self.counts[m] {
-                self.draws.push((m, self.counts[m]..self.counts[m + 1]));
+        let mut stats = FrameStats::default();
+        self.keyed.clear();
+        self.regions.clear();
+        for (side_index, side) in sides.iter().enumerate() {
+            self.regions.push(side.region);
+            for (i, inst) in side.instances.iter().enumerate() {
+                let Some(c) = self.characters.get(inst.model) else {
+                    continue;
+                };
+                let (slot, set) = match c.set(side.method) {
+                    Some(set) => (side.method, set),
+                    None => (0, c.full()),
+                };
+                let last = set.levels.len() - 1;
+                let draw = match side.draws.get(i) {
+                    Some(d) if slot != 0 => *d,
+                    _ => LodDraw::Level(0),
+                };
+                let rows = &c.clip_rows;
+                let mut g = GpuInstance::new(
+                    &inst.transform,
+                    rows[(inst.clip as usize).min(rows.len() - 1)],
+                    inst.time_offset,
+                    inst.speed,
+                    inst.tint,
+                );
+                let key = |pass, level: usize, hops: usize| {
+                    DrawKey::new(pass, side_index, inst.model, slot, level as u8, hops as u8).0
+                };
+                stats.instances += 1;
+                stats.levels[(draw.nearest_level() as usize)
+                    .min(last)
+                    .min(MAX_LEVELS - 1)] += 1;
+                stats.in_transition += draw.in_transition() as u64;
+                let mut count = |k: usize, extra_influences: u32| {
+                    let l = &set.levels[k];
+                    stats.triangles += l.triangles() as u64;
+                    stats.vertices += l.vertices as u64;
+                    stats.influences += (l.influences + extra_influences) as u64;
+                };
+                match draw {
+                    LodDraw::Level(k) => {
+                        let k = (k as usize).min(last);
+                        g.lod = [-1.0, 0.0, 1.0, k as f32];
+                        count(k, 0);
+                        self.keyed.push((key(PASS_OPAQUE, k, 0), g));
+                    }
+                    LodDraw::Morph { fine, coarse, t } => {
+                        let fine = (fine as usize).min(last);
+                        let hops = (coarse as usize).min(last).saturating_sub(fine);
+                        g.lod = [t.clamp(0.0, 1.0), hops as f32, 1.0, fine as f32];
+                        count(fine, set.levels[fine + hops].influences);
+                        self.keyed.push((key(PASS_MORPH, fine, hops), g));
+                    }
+                    LodDraw::Alpha { from, to, p } => {
+                        let (from, to) = ((from as usize).min(last), (to as usize).min(last));
+                        let p = p.clamp(0.0, 1.0);
+                        // See the module comment: the first half fades `to` in over `from`,
+                        // the second fades `from` out over `to`.
+                        let (opaque, faded, opacity) = if p < 0.5 {
+                            (from, to, 2.0 * p)
+                        } else {
+                            (to, from, 2.0 * (1.0 - p))
+                        };
+                        count(opaque, 0);
+                        count(faded, 0);
+                        g.lod = [p, 0.0, 1.0, opaque as f32];
+                        self.keyed.push((key(PASS_OPAQUE, opaque, 0), g));
+                        g.lod = [p, 0.0, opacity, faded as f32];
+                        self.keyed.push((key(PASS_FADE, faded, 0), g));
+                    }
+                }
             }
         }
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.counts);
-        for inst in instances.iter().filter(|i| i.model < models) {
-            let slot = &mut self.cursor[inst.model];
-            let rows = &self.characters[inst.model].clip_rows;
-            self.staging[*slot as usize] = GpuInstance::new(
-                &inst.transform,
-                rows[(inst.clip as usize).min(rows.len() - 1)],
-                inst.time_offset,
-                inst.speed,
-                inst.tint,
-            );
-            *slot += 1;
+        // Group: sort by key, then each run of equal keys is one instanced draw.
+        self.keyed.sort_unstable_by_key(|(k, _)| *k);
+        self.staging.clear();
+        self.draws.clear();
+        for (n, (key, g)) in self.keyed.iter().enumerate() {
+            self.staging.push(*g);
+            match self.draws.last_mut() {
+                Some((k, range)) if k.0 == *key => range.end = n as u32 + 1,
+                _ => self.draws.push((DrawKey(*key), n as u32..n as u32 + 1)),
+            }
         }
+        let total = self.staging.len();
         if total * std::mem::size_of::<GpuInstance>() > self.instance_buffer.size() as usize {
             self.instance_buffer =
                 Self::instance_buffer(&gpu.device, total.next_power_of_two().max(256));
@@ -368,22 +627,13 @@ impl SceneRenderer {
                 bytemuck::cast_slice(&self.staging),
             );
         }
-
-        let mut stats = FrameStats::default();
-        for (m, range) in &self.draws {
-            let c = &self.characters[*m];
-            let n = (range.end - range.start) as u64;
-            stats.instances += n;
-            stats.triangles += n * c.triangle_count as u64;
-            stats.vertices += n * c.vertex_count as u64;
-            stats.influences += n * c.influence_count as u64;
-            stats.draw_calls += 1;
-        }
+        stats.draw_calls = self.draws.len() as u32;
         stats
     }
 
-    /// Records the frame: sky, ground, shadows, characters.
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+    /// Records the frame: sky, ground, shadows, characters. `view` is the rectangle the scene
+    /// covers (x, y, width, height), for the sides' scissor rectangles.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, view: [u32; 4]) {
         pass.set_bind_group(0, &self.frame_bind_group, &[]);
         pass.set_pipeline(&self.sky);
         pass.draw(0..3, 0..1);
@@ -393,33 +643,81 @@ impl SceneRenderer {
             return;
         }
         pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
+        let mut side = usize::MAX;
+        let mut scissor = |pass: &mut wgpu::RenderPass<'_>, s: usize| {
+            if s != side {
+                side = s;
+                let region = self.regions.get(s).copied().unwrap_or_default();
+                let [x, y, w, h] = region.rect(view);
+                pass.set_scissor_rect(x, y, w, h);
+            }
+        };
+        // Every instance has exactly one opaque draw (opaque level or morph): its shadow goes
+        // with it.
+        let opaque = |key: &DrawKey| key.pass() != PASS_FADE;
         if self.shadows {
             pass.set_pipeline(&self.shadow);
-            for (m, range) in &self.draws {
-                pass.set_bind_group(1, &self.characters[*m].bind_group, &[]);
+            for (key, range) in self.draws.iter().filter(|(k, _)| opaque(k)) {
+                scissor(pass, key.side());
+                pass.set_bind_group(1, &self.characters[key.model()].full().bind_group, &[]);
                 pass.draw(0..6, range.clone());
             }
         }
-        match self.shader {
-            CharacterShader::Skinned => {
-                pass.set_pipeline(&self.skinned);
-                for (m, range) in &self.draws {
-                    let c = &self.characters[*m];
-                    pass.set_bind_group(1, &c.bind_group, &[]);
-                    pass.set_index_buffer(c.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..c.index_count, 0, range.clone());
-                }
+        if self.shader == CharacterShader::Plain {
+            pass.set_pipeline(&self.plain);
+            pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
+            for (key, range) in &self.draws {
+                scissor(pass, key.side());
+                let c = &self.characters[key.model()];
+                let set = c.full();
+                pass.set_bind_group(1, &set.bind_group, &[]);
+                pass.set_vertex_buffer(0, c.static_vertices.slice(..));
+                pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..set.levels[0].index_count, 0, range.clone());
             }
-            CharacterShader::Plain => {
-                pass.set_pipeline(&self.plain);
-                pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
-                for (m, range) in &self.draws {
-                    let c = &self.characters[*m];
-                    pass.set_bind_group(1, &c.bind_group, &[]);
-                    pass.set_vertex_buffer(0, c.static_vertices.slice(..));
-                    pass.set_index_buffer(c.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..c.index_count, 0, range.clone());
+            return;
+        }
+        let wire = self
+            .wireframe
+            .as_ref()
+            .filter(|_| self.debug == DebugView::Wireframe);
+        let draw_group = |pass: &mut wgpu::RenderPass<'_>, key: &DrawKey, range: &Range<u32>| {
+            let c = &self.characters[key.model()];
+            let set = c.set(key.slot()).unwrap_or_else(|| c.full());
+            let level = &set.levels[key.level().min(set.levels.len() - 1)];
+            pass.set_bind_group(1, &set.bind_group, &[]);
+            pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+            let indices = level.first_index..level.first_index + level.index_count;
+            pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
+        };
+        let mut current = None;
+        for (key, range) in &self.draws {
+            let pipeline = match (key.pass(), wire) {
+                (PASS_MORPH, Some((_, m))) => m,
+                (_, Some((l, _))) => l,
+                (PASS_MORPH, None) => &self.morph,
+                (PASS_FADE, None) => continue,
+                _ => &self.skinned,
+            };
+            if current != Some(pipeline as *const _) {
+                current = Some(pipeline as *const _);
+                pass.set_pipeline(pipeline);
+            }
+            scissor(pass, key.side());
+            draw_group(pass, key, range);
+        }
+        if wire.is_some() {
+            return;
+        }
+        for pipeline in [&self.fade_depth, &self.fade_color] {
+            let mut set = false;
+            for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
+                if !set {
+                    pass.set_pipeline(pipeline);
+                    set = true;
                 }
+                scissor(pass, key.side());
+                draw_group(pass, key, range);
             }
         }
     }
@@ -441,11 +739,11 @@ impl SceneRenderer {
             depth_stencil_attachment: Some(targets.depth()),
             ..Default::default()
         });
-        if let Some([x, y, w, h]) = viewport {
-            pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
-            pass.set_scissor_rect(x, y, w, h);
-        }
-        self.draw(&mut pass);
+        let view = viewport.unwrap_or([0, 0, targets.width, targets.height]);
+        let [x, y, w, h] = view;
+        pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+        pass.set_scissor_rect(x, y, w, h);
+        self.draw(&mut pass, view);
     }
 
     /// Renders one complete frame into `target` through `targets` and submits it.

@@ -88,7 +88,7 @@ impl FrameUniforms {
     }
 }
 
-/// Mirror of `Instance` in `shaders/skinning.wgsl`: 96 bytes per instance.
+/// Mirror of `Instance` in `shaders/skinning.wgsl`: 112 bytes per instance.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuInstance {
@@ -98,6 +98,8 @@ pub struct GpuInstance {
     /// Time offset in seconds, playback speed, two spare.
     pub timing: [f32; 4],
     pub tint: [f32; 4],
+    /// Level of detail: transition t (−1 outside transitions), geomorph hops, opacity, level.
+    pub lod: [f32; 4],
 }
 
 impl GpuInstance {
@@ -119,12 +121,13 @@ impl GpuInstance {
             clip: clip_rows,
             timing: [time_offset, speed, 0.0, 0.0],
             tint: tint.to_array(),
+            lod: [-1.0, 0.0, 1.0, 0.0],
         }
     }
 
-    pub const ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 7] = wgpu::vertex_attr_array![
         0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Float32x4,
-        5 => Float32x4
+        5 => Float32x4, 6 => Float32x4
     ];
 
     pub fn layout() -> wgpu::VertexBufferLayout<'static> {
@@ -138,7 +141,7 @@ impl GpuInstance {
 
 /// Vertex layout of [`crate::bake::StaticVertex`] for the plain calibration shader.
 pub const STATIC_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
-    wgpu::vertex_attr_array![6 => Float32x3, 7 => Float32x3, 8 => Float32x2];
+    wgpu::vertex_attr_array![7 => Float32x3, 8 => Float32x3, 9 => Float32x2];
 
 pub fn static_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
@@ -155,7 +158,7 @@ mod tests {
     #[test]
     fn sizes_match_wgsl() {
         assert_eq!(std::mem::size_of::<FrameUniforms>(), 2 * 64 + 8 * 16);
-        assert_eq!(std::mem::size_of::<GpuInstance>(), 96);
+        assert_eq!(std::mem::size_of::<GpuInstance>(), 112);
     }
 
     #[test]

@@ -2,6 +2,10 @@
 
 pub mod camera;
 pub mod crowd;
+pub mod lod;
 
 pub use camera::Camera;
 pub use crowd::{Agent, Crowd, CrowdConfig, CrowdModel, Instance, Path};
+pub use lod::{
+    Drive, LodDraw, LodMethod, LodModel, LodPolicy, LodTracker, ScreenProjection, Transition,
+};

@@ -7,10 +7,12 @@
 mod controls;
 mod panel;
 
-use super::shot::write_png;
+use super::levels::{BackgroundBake, Poll};
+use super::shot::{ShotLod, write_png};
 use super::world::{Loaded, SceneSpec, World};
 use crate::render::targets::{Offscreen, RenderTargets};
 use crate::render::{FrameStats, Gpu};
+use crate::scene::LodMethod;
 use anyhow::{Context, Result, anyhow};
 use controls::{Controls, KeyAction};
 use panel::{FrameHistory, Info, Settings};
@@ -38,6 +40,8 @@ pub struct ViewOptions {
     pub samples: u32,
     pub screenshot: Option<PathBuf>,
     pub frames: usize,
+    /// The level-of-detail choices the viewer starts with.
+    pub lod: ShotLod,
 }
 
 /// Is there a display server to talk to? On Linux and the BSDs that means X11 or Wayland.
@@ -148,6 +152,10 @@ struct Viewer {
     /// The 3D view in physical pixels: x, y, width, height.
     view: [u32; 4],
     frames: usize,
+    /// Levels of detail being baked on a background thread, one method at a time.
+    bake: Option<BackgroundBake>,
+    /// What the last bake failed with.
+    bake_error: Option<String>,
 }
 
 impl Viewer {
@@ -180,7 +188,15 @@ impl Viewer {
         config.present_mode = wgpu::PresentMode::AutoVsync;
         surface.configure(&gpu.device, &config);
 
-        let world = World::new(&gpu, loaded, config.format, options.samples)?;
+        let mut world = World::new(&gpu, loaded, config.format, options.samples)?;
+        world.lod.method = options.lod.method;
+        world.lod.compare = options.lod.compare;
+        world.lod.policy = options.lod.policy;
+        world.renderer.debug = options.lod.debug;
+        if options.screenshot.is_some() {
+            // A screenshot shows the levels asked for, so it waits for them.
+            world.ensure_levels(&gpu)?;
+        }
         let targets = RenderTargets::new(
             &gpu.device,
             config.width,
@@ -209,6 +225,10 @@ impl Viewer {
             playing: true,
             speed: 1.0,
             shadows: true,
+            method: world.lod.method,
+            compare: world.lod.compare,
+            policy: world.lod.policy,
+            debug: world.renderer.debug,
         };
         Ok(Viewer {
             adapter: gpu.info.name.clone(),
@@ -232,7 +252,43 @@ impl Viewer {
             stats: FrameStats::default(),
             view: [0, 0, 1, 1],
             frames: 0,
+            bake: None,
+            bake_error: None,
         })
+    }
+
+    /// Takes a finished background bake in, and starts the next one a side needs.
+    fn update_levels(&mut self) -> Result<()> {
+        if let Some(job) = &self.bake {
+            match job.poll() {
+                Poll::Running => return Ok(()),
+                Poll::Done(packs) => {
+                    let method = job.method;
+                    self.bake = None;
+                    if let Err(e) = self.world.install_levels(&self.gpu, method, packs) {
+                        self.bake_error = Some(format!("{method}: {e:#}"));
+                    }
+                }
+                Poll::Failed => {
+                    self.bake_error = Some(format!("{}: the bake stopped", job.method));
+                    self.bake = None;
+                }
+            }
+        }
+        let missing = self.world.lod.methods().into_iter().find_map(|m| match m {
+            LodMethod::Simplified(s) if !self.world.lod.has(m) => Some(s),
+            _ => None,
+        });
+        if let Some(method) = missing
+            && self.bake_error.is_none()
+        {
+            self.bake = Some(BackgroundBake::start(
+                self.world.sources.clone(),
+                method,
+                self.world.cache(),
+            ));
+        }
+        Ok(())
     }
 
     /// Handles one window event; `Ok(false)` ends the viewer.
@@ -297,6 +353,7 @@ impl Viewer {
         let raw = self.egui.take_egui_input(&self.window);
         let mut requests = panel::Requests::default();
         let mut central = egui::Rect::NOTHING;
+        self.update_levels()?;
         let info = Info {
             adapter: &self.adapter,
             backend: &self.backend,
@@ -304,6 +361,10 @@ impl Viewer {
             clips: &self.clip_names,
             stats: self.stats,
             time: self.time,
+            baking: self.bake.as_ref().map(|b| (b.method, b.fraction())),
+            bake_error: self.bake_error.as_deref(),
+            wireframe: self.world.renderer.has_wireframe(),
+            ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
         };
         let (settings, history) = (&mut self.settings, &self.history);
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
@@ -316,6 +377,9 @@ impl Viewer {
                     });
                 });
             central = ui.available_rect_before_wrap();
+            if let Some(right) = settings.compare {
+                panel::compare_overlay(ui, central, settings.method, right);
+            }
         });
         self.egui
             .handle_platform_output(&self.window, output.platform_output);
@@ -332,6 +396,7 @@ impl Viewer {
             self.world.reset_camera();
         }
         self.world.renderer.shadows = self.settings.shadows;
+        self.apply_lod_settings();
 
         // The 3D view: what the panel leaves.
         let (w, h) = (self.config.width, self.config.height);
@@ -340,8 +405,9 @@ impl Viewer {
         let x1 = ((central.max.x * ppp).round() as u32).clamp(x0 + 1, w);
         let y1 = ((central.max.y * ppp).round() as u32).clamp(y0 + 1, h);
         self.view = [x0, y0, x1 - x0, y1 - y0];
-        let aspect = self.view[2] as f32 / self.view[3] as f32;
-        self.stats = self.world.prepare(&self.gpu, aspect, self.time);
+        self.stats = self
+            .world
+            .prepare(&self.gpu, [self.view[2], self.view[3]], self.time, dt);
 
         // egui's texture uploads go in whether or not this frame reaches the screen; its frees
         // once the frame no longer needs the textures.
@@ -431,6 +497,24 @@ impl Viewer {
             return Ok(false);
         }
         Ok(true)
+    }
+
+    /// Hands the panel's level-of-detail choices to the world; a change of method (or of the
+    /// comparison) restarts selection, and a failed bake may be retried.
+    fn apply_lod_settings(&mut self) {
+        let s = &self.settings;
+        let lod = &mut self.world.lod;
+        if lod.method != s.method || lod.compare != s.compare {
+            lod.method = s.method;
+            lod.compare = s.compare;
+            lod.reset();
+            self.bake_error = None;
+        }
+        if lod.policy.transition != s.policy.transition || lod.policy.drive != s.policy.drive {
+            lod.reset();
+        }
+        lod.policy = s.policy;
+        self.world.renderer.debug = s.debug;
     }
 
     fn free_egui_textures(&mut self, ids: &[egui::TextureId]) {

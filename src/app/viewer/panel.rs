@@ -1,6 +1,8 @@
-//! The egui side panel: performance, adapter, and the crowd's controls.
+//! The egui side panel: statistics, levels of detail, comparison, debug views, and the crowd's
+//! controls.
 
-use crate::render::FrameStats;
+use crate::render::{DebugView, FrameStats};
+use crate::scene::{Drive, LodMethod, LodPolicy, Transition};
 use std::collections::VecDeque;
 
 /// How much history the frame-time graph shows.
@@ -121,6 +123,11 @@ pub struct Settings {
     pub playing: bool,
     pub speed: f32,
     pub shadows: bool,
+    pub method: LodMethod,
+    /// Split screen: the right half shows this method.
+    pub compare: Option<LodMethod>,
+    pub policy: LodPolicy,
+    pub debug: DebugView,
 }
 
 /// Facts the panel shows.
@@ -132,6 +139,13 @@ pub struct Info<'a> {
     pub clips: &'a [Vec<String>],
     pub stats: FrameStats,
     pub time: f32,
+    /// The method being baked and the fraction done.
+    pub baking: Option<(crate::bake::simplify::Method, f32)>,
+    pub bake_error: Option<&'a str>,
+    /// Can the adapter draw wireframes?
+    pub wireframe: bool,
+    /// Which methods' levels are on the GPU, in [`LodMethod::ALL`] order.
+    pub ready: [bool; 4],
 }
 
 /// What the panel asks for beyond changing [`Settings`].
@@ -147,28 +161,13 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
     ui.separator();
 
-    ui.strong("Performance");
-    ui.label(format!(
-        "{:.1} fps · {:.1} ms mean over 5 s",
-        history.fps(),
-        history.mean_ms()
-    ));
-    history.graph(ui);
-    let st = info.stats;
-    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
-        ui.label("instances");
-        ui.label(thousands(st.instances));
-        ui.end_row();
-        ui.label("triangles");
-        ui.label(thousands(st.triangles));
-        ui.end_row();
-        ui.label("influences");
-        ui.label(thousands(st.influences));
-        ui.end_row();
-        ui.label("draw calls");
-        ui.label(st.draw_calls.to_string());
-        ui.end_row();
-    });
+    statistics(ui, history, &info.stats);
+    ui.separator();
+    level_of_detail(ui, s, info);
+    ui.separator();
+    compare(ui, s, info);
+    ui.separator();
+    debug_views(ui, s, info);
     ui.separator();
 
     ui.strong("Crowd");
@@ -249,6 +248,244 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         .small(),
     );
     req
+}
+
+/// Colours of the levels, as the `lod` debug view paints them (`level_color` in
+/// `shaders/character.wgsl`).
+const LEVEL_COLORS: [[f32; 3]; 12] = [
+    [0.20, 0.75, 0.30],
+    [0.60, 0.85, 0.20],
+    [0.95, 0.85, 0.15],
+    [0.98, 0.62, 0.12],
+    [0.92, 0.38, 0.12],
+    [0.85, 0.15, 0.15],
+    [0.85, 0.20, 0.55],
+    [0.70, 0.25, 0.85],
+    [0.42, 0.32, 0.92],
+    [0.18, 0.45, 0.95],
+    [0.15, 0.75, 0.90],
+    [0.55, 0.55, 0.55],
+];
+
+fn level_color(k: usize) -> egui::Color32 {
+    let [r, g, b] = LEVEL_COLORS[k.min(LEVEL_COLORS.len() - 1)];
+    egui::Color32::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
+}
+
+fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameStats) {
+    ui.strong("Statistics");
+    ui.label(format!(
+        "{:.1} fps · {:.1} ms mean over 5 s",
+        history.fps(),
+        history.mean_ms()
+    ));
+    history.graph(ui);
+    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+        for (label, value) in [
+            ("instances", st.instances),
+            ("triangles", st.triangles),
+            ("influences", st.influences),
+            ("in transition", st.in_transition),
+            ("draw calls", st.draw_calls as u64),
+        ] {
+            ui.label(label);
+            ui.label(thousands(value));
+            ui.end_row();
+        }
+    });
+    ui.label("instances per level");
+    level_histogram(ui, &st.levels);
+}
+
+/// Instances per level as bars in the levels' debug colours.
+fn level_histogram(ui: &mut egui::Ui, levels: &[u32]) {
+    let used = levels.iter().rposition(|&n| n > 0).map_or(1, |i| i + 1);
+    let (rect, _) =
+        ui.allocate_exact_size(egui::vec2(ui.available_width(), 56.0), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+    let top = levels.iter().copied().max().unwrap_or(0).max(1) as f32;
+    let slot = rect.width() / used.max(4) as f32;
+    for (k, &n) in levels.iter().enumerate().take(used) {
+        let x = rect.left() + k as f32 * slot;
+        let h = (n as f32 / top) * (rect.height() - 14.0);
+        let bar = egui::Rect::from_min_max(
+            egui::pos2(x + 2.0, rect.bottom() - 12.0 - h),
+            egui::pos2(x + slot - 2.0, rect.bottom() - 12.0),
+        );
+        painter.rect_filled(bar, 1.0, level_color(k));
+        painter.text(
+            egui::pos2(x + slot * 0.5, rect.bottom() - 1.0),
+            egui::Align2::CENTER_BOTTOM,
+            format!("{k}"),
+            egui::FontId::proportional(10.0),
+            egui::Color32::from_gray(160),
+        );
+        if n > 0 {
+            painter.text(
+                egui::pos2(x + slot * 0.5, bar.top() - 1.0),
+                egui::Align2::CENTER_BOTTOM,
+                n.to_string(),
+                egui::FontId::proportional(9.0),
+                egui::Color32::from_gray(200),
+            );
+        }
+    }
+}
+
+/// A method picker; methods still to bake say so.
+fn method_combo(ui: &mut egui::Ui, id: &str, value: &mut LodMethod, info: &Info) {
+    egui::ComboBox::from_label(id)
+        .selected_text(value.name())
+        .show_ui(ui, |ui| {
+            for m in LodMethod::ALL {
+                let label = if info.ready[m.index()] {
+                    m.name().to_string()
+                } else {
+                    format!("{} (bakes on first use)", m.name())
+                };
+                ui.selectable_value(value, m, label);
+            }
+        });
+}
+
+fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
+    ui.strong("Level of detail");
+    method_combo(ui, "method", &mut s.method, info);
+    if let Some((method, f)) = info.baking {
+        ui.add(
+            egui::ProgressBar::new(f)
+                .text(format!("baking {method}: {:.0}%", f * 100.0))
+                .desired_height(14.0),
+        );
+    }
+    if let Some(e) = info.bake_error {
+        ui.colored_label(ui.visuals().error_fg_color, e);
+    }
+    let p = &mut s.policy;
+    egui::ComboBox::from_label("transition")
+        .selected_text(p.transition.name())
+        .show_ui(ui, |ui| {
+            for t in Transition::ALL {
+                ui.selectable_value(&mut p.transition, t, t.name());
+            }
+        });
+    if p.transition != Transition::Pop {
+        ui.horizontal(|ui| {
+            ui.radio_value(&mut p.drive, Drive::Time, "over time");
+            ui.radio_value(&mut p.drive, Drive::Zone, "morph zones");
+        });
+        match p.drive {
+            Drive::Time => ui.add(
+                egui::Slider::new(&mut p.duration, 0.05..=3.0)
+                    .suffix(" s")
+                    .text("duration"),
+            ),
+            Drive::Zone => ui.add(
+                egui::Slider::new(&mut p.zone_width, 0.05..=1.0)
+                    .text("zone width")
+                    .custom_formatter(|x, _| format!("{:.0}%", x * 100.0)),
+            ),
+        };
+    }
+    ui.add(
+        egui::Slider::new(&mut p.tolerance_px, 0.25..=16.0)
+            .logarithmic(true)
+            .suffix(" px")
+            .text("tolerance"),
+    );
+    ui.add(
+        egui::Slider::new(&mut p.hysteresis, 0.0..=0.9)
+            .text("hysteresis")
+            .custom_formatter(|x, _| format!("{:.0}%", x * 100.0)),
+    );
+}
+
+fn compare(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
+    ui.strong("Compare");
+    let mut on = s.compare.is_some();
+    if ui
+        .checkbox(&mut on, "split screen: method left, this right")
+        .changed()
+    {
+        s.compare = on.then(|| {
+            if s.method == LodMethod::None {
+                LodMethod::ALL[3]
+            } else {
+                LodMethod::None
+            }
+        });
+    }
+    if let Some(right) = &mut s.compare {
+        method_combo(ui, "right half", right, info);
+    }
+}
+
+fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
+    ui.strong("Debug view");
+    for (view, label) in [
+        (DebugView::Shaded, "shaded"),
+        (DebugView::LodTint, "tint by level"),
+        (DebugView::TransitionTint, "tint by transition t"),
+        (DebugView::Wireframe, "wireframe"),
+        (DebugView::Influences, "influences per vertex"),
+    ] {
+        let enabled = view != DebugView::Wireframe || info.wireframe;
+        ui.add_enabled_ui(enabled, |ui| {
+            ui.radio_value(&mut s.debug, view, label)
+                .on_disabled_hover_text("this adapter cannot draw lines");
+        });
+    }
+    let legend = match s.debug {
+        DebugView::LodTint | DebugView::Wireframe => {
+            Some("level 0 green … 9 blue, as in the histogram")
+        }
+        DebugView::TransitionTint => Some("t = 0 blue … t = 1 red; grey: not in transition"),
+        DebugView::Influences => Some("one influence blue … eight or more red"),
+        DebugView::Shaded => None,
+    };
+    if let Some(l) = legend {
+        ui.label(egui::RichText::new(l).small());
+    }
+}
+
+/// The divider and the method names over the 3D view in compare mode.
+pub fn compare_overlay(ui: &egui::Ui, view: egui::Rect, left: LodMethod, right: LodMethod) {
+    let painter = ui.ctx().layer_painter(egui::LayerId::new(
+        egui::Order::Foreground,
+        egui::Id::unique("compare overlay"),
+    ));
+    let x = view.center().x;
+    painter.vline(
+        x,
+        view.y_range(),
+        egui::Stroke::new(2.0, egui::Color32::from_gray(235)),
+    );
+    for (pos, align, name) in [
+        (
+            egui::pos2(x - 10.0, view.top() + 10.0),
+            egui::Align2::RIGHT_TOP,
+            left,
+        ),
+        (
+            egui::pos2(x + 10.0, view.top() + 10.0),
+            egui::Align2::LEFT_TOP,
+            right,
+        ),
+    ] {
+        let galley = painter.layout_no_wrap(
+            name.name().to_string(),
+            egui::FontId::proportional(16.0),
+            egui::Color32::WHITE,
+        );
+        let rect = align.anchor_size(pos, galley.size()).expand(4.0);
+        painter.rect_filled(rect, 3.0, egui::Color32::from_black_alpha(150));
+        painter.galley(
+            rect.min + egui::vec2(4.0, 4.0),
+            galley,
+            egui::Color32::WHITE,
+        );
+    }
 }
 
 fn thousands(n: u64) -> String {
