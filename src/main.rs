@@ -142,9 +142,10 @@ impl SceneArgs {
 /// Levels of detail: which, how they change, what the view shows.
 #[derive(Args, Debug, Clone)]
 struct LodArgs {
-    /// Level-of-detail method: none, rest-pose, as, as+is.
-    #[arg(long, default_value = "none", value_parser = parse_method)]
-    method: LodMethod,
+    /// Level-of-detail method: none, rest-pose, as, as+is [default: as+is in the viewer, none
+    /// for shot, the full-detail baseline].
+    #[arg(long, value_parser = parse_method)]
+    method: Option<LodMethod>,
     /// Transition between levels: pop, alpha, morph.
     #[arg(long, default_value = "morph", value_parser = parse_transition)]
     transition: Transition,
@@ -172,10 +173,11 @@ struct LodArgs {
 }
 
 impl LodArgs {
-    fn shot_lod(&self) -> ShotLod {
+    /// The choices, with `default` as the method where none is given.
+    fn shot_lod(&self, default: LodMethod) -> ShotLod {
         let (method, compare) = match self.compare {
             Some((a, b)) => (a, Some(b)),
-            None => (self.method, None),
+            None => (self.method.unwrap_or(default), None),
         };
         ShotLod {
             method,
@@ -364,7 +366,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 camera: a.camera,
                 timed_frames: a.frames,
                 calibrate: a.calibrate,
-                lod: a.lod.shot_lod(),
+                lod: a.lod.shot_lod(LodMethod::None),
             })?;
             println!("{}", serde_json::to_string(&report)?);
             Ok(ExitCode::SUCCESS)
@@ -421,7 +423,7 @@ fn view(a: ViewArgs) -> anyhow::Result<ExitCode> {
         samples: a.msaa,
         screenshot: a.screenshot,
         frames: a.frames,
-        lod: a.lod.shot_lod(),
+        lod: a.lod.shot_lod(LodMethod::ALL[3]),
     })
 }
 

@@ -27,17 +27,48 @@ fn luma_stats(img: &image::RgbaImage, x0: u32, y0: u32, x1: u32, y1: u32) -> (f3
 fn viewer_window_shows_the_scene_and_the_panel() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("window.png");
-    let exe = env!("CARGO_BIN_EXE_lodlab");
+    let out = run_viewer(&["view", "--count", "12"], dir.path(), &shot);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "viewer failed: {stderr}");
+    check_screenshot(&shot);
+}
+
+/// The comparison in the window: a light divider down the middle of the 3D view.
+#[test]
+fn viewer_compares_two_methods_side_by_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("compare.png");
     let args = [
-        "view",
         "--count",
-        "12",
-        "--size",
-        "960x540",
-        "--frames",
-        "3",
-        "--screenshot",
+        "30",
+        "--compare",
+        "none,as+is",
+        "--transition",
+        "alpha",
     ];
+    let out = run_viewer(&args, dir.path(), &shot);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "viewer failed: {stderr}");
+    check_screenshot(&shot);
+    let img = image::open(&shot).unwrap().to_rgba8();
+    // The 3D view is right of the 270-point panel; its middle column is the divider.
+    let mid = 270 + (960 - 270) / 2;
+    let light = |x: u32| {
+        (40..540)
+            .filter(|&y| img.get_pixel(x, y).0[..3].iter().all(|&c| c > 220))
+            .count()
+    };
+    let divider = (mid - 2..=mid + 2).map(light).max().unwrap();
+    assert!(
+        divider > 450,
+        "no divider at x = {mid}: {divider} light pixels"
+    );
+}
+
+/// Runs the viewer under Xvfb (or on the display there is) until it writes `shot`, with the
+/// level-of-detail cache in `cache`.
+fn run_viewer(args: &[&str], cache: &Path, shot: &Path) -> std::process::Output {
+    let exe = env!("CARGO_BIN_EXE_lodlab");
     let mut cmd = if on_path("xvfb-run") {
         let mut c = Command::new("xvfb-run");
         c.args(["-a", "-s", "-screen 0 960x540x24", exe]);
@@ -48,10 +79,13 @@ fn viewer_window_shows_the_scene_and_the_panel() {
     } else {
         panic!("this test needs xvfb-run (apt-get install xvfb) or a display");
     };
-    let out = cmd.args(args).arg(&shot).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "viewer failed: {stderr}");
-    check_screenshot(&shot);
+    cmd.args(args)
+        .args(["--size", "960x540", "--frames", "3", "--cache"])
+        .arg(cache)
+        .arg("--screenshot")
+        .arg(shot)
+        .output()
+        .unwrap()
 }
 
 fn check_screenshot(path: &Path) {
@@ -67,7 +101,7 @@ fn check_screenshot(path: &Path) {
         "no dark panel on the left (mean luma {panel_mean})"
     );
     let bright_text = (0..250)
-        .flat_map(|x| (0..300).map(move |y| (x, y)))
+        .flat_map(|x| (0..540).map(move |y| (x, y)))
         .filter(|&(x, y)| img.get_pixel(x, y).0[0] > 150)
         .count();
     assert!(

@@ -60,7 +60,9 @@ pub struct ShotReport {
     pub backend: String,
     pub size: [u32; 2],
     pub time: f32,
+    /// Instances drawn, and those outside the view left out.
     pub instances: u64,
+    pub culled: u64,
     pub triangles: u64,
     pub vertices: u64,
     pub influences: u64,
@@ -99,10 +101,21 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Renders `frames` times and returns the median frame time in milliseconds.
 fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> Result<f64> {
+    time_renderer(gpu, &world.renderer, target, frames)
+}
+
+/// Renders what `renderer` has prepared `frames` times, waiting for the GPU each time, and
+/// returns the median frame time in milliseconds.
+pub fn time_renderer(
+    gpu: &Gpu,
+    renderer: &crate::render::SceneRenderer,
+    target: &Offscreen,
+    frames: usize,
+) -> Result<f64> {
     let mut times = Vec::with_capacity(frames);
     for _ in 0..frames.max(1) {
         let start = Instant::now();
-        world.renderer.render_to(gpu, &target.targets, &target.view);
+        renderer.render_to(gpu, &target.targets, &target.view);
         gpu.wait()?;
         times.push(start.elapsed().as_secs_f64() * 1e3);
     }
@@ -164,6 +177,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         size: [options.width, options.height],
         time: options.time,
         instances: stats.instances,
+        culled: stats.culled,
         triangles: stats.triangles,
         vertices: stats.vertices,
         influences: stats.influences,

@@ -194,8 +194,8 @@ pub struct LodView {
 
 impl LodView {
     /// The methods the sides show, left (or only) first.
-    pub fn methods(&self) -> Vec<LodMethod> {
-        std::iter::once(self.method).chain(self.compare).collect()
+    pub fn methods(&self) -> impl Iterator<Item = LodMethod> + use<> {
+        std::iter::once(self.method).chain(self.compare)
     }
 
     /// Forgets every instance's level and transition: the next frame snaps.
@@ -342,8 +342,7 @@ impl World {
             self.camera.near_far().0,
         );
         let lod = &mut self.lod;
-        let methods = lod.methods();
-        for (side, method) in methods.into_iter().enumerate() {
+        for (side, method) in lod.methods().enumerate() {
             let slot = if lod.has(method) { method.index() } else { 0 };
             let models = &lod.models;
             lod.trackers[side].update_with(
@@ -371,24 +370,25 @@ impl World {
     pub fn upload(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> FrameStats {
         let view = FrameView::from_camera(&self.camera, aspect, time);
         let lod = &self.lod;
-        let methods = lod.methods();
-        let regions: &[Region] = if methods.len() == 2 {
-            &[Region::Left, Region::Right]
-        } else {
-            &[Region::Full]
+        let side = |i: usize, m: LodMethod, region| Side {
+            method: if lod.has(m) { m.index() } else { 0 },
+            instances: &self.instances,
+            draws: &lod.draws[i],
+            region,
         };
-        let sides: Vec<Side> = methods
-            .iter()
-            .zip(regions)
-            .enumerate()
-            .map(|(i, (m, &region))| Side {
-                method: if lod.has(*m) { m.index() } else { 0 },
-                instances: &self.instances,
-                draws: &lod.draws[i],
-                region,
-            })
-            .collect();
-        self.renderer.prepare(gpu, &view, &sides)
+        match lod.compare {
+            None => self
+                .renderer
+                .prepare(gpu, &view, &[side(0, lod.method, Region::Full)]),
+            Some(right) => self.renderer.prepare(
+                gpu,
+                &view,
+                &[
+                    side(0, lod.method, Region::Left),
+                    side(1, right, Region::Right),
+                ],
+            ),
+        }
     }
 
     /// Selection and upload for a frame `width`×`height` pixels, `dt` seconds after the last.

@@ -102,6 +102,21 @@ pub enum Region {
 }
 
 impl Region {
+    /// The planes (xyz · p + w ≥ 0 inside) of the part of the view frustum of `view_proj` that
+    /// this region shows: left, right, bottom, top, near, each normalised so that a sphere
+    /// test is a signed distance.
+    pub fn frustum(self, view_proj: glam::Mat4) -> [glam::Vec4; 5] {
+        let row = |i| view_proj.row(i);
+        let (x, y, z, w) = (row(0), row(1), row(2), row(3));
+        // Clip-space x runs from −w to w; a half keeps x ≥ 0 or x ≤ 0.
+        let (left, right) = match self {
+            Region::Full => (w + x, w - x),
+            Region::Left => (w + x, -x),
+            Region::Right => (x, w - x),
+        };
+        [left, right, w + y, w - y, z].map(|p| p / p.truncate().length().max(1e-12))
+    }
+
     /// The region's rectangle (x, y, width, height) within `view`.
     pub fn rect(self, [x, y, w, h]: [u32; 4]) -> [u32; 4] {
         let half = w / 2;
@@ -128,7 +143,10 @@ pub struct Side<'a> {
 /// What a frame drew.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameStats {
+    /// Instances drawn (in the view frustum).
     pub instances: u64,
+    /// Instances outside the view frustum, not drawn.
+    pub culled: u64,
     pub triangles: u64,
     pub vertices: u64,
     /// Animation-space influences skinned: a morphing vertex counts those of both its levels.
@@ -533,12 +551,30 @@ impl SceneRenderer {
         let mut stats = FrameStats::default();
         self.keyed.clear();
         self.regions.clear();
+        let view_proj = view.proj * view.view;
         for (side_index, side) in sides.iter().enumerate() {
             self.regions.push(side.region);
+            // Instances whose bounding sphere lies outside the side's part of the frustum are
+            // not drawn (in compare mode each half draws only what it shows).
+            let planes = side.region.frustum(view_proj);
             for (i, inst) in side.instances.iter().enumerate() {
                 let Some(c) = self.characters.get(inst.model) else {
                     continue;
                 };
+                let centre = inst.transform.transform_point3(c.sphere.0);
+                let m = inst.transform.matrix3;
+                let radius = c.sphere.1
+                    * m.x_axis
+                        .length()
+                        .max(m.y_axis.length())
+                        .max(m.z_axis.length());
+                if planes
+                    .iter()
+                    .any(|p| p.truncate().dot(centre) + p.w < -radius)
+                {
+                    stats.culled += 1;
+                    continue;
+                }
                 let (slot, set) = match c.set(side.method) {
                     Some(set) => (side.method, set),
                     None => (0, c.full()),

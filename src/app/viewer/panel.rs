@@ -283,6 +283,7 @@ fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameStats) {
     egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
         for (label, value) in [
             ("instances", st.instances),
+            ("culled", st.culled),
             ("triangles", st.triangles),
             ("influences", st.influences),
             ("in transition", st.in_transition),
@@ -308,7 +309,7 @@ fn level_histogram(ui: &mut egui::Ui, levels: &[u32]) {
     let slot = rect.width() / used.max(4) as f32;
     for (k, &n) in levels.iter().enumerate().take(used) {
         let x = rect.left() + k as f32 * slot;
-        let h = (n as f32 / top) * (rect.height() - 14.0);
+        let h = (n as f32 / top) * (rect.height() - 24.0);
         let bar = egui::Rect::from_min_max(
             egui::pos2(x + 2.0, rect.bottom() - 12.0 - h),
             egui::pos2(x + slot - 2.0, rect.bottom() - 12.0),

@@ -1,0 +1,206 @@
+//! Levels of detail at run time, on the CPU: no pop during a morph, and how levels are packed.
+
+use glam::{Affine3A, Vec3, Vec4};
+use lodlab::app::levels::runtime_options;
+use lodlab::bake::CharacterBake;
+use lodlab::bake::lod::bake_lods;
+use lodlab::bake::lod_pack::LodPack;
+use lodlab::bake::simplify::Method;
+use lodlab::import::load_model;
+use lodlab::scene::{Camera, Instance, LodDraw, LodModel, LodPolicy, LodTracker, ScreenProjection};
+
+/// No pop (Merry et al. §6.4, Houle & Poulin §5): while the tracker morphs an instance from
+/// one level to the next at 60 Hz with the default duration, no vertex moves on screen by more
+/// than the tolerance from one frame to the next. The instance stands still in a frozen pose at
+/// the distance where the morph starts, so every motion on screen is the morph's own.
+#[test]
+fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
+    let policy = LodPolicy::default();
+    let (width, height) = (1280u32, 720u32);
+    for name in ["horse", "walker"] {
+        let model = load_model(name).unwrap();
+        let bake = CharacterBake::new(&model).unwrap();
+        let lods = bake_lods(
+            &model,
+            Method::InfluenceSimplification,
+            &runtime_options(&model),
+            &|_| {},
+        );
+        let pack = LodPack::from_levels(&lods.levels).unwrap();
+        let lod_model = LodModel {
+            errors: pack.errors(),
+            center: bake.bounds.center(),
+            radius: bake.bounds.diagonal() * 0.5,
+        };
+        let pose = bake.animation.sample(0, 0.4);
+        let skinned: Vec<Vec<Vec3>> = lods
+            .levels
+            .iter()
+            .map(|l| l.mesh.evaluate(&pose).0)
+            .collect();
+        let camera = Camera::new(Vec3::ZERO, 0.0, 5.0, 3.0);
+        let screen = ScreenProjection::new(
+            camera.eye(),
+            camera.fov_y,
+            height as f32,
+            camera.near_far().0,
+        );
+        let view_proj = camera.proj(width as f32 / height as f32) * camera.view();
+        let to_pixels = |p: Vec3| {
+            let c = view_proj * p.extend(1.0);
+            glam::Vec2::new(
+                c.x / c.w * width as f32 * 0.5,
+                c.y / c.w * height as f32 * 0.5,
+            )
+        };
+        let mut worst = 0.0f32;
+        let mut morph_frames = 0;
+        for k in 1..lods.levels.len() {
+            // Where level k becomes good enough with the hysteresis margin: the sphere's
+            // nearest point just beyond that, along the view direction.
+            let threshold = screen.threshold(lod_model.errors[k], policy.tolerance_px)
+                / (1.0 - policy.hysteresis);
+            let near = threshold * 0.999;
+            let far = threshold * 1.01;
+            let place = |d: f32| {
+                let centre = camera.eye() + camera.forward() * (d + lod_model.radius);
+                Affine3A::from_translation(centre - lod_model.center)
+            };
+            let instance = |d: f32| Instance {
+                model: 0,
+                transform: place(d),
+                clip: 0,
+                time_offset: 0.0,
+                speed: 1.0,
+                tint: Vec4::ONE,
+            };
+            let mut tracker = LodTracker::default();
+            let mut out = Vec::new();
+            let models = std::slice::from_ref(&lod_model);
+            tracker.update(&policy, models, &[instance(near)], &screen, 0.0, &mut out);
+            assert_eq!(
+                out[0],
+                LodDraw::Level(k as u8 - 1),
+                "{name}: before level {k}"
+            );
+            let t = place(far);
+            let mut last: Option<Vec<glam::Vec2>> = None;
+            for _ in 0..120 {
+                tracker.update(
+                    &policy,
+                    models,
+                    &[instance(far)],
+                    &screen,
+                    1.0 / 60.0,
+                    &mut out,
+                );
+                let frame: Vec<glam::Vec2> = match out[0] {
+                    LodDraw::Morph { fine, coarse, t: s } => {
+                        morph_frames += 1;
+                        let (f, c) = (fine as usize, coarse as usize);
+                        assert_eq!((f, c), (k - 1, k));
+                        let map = &lods.levels[f].geomorph;
+                        skinned[f]
+                            .iter()
+                            .zip(map)
+                            .map(|(p, &g)| {
+                                let q = skinned[c][g as usize];
+                                to_pixels(t.transform_point3((1.0 - s) * *p + s * q))
+                            })
+                            .collect()
+                    }
+                    LodDraw::Level(l) => {
+                        assert_eq!(l as usize, k, "{name}: after the morph to {k}");
+                        break;
+                    }
+                    other => panic!("{other:?}"),
+                };
+                if let Some(prev) = &last {
+                    for (a, b) in prev.iter().zip(&frame) {
+                        worst = worst.max(a.distance(*b));
+                    }
+                }
+                last = Some(frame);
+            }
+        }
+        assert!(morph_frames > 30 * (lods.levels.len() - 1) - 10);
+        assert!(
+            worst <= policy.tolerance_px,
+            "{name}: a vertex moved {worst:.2} px in one frame (tolerance {} px)",
+            policy.tolerance_px
+        );
+        eprintln!("{name}: largest move per frame {worst:.3} px");
+    }
+}
+
+/// The viewer's background bake: it reports progress, ends with one pack per model, and a
+/// second bake of the same method comes from the cache.
+#[test]
+fn background_bakes_finish_and_fill_the_cache() {
+    use lodlab::app::levels::{BackgroundBake, LevelSource, Poll};
+    use lodlab::bake::cache::{LodCache, source_hash};
+    let dir = tempfile::tempdir().unwrap();
+    let sources: Vec<LevelSource> = ["walker"]
+        .iter()
+        .map(|name| LevelSource {
+            model: load_model(name).unwrap(),
+            hash: source_hash(&lodlab::import::source_path(name)).unwrap(),
+        })
+        .collect();
+    let wait = |job: BackgroundBake| loop {
+        match job.poll() {
+            Poll::Running => std::thread::sleep(std::time::Duration::from_millis(20)),
+            Poll::Done(packs) => break (packs, job.fraction()),
+            Poll::Failed => panic!("the bake thread died"),
+        }
+    };
+    let cache = LodCache::new(Some(dir.path().to_path_buf()));
+    let (packs, fraction) = wait(BackgroundBake::start(
+        sources.clone(),
+        Method::AnimationSpace,
+        cache.clone(),
+    ));
+    assert_eq!(fraction, 1.0);
+    assert_eq!(packs.len(), 1);
+    let pack = packs[0].as_ref().unwrap();
+    assert!(pack.levels.len() >= 4);
+    let files = std::fs::read_dir(dir.path()).unwrap().count();
+    assert_eq!(files, 1, "one cache file per (model, method)");
+    let start = std::time::Instant::now();
+    let (again, _) = wait(BackgroundBake::start(
+        sources,
+        Method::AnimationSpace,
+        cache,
+    ));
+    assert_eq!(again[0].as_ref().unwrap(), pack);
+    eprintln!("from the cache in {:?}", start.elapsed());
+}
+
+/// Packed levels: every level's indices stay inside it, and every geomorph target is a vertex
+/// of the next level.
+#[test]
+fn packed_levels_address_their_own_vertices() {
+    let model = load_model("horse").unwrap();
+    let lods = bake_lods(&model, Method::RestPose, &runtime_options(&model), &|_| {});
+    let pack = LodPack::from_levels(&lods.levels).unwrap();
+    assert_eq!(pack.levels.len(), lods.levels.len());
+    for (k, l) in pack.levels.iter().enumerate() {
+        let range = l.first_index as usize..(l.first_index + l.index_count) as usize;
+        assert!(pack.indices[range].iter().all(|&i| i < l.vertices));
+        assert_eq!(l.triangles() as usize, lods.levels[k].triangles());
+        let next = pack.levels.get(k + 1).unwrap_or(l);
+        for v in 0..l.vertices {
+            let texel = pack
+                .vertices
+                .grid
+                .get((2 * (l.base_vertex + v) + 1) as usize);
+            let target = texel[0] as u32;
+            assert!(
+                (next.base_vertex..next.base_vertex + next.vertices).contains(&target),
+                "level {k} vertex {v} morphs to {target}"
+            );
+        }
+    }
+    // Errors never fall from level to level.
+    assert!(pack.errors().windows(2).all(|w| w[0] <= w[1]));
+}
