@@ -240,14 +240,12 @@ pub(crate) fn frame_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupL
     })
 }
 
-/// Depth state: test and write, test only, equal only (the colour pass of a faded level), or
-/// neither.
+/// Depth state: test and write, test only, or equal only (the colour pass of a faded level).
 #[derive(Clone, Copy)]
 enum Depth {
     Write,
     TestOnly,
     Equal,
-    Ignore,
 }
 
 struct PipelineSpec<'a> {
@@ -292,7 +290,6 @@ fn pipeline(
         Depth::Write => Some((true, wgpu::CompareFunction::Less)),
         Depth::TestOnly => Some((false, wgpu::CompareFunction::LessEqual)),
         Depth::Equal => Some((false, wgpu::CompareFunction::Equal)),
-        Depth::Ignore => Some((false, wgpu::CompareFunction::Always)),
     }
     .map(|(write, compare)| wgpu::DepthStencilState {
         format: DEPTH_FORMAT,
@@ -442,7 +439,7 @@ impl SceneRenderer {
         let sky = build(
             &frame_only,
             PipelineSpec {
-                depth: Depth::Ignore,
+                depth: Depth::TestOnly,
                 ..PipelineSpec::new("sky", &environment_module, "vs_sky", "fs_sky")
             },
         );
@@ -667,82 +664,45 @@ impl SceneRenderer {
         stats
     }
 
-    /// Records the frame: sky, ground, shadows, characters. `view` is the rectangle the scene
-    /// covers (x, y, width, height), for the sides' scissor rectangles.
+    /// Records the frame. `view` is the rectangle the scene covers (x, y, width, height), for
+    /// the sides' scissor rectangles.
+    ///
+    /// Opaque characters go first, then the ground and the sky (at the far plane, tested
+    /// against depth), so that each pixel of the environment is shaded once and only where no
+    /// character covers it; then the blob shadows, blended over the ground and hidden behind
+    /// characters by the depth test; then the faded levels of alpha transitions over all of it.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, view: [u32; 4]) {
         pass.set_bind_group(0, &self.frame_bind_group, &[]);
-        pass.set_pipeline(&self.sky);
-        pass.draw(0..3, 0..1);
+        let mut scissor = Scissor {
+            view,
+            regions: &self.regions,
+            side: None,
+        };
+        if !self.draws.is_empty() {
+            pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
+            self.draw_opaque(pass, &mut scissor);
+        }
+        // The environment over the whole view.
+        scissor.whole(pass);
         pass.set_pipeline(&self.ground);
         pass.draw(0..6, 0..1);
+        pass.set_pipeline(&self.sky);
+        pass.draw(0..3, 0..1);
         if self.draws.is_empty() {
             return;
         }
-        pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
-        let mut side = usize::MAX;
-        let mut scissor = |pass: &mut wgpu::RenderPass<'_>, s: usize| {
-            if s != side {
-                side = s;
-                let region = self.regions.get(s).copied().unwrap_or_default();
-                let [x, y, w, h] = region.rect(view);
-                pass.set_scissor_rect(x, y, w, h);
-            }
-        };
         // Every instance has exactly one opaque draw (opaque level or morph): its shadow goes
         // with it.
-        let opaque = |key: &DrawKey| key.pass() != PASS_FADE;
         if self.shadows {
             pass.set_pipeline(&self.shadow);
-            for (key, range) in self.draws.iter().filter(|(k, _)| opaque(k)) {
-                scissor(pass, key.side());
+            for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() != PASS_FADE) {
+                scissor.side(pass, key.side());
                 pass.set_bind_group(1, &self.characters[key.model()].full().bind_group, &[]);
                 pass.draw(0..6, range.clone());
             }
         }
-        if self.shader == CharacterShader::Plain {
-            pass.set_pipeline(&self.plain);
-            pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
-            for (key, range) in &self.draws {
-                scissor(pass, key.side());
-                let c = &self.characters[key.model()];
-                let set = c.full();
-                pass.set_bind_group(1, &set.bind_group, &[]);
-                pass.set_vertex_buffer(0, c.static_vertices.slice(..));
-                pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..set.levels[0].index_count, 0, range.clone());
-            }
-            return;
-        }
-        let wire = self
-            .wireframe
-            .as_ref()
-            .filter(|_| self.debug == DebugView::Wireframe);
-        let draw_group = |pass: &mut wgpu::RenderPass<'_>, key: &DrawKey, range: &Range<u32>| {
-            let c = &self.characters[key.model()];
-            let set = c.set(key.slot()).unwrap_or_else(|| c.full());
-            let level = &set.levels[key.level().min(set.levels.len() - 1)];
-            pass.set_bind_group(1, &set.bind_group, &[]);
-            pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-            let indices = level.first_index..level.first_index + level.index_count;
-            pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
-        };
-        let mut current = None;
-        for (key, range) in &self.draws {
-            let pipeline = match (key.pass(), wire) {
-                (PASS_MORPH, Some((_, m))) => m,
-                (_, Some((l, _))) => l,
-                (PASS_MORPH, None) => &self.morph,
-                (PASS_FADE, None) => continue,
-                _ => &self.skinned,
-            };
-            if current != Some(pipeline as *const _) {
-                current = Some(pipeline as *const _);
-                pass.set_pipeline(pipeline);
-            }
-            scissor(pass, key.side());
-            draw_group(pass, key, range);
-        }
-        if wire.is_some() {
+        let wireframe = self.debug == DebugView::Wireframe && self.wireframe.is_some();
+        if self.shader == CharacterShader::Plain || wireframe {
             return;
         }
         for pipeline in [&self.fade_depth, &self.fade_color] {
@@ -752,12 +712,89 @@ impl SceneRenderer {
                     pass.set_pipeline(pipeline);
                     set = true;
                 }
-                scissor(pass, key.side());
-                draw_group(pass, key, range);
+                scissor.side(pass, key.side());
+                self.draw_group(pass, key, range);
             }
         }
     }
 
+    /// One instanced draw of a group's level from its method's set.
+    fn draw_group(&self, pass: &mut wgpu::RenderPass<'_>, key: &DrawKey, range: &Range<u32>) {
+        let c = &self.characters[key.model()];
+        let set = c.set(key.slot()).unwrap_or_else(|| c.full());
+        let level = &set.levels[key.level().min(set.levels.len() - 1)];
+        pass.set_bind_group(1, &set.bind_group, &[]);
+        pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        let indices = level.first_index..level.first_index + level.index_count;
+        pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
+    }
+
+    /// The opaque character draws: levels and geomorphs (in wireframe mode the faded levels of
+    /// alpha transitions too, as lines), or the plain calibration draw.
+    fn draw_opaque(&self, pass: &mut wgpu::RenderPass<'_>, scissor: &mut Scissor) {
+        if self.shader == CharacterShader::Plain {
+            pass.set_pipeline(&self.plain);
+            pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
+            for (key, range) in &self.draws {
+                scissor.side(pass, key.side());
+                let c = &self.characters[key.model()];
+                let set = c.full();
+                pass.set_bind_group(1, &set.bind_group, &[]);
+                pass.set_vertex_buffer(0, c.static_vertices.slice(..));
+                pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..set.levels[0].index_count, 0, range.clone());
+            }
+            pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
+            return;
+        }
+        let wire = self
+            .wireframe
+            .as_ref()
+            .filter(|_| self.debug == DebugView::Wireframe);
+        let mut current = None;
+        for (key, range) in &self.draws {
+            let (pipeline, id) = match (key.pass(), wire) {
+                (PASS_MORPH, Some((_, m))) => (m, 0),
+                (_, Some((l, _))) => (l, 1),
+                (PASS_MORPH, None) => (&self.morph, 2),
+                (PASS_FADE, None) => continue,
+                _ => (&self.skinned, 3),
+            };
+            if current != Some(id) {
+                current = Some(id);
+                pass.set_pipeline(pipeline);
+            }
+            scissor.side(pass, key.side());
+            self.draw_group(pass, key, range);
+        }
+    }
+}
+
+/// The scissor rectangle of the side being drawn, set only when the side changes.
+struct Scissor<'a> {
+    view: [u32; 4],
+    regions: &'a [Region],
+    side: Option<usize>,
+}
+
+impl Scissor<'_> {
+    fn side(&mut self, pass: &mut wgpu::RenderPass<'_>, side: usize) {
+        if self.side != Some(side) {
+            self.side = Some(side);
+            let region = self.regions.get(side).copied().unwrap_or(Region::Full);
+            let [x, y, w, h] = region.rect(self.view);
+            pass.set_scissor_rect(x, y, w, h);
+        }
+    }
+
+    fn whole(&mut self, pass: &mut wgpu::RenderPass<'_>) {
+        self.side = None;
+        let [x, y, w, h] = self.view;
+        pass.set_scissor_rect(x, y, w, h);
+    }
+}
+
+impl SceneRenderer {
     /// Records the scene pass into `target` through `targets`, drawing only inside `viewport`
     /// (x, y, width, height in pixels) when one is given.
     pub fn encode(
