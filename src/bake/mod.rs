@@ -49,12 +49,6 @@ pub struct CharacterBake {
 impl CharacterBake {
     pub fn new(model: &Model) -> Result<Self, String> {
         let am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
-        Self::with_mesh(model, am)
-    }
-
-    /// The bake of `model` drawing `am` instead of its full-detail mesh (a level of detail):
-    /// same skeleton, clips and materials.
-    pub fn with_mesh(model: &Model, am: AnimationSpaceMesh) -> Result<Self, String> {
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
         let vertices = VertexTexture::pack(&[&am], &[])?;
         let materials = MaterialLayers::bake(&model.materials);
