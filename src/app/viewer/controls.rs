@@ -21,6 +21,14 @@ pub struct Controls {
 pub enum KeyAction {
     TogglePlay,
     ResetCamera,
+    /// M: the next level-of-detail method.
+    NextMethod,
+    /// T: the next transition.
+    NextTransition,
+    /// V: the next debug view.
+    NextDebugView,
+    /// C: split screen on or off.
+    ToggleCompare,
 }
 
 impl Controls {
@@ -46,6 +54,10 @@ impl Controls {
                             match code {
                                 KeyCode::Space => return Some(KeyAction::TogglePlay),
                                 KeyCode::KeyR => return Some(KeyAction::ResetCamera),
+                                KeyCode::KeyM => return Some(KeyAction::NextMethod),
+                                KeyCode::KeyT => return Some(KeyAction::NextTransition),
+                                KeyCode::KeyV => return Some(KeyAction::NextDebugView),
+                                KeyCode::KeyC => return Some(KeyAction::ToggleCompare),
                                 _ => {}
                             }
                         }

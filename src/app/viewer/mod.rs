@@ -10,9 +10,10 @@ mod panel;
 use super::levels::{BackgroundBake, Poll};
 use super::shot::{ShotLod, write_png};
 use super::world::{Loaded, SceneSpec, World};
+use crate::render::DebugView;
 use crate::render::targets::{Offscreen, RenderTargets};
 use crate::render::{FrameStats, Gpu};
-use crate::scene::LodMethod;
+use crate::scene::{LodMethod, Transition};
 use anyhow::{Context, Result, anyhow};
 use controls::{Controls, KeyAction};
 use panel::{FrameHistory, Info, Settings};
@@ -24,6 +25,12 @@ use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::{Window, WindowId};
+
+/// The choice after `current` in `all`, wrapping round.
+fn next<T: Copy + PartialEq>(all: &[T], current: T) -> T {
+    let i = all.iter().position(|&x| x == current).map_or(0, |i| i + 1);
+    all[i % all.len()]
+}
 
 /// Width of the side panel in points.
 const PANEL_WIDTH: f32 = 270.0;
@@ -310,9 +317,24 @@ impl Viewer {
                     pointer_free,
                     keyboard_free,
                 );
+                let s = &mut self.settings;
                 match action {
-                    Some(KeyAction::TogglePlay) => self.settings.playing = !self.settings.playing,
+                    Some(KeyAction::TogglePlay) => s.playing = !s.playing,
                     Some(KeyAction::ResetCamera) => self.world.reset_camera(),
+                    Some(KeyAction::NextMethod) => s.method = next(&LodMethod::ALL, s.method),
+                    Some(KeyAction::NextTransition) => {
+                        s.policy.transition = next(&Transition::ALL, s.policy.transition)
+                    }
+                    Some(KeyAction::NextDebugView) => {
+                        let views: Vec<DebugView> = DebugView::ALL
+                            .into_iter()
+                            .filter(|&v| {
+                                v != DebugView::Wireframe || self.world.renderer.has_wireframe()
+                            })
+                            .collect();
+                        s.debug = next(&views, s.debug);
+                    }
+                    Some(KeyAction::ToggleCompare) => s.compare = panel::toggle_compare(s),
                     None => {}
                 }
             }

@@ -352,6 +352,7 @@ fn method_combo(ui: &mut egui::Ui, id: &str, value: &mut LodMethod, info: &Info)
 
 fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.strong("Level of detail");
+    ui.label(egui::RichText::new("M: next method · T: next transition").small());
     method_combo(ui, "method", &mut s.method, info);
     if let Some((method, f)) = info.baking {
         ui.add(
@@ -406,24 +407,29 @@ fn compare(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.strong("Compare");
     let mut on = s.compare.is_some();
     if ui
-        .checkbox(&mut on, "split screen: method left, this right")
+        .checkbox(&mut on, "split screen: method left, this right (C)")
         .changed()
     {
-        s.compare = on.then(|| {
-            if s.method == LodMethod::None {
-                LodMethod::ALL[3]
-            } else {
-                LodMethod::None
-            }
-        });
+        s.compare = toggle_compare(s);
     }
     if let Some(right) = &mut s.compare {
         method_combo(ui, "right half", right, info);
     }
 }
 
+/// The comparison after switching it on or off: on, it shows full detail against a simplified
+/// method, whichever the left half does not.
+pub fn toggle_compare(s: &Settings) -> Option<LodMethod> {
+    match s.compare {
+        Some(_) => None,
+        None if s.method == LodMethod::None => Some(LodMethod::ALL[3]),
+        None => Some(LodMethod::None),
+    }
+}
+
 fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.strong("Debug view");
+    ui.label(egui::RichText::new("V: next view").small());
     for (view, label) in [
         (DebugView::Shaded, "shaded"),
         (DebugView::LodTint, "tint by level"),
