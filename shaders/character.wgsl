@@ -94,7 +94,35 @@ fn heat(x: f32) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
-    var base = textureSample(material_tex, material_sampler, in.uv, in.material).rgb * in.tint.rgb;
+    let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
+    return vec4<f32>(lit(in, texel.rgb, normalize(in.normal)), in.lod.z);
+}
+
+// Foliage without multisampling: the texture's alpha cuts the leaf shape out; both sides are
+// drawn, lit from the side that faces the viewer.
+@fragment
+fn fs_foliage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
+    if (texel.a < 0.5) {
+        discard;
+    }
+    let n = normalize(in.normal) * select(-1.0, 1.0, front);
+    return vec4<f32>(lit(in, texel.rgb, n), 1.0);
+}
+
+// Foliage with multisampling and alpha to coverage: the alpha is sharpened to about a pixel
+// around the 0.5 contour, so the cut edge is antialiased but does not dissolve into a dither.
+@fragment
+fn fs_foliage_coverage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
+    let a = clamp((texel.a - 0.5) / max(fwidth(texel.a), 1e-4) + 0.5, 0.0, 1.0);
+    let n = normalize(in.normal) * select(-1.0, 1.0, front);
+    return vec4<f32>(lit(in, texel.rgb, n), a);
+}
+
+// The character's colour: material (or a debug view's colour), sun and sky light, rim, fog.
+fn lit(in: VsOut, albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var base = albedo * in.tint.rgb;
     // frame.time.y: the debug view (see `DebugView` in src/render/renderer.rs).
     let view = u32(frame.time.y);
     if (view == 1u) {
@@ -105,10 +133,9 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
         // One influence is cold, eight or more hot.
         base = heat((in.influences - 1.0) / 7.0);
     }
-    let n = normalize(in.normal);
     var c = shade(base, n);
     // A touch of rim light separates figures from the ground at a distance.
     let v = normalize(frame.camera_pos.xyz - in.world);
     c += frame.sky_horizon.rgb * pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12;
-    return vec4<f32>(apply_fog(c, in.world), in.lod.z);
+    return apply_fog(c, in.world);
 }

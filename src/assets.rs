@@ -8,16 +8,38 @@ use std::path::PathBuf;
 pub struct Builtin {
     pub name: &'static str,
     pub file_name: &'static str,
+    pub kind: Kind,
+}
+
+/// What a built-in asset is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A subdivided, closed, skinned character (`horse`, `walker`).
+    Creature,
+    /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`).
+    Tree,
 }
 
 pub const BUILTINS: &[Builtin] = &[
     Builtin {
         name: "horse",
         file_name: "horse.glb",
+        kind: Kind::Creature,
     },
     Builtin {
         name: "walker",
         file_name: "walker.glb",
+        kind: Kind::Creature,
+    },
+    Builtin {
+        name: "broadleaf",
+        file_name: "broadleaf.glb",
+        kind: Kind::Tree,
+    },
+    Builtin {
+        name: "conifer",
+        file_name: "conifer.glb",
+        kind: Kind::Tree,
     },
 ];
 

@@ -106,15 +106,15 @@ struct GenAssetsArgs {
 /// Which scene and which characters.
 #[derive(Args, Debug, Clone)]
 struct SceneArgs {
-    /// Scene to show.
+    /// Scene to show: crowd (characters) or forest (trees).
     #[arg(long, default_value = "crowd")]
     scene: String,
     /// Model: a built-in asset (horse, walker) or a glTF path. Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
     models: Vec<String>,
-    /// Number of characters.
-    #[arg(long, default_value_t = 300)]
-    count: usize,
+    /// Number of characters (or trees) [default: 300 in the crowd, 12 in the forest].
+    #[arg(long)]
+    count: Option<usize>,
     /// Play this clip on every model that has it (default: a mix).
     #[arg(long)]
     clip: Option<String>,
@@ -131,7 +131,9 @@ impl SceneArgs {
         SceneSpec {
             scene: self.scene.clone(),
             models: self.models.clone(),
-            count: self.count,
+            count: self
+                .count
+                .unwrap_or_else(|| lodlab::app::world::default_count(&self.scene)),
             clip: self.clip.clone(),
             seed: self.seed,
             cache_dir: self.cache.clone(),

@@ -18,10 +18,21 @@ use glam::Vec3;
 use std::path::PathBuf;
 
 /// Scenes lodlab knows.
-pub const SCENES: &[&str] = &["crowd"];
+pub const SCENES: &[&str] = &["crowd", "forest"];
 
 /// Models of the default crowd.
 pub const DEFAULT_MODELS: &[&str] = &["horse", "walker"];
+
+/// Trees of the default forest.
+pub const DEFAULT_TREES: &[&str] = &["broadleaf", "conifer"];
+
+/// How many instances a scene shows unless told.
+pub fn default_count(scene: &str) -> usize {
+    match scene {
+        "forest" => 12,
+        _ => 300,
+    }
+}
 
 /// What to show.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,7 +77,12 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
         );
     }
     let names: Vec<String> = if spec.models.is_empty() {
-        DEFAULT_MODELS.iter().map(|s| s.to_string()).collect()
+        let defaults = if spec.scene == "forest" {
+            DEFAULT_TREES
+        } else {
+            DEFAULT_MODELS
+        };
+        defaults.iter().map(|s| s.to_string()).collect()
     } else {
         spec.models.clone()
     };
@@ -112,14 +128,18 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
             })
         })
         .collect();
-    let mut crowd = Crowd::layout(
-        &crowd_models,
-        &CrowdConfig {
-            count: spec.count,
-            seed: spec.seed,
-            clips,
-        },
-    );
+    let mut crowd = if spec.scene == "forest" {
+        crate::scene::forest::layout(&crowd_models, spec.count, spec.seed)
+    } else {
+        Crowd::layout(
+            &crowd_models,
+            &CrowdConfig {
+                count: spec.count,
+                seed: spec.seed,
+                clips,
+            },
+        )
+    };
     for a in &mut crowd.agents {
         a.model = chosen[a.model];
     }

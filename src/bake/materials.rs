@@ -124,9 +124,22 @@ fn layer_pixels(m: &Material, width: u32, height: u32) -> Vec<u8> {
     }
 }
 
+/// Alpha at or above this is inside a cut-out (foliage is alpha-tested at one half).
+const CUTOFF: u8 = 128;
+
 /// Mip levels down to 1×1, each a 2×2 box average taken in linear light.
+///
+/// A layer with a cut-out (foliage) is treated as alpha-tested: colour is averaged weighted by
+/// alpha, so the transparent surroundings do not darken the edges, and each level's alpha is
+/// scaled so that the share of texels passing the alpha test stays that of the full-size
+/// texture, so thin leaves and needles do not erode into nothing at a distance.
 fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
     let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
+    let cut_out = base.chunks_exact(4).any(|p| p[3] < CUTOFF);
+    let coverage = |px: &[u8]| {
+        px.chunks_exact(4).filter(|p| p[3] >= CUTOFF).count() as f32 / (px.len() / 4) as f32
+    };
+    let target = coverage(&base);
     let mut chain = vec![base];
     let (mut w, mut h) = (width, height);
     while w > 1 || h > 1 {
@@ -136,27 +149,63 @@ fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
         for y in 0..nh {
             for x in 0..nw {
                 let mut acc = [0.0f32; 4];
+                let mut weight = 0.0f32;
                 for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     let sx = (2 * x + dx).min(w - 1);
                     let sy = (2 * y + dy).min(h - 1);
                     let i = ((sy * w + sx) * 4) as usize;
+                    let a = if cut_out {
+                        prev[i + 3] as f32 / 255.0
+                    } else {
+                        1.0
+                    };
                     for c in 0..3 {
-                        acc[c] += lut[prev[i + c] as usize];
+                        acc[c] += lut[prev[i + c] as usize] * a;
                     }
+                    weight += a;
                     acc[3] += prev[i + 3] as f32;
                 }
+                let wsum = if cut_out { weight.max(1e-6) } else { 4.0 };
                 next.extend_from_slice(&[
-                    linear_to_srgb(acc[0] / 4.0),
-                    linear_to_srgb(acc[1] / 4.0),
-                    linear_to_srgb(acc[2] / 4.0),
+                    linear_to_srgb(acc[0] / wsum),
+                    linear_to_srgb(acc[1] / wsum),
+                    linear_to_srgb(acc[2] / wsum),
                     (acc[3] / 4.0).round() as u8,
                 ]);
             }
+        }
+        if cut_out {
+            preserve_coverage(&mut next, target);
         }
         chain.push(next);
         (w, h) = (nw, nh);
     }
     chain
+}
+
+/// Scales a level's alpha so that the share of texels at or above [`CUTOFF`] is `target`
+/// (Castaño's coverage-preserving mipmaps), by bisection on the scale.
+fn preserve_coverage(level: &mut [u8], target: f32) {
+    let n = (level.len() / 4) as f32;
+    let share = |scale: f32| {
+        level
+            .chunks_exact(4)
+            .filter(|p| (p[3] as f32 * scale).min(255.0) >= CUTOFF as f32)
+            .count() as f32
+            / n
+    };
+    let (mut lo, mut hi) = (0.0f32, 16.0f32);
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if share(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    for p in level.chunks_exact_mut(4) {
+        p[3] = (p[3] as f32 * hi).round().min(255.0) as u8;
+    }
 }
 
 #[cfg(test)]
@@ -175,6 +224,59 @@ mod tests {
         assert_eq!((l.width, l.height, l.layer_count), (4, 4, 2));
         assert_eq!(l.mips.len(), 3);
         assert_eq!(&l.mips[2], &[255, 0, 0, 255, 255, 0, 0, 255]);
+    }
+
+    #[test]
+    fn cut_out_mips_keep_their_coverage() {
+        // Small soft dots scattered at random, like distant leaves: a plain box filter fades
+        // them below the cut-off within a few levels.
+        let size = 128u32;
+        let mut rng = fastrand::Rng::with_seed(5);
+        let dots: Vec<(f32, f32, f32)> = (0..160)
+            .map(|_| (rng.f32() * 128.0, rng.f32() * 128.0, 1.0 + 1.5 * rng.f32()))
+            .collect();
+        let mut pixels = Vec::new();
+        for y in 0..size {
+            for x in 0..size {
+                let r = dots
+                    .iter()
+                    .map(|&(cx, cy, rad)| {
+                        ((x as f32 + 0.5 - cx).hypot(y as f32 + 0.5 - cy) - rad).max(0.0)
+                    })
+                    .fold(f32::MAX, f32::min);
+                let a = ((1.0 - r) * 255.0).clamp(0.0, 255.0) as u8;
+                pixels.extend_from_slice(&[40, 120, 30, a]);
+            }
+        }
+        let m = Material {
+            name: "needles".into(),
+            base_color: [1.0; 4],
+            texture: Some(Rgba8Image {
+                width: size,
+                height: size,
+                pixels,
+            }),
+        };
+        let l = MaterialLayers::bake(&[m]);
+        let share = |px: &[u8]| {
+            px.chunks_exact(4).filter(|p| p[3] >= CUTOFF).count() as f32 / (px.len() / 4) as f32
+        };
+        let base = share(&l.mips[0]);
+        assert!(base > 0.1 && base < 0.5, "{base}");
+        for level in 1..=3 {
+            let s = share(&l.mips[level]);
+            assert!(
+                (s - base).abs() <= 0.05,
+                "level {level}: {s} of texels pass, {base} at full size"
+            );
+            assert!(s > 0.0, "level {level}: the lines vanished");
+            // Colour comes from the lines only, not from the black around them.
+            let i = l.mips[level]
+                .chunks_exact(4)
+                .position(|p| p[3] > 0)
+                .unwrap();
+            assert!(l.mips[level][4 * i + 1] > 100, "darkened edge colour");
+        }
     }
 
     #[test]

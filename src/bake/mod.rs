@@ -44,6 +44,8 @@ pub struct CharacterBake {
     /// Bounds over the sampled frames of every clip, in scene units, model-local.
     pub bounds: Bounds,
     pub animation_space: AnimationSpaceMesh,
+    /// Some material has cut-out alpha (foliage): drawn two-sided and alpha-tested.
+    pub alpha_tested: bool,
 }
 
 impl CharacterBake {
@@ -85,6 +87,12 @@ impl CharacterBake {
             materials,
             static_vertices,
             bounds,
+            alpha_tested: model.materials.iter().any(|m| {
+                m.base_color[3] < 0.5
+                    || m.texture
+                        .as_ref()
+                        .is_some_and(|t| t.pixels.chunks_exact(4).any(|px| px[3] < 128))
+            }),
             animation_space: am,
         })
     }

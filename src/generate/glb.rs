@@ -3,7 +3,7 @@
 //! embedded PNG. The output is a pure function of the model, byte for byte, so committed assets
 //! can be checked against their generator.
 
-use crate::model::{ChannelTarget, Interpolation, Model};
+use crate::model::{ChannelTarget, Interpolation, Model, SkinnedMesh};
 use serde_json::{Value, json};
 use std::borrow::Cow;
 
@@ -103,29 +103,31 @@ fn png(image: &crate::model::Rgba8Image) -> Vec<u8> {
     out
 }
 
-/// Encodes `model` as a `.glb` file.
-pub fn to_glb(model: &Model) -> Vec<u8> {
-    let mut b = Builder::default();
-    let mesh = &model.mesh;
-    let skel = &model.skeleton;
-
-    // Mesh attributes.
-    let positions: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
-    let normals: Vec<f32> = mesh.normals.iter().flat_map(|p| p.to_array()).collect();
-    let uvs: Vec<f32> = mesh.uvs.iter().flat_map(|p| p.to_array()).collect();
+/// Positions, normals, texture coordinates and joint/weight sets of the vertices `used`.
+fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Value {
+    let positions: Vec<f32> = used
+        .iter()
+        .flat_map(|&v| mesh.positions[v].to_array())
+        .collect();
+    let normals: Vec<f32> = used
+        .iter()
+        .flat_map(|&v| mesh.normals[v].to_array())
+        .collect();
+    let uvs: Vec<f32> = used.iter().flat_map(|&v| mesh.uvs[v].to_array()).collect();
     let pos = b.floats(&positions, 3, "VEC3", true, Some(ARRAY_BUFFER));
     let nrm = b.floats(&normals, 3, "VEC3", false, Some(ARRAY_BUFFER));
     let tex = b.floats(&uvs, 2, "VEC2", false, Some(ARRAY_BUFFER));
     let mut attributes = json!({"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": tex});
-    let most = (0..mesh.vertex_count())
-        .map(|v| mesh.influences_of(v).len())
+    let most = used
+        .iter()
+        .map(|&v| mesh.influences_of(v).len())
         .max()
         .unwrap_or(1)
         .max(1);
     for set in 0..most.div_ceil(4) {
-        let mut joints: Vec<u16> = Vec::with_capacity(mesh.vertex_count() * 4);
-        let mut weights: Vec<f32> = Vec::with_capacity(mesh.vertex_count() * 4);
-        for v in 0..mesh.vertex_count() {
+        let mut joints: Vec<u16> = Vec::with_capacity(used.len() * 4);
+        let mut weights: Vec<f32> = Vec::with_capacity(used.len() * 4);
+        for &v in used {
             let inf = mesh.influences_of(v);
             for k in 4 * set..4 * set + 4 {
                 match inf.get(k) {
@@ -144,7 +146,7 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
             bytemuck::cast_slice(&joints),
             Some(ARRAY_BUFFER),
             UNSIGNED_SHORT,
-            mesh.vertex_count(),
+            used.len(),
             "VEC4",
             None,
         );
@@ -152,14 +154,47 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
         attributes[format!("JOINTS_{set}")] = json!(j);
         attributes[format!("WEIGHTS_{set}")] = json!(w);
     }
-    let indices = b.accessor(
-        bytemuck::cast_slice(&mesh.indices),
-        Some(ELEMENT_ARRAY_BUFFER),
-        UNSIGNED_INT,
-        mesh.indices.len(),
-        "SCALAR",
-        None,
-    );
+    attributes
+}
+
+/// Encodes `model` as a `.glb` file.
+pub fn to_glb(model: &Model) -> Vec<u8> {
+    let mut b = Builder::default();
+    let mesh = &model.mesh;
+    let skel = &model.skeleton;
+
+    // One primitive per material, each with the vertices it uses (in order), so that an
+    // importer merging primitives in order gets the mesh back as it was.
+    let mut primitives = Vec::new();
+    for material in 0..model.materials.len().max(1) {
+        let used: Vec<usize> = (0..mesh.vertex_count())
+            .filter(|&v| mesh.materials.get(v).copied().unwrap_or(0) as usize == material)
+            .collect();
+        if used.is_empty() {
+            continue;
+        }
+        let mut local = vec![u32::MAX; mesh.vertex_count()];
+        for (i, &v) in used.iter().enumerate() {
+            local[v] = i as u32;
+        }
+        let indices: Vec<u32> = mesh
+            .indices
+            .chunks_exact(3)
+            .filter(|t| local[t[0] as usize] != u32::MAX)
+            .flat_map(|t| t.iter().map(|&i| local[i as usize]))
+            .collect();
+        let attributes = vertex_attributes(&mut b, mesh, &used);
+        let indices = b.accessor(
+            bytemuck::cast_slice(&indices),
+            Some(ELEMENT_ARRAY_BUFFER),
+            UNSIGNED_INT,
+            indices.len(),
+            "SCALAR",
+            None,
+        );
+        primitives
+            .push(json!({"attributes": attributes, "indices": indices, "material": material}));
+    }
 
     // Materials and textures.
     let mut images = Vec::new();
@@ -266,7 +301,7 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
         "scene": 0,
         "scenes": [{"nodes": roots}],
         "nodes": nodes,
-        "meshes": [{"name": model.name, "primitives": [{"attributes": attributes, "indices": indices, "material": 0}]}],
+        "meshes": [{"name": model.name, "primitives": primitives}],
         "materials": materials,
         "skins": [skin],
         "animations": animations,

@@ -1,5 +1,6 @@
 //! The project's own demo creatures, generated procedurally: box-modelled control cages smoothed
-//! by Catmull–Clark subdivision, automatic skin weights, painted textures and keyframed clips.
+//! by Catmull–Clark subdivision, automatic skin weights, painted textures and keyframed clips;
+//! and the demo trees ([`tree`]): branching skeletons, tube wood, leaf quads and a wind loop.
 //! `lodlab gen-assets` writes them to `assets/` as `.glb`; everything else reads those files.
 
 pub mod build;
@@ -9,6 +10,7 @@ pub mod finish;
 pub mod glb;
 pub mod horse;
 pub mod rig;
+pub mod tree;
 pub mod walker;
 
 use crate::model::Model;
@@ -18,6 +20,8 @@ pub fn generate(name: &str) -> Option<Model> {
     match name {
         "horse" => Some(horse::horse()),
         "walker" => Some(walker::walker()),
+        "broadleaf" => Some(tree::broadleaf()),
+        "conifer" => Some(tree::conifer()),
         _ => None,
     }
 }

@@ -21,8 +21,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Models whose rest pose is taller than this, or shorter than [`MIN_PLAUSIBLE_HEIGHT`], are in
-/// units other than metres (centimetres, say) and get scaled to [`DEFAULT_HEIGHT`].
-const MAX_PLAUSIBLE_HEIGHT: f32 = 10.0;
+/// units other than metres (centimetres, say) and get scaled to [`DEFAULT_HEIGHT`]. Tall trees
+/// are metric up to 40 m.
+const MAX_PLAUSIBLE_HEIGHT: f32 = 40.0;
 const MIN_PLAUSIBLE_HEIGHT: f32 = 0.1;
 const DEFAULT_HEIGHT: f32 = 1.0;
 

@@ -20,6 +20,8 @@ pub struct GpuCharacter {
     pub name: String,
     /// Bounding sphere over the animation, model space: centre and radius.
     pub sphere: (glam::Vec3, f32),
+    /// Foliage: drawn two-sided with its alpha as a cut-out.
+    pub two_sided: bool,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
     /// The full-detail triangles in one fixed pose, for the plain calibration shader.
@@ -170,6 +172,7 @@ impl GpuCharacter {
         let mut character = GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
+            two_sided: bake.alpha_tested,
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),

@@ -212,6 +212,8 @@ pub struct SceneRenderer {
     fade_color: wgpu::RenderPipeline,
     /// Line-mode versions of `skinned` and `morph`, where the adapter can draw lines.
     wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
+    /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
+    foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
     plain: wgpu::RenderPipeline,
     sky: wgpu::RenderPipeline,
     ground: wgpu::RenderPipeline,
@@ -260,6 +262,8 @@ struct PipelineSpec<'a> {
     /// Colour writes off: a depth-only pass.
     depth_only: bool,
     polygon_mode: wgpu::PolygonMode,
+    /// Alpha to coverage (only where there is multisampling).
+    alpha_to_coverage: bool,
 }
 
 impl<'a> PipelineSpec<'a> {
@@ -275,6 +279,7 @@ impl<'a> PipelineSpec<'a> {
             cull: None,
             depth_only: false,
             polygon_mode: wgpu::PolygonMode::Fill,
+            alpha_to_coverage: false,
         }
     }
 }
@@ -315,6 +320,7 @@ fn pipeline(
         depth_stencil,
         multisample: wgpu::MultisampleState {
             count: samples,
+            alpha_to_coverage_enabled: spec.alpha_to_coverage && samples > 1,
             ..Default::default()
         },
         fragment: Some(wgpu::FragmentState {
@@ -415,6 +421,25 @@ impl SceneRenderer {
                 ..character("faded level colour", "vs_main")
             },
         );
+        // Foliage: no culling, the texture's alpha as a cut-out; with multisampling, alpha to
+        // coverage smooths the cut edges.
+        let foliage_fs = if s > 1 {
+            "fs_foliage_coverage"
+        } else {
+            "fs_foliage"
+        };
+        let foliage = |label, vs| PipelineSpec {
+            cull: None,
+            alpha_to_coverage: true,
+            ..PipelineSpec {
+                fs: foliage_fs,
+                ..character(label, vs)
+            }
+        };
+        let foliage = (
+            build(&with_characters, foliage("foliage", "vs_main")),
+            build(&with_characters, foliage("geomorphed foliage", "vs_morph")),
+        );
         let wireframe = device
             .features()
             .contains(wgpu::Features::POLYGON_MODE_LINE)
@@ -473,6 +498,7 @@ impl SceneRenderer {
             fade_depth,
             fade_color,
             wireframe,
+            foliage,
             plain,
             sky,
             ground,
@@ -753,12 +779,15 @@ impl SceneRenderer {
             .filter(|_| self.debug == DebugView::Wireframe);
         let mut current = None;
         for (key, range) in &self.draws {
-            let (pipeline, id) = match (key.pass(), wire) {
-                (PASS_MORPH, Some((_, m))) => (m, 0),
-                (_, Some((l, _))) => (l, 1),
-                (PASS_MORPH, None) => (&self.morph, 2),
-                (PASS_FADE, None) => continue,
-                _ => (&self.skinned, 3),
+            let two_sided = self.characters[key.model()].two_sided;
+            let (pipeline, id) = match (key.pass(), wire, two_sided) {
+                (PASS_MORPH, Some((_, m)), _) => (m, 0),
+                (_, Some((l, _)), _) => (l, 1),
+                (PASS_FADE, None, _) => continue,
+                (PASS_MORPH, None, true) => (&self.foliage.1, 2),
+                (_, None, true) => (&self.foliage.0, 3),
+                (PASS_MORPH, None, false) => (&self.morph, 4),
+                _ => (&self.skinned, 5),
             };
             if current != Some(id) {
                 current = Some(id);

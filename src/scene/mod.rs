@@ -2,6 +2,7 @@
 
 pub mod camera;
 pub mod crowd;
+pub mod forest;
 pub mod lod;
 
 pub use camera::Camera;

@@ -1,0 +1,311 @@
+//! The demo trees are cyclically animated skeletal tree models (Aalborg thesis §1.4): a closed
+//! skinned wood mesh, foliage quads bound to one bone each, four generations of branches, and a
+//! seamless wind loop that is faster and wider at the twigs than at the trunk.
+
+use glam::Vec3;
+use lodlab::anim::local_pose;
+use lodlab::generate::tree::{FOLIAGE_MATERIAL, broadleaf, conifer};
+use lodlab::model::Model;
+use std::collections::HashMap;
+
+fn trees() -> Vec<Model> {
+    vec![broadleaf(), conifer()]
+}
+
+#[test]
+fn sizes_are_those_of_the_issue() {
+    for m in trees() {
+        let bones = m.skeleton.bone_count();
+        assert!((50..=200).contains(&bones), "{}: {bones} bones", m.name);
+        let leaf_vertices = m
+            .mesh
+            .materials
+            .iter()
+            .filter(|&&x| x == FOLIAGE_MATERIAL)
+            .count();
+        let leaves = leaf_vertices / 4;
+        assert!(
+            (2_000..=20_000).contains(&leaves),
+            "{}: {leaves} leaves",
+            m.name
+        );
+        assert_eq!(m.clips.len(), 1);
+        let d = m.clips[0].duration;
+        assert!((4.0..=8.0).contains(&d), "{}: loop of {d} s", m.name);
+        assert_eq!(m.materials.len(), 2);
+        // The foliage texture cuts leaves out with its alpha.
+        let tex = m.materials[FOLIAGE_MATERIAL as usize]
+            .texture
+            .as_ref()
+            .unwrap();
+        let alphas: Vec<u8> = tex.pixels.chunks_exact(4).map(|p| p[3]).collect();
+        assert!(alphas.contains(&0) && alphas.contains(&255));
+    }
+}
+
+#[test]
+fn every_leaf_hangs_from_one_bone_with_weight_one() {
+    for m in trees() {
+        let mesh = &m.mesh;
+        let mut leaf_triangles = 0;
+        for t in mesh.indices.chunks_exact(3) {
+            if mesh.materials[t[0] as usize] != FOLIAGE_MATERIAL {
+                continue;
+            }
+            leaf_triangles += 1;
+            let bones: Vec<u32> = t
+                .iter()
+                .map(|&v| {
+                    let inf = mesh.influences_of(v as usize);
+                    assert_eq!(
+                        inf.len(),
+                        1,
+                        "{}: leaf vertex {v} has {} bones",
+                        m.name,
+                        inf.len()
+                    );
+                    assert_eq!(inf[0].weight, 1.0);
+                    inf[0].bone
+                })
+                .collect();
+            assert!(
+                bones.iter().all(|&b| b == bones[0]),
+                "{}: a leaf spans bones",
+                m.name
+            );
+        }
+        assert!(leaf_triangles > 0);
+    }
+}
+
+#[test]
+fn the_wood_is_closed_and_blends_bones_at_joints() {
+    for m in trees() {
+        let mesh = &m.mesh;
+        // Weld by position: tube seams and cap rims repeat positions.
+        let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+        let id: Vec<u32> = mesh
+            .positions
+            .iter()
+            .map(|p| {
+                let key = p.to_array().map(f32::to_bits);
+                let n = ids.len() as u32;
+                *ids.entry(key).or_insert(n)
+            })
+            .collect();
+        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+        let mut wood = 0;
+        for t in mesh.indices.chunks_exact(3) {
+            if mesh.materials[t[0] as usize] == FOLIAGE_MATERIAL {
+                continue;
+            }
+            wood += 1;
+            for k in 0..3 {
+                let (a, b) = (id[t[k] as usize], id[t[(k + 1) % 3] as usize]);
+                if a != b {
+                    // Directed: a closed, consistently wound surface uses each edge once each way.
+                    *edges.entry((a, b)).or_default() += 1;
+                    *edges.entry((b, a)).or_default() -= 1;
+                }
+            }
+        }
+        assert!(wood > 1000);
+        let open = edges.values().filter(|&&c| c != 0).count();
+        assert_eq!(open, 0, "{}: {open} boundary edges in the wood", m.name);
+        let blended = (0..mesh.vertex_count())
+            .filter(|&v| mesh.materials[v] != FOLIAGE_MATERIAL)
+            .filter(|&v| mesh.influences_of(v).len() >= 2)
+            .count();
+        assert!(
+            blended > 500,
+            "{}: {blended} wood vertices blend bones",
+            m.name
+        );
+    }
+}
+
+#[test]
+fn branches_fork_four_generations_deep() {
+    for m in trees() {
+        let nodes = &m.skeleton.nodes;
+        let mut children = vec![0usize; nodes.len()];
+        for n in nodes {
+            if let Some(p) = n.parent {
+                children[p as usize] += 1;
+            }
+        }
+        // Along every path from the root, count the bones where a branch forks off.
+        let forks = |mut b: usize| {
+            let mut count = 0;
+            while let Some(p) = nodes[b].parent {
+                count += (children[p as usize] >= 2) as usize;
+                b = p as usize;
+            }
+            count
+        };
+        let deepest = (0..nodes.len()).map(forks).max().unwrap();
+        assert!(deepest >= 4, "{}: only {deepest} generations", m.name);
+    }
+}
+
+/// Rotation angle of every bone relative to its rest pose, over one loop.
+fn bend_angles(m: &Model, samples: usize) -> Vec<Vec<f32>> {
+    let clip = &m.clips[0];
+    let mut out = vec![Vec::with_capacity(samples); m.skeleton.bone_count()];
+    for k in 0..samples {
+        let t = clip.duration * k as f32 / samples as f32;
+        let pose = local_pose(&m.skeleton, Some(clip), t);
+        for (b, local) in pose.iter().enumerate() {
+            let rest = m.skeleton.nodes[b].rest.rotation;
+            out[b].push((rest.inverse() * local.rotation).angle_between_identity());
+        }
+    }
+    out
+}
+
+trait AngleFromIdentity {
+    fn angle_between_identity(&self) -> f32;
+}
+
+impl AngleFromIdentity for glam::Quat {
+    fn angle_between_identity(&self) -> f32 {
+        2.0 * self.w.abs().min(1.0).acos()
+    }
+}
+
+#[test]
+fn the_wind_loops_and_twigs_move_faster_and_wider_than_the_trunk() {
+    for m in trees() {
+        let clip = &m.clips[0];
+        // Seamless: every channel's last key is its first.
+        for ch in &clip.channels {
+            let (a, b) = (ch.values[0], *ch.values.last().unwrap());
+            assert!(
+                (a - b).length() < 1e-6,
+                "{}: channel of node {}",
+                m.name,
+                ch.node
+            );
+            assert!((ch.times.last().unwrap() - clip.duration).abs() < 1e-4);
+        }
+        let angles = bend_angles(&m, 240);
+        let depth = |mut b: usize| {
+            let mut d = 0;
+            while let Some(p) = m.skeleton.nodes[b].parent {
+                d += 1;
+                b = p as usize;
+            }
+            d
+        };
+        // Swing (max − min) and sign changes of the angle's deviation from its mean.
+        let stats = |a: &[f32]| {
+            let mean = a.iter().sum::<f32>() / a.len() as f32;
+            let swing = a.iter().cloned().fold(f32::MIN, f32::max)
+                - a.iter().cloned().fold(f32::MAX, f32::min);
+            let crossings = a
+                .windows(2)
+                .filter(|w| (w[0] - mean).signum() != (w[1] - mean).signum())
+                .count();
+            (swing, crossings as f32)
+        };
+        let trunk = m
+            .skeleton
+            .nodes
+            .iter()
+            .position(|n| n.name == "trunk1")
+            .unwrap();
+        let max_depth = (0..m.skeleton.bone_count()).map(depth).max().unwrap();
+        let twigs: Vec<usize> = (0..m.skeleton.bone_count())
+            .filter(|&b| depth(b) + 1 >= max_depth)
+            .collect();
+        let (trunk_swing, trunk_rate) = stats(&angles[trunk]);
+        let twig_stats: Vec<(f32, f32)> = twigs.iter().map(|&b| stats(&angles[b])).collect();
+        let twig_swing = twig_stats.iter().map(|s| s.0).sum::<f32>() / twig_stats.len() as f32;
+        let twig_rate = twig_stats.iter().map(|s| s.1).sum::<f32>() / twig_stats.len() as f32;
+        assert!(
+            twig_swing > 2.0 * trunk_swing,
+            "{}: twigs swing {twig_swing}, trunk {trunk_swing}",
+            m.name
+        );
+        assert!(
+            twig_rate > 1.5 * trunk_rate,
+            "{}: twigs cross {twig_rate} times a loop, trunk {trunk_rate}",
+            m.name
+        );
+        assert!(trunk_swing > 0.0);
+    }
+}
+
+#[test]
+fn trees_stand_on_the_ground_and_are_metric() {
+    for name in ["broadleaf", "conifer"] {
+        let m = lodlab::import::load_model(name).unwrap();
+        let lo = m
+            .mesh
+            .positions
+            .iter()
+            .map(|p| m.skeleton.root_transform.transform_point3(*p))
+            .fold(Vec3::splat(f32::MAX), Vec3::min);
+        let hi = m
+            .mesh
+            .positions
+            .iter()
+            .map(|p| m.skeleton.root_transform.transform_point3(*p))
+            .fold(Vec3::splat(f32::MIN), Vec3::max);
+        assert!(lo.y.abs() < 0.05, "{name}: lowest point at {}", lo.y);
+        let h = hi.y - lo.y;
+        assert!((5.0..=20.0).contains(&h), "{name}: {h} m tall");
+    }
+}
+
+/// The forest renders: trees with green foliage whose quads are cut out by the leaf alpha
+/// (no dark quad corners), with and without multisampling.
+#[test]
+fn a_forest_shot_shows_trees_with_cut_out_leaves() {
+    use lodlab::app::shot::{ShotOptions, run};
+    use lodlab::app::world::SceneSpec;
+    let dir = tempfile::tempdir().unwrap();
+    for samples in [1, 4] {
+        let out = dir.path().join(format!("forest{samples}.png"));
+        let report = run(&ShotOptions {
+            spec: SceneSpec {
+                scene: "forest".into(),
+                count: 4,
+                cache_dir: Some(dir.path().to_path_buf()),
+                ..Default::default()
+            },
+            out: out.clone(),
+            width: 320,
+            height: 240,
+            time: 1.5,
+            samples,
+            camera: None,
+            timed_frames: 1,
+            calibrate: false,
+            lod: Default::default(),
+        })
+        .unwrap();
+        assert_eq!(report.scene, "forest");
+        assert_eq!(report.instances + report.culled, 4);
+        let img = image::open(&out).unwrap().to_rgba8();
+        let n = (img.width() * img.height()) as f32;
+        let green = img
+            .pixels()
+            .filter(|p| p[1] as i32 > p[0] as i32 + 15 && p[1] as i32 > p[2] as i32 + 10)
+            .count() as f32;
+        let dark = img
+            .pixels()
+            .filter(|p| p[0] < 20 && p[1] < 20 && p[2] < 20)
+            .count() as f32;
+        assert!(
+            green / n > 0.03,
+            "MSAA {samples}: foliage covers {:.3}",
+            green / n
+        );
+        assert!(
+            dark / n < 0.002,
+            "MSAA {samples}: {:.4} of pixels are dark quads",
+            dark / n
+        );
+    }
+}
