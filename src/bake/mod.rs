@@ -5,6 +5,7 @@
 
 pub mod anim_texture;
 pub mod animation_space;
+pub mod billboard;
 pub mod cache;
 pub mod lod;
 pub mod lod_error;

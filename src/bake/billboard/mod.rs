@@ -1,0 +1,191 @@
+//! Animated billboard clouds for foliage (Aalborg thesis, Ch. 2, 3 and 7): pure CPU.
+//!
+//! - [`foliage`] finds a tree's leaves: the connected pieces of the triangles whose material
+//!   cuts its shape out with alpha, each bound to one bone.
+//! - [`cloud::stochastic_cloud`] clusters leaves onto billboards (§3.3–3.7).
+//! - [`skeleton_cloud`] builds one cloud per bone (the thesis's "skeleton billboard cloud
+//!   simplification", Ch. 7): every billboard is then skinned with weight 1 to its bone and
+//!   moves rigidly with its branch, exactly as its leaves did.
+
+pub mod cloud;
+pub mod rect;
+
+use crate::model::Model;
+use cloud::{Billboard, CloudParams, Leaf, stochastic_cloud};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// A tree's leaves, rest pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Foliage {
+    pub leaves: Vec<Leaf>,
+    /// The bone every leaf is bound to.
+    pub bones: Vec<u32>,
+    /// For every leaf, its triangles (indices into the model's triangle list).
+    pub triangles: Vec<Vec<u32>>,
+    /// Leaves whose vertices were bound to more than one bone, rebound to the bone that holds
+    /// most of their weight (the thesis's pre-processing, §8.3).
+    pub rebound: usize,
+}
+
+/// Does this material cut its shape out with alpha (foliage)?
+pub fn is_cut_out(m: &crate::model::Material) -> bool {
+    m.base_color[3] < 0.5
+        || m.texture
+            .as_ref()
+            .is_some_and(|t| t.pixels.chunks_exact(4).any(|px| px[3] < 128))
+}
+
+/// The leaves of `model`: triangles of cut-out materials, joined into leaves where they share
+/// vertices (a quad's two triangles are one leaf). Fails, in one line, where there are none.
+pub fn foliage(model: &Model) -> Result<Foliage, String> {
+    let mesh = &model.mesh;
+    let cut_out: Vec<bool> = model.materials.iter().map(is_cut_out).collect();
+    let is_leaf = |v: u32| {
+        cut_out
+            .get(mesh.materials[v as usize] as usize)
+            .copied()
+            .unwrap_or(false)
+    };
+    let tris: Vec<u32> = (0..mesh.triangle_count() as u32)
+        .filter(|&t| is_leaf(mesh.indices[3 * t as usize]))
+        .collect();
+    if tris.is_empty() {
+        return Err(
+            "no foliage: no triangle has a material that cuts leaves out with alpha".into(),
+        );
+    }
+    // Union-find over vertices of leaf triangles.
+    let mut parent: Vec<u32> = (0..mesh.vertex_count() as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    for &t in &tris {
+        let i = &mesh.indices[3 * t as usize..3 * t as usize + 3];
+        let a = find(&mut parent, i[0]);
+        for &v in &i[1..] {
+            let b = find(&mut parent, v);
+            parent[b as usize] = a;
+        }
+    }
+    let mut piece_of = std::collections::HashMap::new();
+    let mut pieces: Vec<Vec<u32>> = Vec::new();
+    for &t in &tris {
+        let root = find(&mut parent, mesh.indices[3 * t as usize]);
+        let k = *piece_of.entry(root).or_insert_with(|| {
+            pieces.push(Vec::new());
+            pieces.len() - 1
+        });
+        pieces[k].push(t);
+    }
+    let mut out = Foliage {
+        leaves: Vec::with_capacity(pieces.len()),
+        bones: Vec::with_capacity(pieces.len()),
+        triangles: Vec::with_capacity(pieces.len()),
+        rebound: 0,
+    };
+    for piece in pieces {
+        // Corners: the piece's vertices in order of first use, which for a quad (0 1 2, 0 2 3)
+        // goes round it.
+        let mut corners: Vec<u32> = Vec::new();
+        for &t in &piece {
+            for &v in &mesh.indices[3 * t as usize..3 * t as usize + 3] {
+                if !corners.contains(&v) {
+                    corners.push(v);
+                }
+            }
+        }
+        let mut weight_of_bone: Vec<(u32, f32)> = Vec::new();
+        for &v in &corners {
+            for inf in mesh.influences_of(v as usize) {
+                match weight_of_bone.iter_mut().find(|(b, _)| *b == inf.bone) {
+                    Some(e) => e.1 += inf.weight,
+                    None => weight_of_bone.push((inf.bone, inf.weight)),
+                }
+            }
+        }
+        if weight_of_bone.len() > 1 {
+            out.rebound += 1;
+        }
+        let bone = weight_of_bone
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+            .map_or(0, |e| e.0);
+        out.leaves.push(Leaf::new(
+            corners
+                .iter()
+                .map(|&v| mesh.positions[v as usize])
+                .collect(),
+        ));
+        out.bones.push(bone);
+        out.triangles.push(piece);
+    }
+    Ok(out)
+}
+
+/// A skeleton billboard cloud: billboards built bone by bone, each bound to its bone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkeletonCloud {
+    pub billboards: Vec<Billboard>,
+    /// The bone of every billboard.
+    pub bones: Vec<u32>,
+}
+
+impl SkeletonCloud {
+    pub fn total_area(&self) -> f32 {
+        self.billboards.iter().map(Billboard::area).sum()
+    }
+}
+
+/// One cloud per bone that carries leaves (thesis Ch. 7), in parallel; leaf indices in the
+/// billboards are indices into `foliage.leaves`. ε is in scene units.
+pub fn skeleton_cloud(foliage: &Foliage, params: &CloudParams) -> SkeletonCloud {
+    let mut bones: Vec<u32> = foliage.bones.clone();
+    bones.sort_unstable();
+    bones.dedup();
+    let per_bone: Vec<(u32, Vec<Billboard>)> = bones
+        .par_iter()
+        .map(|&bone| {
+            let members: Vec<u32> = (0..foliage.leaves.len() as u32)
+                .filter(|&i| foliage.bones[i as usize] == bone)
+                .collect();
+            let leaves: Vec<Leaf> = members
+                .iter()
+                .map(|&i| foliage.leaves[i as usize].clone())
+                .collect();
+            let group = CloudParams {
+                seed: params.seed ^ (bone as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+                ..*params
+            };
+            let mut cloud = stochastic_cloud(&leaves, &group);
+            for b in &mut cloud {
+                for i in b.leaves.iter_mut().chain(b.drawn.iter_mut()) {
+                    *i = members[*i as usize];
+                }
+            }
+            (bone, cloud)
+        })
+        .collect();
+    let mut out = SkeletonCloud {
+        billboards: Vec::new(),
+        bones: Vec::new(),
+    };
+    for (bone, cloud) in per_bone {
+        out.bones.extend(std::iter::repeat_n(bone, cloud.len()));
+        out.billboards.extend(cloud);
+    }
+    out
+}
+
+/// The tree's height in its rest pose (ε is given in units of it).
+pub fn tree_height(model: &Model) -> f32 {
+    let (lo, hi) = model.mesh.positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    (hi.y - lo.y).max(1e-3)
+}
