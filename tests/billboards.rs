@@ -161,3 +161,43 @@ fn foliage_that_the_method_does_not_expect() {
     assert_eq!(f.rebound, 1);
     assert!(f.bones.contains(&bone));
 }
+
+/// The colour metric (thesis §5.1.3, at its 800×600, 5 views, 5 frames): 0 for the tree against
+/// itself, and at ε = 0 the atlas reproduces the foliage to within 2% (the thesis's baker
+/// managed 7%).
+#[test]
+fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
+    use lodlab::app::tree_levels::{cloud_level, colour_error};
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    for name in ["broadleaf", "conifer"] {
+        let tree = load_model(name).unwrap();
+        if name == "broadleaf" {
+            assert_eq!(colour_error(&gpu, &tree, &tree, [800, 600]).unwrap(), 0.0);
+        }
+        let f = foliage(&tree).unwrap();
+        let h = tree_height(&tree);
+        let params = CloudParams {
+            epsilon: 0.0,
+            ..Default::default()
+        };
+        let (model, count, _) = cloud_level(&gpu, &tree, &f, &params, 800.0 / h).unwrap();
+        assert_eq!(count, f.leaves.len());
+        let e = colour_error(&gpu, &tree, &model, [800, 600]).unwrap();
+        assert!(e <= 0.02, "{name}: colour error {e} at ε = 0");
+        if name != "broadleaf" {
+            continue;
+        }
+        // A coarse cloud is visibly worse, and still a tree.
+        let coarse = CloudParams {
+            epsilon: 0.05 * h,
+            ..Default::default()
+        };
+        let (model, count, _) = cloud_level(&gpu, &tree, &f, &coarse, 800.0 / h).unwrap();
+        assert!(count * 10 < f.leaves.len());
+        let e2 = colour_error(&gpu, &tree, &model, [800, 600]).unwrap();
+        assert!(
+            e2 > e && e2 < 0.5,
+            "{name}: colour error {e2} at ε = 0.05 h"
+        );
+    }
+}

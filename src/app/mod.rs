@@ -5,5 +5,6 @@ pub mod gen_assets;
 pub mod levels;
 pub mod report;
 pub mod shot;
+pub mod tree_levels;
 pub mod viewer;
 pub mod world;

@@ -186,12 +186,18 @@ fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
 /// Scales a level's alpha so that the share of texels at or above [`CUTOFF`] is `target`
 /// (Castaño's coverage-preserving mipmaps), by bisection on the scale.
 fn preserve_coverage(level: &mut [u8], target: f32) {
+    let mut histogram = [0u32; 256];
+    for p in level.chunks_exact(4) {
+        histogram[p[3] as usize] += 1;
+    }
     let n = (level.len() / 4) as f32;
     let share = |scale: f32| {
-        level
-            .chunks_exact(4)
-            .filter(|p| (p[3] as f32 * scale).min(255.0) >= CUTOFF as f32)
-            .count() as f32
+        histogram
+            .iter()
+            .enumerate()
+            .filter(|&(a, _)| (a as f32 * scale).min(255.0) >= CUTOFF as f32)
+            .map(|(_, &c)| c)
+            .sum::<u32>() as f32
             / n
     };
     let (mut lo, mut hi) = (0.0f32, 16.0f32);
@@ -203,8 +209,11 @@ fn preserve_coverage(level: &mut [u8], target: f32) {
             hi = mid;
         }
     }
+    let scaled: Vec<u8> = (0..256)
+        .map(|a| (a as f32 * hi).round().min(255.0) as u8)
+        .collect();
     for p in level.chunks_exact_mut(4) {
-        p[3] = (p[3] as f32 * hi).round().min(255.0) as u8;
+        p[3] = scaled[p[3] as usize];
     }
 }
 

@@ -566,24 +566,24 @@ fn foliage_texture(conifer: bool) -> Rgba8Image {
                 if conifer { 3.0 } else { 1.0 },
             ));
             if conifer {
-                // A twig up the middle with needles slanting off both sides.
-                let twig = segment_distance(p, base, Vec2::new(0.5, 0.04));
-                if twig < 0.012 {
+                // A spray: a twig up the middle in a tapering mass of needles slanting off both
+                // sides, the edge serrated by the needle tips. Solid enough to keep its shape
+                // at a distance; the needles show in the colour and the edge.
+                let along = ((0.98 - p.y) / 0.94).clamp(0.0, 1.0);
+                let across = (p.x - 0.5).abs();
+                let half =
+                    0.4 * (std::f32::consts::PI * along.powf(0.7)).sin() * (1.0 - 0.45 * along);
+                let tips = (across * 18.0 + along * 30.0).fract();
+                let edge = half * (0.78 + 0.22 * (1.0 - (2.0 * tips - 1.0).abs()));
+                if across < 0.012 && along > 0.0 && along < 0.97 {
                     alpha = 1.0;
                     colour = Vec3::new(0.25, 0.17, 0.1);
-                } else {
-                    let along = (0.98 - p.y).clamp(0.0, 0.94);
-                    let spacing = 0.03;
-                    let k = (along / spacing).round();
-                    let side = if p.x < 0.5 { -1.0 } else { 1.0 };
-                    let start = Vec2::new(0.5, 0.98 - k * spacing);
-                    let reach = 0.36 * (1.0 - 0.55 * (k * spacing / 0.94));
-                    let end = start + Vec2::new(side * reach, -reach * 0.55);
-                    let d = segment_distance(p, start, end);
-                    if d < 0.014 && k >= 1.0 {
-                        alpha = 1.0;
-                        colour = Vec3::new(0.05, 0.16, 0.07) * (0.75 + 0.5 * shade);
-                    }
+                } else if across <= edge && p.y <= 0.98 {
+                    alpha = 1.0;
+                    let needle = ((across * 1.3 + (0.98 - p.y) * 0.75) * 45.0).fract();
+                    let stripe =
+                        0.75 + 0.35 * smooth(0.2, 0.5, needle) * (1.0 - smooth(0.5, 0.8, needle));
+                    colour = Vec3::new(0.05, 0.16, 0.07) * stripe * (0.8 + 0.4 * shade);
                 }
             } else {
                 // Three ovate leaves fanning out from the base.

@@ -1,5 +1,6 @@
 //! Render: everything that talks to wgpu. It sees the bake's outputs only as plain data.
 
+pub mod atlas;
 pub mod capture;
 pub mod character;
 pub mod gpu;

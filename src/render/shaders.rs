@@ -10,6 +10,7 @@ const PLAIN: &str = include_str!("../../shaders/plain.wgsl");
 const CAPTURE: &str = include_str!("../../shaders/capture.wgsl");
 const ENVIRONMENT: &str = include_str!("../../shaders/environment.wgsl");
 const SHADOW: &str = include_str!("../../shaders/shadow.wgsl");
+const ATLAS: &str = include_str!("../../shaders/atlas.wgsl");
 
 /// A composed shader module: a name for labels and errors, and its full source.
 pub struct ShaderSource {
@@ -51,8 +52,14 @@ pub const SHADOW_SHADER: ShaderSource = ShaderSource {
     parts: &[COMMON, SKINNING, SHADOW],
 };
 
+pub const ATLAS_SHADER: ShaderSource = ShaderSource {
+    name: "atlas",
+    parts: &[ATLAS],
+};
+
 /// Every module the renderer builds.
 pub const ALL: &[&ShaderSource] = &[
+    &ATLAS_SHADER,
     &CHARACTER_SHADER,
     &PLAIN_SHADER,
     &CAPTURE_SHADER,

@@ -7,6 +7,7 @@
 //!   simplification", Ch. 7): every billboard is then skinned with weight 1 to its bone and
 //!   moves rigidly with its branch, exactly as its leaves did.
 
+pub mod atlas;
 pub mod cloud;
 pub mod rect;
 
@@ -188,4 +189,80 @@ pub fn tree_height(model: &Model) -> f32 {
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
     );
     (hi.y - lo.y).max(1e-3)
+}
+
+/// The tree with its foliage replaced by a billboard cloud: the wood as it was, and every
+/// billboard a quad skinned with weight 1 to its bone, textured from `atlas` (a new material
+/// after the wood's). Materials that cut leaves out are dropped with the leaves.
+pub fn cloud_model(
+    tree: &Model,
+    cloud: &SkeletonCloud,
+    layout: &atlas::AtlasLayout,
+    atlas: crate::model::Rgba8Image,
+) -> Model {
+    use crate::model::{Influence, Material, SkinnedMesh};
+    let src = &tree.mesh;
+    let keep: Vec<bool> = tree.materials.iter().map(|m| !is_cut_out(m)).collect();
+    let mut material_map = vec![0u16; tree.materials.len()];
+    let mut materials: Vec<Material> = Vec::new();
+    for (i, m) in tree.materials.iter().enumerate() {
+        if keep[i] {
+            material_map[i] = materials.len() as u16;
+            materials.push(m.clone());
+        }
+    }
+    let atlas_material = materials.len() as u16;
+    materials.push(Material {
+        name: "billboards".into(),
+        base_color: [1.0; 4],
+        texture: Some(atlas),
+    });
+    let mut mesh = SkinnedMesh {
+        influence_offsets: vec![0],
+        ..Default::default()
+    };
+    let mut remap = vec![u32::MAX; src.vertex_count()];
+    for t in src.indices.chunks_exact(3) {
+        if !keep
+            .get(src.materials[t[0] as usize] as usize)
+            .copied()
+            .unwrap_or(true)
+        {
+            continue;
+        }
+        for &v in t {
+            let v = v as usize;
+            if remap[v] == u32::MAX {
+                remap[v] = mesh.positions.len() as u32;
+                mesh.positions.push(src.positions[v]);
+                mesh.normals.push(src.normals[v]);
+                mesh.uvs.push(src.uvs[v]);
+                mesh.materials.push(material_map[src.materials[v] as usize]);
+                mesh.influences.extend_from_slice(src.influences_of(v));
+                mesh.influence_offsets.push(mesh.influences.len() as u32);
+            }
+            mesh.indices.push(remap[v]);
+        }
+    }
+    for (b, (bb, &bone)) in cloud.billboards.iter().zip(&cloud.bones).enumerate() {
+        let uvs = layout.corner_uvs(b);
+        let first = mesh.positions.len() as u32;
+        for (p, uv) in bb.corners.iter().zip(uvs) {
+            mesh.positions.push(*p);
+            mesh.normals.push(bb.plane.normal);
+            mesh.uvs.push(uv);
+            mesh.materials.push(atlas_material);
+            mesh.influences.push(Influence { bone, weight: 1.0 });
+            mesh.influence_offsets.push(mesh.influences.len() as u32);
+        }
+        mesh.indices
+            .extend_from_slice(&[first, first + 1, first + 2, first, first + 2, first + 3]);
+    }
+    Model {
+        name: tree.name.clone(),
+        mesh,
+        skeleton: tree.skeleton.clone(),
+        clips: tree.clips.clone(),
+        materials,
+    }
 }
