@@ -37,8 +37,9 @@ enum Command {
     /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS),
     /// or fetch them from the cache, and print them as a table.
     Bake(BakeArgs),
-    /// Measure a model's levels of detail: error curves (report.json, error.png, as in
-    /// Merry et al. Figure 7) and bake timings (timings.md, as in their Table 1).
+    /// Measure a model's levels of detail: for a character, error curves (report.json,
+    /// error.png, as in Merry et al. Figure 7) and bake timings (timings.md, their Table 1);
+    /// for a tree, its billboard-cloud chain (report.json, colour-error.png, levels.png).
     Report(ReportArgs),
 }
 
@@ -395,6 +396,22 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::Report(a)) => {
+            // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
+            // report; a character the simplification report.
+            let model = lodlab::import::load_model(&a.model)?;
+            if lodlab::bake::billboard::foliage(&model).is_ok() {
+                let r = lodlab::app::tree_report::run(&model, &a.out)?;
+                let last = r.levels.last().map_or(0, |l| l.billboards);
+                println!(
+                    "{}: {} leaves, {} levels down to {last} billboards in {:.2} s; wrote {}",
+                    r.model,
+                    r.leaves,
+                    r.levels.len(),
+                    r.chain_seconds,
+                    a.out.display()
+                );
+                return Ok(ExitCode::SUCCESS);
+            }
             let report = lodlab::app::report::run(&lodlab::app::report::ReportOptions {
                 model: a.model,
                 out: a.out.clone(),

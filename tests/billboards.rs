@@ -4,13 +4,16 @@
 use glam::{Vec2, Vec3};
 use lodlab::anim::bone_matrices;
 use lodlab::bake::billboard::cloud::CloudParams;
-use lodlab::bake::billboard::{SkeletonCloud, foliage, skeleton_cloud, tree_height};
+use lodlab::bake::billboard::{
+    Grouping, SkeletonCloud, foliage, grouped_cloud, skeleton_cloud, tree_height,
+};
 use lodlab::import::load_model;
 use lodlab::model::Model;
 
 fn cloud(m: &Model, epsilon_of_height: f32, seed: u64) -> SkeletonCloud {
     let f = foliage(m).unwrap();
     skeleton_cloud(
+        &m.skeleton,
         &f,
         &CloudParams {
             epsilon: epsilon_of_height * tree_height(m),
@@ -84,6 +87,51 @@ fn every_leaf_is_on_exactly_one_billboard_within_epsilon() {
             f.leaves.len()
         );
         assert!(counts[3] * 4 < counts[0], "{name}: {counts:?}");
+    }
+}
+
+/// Coarser groups give fewer billboards; the whole crown as one group gets down to a handful,
+/// each bound to the deepest bone its leaves share.
+#[test]
+fn grouping_subtrees_reaches_a_handful_of_billboards() {
+    for name in ["broadleaf", "conifer"] {
+        let m = load_model(name).unwrap();
+        let f = foliage(&m).unwrap();
+        let params = CloudParams {
+            epsilon: 0.15 * tree_height(&m),
+            ..Default::default()
+        };
+        let count = |g| grouped_cloud(&m.skeleton, &f, &params, g).billboards.len();
+        let per_bone = count(Grouping::PerBone);
+        let two = count(Grouping::Subtree { forks: 2 });
+        let one = count(Grouping::Subtree { forks: 1 });
+        let crown = grouped_cloud(&m.skeleton, &f, &params, Grouping::Subtree { forks: 0 });
+        assert!(
+            per_bone > two && two >= one && one >= crown.billboards.len(),
+            "{name}: {per_bone} {two} {one} {}",
+            crown.billboards.len()
+        );
+        assert!(
+            crown.billboards.len() <= 10,
+            "{name}: {}",
+            crown.billboards.len()
+        );
+        // Each billboard's bone is an ancestor (or the bone) of every leaf on it.
+        // (Bones are joints; walk the node hierarchy.)
+        let node = |b: u32| m.skeleton.joints[b as usize];
+        for (b, &bone) in crown.billboards.iter().zip(&crown.bones) {
+            for &i in &b.leaves {
+                let mut x = Some(node(f.bones[i as usize]));
+                while x.is_some_and(|x| x != node(bone)) {
+                    x = m.skeleton.nodes[x.unwrap() as usize].parent;
+                }
+                assert_eq!(
+                    x,
+                    Some(node(bone)),
+                    "{name}: billboard bone is not above its leaves"
+                );
+            }
+        }
     }
 }
 
@@ -180,9 +228,9 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             epsilon: 0.0,
             ..Default::default()
         };
-        let (model, count, _) = cloud_level(&gpu, &tree, &f, &params, 800.0 / h).unwrap();
-        assert_eq!(count, f.leaves.len());
-        let e = colour_error(&gpu, &tree, &model, [800, 600]).unwrap();
+        let level = cloud_level(&gpu, &tree, &f, &params, Grouping::PerBone, 800.0 / h).unwrap();
+        assert_eq!(level.billboards, f.leaves.len());
+        let e = colour_error(&gpu, &tree, &level.model, [800, 600]).unwrap();
         assert!(e <= 0.02, "{name}: colour error {e} at ε = 0");
         if name != "broadleaf" {
             continue;
@@ -192,12 +240,58 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             epsilon: 0.05 * h,
             ..Default::default()
         };
-        let (model, count, _) = cloud_level(&gpu, &tree, &f, &coarse, 800.0 / h).unwrap();
-        assert!(count * 10 < f.leaves.len());
-        let e2 = colour_error(&gpu, &tree, &model, [800, 600]).unwrap();
+        let level = cloud_level(&gpu, &tree, &f, &coarse, Grouping::PerBone, 800.0 / h).unwrap();
+        assert!(level.billboards * 10 < f.leaves.len());
+        let e2 = colour_error(&gpu, &tree, &level.model, [800, 600]).unwrap();
         assert!(
             e2 > e && e2 < 0.5,
             "{name}: colour error {e2} at ε = 0.05 h"
+        );
+    }
+}
+
+/// The chain of a tree: L0 the tree itself, then clouds for rising ε with falling billboard
+/// counts, ending at ten billboards or fewer, each level's atlas within the texture limit.
+#[test]
+fn the_chain_falls_to_a_handful_of_billboards() {
+    use lodlab::app::tree_levels::{ChainOptions, tree_chain};
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let tree = load_model("broadleaf").unwrap();
+    let f = foliage(&tree).unwrap();
+    let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default()).unwrap();
+    assert!(chain.len() >= 5, "{} levels", chain.len());
+    assert_eq!(chain[0].epsilon, 0.0);
+    assert_eq!(chain[0].cloud.model, tree);
+    for w in chain[1..].windows(2) {
+        assert!(w[1].epsilon > w[0].epsilon);
+        assert!(w[1].cloud.billboards < w[0].cloud.billboards);
+    }
+    assert!(chain.last().unwrap().cloud.billboards <= 10);
+    for l in &chain[1..] {
+        let atlas = l
+            .cloud
+            .model
+            .materials
+            .last()
+            .unwrap()
+            .texture
+            .as_ref()
+            .unwrap();
+        assert!(atlas.width <= 2048 && atlas.height <= 2048);
+        assert_eq!(
+            l.cloud.texture_bytes,
+            (atlas.width * atlas.height * 4) as usize
+        );
+        // The wood is kept whole; the foliage is billboards, two triangles each.
+        let wood = tree
+            .mesh
+            .indices
+            .chunks_exact(3)
+            .filter(|t| tree.mesh.materials[t[0] as usize] == 0)
+            .count();
+        assert_eq!(
+            l.cloud.model.mesh.triangle_count(),
+            wood + 2 * l.cloud.billboards
         );
     }
 }

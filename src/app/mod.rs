@@ -6,5 +6,6 @@ pub mod levels;
 pub mod report;
 pub mod shot;
 pub mod tree_levels;
+pub mod tree_report;
 pub mod viewer;
 pub mod world;

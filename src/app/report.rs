@@ -427,13 +427,13 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
     super::shot::write_png(path, &rgba)
 }
 
-fn plot_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
+pub(crate) fn plot_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::anyhow!("cannot draw the plot: {e}")
 }
 
 /// plotters draws text with fonts registered by name; lodlab brings its own (the one egui
 /// ships), so plots look the same on every machine and need no system fonts.
-fn register_font() {
+pub(crate) fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let _ = plotters::style::register_font(

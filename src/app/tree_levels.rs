@@ -3,7 +3,7 @@
 
 use crate::bake::billboard::atlas::{atlas_triangles, dilate, layout};
 use crate::bake::billboard::cloud::CloudParams;
-use crate::bake::billboard::{Foliage, cloud_model, is_cut_out, skeleton_cloud};
+use crate::bake::billboard::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::bake::materials::MaterialLayers;
 use crate::model::Model;
 use crate::render::Gpu;
@@ -13,17 +13,28 @@ use anyhow::{Result, anyhow};
 /// Texels of dilated colour round every leaf in the atlas.
 const DILATE_RINGS: u32 = 4;
 
-/// The tree drawn with a skeleton billboard cloud of its foliage at `params`, with
-/// `texels_per_unit` texels per scene unit in the atlas. Also returns the cloud's billboard
-/// count and total area.
+/// What one cloud level is.
+#[derive(Clone, Debug)]
+pub struct CloudLevel {
+    pub model: Model,
+    pub billboards: usize,
+    /// Total billboard area, scene units².
+    pub area: f32,
+    /// Bytes of its atlas (RGBA8, base level).
+    pub texture_bytes: usize,
+}
+
+/// The tree drawn with a billboard cloud of its foliage at `params`, grouped by `grouping`,
+/// with `texels_per_unit` texels per scene unit in the atlas.
 pub fn cloud_level(
     gpu: &Gpu,
     tree: &Model,
     foliage: &Foliage,
     params: &CloudParams,
+    grouping: Grouping,
     texels_per_unit: f32,
-) -> Result<(Model, usize, f32)> {
-    let cloud = skeleton_cloud(foliage, params);
+) -> Result<CloudLevel> {
+    let cloud = grouped_cloud(&tree.skeleton, foliage, params, grouping);
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
     let triangles = atlas_triangles(&cloud.billboards, &atlas_layout, params.epsilon, |leaf| {
@@ -46,8 +57,12 @@ pub fn cloud_level(
     let leaf = MaterialLayers::bake(std::slice::from_ref(leaf_material));
     let mut atlas = render_atlas(gpu, &atlas_layout, &triangles, &leaf)?;
     dilate(&mut atlas.pixels, atlas.width, atlas.height, DILATE_RINGS);
-    let (count, area) = (cloud.billboards.len(), cloud.total_area());
-    Ok((cloud_model(tree, &cloud, &atlas_layout, atlas), count, area))
+    Ok(CloudLevel {
+        billboards: cloud.billboards.len(),
+        area: cloud.total_area(),
+        texture_bytes: atlas.pixels.len(),
+        model: cloud_model(tree, &cloud, &atlas_layout, atlas),
+    })
 }
 
 /// Views and frames of the colour metric (thesis §5.1.3): five views evenly round the tree at
@@ -125,4 +140,103 @@ pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) ->
         }
     }
     Ok(wrong as f32 / covered.max(1) as f32)
+}
+
+/// How a tree's chain of levels is cut.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChainOptions {
+    /// ε of level 1, as a fraction of the tree's height; each level doubles it.
+    pub first_epsilon: f32,
+    /// The chain ends at the first level with this many billboards or fewer.
+    pub last_billboards: usize,
+    /// Screen tolerance the levels are made for, pixels: an atlas gets about two texels per
+    /// screen pixel at the distance where its ε projects to this.
+    pub tolerance_px: f32,
+    pub seed: u64,
+}
+
+impl Default for ChainOptions {
+    fn default() -> Self {
+        ChainOptions {
+            first_epsilon: 0.005,
+            last_billboards: 10,
+            tolerance_px: 1.5,
+            seed: 1,
+        }
+    }
+}
+
+/// One level of a tree's chain.
+#[derive(Clone, Debug)]
+pub struct TreeLevel {
+    /// ε in scene units (0 for the full tree, level 0).
+    pub epsilon: f32,
+    pub grouping: Option<Grouping>,
+    pub cloud: CloudLevel,
+    pub bake_seconds: f64,
+}
+
+/// The groupings tried in turn, finest first.
+const GROUPINGS: [Grouping; 5] = [
+    Grouping::PerBone,
+    Grouping::Subtree { forks: 3 },
+    Grouping::Subtree { forks: 2 },
+    Grouping::Subtree { forks: 1 },
+    Grouping::Subtree { forks: 0 },
+];
+
+/// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε doubling
+/// from `first_epsilon`. Clouds are built per bone while that pays; where doubling ε would not
+/// cut the count by a fifth, the leaves are grouped by coarser branch subtrees instead (down
+/// to one cloud for the whole crown), until a level has at most `last_billboards` billboards.
+pub fn tree_chain(
+    gpu: &Gpu,
+    tree: &Model,
+    foliage: &Foliage,
+    opts: &ChainOptions,
+) -> Result<Vec<TreeLevel>> {
+    let h = crate::bake::billboard::tree_height(tree);
+    let mut levels = vec![TreeLevel {
+        epsilon: 0.0,
+        grouping: None,
+        cloud: CloudLevel {
+            model: tree.clone(),
+            billboards: 0,
+            area: 0.0,
+            texture_bytes: 0,
+        },
+        bake_seconds: 0.0,
+    }];
+    let mut eps = opts.first_epsilon.max(1e-4) * h;
+    let mut g = 0usize;
+    let mut previous = usize::MAX;
+    for _ in 0..40 {
+        let start = std::time::Instant::now();
+        let params = CloudParams {
+            epsilon: eps,
+            seed: opts.seed,
+            ..Default::default()
+        };
+        // About two texels per screen pixel where this level comes in.
+        let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
+        let cloud = cloud_level(gpu, tree, foliage, &params, GROUPINGS[g], density)?;
+        let count = cloud.billboards;
+        // A level that hardly improves on the last: group coarser at the same ε instead.
+        if count as f32 > 0.8 * previous as f32 && g + 1 < GROUPINGS.len() {
+            g += 1;
+            continue;
+        }
+        levels.push(TreeLevel {
+            epsilon: eps,
+            grouping: Some(GROUPINGS[g]),
+            cloud,
+            bake_seconds: start.elapsed().as_secs_f64(),
+        });
+        if count <= opts.last_billboards {
+            break;
+        }
+        previous = count;
+        eps *= 2.0;
+    }
+    Ok(levels)
 }

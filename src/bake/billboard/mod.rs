@@ -142,24 +142,143 @@ impl SkeletonCloud {
     }
 }
 
-/// One cloud per bone that carries leaves (thesis Ch. 7), in parallel; leaf indices in the
-/// billboards are indices into `foliage.leaves`. ε is in scene units.
-pub fn skeleton_cloud(foliage: &Foliage, params: &CloudParams) -> SkeletonCloud {
-    let mut bones: Vec<u32> = foliage.bones.clone();
-    bones.sort_unstable();
-    bones.dedup();
-    let per_bone: Vec<(u32, Vec<Billboard>)> = bones
+/// How leaves are split into separate clouds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Grouping {
+    /// One cloud per bone (thesis Ch. 7): billboards move exactly as their leaves did.
+    PerBone,
+    /// One cloud per branch subtree hanging below `forks` forks of the skeleton (0: one cloud
+    /// for the whole crown). Coarser groups give fewer billboards; a billboard then moves with
+    /// the deepest bone its leaves share, and the finer sway below it is lost (the thesis's
+    /// joint collapses, §7.1, taken a whole subtree at a time).
+    Subtree { forks: u32 },
+}
+
+/// The skeleton as bones: the parent bone of every bone (through non-joint nodes) and the
+/// number of forks (bones with two or more child bones) above it.
+struct BoneTree {
+    parent: Vec<Option<u32>>,
+    forks: Vec<u32>,
+    depth: Vec<u32>,
+}
+
+impl BoneTree {
+    fn new(skeleton: &crate::model::Skeleton) -> BoneTree {
+        let n = skeleton.joints.len();
+        let mut bone_of_node = vec![None; skeleton.nodes.len()];
+        for (b, &node) in skeleton.joints.iter().enumerate() {
+            bone_of_node[node as usize] = Some(b as u32);
+        }
+        let parent: Vec<Option<u32>> = skeleton
+            .joints
+            .iter()
+            .map(|&node| {
+                let mut p = skeleton.nodes[node as usize].parent;
+                while let Some(q) = p {
+                    if let Some(b) = bone_of_node[q as usize] {
+                        return Some(b);
+                    }
+                    p = skeleton.nodes[q as usize].parent;
+                }
+                None
+            })
+            .collect();
+        let mut children = vec![0u32; n];
+        for p in parent.iter().flatten() {
+            children[*p as usize] += 1;
+        }
+        let chain = |mut b: u32, f: &dyn Fn(u32) -> u32| {
+            let mut total = 0;
+            while let Some(p) = parent[b as usize] {
+                total += f(p);
+                b = p;
+            }
+            total
+        };
+        let forks = (0..n as u32)
+            .map(|b| chain(b, &|p| (children[p as usize] >= 2) as u32))
+            .collect();
+        let depth = (0..n as u32).map(|b| chain(b, &|_| 1)).collect();
+        BoneTree {
+            parent,
+            forks,
+            depth,
+        }
+    }
+
+    /// The bone whose cloud a leaf on `bone` joins.
+    fn group(&self, bone: u32, grouping: Grouping) -> u32 {
+        match grouping {
+            Grouping::PerBone => bone,
+            Grouping::Subtree { forks } => {
+                let mut b = bone;
+                while let Some(p) = self.parent[b as usize] {
+                    if self.forks[b as usize] <= forks {
+                        break;
+                    }
+                    b = p;
+                }
+                b
+            }
+        }
+    }
+
+    /// The deepest bone that is `a` or an ancestor of it and also of `b`.
+    fn shared(&self, mut a: u32, mut b: u32) -> u32 {
+        while a != b {
+            if self.depth[a as usize] >= self.depth[b as usize] {
+                match self.parent[a as usize] {
+                    Some(p) => a = p,
+                    None => return a,
+                }
+            } else {
+                match self.parent[b as usize] {
+                    Some(p) => b = p,
+                    None => return b,
+                }
+            }
+        }
+        a
+    }
+}
+
+/// A billboard cloud of the foliage, one cloud per group of `grouping`, in parallel; every
+/// billboard is bound to the deepest bone its leaves share. Leaf indices in the billboards are
+/// indices into `foliage.leaves`; ε is in scene units.
+pub fn grouped_cloud(
+    skeleton: &crate::model::Skeleton,
+    foliage: &Foliage,
+    params: &CloudParams,
+    grouping: Grouping,
+) -> SkeletonCloud {
+    let tree = BoneTree::new(skeleton);
+    let bone_count = tree.parent.len() as u32;
+    let group_of: Vec<u32> = foliage
+        .bones
+        .iter()
+        .map(|&b| {
+            if b < bone_count {
+                tree.group(b, grouping)
+            } else {
+                b
+            }
+        })
+        .collect();
+    let mut groups: Vec<u32> = group_of.clone();
+    groups.sort_unstable();
+    groups.dedup();
+    let per_group: Vec<Vec<Billboard>> = groups
         .par_iter()
-        .map(|&bone| {
+        .map(|&g| {
             let members: Vec<u32> = (0..foliage.leaves.len() as u32)
-                .filter(|&i| foliage.bones[i as usize] == bone)
+                .filter(|&i| group_of[i as usize] == g)
                 .collect();
             let leaves: Vec<Leaf> = members
                 .iter()
                 .map(|&i| foliage.leaves[i as usize].clone())
                 .collect();
             let group = CloudParams {
-                seed: params.seed ^ (bone as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+                seed: params.seed ^ (g as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
                 ..*params
             };
             let mut cloud = stochastic_cloud(&leaves, &group);
@@ -168,18 +287,41 @@ pub fn skeleton_cloud(foliage: &Foliage, params: &CloudParams) -> SkeletonCloud 
                     *i = members[*i as usize];
                 }
             }
-            (bone, cloud)
+            cloud
         })
         .collect();
     let mut out = SkeletonCloud {
         billboards: Vec::new(),
         bones: Vec::new(),
     };
-    for (bone, cloud) in per_bone {
-        out.bones.extend(std::iter::repeat_n(bone, cloud.len()));
-        out.billboards.extend(cloud);
+    for cloud in per_group {
+        for b in cloud {
+            let bone = b
+                .leaves
+                .iter()
+                .map(|&i| foliage.bones[i as usize])
+                .reduce(|a, c| {
+                    if a < bone_count && c < bone_count {
+                        tree.shared(a, c)
+                    } else {
+                        a
+                    }
+                })
+                .unwrap_or(0);
+            out.bones.push(bone);
+            out.billboards.push(b);
+        }
     }
     out
+}
+
+/// One cloud per bone that carries leaves (thesis Ch. 7).
+pub fn skeleton_cloud(
+    skeleton: &crate::model::Skeleton,
+    foliage: &Foliage,
+    params: &CloudParams,
+) -> SkeletonCloud {
+    grouped_cloud(skeleton, foliage, params, Grouping::PerBone)
 }
 
 /// The tree's height in its rest pose (ε is given in units of it).

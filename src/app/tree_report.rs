@@ -1,0 +1,260 @@
+//! `lodlab report TREE`: a tree's chain of billboard-cloud levels measured as in the Aalborg
+//! thesis (§5.1.3, §8.4): per level ε, billboards, area, texture memory, colour error and bake
+//! time (`report.json`), colour error and billboard count against ε (`colour-error.png`), and
+//! every level side by side from one view (`levels.png`).
+
+use super::report::{plot_error, register_font, write_atomic};
+use super::tree_levels::{ChainOptions, TreeLevel, colour_error, tree_chain};
+use crate::bake::billboard::{Grouping, foliage, tree_height};
+use crate::model::Model;
+use crate::render::Gpu;
+use anyhow::{Context, Result, anyhow};
+use plotters::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+
+/// The colour metric's image size (thesis §5.1.3).
+pub const METRIC_SIZE: [u32; 2] = [800, 600];
+
+#[derive(Clone, Debug, Serialize)]
+pub struct LevelReport {
+    /// ε as a fraction of the tree's height.
+    pub epsilon: f32,
+    pub epsilon_m: f32,
+    /// How leaves were grouped into clouds: "full tree", "per bone", "subtree below N forks".
+    pub grouping: String,
+    pub billboards: usize,
+    pub triangles: usize,
+    /// Total billboard area, m².
+    pub area: f32,
+    pub texture_bytes: usize,
+    pub colour_error: f32,
+    pub bake_seconds: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TreeReport {
+    pub model: String,
+    pub leaves: usize,
+    pub bones: usize,
+    pub height_m: f32,
+    pub levels: Vec<LevelReport>,
+    /// Seconds to build the whole chain (clouds and atlases).
+    pub chain_seconds: f64,
+    pub metric: String,
+}
+
+fn grouping_name(g: Option<Grouping>) -> String {
+    match g {
+        None => "full tree".into(),
+        Some(Grouping::PerBone) => "per bone".into(),
+        Some(Grouping::Subtree { forks: 0 }) => "whole crown".into(),
+        Some(Grouping::Subtree { forks }) => format!("subtree below {forks} forks"),
+    }
+}
+
+/// Builds the chain of `tree`, measures it and writes the three files into `out`.
+pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
+    let f = foliage(tree).map_err(|e| anyhow!("{}: {e}", tree.name))?;
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
+    let gpu = Gpu::headless()?;
+    let h = tree_height(tree);
+    let start = std::time::Instant::now();
+    let chain = tree_chain(&gpu, tree, &f, &ChainOptions::default())?;
+    let chain_seconds = start.elapsed().as_secs_f64();
+    let mut levels = Vec::new();
+    for (k, l) in chain.iter().enumerate() {
+        let error = colour_error(&gpu, tree, &l.cloud.model, METRIC_SIZE)?;
+        eprintln!(
+            "lodlab: {} L{k}: ε {:.4} h, {} billboards, colour error {:.3}",
+            tree.name,
+            l.epsilon / h,
+            l.cloud.billboards,
+            error
+        );
+        levels.push(LevelReport {
+            epsilon: l.epsilon / h,
+            epsilon_m: l.epsilon,
+            grouping: grouping_name(l.grouping),
+            billboards: l.cloud.billboards,
+            triangles: l.cloud.model.mesh.triangle_count(),
+            area: l.cloud.area,
+            texture_bytes: l.cloud.texture_bytes,
+            colour_error: error,
+            bake_seconds: l.bake_seconds,
+        });
+    }
+    let report = TreeReport {
+        model: tree.name.clone(),
+        leaves: f.leaves.len(),
+        bones: tree.skeleton.bone_count(),
+        height_m: h,
+        levels,
+        chain_seconds,
+        metric: format!(
+            "binary coverage masks at {}x{}, {} views round the tree at ground level, {} times over the loop; share of the full tree's covered pixels that differ",
+            METRIC_SIZE[0],
+            METRIC_SIZE[1],
+            super::tree_levels::METRIC_VIEWS,
+            super::tree_levels::METRIC_FRAMES
+        ),
+    };
+    write_atomic(
+        &out.join("report.json"),
+        serde_json::to_string_pretty(&report)?.as_bytes(),
+    )?;
+    plot(&report, &out.join("colour-error.png"))?;
+    contact_sheet(&gpu, &chain, &report, &out.join("levels.png"))?;
+    Ok(report)
+}
+
+/// Colour error (top) and billboard count (bottom, log scale) against ε.
+fn plot(report: &TreeReport, path: &Path) -> Result<()> {
+    register_font();
+    let (w, h) = (1000u32, 800u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let pts: Vec<&LevelReport> = report.levels.iter().skip(1).collect();
+    let x1 = pts.iter().map(|l| l.epsilon).fold(0.01f32, f32::max) as f64 * 1.08;
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let (top, bottom) = root.split_vertically(h / 2);
+        let colour = RGBColor(30, 100, 220);
+        let mut chart = ChartBuilder::on(&top)
+            .caption(
+                format!("{}: colour error of its billboard clouds", report.model),
+                ("sans-serif", 24),
+            )
+            .margin(18)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                0.0..x1,
+                0.0..(pts.iter().map(|l| l.colour_error).fold(0.05f32, f32::max) as f64 * 1.15),
+            )
+            .map_err(plot_error)?;
+        chart
+            .configure_mesh()
+            .x_desc("ε (fraction of tree height)")
+            .y_desc("colour error")
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 17))
+            .draw()
+            .map_err(plot_error)?;
+        let series: Vec<(f64, f64)> = pts
+            .iter()
+            .map(|l| (l.epsilon as f64, l.colour_error as f64))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(
+                series.iter().copied(),
+                colour.stroke_width(2),
+            ))
+            .map_err(plot_error)?;
+        chart
+            .draw_series(series.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+            .map_err(plot_error)?;
+
+        let red = RGBColor(220, 50, 40);
+        let max_count = pts.iter().map(|l| l.billboards).max().unwrap_or(10).max(10) as f64;
+        let mut chart = ChartBuilder::on(&bottom)
+            .caption("billboards", ("sans-serif", 22))
+            .margin(18)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..x1, 0.0..(max_count * 1.5).log10())
+            .map_err(plot_error)?;
+        chart
+            .configure_mesh()
+            .x_desc("ε (fraction of tree height)")
+            .y_desc("billboards (log scale)")
+            .y_label_formatter(&|y| format!("{:.0}", 10f64.powf(*y)))
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 17))
+            .draw()
+            .map_err(plot_error)?;
+        let series: Vec<(f64, f64)> = pts
+            .iter()
+            .map(|l| (l.epsilon as f64, (l.billboards.max(1) as f64).log10()))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(series.iter().copied(), red.stroke_width(2)))
+            .map_err(plot_error)?;
+        chart
+            .draw_series(series.iter().map(|&p| Circle::new(p, 4, red.filled())))
+            .map_err(plot_error)?;
+        root.present().map_err(plot_error)?;
+    }
+    let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
+    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+}
+
+/// Every level from the same view, side by side, labelled.
+fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Path) -> Result<()> {
+    use crate::app::levels::LevelSource;
+    use crate::app::world::{Loaded, SceneSpec, World};
+    use crate::bake::CharacterBake;
+    use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+    let (tw, th) = (300u32, 400u32);
+    let columns = chain.len().min(6) as u32;
+    let rows = (chain.len() as u32).div_ceil(columns);
+    let mut sheet =
+        image::RgbImage::from_pixel(tw * columns, th * rows, image::Rgb([255, 255, 255]));
+    let target = Offscreen::new(gpu, tw, th, 4);
+    for (k, l) in chain.iter().enumerate() {
+        let m = &l.cloud.model;
+        let bake = CharacterBake::new(m).map_err(|e| anyhow!("{}: {e}", m.name))?;
+        let height = bake.bounds.size().y;
+        let loaded = Loaded {
+            spec: SceneSpec {
+                scene: "forest".into(),
+                count: 1,
+                ..Default::default()
+            },
+            bakes: vec![bake],
+            sources: vec![LevelSource {
+                model: m.clone(),
+                hash: [0; 32],
+            }],
+        };
+        let mut world = World::new(gpu, loaded, OFFSCREEN_FORMAT, 4)?;
+        world.camera = crate::scene::Camera::new(
+            glam::Vec3::new(0.0, height * 0.5, 0.0),
+            30.0,
+            6.0,
+            height * 1.45,
+        );
+        world.prepare(gpu, [tw, th], 1.0, 0.0);
+        world.renderer.render_to(gpu, &target.targets, &target.view);
+        let tile = image::DynamicImage::ImageRgba8(target.read_rgba(gpu)?).to_rgb8();
+        let (x, y) = ((k as u32 % columns) * tw, (k as u32 / columns) * th);
+        image::imageops::replace(&mut sheet, &tile, x as i64, y as i64);
+    }
+    // Labels.
+    register_font();
+    let (w, h) = sheet.dimensions();
+    let mut buf = sheet.into_raw();
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        for (k, l) in report.levels.iter().enumerate() {
+            let (x, y) = ((k as u32 % columns) * tw, (k as u32 / columns) * th);
+            let text = if k == 0 {
+                format!("L0: {} leaves", report.leaves)
+            } else {
+                format!(
+                    "L{k}: ε {:.3} h · {} billboards · {:.3}",
+                    l.epsilon, l.billboards, l.colour_error
+                )
+            };
+            root.draw(&Text::new(
+                text,
+                (x as i32 + 8, y as i32 + 8),
+                ("sans-serif", 15).into_font().color(&BLACK),
+            ))
+            .map_err(plot_error)?;
+        }
+        root.present().map_err(plot_error)?;
+    }
+    let rgb = image::RgbImage::from_raw(w, h, buf).context("sheet size")?;
+    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+}
