@@ -228,7 +228,16 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             epsilon: 0.0,
             ..Default::default()
         };
-        let level = cloud_level(&gpu, &tree, &f, &params, Grouping::PerBone, 800.0 / h).unwrap();
+        let level = cloud_level(
+            &gpu,
+            &tree,
+            &f,
+            &params,
+            Grouping::PerBone,
+            800.0 / h,
+            &tree,
+        )
+        .unwrap();
         assert_eq!(level.billboards, f.leaves.len());
         let e = colour_error(&gpu, &tree, &level.model, [800, 600]).unwrap();
         assert!(e <= 0.02, "{name}: colour error {e} at ε = 0");
@@ -240,7 +249,16 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             epsilon: 0.05 * h,
             ..Default::default()
         };
-        let level = cloud_level(&gpu, &tree, &f, &coarse, Grouping::PerBone, 800.0 / h).unwrap();
+        let level = cloud_level(
+            &gpu,
+            &tree,
+            &f,
+            &coarse,
+            Grouping::PerBone,
+            800.0 / h,
+            &tree,
+        )
+        .unwrap();
         assert!(level.billboards * 10 < f.leaves.len());
         let e2 = colour_error(&gpu, &tree, &level.model, [800, 600]).unwrap();
         assert!(
@@ -282,16 +300,65 @@ fn the_chain_falls_to_a_handful_of_billboards() {
             l.cloud.texture_bytes,
             (atlas.width * atlas.height * 4) as usize
         );
-        // The wood is kept whole; the foliage is billboards, two triangles each.
-        let wood = tree
-            .mesh
-            .indices
-            .chunks_exact(3)
-            .filter(|t| tree.mesh.materials[t[0] as usize] == 0)
-            .count();
+        // The foliage is billboards, two triangles each; the wood is simplified, never grown.
+        let w = wood(&l.cloud.model);
         assert_eq!(
             l.cloud.model.mesh.triangle_count(),
-            wood + 2 * l.cloud.billboards
+            w + 2 * l.cloud.billboards
         );
+        assert!(w <= wood(&tree));
     }
+    // The coarsest level draws a small fraction of the triangles of the full tree.
+    let last = &chain.last().unwrap().cloud.model;
+    assert!(last.mesh.triangle_count() * 20 < tree.mesh.triangle_count());
+}
+
+/// Triangles of a tree's wood (material 0).
+fn wood(m: &Model) -> usize {
+    m.mesh
+        .indices
+        .chunks_exact(3)
+        .filter(|t| m.mesh.materials[t[0] as usize] == 0)
+        .count()
+}
+
+/// The simplified wood is made of the tree's own vertices, influences and all (half-edge
+/// collapses move no vertex), fewer of them as ε grows; thin branches go, the trunk stays.
+#[test]
+fn simplified_wood_keeps_its_vertices() {
+    use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
+    let tree = load_model("conifer").unwrap();
+    let chain = WoodChain::new(&tree);
+    let h = tree_height(&tree);
+    let original: std::collections::HashMap<[u32; 3], Vec<(u32, u32)>> =
+        (0..tree.mesh.vertex_count())
+            .map(|v| {
+                (
+                    tree.mesh.positions[v].to_array().map(f32::to_bits),
+                    tree.mesh
+                        .influences_of(v)
+                        .iter()
+                        .map(|i| (i.bone, i.weight.to_bits()))
+                        .collect(),
+                )
+            })
+            .collect();
+    let mut last = usize::MAX;
+    for e in [0.002, 0.01, 0.05, 0.2] {
+        let w = without_foliage(&chain.tree_at(&tree, e * h));
+        let n = w.mesh.triangle_count();
+        assert!(n <= last && n > 0, "ε {e}: {n} triangles after {last}");
+        last = n;
+        for v in 0..w.mesh.vertex_count() {
+            let key = w.mesh.positions[v].to_array().map(f32::to_bits);
+            let infl: Vec<(u32, u32)> = w
+                .mesh
+                .influences_of(v)
+                .iter()
+                .map(|i| (i.bone, i.weight.to_bits()))
+                .collect();
+            assert_eq!(original.get(&key), Some(&infl), "ε {e}: vertex {v} is new");
+        }
+    }
+    assert!(last * 10 < wood(&tree));
 }

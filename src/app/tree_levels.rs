@@ -3,6 +3,7 @@
 
 use crate::bake::billboard::atlas::{atlas_triangles, dilate, layout};
 use crate::bake::billboard::cloud::CloudParams;
+use crate::bake::billboard::wood::{WoodChain, only_foliage};
 use crate::bake::billboard::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::bake::materials::MaterialLayers;
 use crate::model::Model;
@@ -25,7 +26,8 @@ pub struct CloudLevel {
 }
 
 /// The tree drawn with a billboard cloud of its foliage at `params`, grouped by `grouping`,
-/// with `texels_per_unit` texels per scene unit in the atlas.
+/// with `texels_per_unit` texels per scene unit in the atlas. The wood is that of `wood`
+/// (the tree itself, or the tree with its wood simplified).
 pub fn cloud_level(
     gpu: &Gpu,
     tree: &Model,
@@ -33,6 +35,7 @@ pub fn cloud_level(
     params: &CloudParams,
     grouping: Grouping,
     texels_per_unit: f32,
+    wood: &Model,
 ) -> Result<CloudLevel> {
     let cloud = grouped_cloud(&tree.skeleton, foliage, params, grouping);
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
@@ -61,7 +64,7 @@ pub fn cloud_level(
         billboards: cloud.billboards.len(),
         area: cloud.total_area(),
         texture_bytes: atlas.pixels.len(),
-        model: cloud_model(tree, &cloud, &atlas_layout, atlas),
+        model: cloud_model(wood, &cloud, &atlas_layout, atlas),
     })
 }
 
@@ -71,9 +74,10 @@ pub const METRIC_VIEWS: usize = 5;
 pub const METRIC_FRAMES: usize = 5;
 
 /// The colour error of `lod` against `original` (thesis §5.1.3): binary masks of where the
-/// tree covers the image, at `size`, from [`METRIC_VIEWS`] views round it at ground level and
-/// [`METRIC_FRAMES`] times of its loop; the share of the original's covered pixels that the
-/// two masks disagree on, over all of them. 0 for identical trees.
+/// foliage (the original's leaves, the level's billboards; wood left out) covers the image, at
+/// `size`, from [`METRIC_VIEWS`] views round it at ground level and [`METRIC_FRAMES`] times of
+/// its loop; the share of the original's foliage pixels that the two masks disagree on, over
+/// all of them. 0 for identical trees.
 pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) -> Result<f32> {
     use crate::app::levels::LevelSource;
     use crate::app::world::{Loaded, SceneSpec, World};
@@ -97,8 +101,8 @@ pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) ->
         w.renderer.shadows = false;
         Ok(w)
     };
-    let mut a = world_of(original)?;
-    let mut b = world_of(lod)?;
+    let mut a = world_of(&only_foliage(original))?;
+    let mut b = world_of(&only_foliage(lod))?;
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
     let height = bounds.size().y.max(1e-3);
@@ -186,7 +190,8 @@ const GROUPINGS: [Grouping; 5] = [
 ];
 
 /// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε doubling
-/// from `first_epsilon`. Clouds are built per bone while that pays; where doubling ε would not
+/// from `first_epsilon`, each with the wood simplified to the same error bound
+/// ([`WoodChain`]). Clouds are built per bone while that pays; where doubling ε would not
 /// cut the count by a fifth, the leaves are grouped by coarser branch subtrees instead (down
 /// to one cloud for the whole crown), until a level has at most `last_billboards` billboards.
 pub fn tree_chain(
@@ -207,6 +212,7 @@ pub fn tree_chain(
         },
         bake_seconds: 0.0,
     }];
+    let wood = WoodChain::new(tree);
     let mut eps = opts.first_epsilon.max(1e-4) * h;
     let mut g = 0usize;
     let mut previous = usize::MAX;
@@ -219,7 +225,8 @@ pub fn tree_chain(
         };
         // About two texels per screen pixel where this level comes in.
         let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
-        let cloud = cloud_level(gpu, tree, foliage, &params, GROUPINGS[g], density)?;
+        let base = wood.tree_at(tree, eps);
+        let cloud = cloud_level(gpu, tree, foliage, &params, GROUPINGS[g], density, &base)?;
         let count = cloud.billboards;
         // A level that hardly improves on the last: group coarser at the same ε instead.
         if count as f32 > 0.8 * previous as f32 && g + 1 < GROUPINGS.len() {

@@ -238,6 +238,7 @@ impl LodView {
 
 /// Models loaded and baked for a spec, checked, before any GPU work: bad input fails the same
 /// way with or without a GPU.
+#[derive(Clone)]
 pub struct Loaded {
     pub spec: SceneSpec,
     pub bakes: Vec<CharacterBake>,

@@ -343,23 +343,31 @@ fn tube(mesh: &mut SkinnedMesh, b: &Branch) {
             ]);
         }
     }
-    // Caps: a fan round a centre vertex at each end. The ring's seam vertex (k = sides) repeats
-    // k = 0, so the fan uses the first `sides` ring vertices of a ring of its own, welded to the
-    // tube by position (same rest position and weights: it cannot open).
+    // Caps: a fan from a centre vertex over the end ring's own vertices, so the tube stays one
+    // chart in texture space (the cap a fan just beyond the ring's edge of the strip) and its
+    // rings are no chart border: the simplifier may collapse them.
     for (end, s) in [(0usize, 0.0f32), (rings, rings as f32 / per_bone as f32)] {
         let normal = if end == 0 { -dir } else { dir };
-        let centre = mesh.positions[ring_starts[end] as usize]
-            .lerp(mesh.positions[ring_starts[end] as usize + sides / 2], 0.5);
+        let ring = ring_starts[end];
+        let centre =
+            mesh.positions[ring as usize].lerp(mesh.positions[ring as usize + sides / 2], 0.5);
         let weights = b.chain.weights(s);
-        let c = push_vertex(mesh, centre, normal, Vec2::new(0.5, 0.0), BARK, &weights);
-        let first = mesh.positions.len() as u32;
-        for k in 0..sides {
-            let v = (ring_starts[end] + k as u32) as usize;
-            let p = mesh.positions[v];
-            push_vertex(mesh, p, normal, Vec2::new(0.5, 0.02), BARK, &weights);
-        }
+        let v_edge = mesh.uvs[ring as usize].y;
+        let v_centre = if end == 0 {
+            v_edge - 0.15
+        } else {
+            v_edge + 0.15
+        };
+        let c = push_vertex(
+            mesh,
+            centre,
+            normal,
+            Vec2::new(0.5, v_centre),
+            BARK,
+            &weights,
+        );
         for k in 0..sides as u32 {
-            let (p, q) = (first + k, first + (k + 1) % sides as u32);
+            let (p, q) = (ring + k, ring + k + 1);
             if end == 0 {
                 mesh.indices.extend_from_slice(&[c, q, p]);
             } else {

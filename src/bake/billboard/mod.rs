@@ -10,6 +10,7 @@
 pub mod atlas;
 pub mod cloud;
 pub mod rect;
+pub mod wood;
 
 use crate::model::Model;
 use cloud::{Billboard, CloudParams, Leaf, stochastic_cloud};

@@ -1,0 +1,76 @@
+//! Frame times of a forest of 100 trees drawn at each level of their billboard-cloud chain, as
+//! ratios measured in one run: `cargo bench --bench tree_lod` (on lavapipe, or whatever
+//! adapter wgpu picks). Also the wall time of building each chain (clouds and atlases).
+
+use anyhow::{Result, anyhow};
+use lodlab::app::levels::LevelSource;
+use lodlab::app::shot::time_renderer;
+use lodlab::app::tree_levels::{ChainOptions, tree_chain};
+use lodlab::app::world::{Loaded, SceneSpec, World};
+use lodlab::bake::CharacterBake;
+use lodlab::bake::billboard::foliage;
+use lodlab::render::Gpu;
+use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+
+const TREES: usize = 100;
+const WIDTH: u32 = 1280;
+const HEIGHT: u32 = 720;
+
+fn main() -> Result<()> {
+    let gpu = Gpu::headless()?;
+    println!("adapter: {}", gpu.describe());
+    for name in ["broadleaf", "conifer"] {
+        let tree = lodlab::import::load_model(name)?;
+        let f = foliage(&tree).map_err(|e| anyhow!(e))?;
+        let start = std::time::Instant::now();
+        let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default())?;
+        println!(
+            "\n{name}: chain of {} levels built in {:.2} s; {TREES} trees, {WIDTH}x{HEIGHT}",
+            chain.len(),
+            start.elapsed().as_secs_f64()
+        );
+        println!(
+            "{:<5} {:>10} {:>12} {:>14} {:>8} {:>14} {:>8}",
+            "level", "billboards", "triangles", "ms MSAA 4", "vs L0", "ms no MSAA", "vs L0"
+        );
+        let mut l0 = [0.0; 2];
+        for (k, level) in chain.iter().enumerate() {
+            let m = &level.cloud.model;
+            let bake = CharacterBake::new(m).map_err(|e| anyhow!(e))?;
+            let loaded = Loaded {
+                spec: SceneSpec {
+                    scene: "forest".into(),
+                    count: TREES,
+                    ..Default::default()
+                },
+                bakes: vec![bake],
+                sources: vec![LevelSource {
+                    model: m.clone(),
+                    hash: [0; 32],
+                }],
+            };
+            let mut ms = [0.0; 2];
+            let mut triangles = 0;
+            for (i, samples) in [4, 1].into_iter().enumerate() {
+                let mut world = World::new(&gpu, loaded.clone(), OFFSCREEN_FORMAT, samples)?;
+                let target = Offscreen::new(&gpu, WIDTH, HEIGHT, samples);
+                triangles = world.prepare(&gpu, [WIDTH, HEIGHT], 2.0, 0.0).triangles;
+                time_renderer(&gpu, &world.renderer, &target, 1)?;
+                ms[i] = time_renderer(&gpu, &world.renderer, &target, 7)?;
+                if k == 0 {
+                    l0[i] = ms[i];
+                }
+            }
+            println!(
+                "L{k:<4} {:>10} {:>12} {:>14.1} {:>7.1}x {:>14.1} {:>7.1}x",
+                level.cloud.billboards,
+                triangles,
+                ms[0],
+                l0[0] / ms[0],
+                ms[1],
+                l0[1] / ms[1]
+            );
+        }
+    }
+    Ok(())
+}
