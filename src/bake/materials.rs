@@ -68,7 +68,8 @@ impl MaterialLayers {
     }
 }
 
-fn srgb_to_linear(c: u8) -> f32 {
+/// An sRGB-encoded byte in linear light.
+pub(crate) fn srgb_to_linear(c: u8) -> f32 {
     let c = c as f32 / 255.0;
     if c <= 0.04045 {
         c / 12.92
@@ -77,7 +78,8 @@ fn srgb_to_linear(c: u8) -> f32 {
     }
 }
 
-fn linear_to_srgb(c: f32) -> u8 {
+/// Linear light to an sRGB-encoded byte.
+pub(crate) fn linear_to_srgb(c: f32) -> u8 {
     let c = c.clamp(0.0, 1.0);
     let s = if c <= 0.0031308 {
         c * 12.92

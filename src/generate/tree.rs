@@ -530,19 +530,11 @@ fn bark_texture() -> Rgba8Image {
 }
 
 fn srgb(c: Vec3, a: f32) -> [u8; 4] {
-    let e = |x: f32| {
-        let x = x.clamp(0.0, 1.0);
-        let s = if x <= 0.003_130_8 {
-            12.92 * x
-        } else {
-            1.055 * x.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
+    use crate::bake::materials::linear_to_srgb;
     [
-        e(c.x),
-        e(c.y),
-        e(c.z),
+        linear_to_srgb(c.x),
+        linear_to_srgb(c.y),
+        linear_to_srgb(c.z),
         (a.clamp(0.0, 1.0) * 255.0).round() as u8,
     ]
 }

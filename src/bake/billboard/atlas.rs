@@ -173,28 +173,12 @@ pub fn atlas_triangles(
 
 /// Divides alpha out of sRGB colour that was blended over transparent black (in linear light).
 pub fn unpremultiply(pixels: &mut [u8]) {
-    let to_linear = |c: u8| {
-        let c = c as f32 / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    let to_srgb = |c: f32| {
-        let c = c.clamp(0.0, 1.0);
-        let s = if c <= 0.003_130_8 {
-            c * 12.92
-        } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
+    use crate::bake::materials::{linear_to_srgb, srgb_to_linear};
     for p in pixels.chunks_exact_mut(4) {
         let a = p[3] as f32 / 255.0;
         if a > 0.0 && a < 1.0 {
             for c in &mut p[..3] {
-                *c = to_srgb(to_linear(*c) / a);
+                *c = linear_to_srgb(srgb_to_linear(*c) / a);
             }
         }
     }
