@@ -309,3 +309,65 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
         );
     }
 }
+
+/// With a simplified method chosen, trees switch to their billboard-cloud levels by the same
+/// projected-error selection as characters: fewer triangles, several levels in use, and a
+/// picture that stays close to the full trees.
+#[test]
+fn forest_trees_use_their_cloud_levels() {
+    use lodlab::app::shot::{ShotLod, ShotOptions, run};
+    use lodlab::app::world::SceneSpec;
+    use lodlab::scene::{LodMethod, LodPolicy, Transition};
+    let dir = tempfile::tempdir().unwrap();
+    let shoot = |method: LodMethod| {
+        let out = dir.path().join(format!("{}.png", method.index()));
+        let report = run(&ShotOptions {
+            spec: SceneSpec {
+                scene: "forest".into(),
+                count: 16,
+                cache_dir: Some(dir.path().to_path_buf()),
+                ..Default::default()
+            },
+            out: out.clone(),
+            width: 480,
+            height: 270,
+            time: 1.0,
+            samples: 1,
+            camera: None,
+            timed_frames: 1,
+            calibrate: false,
+            lod: ShotLod {
+                method,
+                policy: LodPolicy {
+                    transition: Transition::Pop,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        })
+        .unwrap();
+        (report, image::open(&out).unwrap().to_rgba8())
+    };
+    let (full, a) = shoot(LodMethod::None);
+    let (lod, b) = shoot(LodMethod::ALL[3]);
+    assert_eq!(full.levels.len(), 1);
+    assert!(
+        lod.levels.iter().filter(|&&n| n > 0).count() >= 2,
+        "{:?}",
+        lod.levels
+    );
+    assert!(lod.levels[1..].iter().sum::<u32>() > 0);
+    assert!(
+        lod.triangles * 2 < full.triangles,
+        "{} vs {}",
+        lod.triangles,
+        full.triangles
+    );
+    let differ = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > 40))
+        .count();
+    let n = (a.width() * a.height()) as usize;
+    assert!(differ * 8 < n, "{differ} of {n} pixels differ a lot");
+}

@@ -29,6 +29,18 @@ pub fn runtime_options(model: &Model) -> crate::bake::lod::LodOptions {
 /// `lodlab bake --tolerance` default: the error bound of LOD 1 in pixels.
 pub const DEFAULT_BAKE_TOLERANCE_PX: f32 = 0.5;
 
+/// What baking one model by a method gave: its packed levels, or nothing for a tree (trees get
+/// billboard-cloud levels instead, see [`crate::app::tree_levels`]).
+pub type Baked = Option<Result<LodPack, String>>;
+
+/// Is this model a tree (foliage cut out with alpha)?
+pub fn is_tree(model: &Model) -> bool {
+    model
+        .materials
+        .iter()
+        .any(crate::bake::billboard::is_cut_out)
+}
+
 /// The levels of every model by `method`, in model order, from the cache or baked now.
 /// `progress(i, f)` reports model i's fraction done. Cache warnings go to `warn`.
 pub fn bake_all(
@@ -37,11 +49,15 @@ pub fn bake_all(
     cache: &LodCache,
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
-) -> Vec<Result<LodPack, String>> {
+) -> Vec<Baked> {
     sources
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
+            if is_tree(&s.model) {
+                progress(i, 1.0);
+                return None;
+            }
             let options = runtime_options(&s.model);
             let (lods, origin) =
                 cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
@@ -49,7 +65,7 @@ pub fn bake_all(
                 warn(w);
             }
             progress(i, 1.0);
-            pack(&lods)
+            Some(pack(&lods))
         })
         .collect()
 }
@@ -63,13 +79,13 @@ pub struct BackgroundBake {
     pub method: Method,
     /// Per model, progress in thousandths.
     progress: Arc<Vec<AtomicU32>>,
-    result: Receiver<Vec<Result<LodPack, String>>>,
+    result: Receiver<Vec<Baked>>,
 }
 
 /// What polling a background bake found.
 pub enum Poll {
     Running,
-    Done(Vec<Result<LodPack, String>>),
+    Done(Vec<Baked>),
     /// The thread died without an answer.
     Failed,
 }

@@ -1,7 +1,7 @@
 //! Building a scene for the front ends: load the models, bake them, lay out the crowd, place the
 //! camera. Shared by the viewer, `shot` and the tests, so they all show the same thing.
 
-use super::levels::{LevelSource, bake_all};
+use super::levels::{Baked, LevelSource, bake_all, is_tree};
 use crate::bake::CharacterBake;
 use crate::bake::cache::{LodCache, source_hash};
 use crate::bake::lod_pack::LodPack;
@@ -198,6 +198,11 @@ pub struct World {
     pub renderer: SceneRenderer,
     pub lod: LodView,
     instances: Vec<Instance>,
+    /// Per model: for a tree whose billboard-cloud chain is built, the renderer's character of
+    /// every level (level 0 the tree itself).
+    tree_levels: Vec<Option<Vec<usize>>>,
+    /// The instances and draws of a frame with trees turned into their level's character.
+    drawn: [(Vec<Instance>, Vec<LodDraw>); 2],
 }
 
 /// What levels of detail are shown and how: the user's choices and the per-instance state.
@@ -275,6 +280,7 @@ impl World {
         }
         let crowd = layout_crowd(&spec, &bakes, None);
         let camera = default_camera(&crowd, &bakes);
+        let n_models = bakes.len();
         let lod = LodView {
             policy: LodPolicy::default(),
             method: LodMethod::None,
@@ -297,8 +303,10 @@ impl World {
             crowd,
             camera,
             renderer,
+            tree_levels: vec![None; n_models],
             lod,
             instances: Vec::new(),
+            drawn: Default::default(),
         })
     }
 
@@ -309,14 +317,12 @@ impl World {
 
     /// Uploads the levels of `method` for every model (`packs` in model order) and makes them
     /// available to selection.
-    pub fn install_levels(
-        &mut self,
-        gpu: &Gpu,
-        method: Method,
-        packs: Vec<Result<LodPack, String>>,
-    ) -> Result<()> {
+    pub fn install_levels(&mut self, gpu: &Gpu, method: Method, packs: Vec<Baked>) -> Result<()> {
         let slot = LodMethod::Simplified(method).index();
         for (m, pack) in packs.into_iter().enumerate() {
+            let Some(pack) = pack else {
+                continue;
+            };
             let pack = pack.map_err(anyhow::Error::msg)?;
             self.renderer.add_levels(gpu, m, slot, &pack)?;
             self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
@@ -337,6 +343,46 @@ impl World {
                 self.install_levels(gpu, m, packs)?;
             }
         }
+        self.ensure_tree_levels(gpu)
+    }
+
+    /// Builds, where a simplified method is shown, the billboard-cloud chain of every tree and
+    /// uploads each level as a character of its own; trees then switch between them (by
+    /// popping) with the same selection as the characters, their ε as the level error.
+    pub fn ensure_tree_levels(&mut self, gpu: &Gpu) -> Result<()> {
+        if !self.lod.methods().any(|m| m != LodMethod::None) {
+            return Ok(());
+        }
+        for m in 0..self.sources.len() {
+            if self.tree_levels[m].is_some() || !is_tree(&self.sources[m].model) {
+                continue;
+            }
+            let tree = &self.sources[m].model;
+            let foliage = crate::bake::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
+            let chain = super::tree_levels::tree_chain(
+                gpu,
+                tree,
+                &foliage,
+                &super::tree_levels::ChainOptions::default(),
+            )?;
+            let mut characters = vec![m];
+            for level in &chain[1..] {
+                let bake = CharacterBake::new(&level.cloud.model)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", tree.name))?;
+                characters.push(self.renderer.add_character(gpu, &bake)?);
+            }
+            let errors: Vec<f32> = chain.iter().map(|l| l.epsilon).collect();
+            let b = &self.bakes[m];
+            for method in LodMethod::ALL.into_iter().skip(1) {
+                self.lod.models[m][method.index()] = Some(LodModel {
+                    errors: errors.clone(),
+                    center: b.bounds.center(),
+                    radius: b.bounds.diagonal() * 0.5,
+                });
+            }
+            self.tree_levels[m] = Some(characters);
+        }
+        self.lod.reset();
         Ok(())
     }
 
@@ -391,10 +437,35 @@ impl World {
     pub fn upload(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> FrameStats {
         let view = FrameView::from_camera(&self.camera, aspect, time);
         let lod = &self.lod;
+        // Trees draw their level's own character (a billboard cloud) at full detail; a
+        // transition between two levels pops at its midpoint.
+        let sides = 1 + lod.compare.is_some() as usize;
+        for i in 0..sides {
+            let (instances, draws) = &mut self.drawn[i];
+            instances.clear();
+            draws.clear();
+            for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
+                match self.tree_levels.get(inst.model).and_then(Option::as_ref) {
+                    Some(levels) => {
+                        let k = (d.nearest_level() as usize).min(levels.len() - 1);
+                        instances.push(Instance {
+                            model: levels[k],
+                            ..*inst
+                        });
+                        draws.push(LodDraw::Level(k as u8));
+                    }
+                    None => {
+                        instances.push(*inst);
+                        draws.push(*d);
+                    }
+                }
+            }
+        }
+        let drawn = &self.drawn;
         let side = |i: usize, m: LodMethod, region| Side {
             method: if lod.has(m) { m.index() } else { 0 },
-            instances: &self.instances,
-            draws: &lod.draws[i],
+            instances: &drawn[i].0,
+            draws: &drawn[i].1,
             region,
         };
         match lod.compare {

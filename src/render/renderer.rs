@@ -264,6 +264,8 @@ struct PipelineSpec<'a> {
     polygon_mode: wgpu::PolygonMode,
     /// Alpha to coverage (only where there is multisampling).
     alpha_to_coverage: bool,
+    /// Depth bias: pulls a surface lying on another towards the eye.
+    bias: wgpu::DepthBiasState,
 }
 
 impl<'a> PipelineSpec<'a> {
@@ -280,6 +282,7 @@ impl<'a> PipelineSpec<'a> {
             depth_only: false,
             polygon_mode: wgpu::PolygonMode::Fill,
             alpha_to_coverage: false,
+            bias: Default::default(),
         }
     }
 }
@@ -301,7 +304,7 @@ fn pipeline(
         depth_write_enabled: Some(write),
         depth_compare: Some(compare),
         stencil: Default::default(),
-        bias: Default::default(),
+        bias: spec.bias,
     });
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(spec.label),
@@ -478,6 +481,13 @@ impl SceneRenderer {
                 buffers: &instances,
                 depth: Depth::TestOnly,
                 blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                // The shadows lie on the ground: at grazing angles and a distance their depth
+                // and the ground's fight in bands without a bias towards the eye.
+                bias: wgpu::DepthBiasState {
+                    constant: -8,
+                    slope_scale: -2.0,
+                    clamp: 0.0,
+                },
                 ..PipelineSpec::new("blob shadows", &shadow_module, "vs_main", "fs_main")
             },
         );
@@ -603,10 +613,7 @@ impl SceneRenderer {
                     None => (0, c.full()),
                 };
                 let last = set.levels.len() - 1;
-                let draw = match side.draws.get(i) {
-                    Some(d) if slot != 0 => *d,
-                    _ => LodDraw::Level(0),
-                };
+                let draw = side.draws.get(i).copied().unwrap_or(LodDraw::Level(0));
                 let rows = &c.clip_rows;
                 let mut g = GpuInstance::new(
                     &inst.transform,
@@ -619,9 +626,9 @@ impl SceneRenderer {
                     DrawKey::new(pass, side_index, inst.model, slot, level as u8, hops as u8).0
                 };
                 stats.instances += 1;
-                stats.levels[(draw.nearest_level() as usize)
-                    .min(last)
-                    .min(MAX_LEVELS - 1)] += 1;
+                // The level the instance asked for (a tree's level is a character of its own,
+                // drawn at its only level).
+                stats.levels[(draw.nearest_level() as usize).min(MAX_LEVELS - 1)] += 1;
                 stats.in_transition += draw.in_transition() as u64;
                 let mut count = |k: usize, extra_influences: u32| {
                     let l = &set.levels[k];
@@ -630,9 +637,11 @@ impl SceneRenderer {
                     stats.influences += (l.influences + extra_influences) as u64;
                 };
                 match draw {
-                    LodDraw::Level(k) => {
-                        let k = (k as usize).min(last);
-                        g.lod = [-1.0, 0.0, 1.0, k as f32];
+                    LodDraw::Level(asked) => {
+                        // The debug tint shows the level asked for (a tree's cloud level is a
+                        // character of its own, drawn at its only level).
+                        let k = (asked as usize).min(last);
+                        g.lod = [-1.0, 0.0, 1.0, asked as f32];
                         count(k, 0);
                         self.keyed.push((key(PASS_OPAQUE, k, 0), g));
                     }

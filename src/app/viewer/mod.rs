@@ -272,7 +272,12 @@ impl Viewer {
                 Poll::Done(packs) => {
                     let method = job.method;
                     self.bake = None;
-                    if let Err(e) = self.world.install_levels(&self.gpu, method, packs) {
+                    // Trees get their billboard clouds here, on the GPU (about a second each).
+                    let installed = self
+                        .world
+                        .install_levels(&self.gpu, method, packs)
+                        .and_then(|_| self.world.ensure_tree_levels(&self.gpu));
+                    if let Err(e) = installed {
                         self.bake_error = Some(format!("{method}: {e:#}"));
                     }
                 }
