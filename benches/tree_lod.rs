@@ -3,11 +3,9 @@
 //! adapter wgpu picks). Also the wall time of building each chain (clouds and atlases).
 
 use anyhow::{Result, anyhow};
-use lodlab::app::levels::LevelSource;
 use lodlab::app::shot::time_renderer;
 use lodlab::app::tree_levels::{ChainOptions, tree_chain};
-use lodlab::app::world::{Loaded, SceneSpec, World};
-use lodlab::bake::CharacterBake;
+use lodlab::app::world::{Loaded, World};
 use lodlab::bake::billboard::foliage;
 use lodlab::render::Gpu;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
@@ -36,19 +34,7 @@ fn main() -> Result<()> {
         let mut l0 = [0.0; 2];
         for (k, level) in chain.iter().enumerate() {
             let m = &level.cloud.model;
-            let bake = CharacterBake::new(m).map_err(|e| anyhow!(e))?;
-            let loaded = Loaded {
-                spec: SceneSpec {
-                    scene: "forest".into(),
-                    count: TREES,
-                    ..Default::default()
-                },
-                bakes: vec![bake],
-                sources: vec![LevelSource {
-                    model: m.clone(),
-                    hash: [0; 32],
-                }],
-            };
+            let loaded = Loaded::forest_of(m, TREES)?;
             let mut ms = [0.0; 2];
             let mut triangles = 0;
             for (i, samples) in [4, 1].into_iter().enumerate() {

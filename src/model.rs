@@ -135,6 +135,40 @@ impl SkinnedMesh {
         let b = self.influence_offsets[vertex + 1] as usize;
         &self.influences[a..b]
     }
+
+    /// An empty mesh, ready for vertices to be appended.
+    pub fn empty() -> SkinnedMesh {
+        SkinnedMesh {
+            influence_offsets: vec![0],
+            ..Default::default()
+        }
+    }
+
+    /// Appends vertex `v` of `src` (all its attributes) and returns its index here.
+    pub fn copy_vertex_from(&mut self, src: &SkinnedMesh, v: usize) -> u32 {
+        self.positions.push(src.positions[v]);
+        self.normals.push(src.normals[v]);
+        self.uvs.push(src.uvs[v]);
+        self.materials.push(src.materials[v]);
+        self.influences.extend_from_slice(src.influences_of(v));
+        self.influence_offsets.push(self.influences.len() as u32);
+        self.positions.len() as u32 - 1
+    }
+
+    /// Appends the triangles of `src` that `keep` accepts, in order, with the vertices they use
+    /// (each once, in order of first use).
+    pub fn copy_triangles_from(&mut self, src: &SkinnedMesh, keep: impl Fn(&[u32]) -> bool) {
+        let mut remap = vec![u32::MAX; src.vertex_count()];
+        for t in src.indices.chunks_exact(3).filter(|t| keep(t)) {
+            for &v in t {
+                let v = v as usize;
+                if remap[v] == u32::MAX {
+                    remap[v] = self.copy_vertex_from(src, v);
+                }
+                self.indices.push(remap[v]);
+            }
+        }
+    }
 }
 
 /// An 8-bit RGBA image, rows top to bottom.

@@ -79,25 +79,10 @@ pub const METRIC_FRAMES: usize = 5;
 /// its loop; the share of the original's foliage pixels that the two masks disagree on, over
 /// all of them. 0 for identical trees.
 pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) -> Result<f32> {
-    use crate::app::levels::LevelSource;
-    use crate::app::world::{Loaded, SceneSpec, World};
-    use crate::bake::CharacterBake;
+    use crate::app::world::{Loaded, World};
     use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
     let world_of = |m: &Model| -> Result<World> {
-        let bake = CharacterBake::new(m).map_err(|e| anyhow!("{}: {e}", m.name))?;
-        let loaded = Loaded {
-            spec: SceneSpec {
-                scene: "forest".into(),
-                count: 1,
-                ..Default::default()
-            },
-            bakes: vec![bake],
-            sources: vec![LevelSource {
-                model: m.clone(),
-                hash: [0; 32],
-            }],
-        };
-        let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
+        let mut w = World::new(gpu, Loaded::forest_of(m, 1)?, OFFSCREEN_FORMAT, 1)?;
         w.renderer.shadows = false;
         Ok(w)
     };

@@ -191,9 +191,7 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
 
 /// Every level from the same view, side by side, labelled.
 fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Path) -> Result<()> {
-    use crate::app::levels::LevelSource;
-    use crate::app::world::{Loaded, SceneSpec, World};
-    use crate::bake::CharacterBake;
+    use crate::app::world::{Loaded, World};
     use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
     let (tw, th) = (300u32, 400u32);
     let columns = chain.len().min(6) as u32;
@@ -203,21 +201,8 @@ fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Pat
     let target = Offscreen::new(gpu, tw, th, 4);
     for (k, l) in chain.iter().enumerate() {
         let m = &l.cloud.model;
-        let bake = CharacterBake::new(m).map_err(|e| anyhow!("{}: {e}", m.name))?;
-        let height = bake.bounds.size().y;
-        let loaded = Loaded {
-            spec: SceneSpec {
-                scene: "forest".into(),
-                count: 1,
-                ..Default::default()
-            },
-            bakes: vec![bake],
-            sources: vec![LevelSource {
-                model: m.clone(),
-                hash: [0; 32],
-            }],
-        };
-        let mut world = World::new(gpu, loaded, OFFSCREEN_FORMAT, 4)?;
+        let mut world = World::new(gpu, Loaded::forest_of(m, 1)?, OFFSCREEN_FORMAT, 4)?;
+        let height = world.bakes[0].bounds.size().y;
         world.camera = crate::scene::Camera::new(
             glam::Vec3::new(0.0, height * 0.5, 0.0),
             30.0,

@@ -8,6 +8,7 @@ use crate::bake::lod_pack::LodPack;
 use crate::bake::simplify::Method;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
+use crate::model::Model;
 use crate::render::{FrameStats, FrameView, Gpu, Region, SceneRenderer, Side};
 use crate::scene::{
     Camera, Crowd, CrowdConfig, CrowdModel, Instance, LodDraw, LodMethod, LodModel, LodPolicy,
@@ -251,6 +252,24 @@ pub struct Loaded {
 }
 
 impl Loaded {
+    /// A forest of `count` copies of a model built in memory (a tree's level, say), not read
+    /// from a file: it has no source to cache levels under.
+    pub fn forest_of(model: &Model, count: usize) -> Result<Loaded> {
+        let bake = CharacterBake::new(model).map_err(|e| anyhow::anyhow!("{}: {e}", model.name))?;
+        Ok(Loaded {
+            spec: SceneSpec {
+                scene: "forest".into(),
+                count,
+                ..Default::default()
+            },
+            bakes: vec![bake],
+            sources: vec![LevelSource {
+                model: model.clone(),
+                hash: [0; 32],
+            }],
+        })
+    }
+
     pub fn new(spec: SceneSpec) -> Result<Loaded> {
         let (bakes, sources): (Vec<_>, Vec<_>) = load_sources(&spec)?.into_iter().unzip();
         check_clip(&spec, &bakes)?;
@@ -438,34 +457,37 @@ impl World {
         let view = FrameView::from_camera(&self.camera, aspect, time);
         let lod = &self.lod;
         // Trees draw their level's own character (a billboard cloud) at full detail; a
-        // transition between two levels pops at its midpoint.
+        // transition between two levels pops at its midpoint. Without tree levels the crowd
+        // goes to the renderer as it is.
+        let has_trees = self.tree_levels.iter().any(Option::is_some);
         let sides = 1 + lod.compare.is_some() as usize;
-        for i in 0..sides {
+        for i in (0..sides).filter(|_| has_trees) {
             let (instances, draws) = &mut self.drawn[i];
             instances.clear();
             draws.clear();
             for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
-                match self.tree_levels.get(inst.model).and_then(Option::as_ref) {
+                let (inst, d) = match self.tree_levels.get(inst.model).and_then(Option::as_ref) {
                     Some(levels) => {
                         let k = (d.nearest_level() as usize).min(levels.len() - 1);
-                        instances.push(Instance {
-                            model: levels[k],
-                            ..*inst
-                        });
-                        draws.push(LodDraw::Level(k as u8));
+                        let model = levels[k];
+                        (Instance { model, ..*inst }, LodDraw::Level(k as u8))
                     }
-                    None => {
-                        instances.push(*inst);
-                        draws.push(*d);
-                    }
-                }
+                    None => (*inst, *d),
+                };
+                instances.push(inst);
+                draws.push(d);
             }
         }
         let drawn = &self.drawn;
+        let instances = &self.instances;
         let side = |i: usize, m: LodMethod, region| Side {
             method: if lod.has(m) { m.index() } else { 0 },
-            instances: &drawn[i].0,
-            draws: &drawn[i].1,
+            instances: if has_trees { &drawn[i].0 } else { instances },
+            draws: if has_trees {
+                &drawn[i].1
+            } else {
+                &lod.draws[i]
+            },
             region,
         };
         match lod.compare {

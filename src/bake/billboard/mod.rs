@@ -57,27 +57,15 @@ pub fn foliage(model: &Model) -> Result<Foliage, String> {
             "no foliage: no triangle has a material that cuts leaves out with alpha".into(),
         );
     }
-    // Union-find over vertices of leaf triangles.
-    let mut parent: Vec<u32> = (0..mesh.vertex_count() as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
-    for &t in &tris {
-        let i = &mesh.indices[3 * t as usize..3 * t as usize + 3];
-        let a = find(&mut parent, i[0]);
-        for &v in &i[1..] {
-            let b = find(&mut parent, v);
-            parent[b as usize] = a;
-        }
-    }
+    let roots = connected_pieces(
+        mesh.vertex_count(),
+        tris.iter()
+            .map(|&t| &mesh.indices[3 * t as usize..3 * t as usize + 3]),
+    );
     let mut piece_of = std::collections::HashMap::new();
     let mut pieces: Vec<Vec<u32>> = Vec::new();
     for &t in &tris {
-        let root = find(&mut parent, mesh.indices[3 * t as usize]);
+        let root = roots[mesh.indices[3 * t as usize] as usize];
         let k = *piece_of.entry(root).or_insert_with(|| {
             pieces.push(Vec::new());
             pieces.len() - 1
@@ -127,6 +115,30 @@ pub fn foliage(model: &Model) -> Result<Foliage, String> {
         out.triangles.push(piece);
     }
     Ok(out)
+}
+
+/// For every vertex, a representative of the connected piece it belongs to: vertices that
+/// share one of `triangles` are in the same piece (union-find).
+pub fn connected_pieces<'a>(
+    vertices: usize,
+    triangles: impl Iterator<Item = &'a [u32]>,
+) -> Vec<u32> {
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    let mut parent: Vec<u32> = (0..vertices as u32).collect();
+    for t in triangles {
+        let a = find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let b = find(&mut parent, v);
+            parent[b as usize] = a;
+        }
+    }
+    (0..vertices as u32).map(|v| find(&mut parent, v)).collect()
 }
 
 /// A skeleton billboard cloud: billboards built bone by bone, each bound to its bone.
@@ -360,32 +372,14 @@ pub fn cloud_model(
         base_color: [1.0; 4],
         texture: Some(atlas),
     });
-    let mut mesh = SkinnedMesh {
-        influence_offsets: vec![0],
-        ..Default::default()
-    };
-    let mut remap = vec![u32::MAX; src.vertex_count()];
-    for t in src.indices.chunks_exact(3) {
-        if !keep
-            .get(src.materials[t[0] as usize] as usize)
+    let mut mesh = SkinnedMesh::empty();
+    mesh.copy_triangles_from(src, |t| {
+        keep.get(src.materials[t[0] as usize] as usize)
             .copied()
             .unwrap_or(true)
-        {
-            continue;
-        }
-        for &v in t {
-            let v = v as usize;
-            if remap[v] == u32::MAX {
-                remap[v] = mesh.positions.len() as u32;
-                mesh.positions.push(src.positions[v]);
-                mesh.normals.push(src.normals[v]);
-                mesh.uvs.push(src.uvs[v]);
-                mesh.materials.push(material_map[src.materials[v] as usize]);
-                mesh.influences.extend_from_slice(src.influences_of(v));
-                mesh.influence_offsets.push(mesh.influences.len() as u32);
-            }
-            mesh.indices.push(remap[v]);
-        }
+    });
+    for m in &mut mesh.materials {
+        *m = material_map[*m as usize];
     }
     for (b, (bb, &bone)) in cloud.billboards.iter().zip(&cloud.bones).enumerate() {
         let uvs = layout.corner_uvs(b);

@@ -62,23 +62,13 @@ impl WoodChain {
         let level = levels
             .last()
             .expect("extract returns every prefix asked for");
-        let src = &self.wood.mesh;
-        let mut mesh = SkinnedMesh {
-            influence_offsets: vec![0],
-            ..Default::default()
-        };
+        let mut mesh = SkinnedMesh::empty();
         for &b in &level.source {
-            let v = self.order[b as usize];
-            mesh.positions.push(src.positions[v]);
-            mesh.normals.push(src.normals[v]);
-            mesh.uvs.push(src.uvs[v]);
-            mesh.materials.push(src.materials[v]);
-            mesh.influences.extend_from_slice(src.influences_of(v));
-            mesh.influence_offsets.push(mesh.influences.len() as u32);
+            mesh.copy_vertex_from(&self.wood.mesh, self.order[b as usize]);
         }
         mesh.indices = level.mesh.indices.clone();
         drop_thin_pieces(&mut mesh, error * 0.5);
-        append_foliage(&mut mesh, tree);
+        copy_triangles(&mut mesh, tree, true);
         Model {
             mesh,
             ..tree.clone()
@@ -91,22 +81,7 @@ impl WoodChain {
 /// the piece holding the lowest vertex (the trunk).
 fn drop_thin_pieces(mesh: &mut SkinnedMesh, width: f32) {
     let n = mesh.vertex_count();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
-    for t in mesh.indices.chunks_exact(3) {
-        let a = find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = find(&mut parent, v);
-            parent[b as usize] = a;
-        }
-    }
-    let roots: Vec<u32> = (0..n as u32).map(|v| find(&mut parent, v)).collect();
+    let roots = super::connected_pieces(n, mesh.indices.chunks_exact(3));
     let trunk = (0..n)
         .min_by(|&a, &b| mesh.positions[a].y.total_cmp(&mesh.positions[b].y))
         .map(|v| roots[v]);
@@ -153,42 +128,14 @@ fn drop_thin_pieces(mesh: &mut SkinnedMesh, width: f32) {
     if thin.is_empty() {
         return;
     }
-    let kept: Vec<u32> = mesh
-        .indices
-        .chunks_exact(3)
-        .filter(|t| !thin.contains(&roots[t[0] as usize]))
-        .flatten()
-        .copied()
-        .collect();
-    let mut compact = SkinnedMesh {
-        influence_offsets: vec![0],
-        ..Default::default()
-    };
-    let mut remap = vec![u32::MAX; n];
-    for &v in &kept {
-        let v = v as usize;
-        if remap[v] == u32::MAX {
-            remap[v] = compact.positions.len() as u32;
-            compact.positions.push(mesh.positions[v]);
-            compact.normals.push(mesh.normals[v]);
-            compact.uvs.push(mesh.uvs[v]);
-            compact.materials.push(mesh.materials[v]);
-            compact.influences.extend_from_slice(mesh.influences_of(v));
-            compact
-                .influence_offsets
-                .push(compact.influences.len() as u32);
-        }
-        compact.indices.push(remap[v]);
-    }
+    let mut compact = SkinnedMesh::empty();
+    compact.copy_triangles_from(mesh, |t| !thin.contains(&roots[t[0] as usize]));
     *mesh = compact;
 }
 
 /// `tree` with the triangles of cut-out materials (and the vertices only they use) removed.
 pub fn without_foliage(tree: &Model) -> Model {
-    let mut mesh = SkinnedMesh {
-        influence_offsets: vec![0],
-        ..Default::default()
-    };
+    let mut mesh = SkinnedMesh::empty();
     copy_triangles(&mut mesh, tree, false);
     Model {
         mesh,
@@ -198,10 +145,7 @@ pub fn without_foliage(tree: &Model) -> Model {
 
 /// `tree` with only the triangles of cut-out materials: its foliage (or billboards).
 pub fn only_foliage(tree: &Model) -> Model {
-    let mut mesh = SkinnedMesh {
-        influence_offsets: vec![0],
-        ..Default::default()
-    };
+    let mut mesh = SkinnedMesh::empty();
     copy_triangles(&mut mesh, tree, true);
     Model {
         mesh,
@@ -209,35 +153,14 @@ pub fn only_foliage(tree: &Model) -> Model {
     }
 }
 
-fn append_foliage(mesh: &mut SkinnedMesh, tree: &Model) {
-    copy_triangles(mesh, tree, true);
-}
-
 /// Appends the triangles of `tree` whose material is (or is not) cut out.
 fn copy_triangles(mesh: &mut SkinnedMesh, tree: &Model, foliage: bool) {
-    let src = &tree.mesh;
     let cut: Vec<bool> = tree.materials.iter().map(is_cut_out).collect();
-    let mut remap = vec![u32::MAX; src.vertex_count()];
-    for t in src.indices.chunks_exact(3) {
-        let is_foliage = cut
-            .get(src.materials[t[0] as usize] as usize)
+    let src = &tree.mesh;
+    mesh.copy_triangles_from(src, |t| {
+        cut.get(src.materials[t[0] as usize] as usize)
             .copied()
-            .unwrap_or(false);
-        if is_foliage != foliage {
-            continue;
-        }
-        for &v in t {
-            let v = v as usize;
-            if remap[v] == u32::MAX {
-                remap[v] = mesh.positions.len() as u32;
-                mesh.positions.push(src.positions[v]);
-                mesh.normals.push(src.normals[v]);
-                mesh.uvs.push(src.uvs[v]);
-                mesh.materials.push(src.materials[v]);
-                mesh.influences.extend_from_slice(src.influences_of(v));
-                mesh.influence_offsets.push(mesh.influences.len() as u32);
-            }
-            mesh.indices.push(remap[v]);
-        }
-    }
+            .unwrap_or(false)
+            == foliage
+    });
 }
