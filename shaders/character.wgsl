@@ -98,12 +98,27 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     return vec4<f32>(lit(in, texel.rgb, normalize(in.normal)), in.lod.z);
 }
 
+// Interleaved gradient noise (Jimenez 2014): a threshold in [0, 1) per pixel, evenly spread
+// over any small block of pixels.
+fn pixel_threshold(pixel: vec2<f32>) -> f32 {
+    return fract(52.9829189 * fract(dot(floor(pixel), vec2<f32>(0.06711056, 0.00583715))));
+}
+
+// The screen-door cross-dissolve of a tree changing level (see `LodDraw::Dissolve` and the
+// comment at the top of src/render/renderer.rs): lod.z ≥ 0 keeps the pixels whose threshold lies
+// below it (1, outside dissolves, keeps all), lod.z < 0 those whose threshold is at or above
+// −lod.z − 1, so the incoming and outgoing halves of one dissolve cover complementary pixels.
+fn dissolved(in: VsOut) -> bool {
+    let x = pixel_threshold(in.clip.xy);
+    return select(x >= in.lod.z, x < -in.lod.z - 1.0, in.lod.z < 0.0);
+}
+
 // Foliage without multisampling: the texture's alpha cuts the leaf shape out; both sides are
 // drawn, lit from the side that faces the viewer.
 @fragment
 fn fs_foliage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
-    if (texel.a < 0.5) {
+    if (texel.a < 0.5 || dissolved(in)) {
         discard;
     }
     let n = normalize(in.normal) * select(-1.0, 1.0, front);
@@ -116,6 +131,9 @@ fn fs_foliage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec
 fn fs_foliage_coverage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     let a = clamp((texel.a - 0.5) / max(fwidth(texel.a), 1e-4) + 0.5, 0.0, 1.0);
+    if (dissolved(in)) {
+        discard;
+    }
     let n = normalize(in.normal) * select(-1.0, 1.0, front);
     return vec4<f32>(lit(in, texel.rgb, n), a);
 }

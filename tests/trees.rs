@@ -371,3 +371,91 @@ fn forest_trees_use_their_cloud_levels() {
     let n = (a.width() * a.height()) as usize;
     assert!(differ * 8 < n, "{differ} of {n} pixels differ a lot");
 }
+
+/// Trees change level by a screen-door cross-dissolve: at p = 0 and p = 1 the picture is
+/// exactly the outgoing and the incoming model, and in between every pixel is exactly one of
+/// the two, the incoming one on a share of the pixels that grows with p. The two halves are
+/// one instance: counted once, with one shadow.
+#[test]
+fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
+    use lodlab::app::world::{Loaded, SceneSpec, World};
+    use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+    use lodlab::render::{FrameView, Gpu, Region, Side};
+    use lodlab::scene::{Instance, LodDraw};
+    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    for samples in [1, 4] {
+        // Two different trees stand in for the two levels: the dissolve does not care.
+        let spec = SceneSpec {
+            scene: "forest".into(),
+            models: vec!["broadleaf".into(), "conifer".into()],
+            count: 1,
+            ..Default::default()
+        };
+        let mut world =
+            World::new(&gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, samples).unwrap();
+        world.renderer.shadows = false;
+        let (w, h) = (200u32, 200u32);
+        let target = Offscreen::new(&gpu, w, h, samples);
+        let mut instances: Vec<Instance> = Vec::new();
+        world.crowd.instances_at(0.7, &mut instances);
+        let one = instances[0];
+        let pair = [Instance { model: 0, ..one }, Instance { model: 1, ..one }];
+        let view = FrameView::from_camera(&world.camera, 1.0, 0.7);
+        let mut render = |instances: &[Instance], draws: &[LodDraw]| {
+            let stats = world.renderer.prepare(
+                &gpu,
+                &view,
+                &[Side {
+                    method: 0,
+                    instances,
+                    draws,
+                    region: Region::Full,
+                }],
+            );
+            world
+                .renderer
+                .render_to(&gpu, &target.targets, &target.view);
+            (stats, target.read_rgba(&gpu).unwrap())
+        };
+        let (_, from) = render(&pair[..1], &[LodDraw::Level(0)]);
+        let (_, to) = render(&pair[1..], &[LodDraw::Level(0)]);
+        let dissolve = |p| {
+            [false, true].map(|incoming| LodDraw::Dissolve {
+                level: incoming as u8,
+                p,
+                incoming,
+            })
+        };
+        let differ: Vec<usize> = (0..from.len() / 4)
+            .filter(|&i| from.as_raw()[4 * i..4 * i + 4] != to.as_raw()[4 * i..4 * i + 4])
+            .collect();
+        assert!(
+            differ.len() > 2000,
+            "the two trees differ on {} pixels",
+            differ.len()
+        );
+        for (p, expected) in [(0.0, &from), (1.0, &to)] {
+            let (stats, img) = render(&pair, &dissolve(p));
+            assert_eq!(img.as_raw(), expected.as_raw(), "MSAA {samples}, p = {p}");
+            assert_eq!((stats.instances, stats.in_transition), (1, 1));
+        }
+        for p in [0.25f32, 0.5, 0.75] {
+            let (_, img) = render(&pair, &dissolve(p));
+            let px = |im: &image::RgbaImage, i: usize| im.as_raw()[4 * i..4 * i + 4].to_vec();
+            let mut incoming = 0usize;
+            for &i in &differ {
+                let (a, b, c) = (px(&from, i), px(&to, i), px(&img, i));
+                assert!(
+                    c == a || c == b,
+                    "MSAA {samples}, p = {p}: pixel {i} is neither"
+                );
+                incoming += (c == b) as usize;
+            }
+            let share = incoming as f32 / differ.len() as f32;
+            assert!(
+                (share - p).abs() < 0.1,
+                "MSAA {samples}, p = {p}: {share:.3} of the pixels show the incoming tree"
+            );
+        }
+    }
+}

@@ -366,8 +366,9 @@ impl World {
     }
 
     /// Builds, where a simplified method is shown, the billboard-cloud chain of every tree and
-    /// uploads each level as a character of its own; trees then switch between them (by
-    /// popping) with the same selection as the characters, their ε as the level error.
+    /// uploads each level as a character of its own; trees then switch between them with the
+    /// same selection and transitions as the characters, their ε as the level error (an alpha
+    /// or morph transition becomes a cross-dissolve, see [`LodDraw::Dissolve`]).
     pub fn ensure_tree_levels(&mut self, gpu: &Gpu) -> Result<()> {
         if !self.lod.methods().any(|m| m != LodMethod::None) {
             return Ok(());
@@ -456,9 +457,10 @@ impl World {
     pub fn upload(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> FrameStats {
         let view = FrameView::from_camera(&self.camera, aspect, time);
         let lod = &self.lod;
-        // Trees draw their level's own character (a billboard cloud) at full detail; a
-        // transition between two levels pops at its midpoint. Without tree levels the crowd
-        // goes to the renderer as it is.
+        // Trees draw their level's own character (a billboard cloud) at full detail; between
+        // two levels (an alpha or a morph transition) they cross-dissolve, the two levels'
+        // characters drawn as two instances. Without tree levels the crowd goes to the
+        // renderer as it is.
         let has_trees = self.tree_levels.iter().any(Option::is_some);
         let sides = 1 + lod.compare.is_some() as usize;
         for i in (0..sides).filter(|_| has_trees) {
@@ -466,16 +468,32 @@ impl World {
             instances.clear();
             draws.clear();
             for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
-                let (inst, d) = match self.tree_levels.get(inst.model).and_then(Option::as_ref) {
-                    Some(levels) => {
-                        let k = (d.nearest_level() as usize).min(levels.len() - 1);
-                        let model = levels[k];
-                        (Instance { model, ..*inst }, LodDraw::Level(k as u8))
-                    }
-                    None => (*inst, *d),
+                let Some(levels) = self.tree_levels.get(inst.model).and_then(Option::as_ref) else {
+                    instances.push(*inst);
+                    draws.push(*d);
+                    continue;
                 };
-                instances.push(inst);
-                draws.push(d);
+                let at = |k: u8| Instance {
+                    model: levels[(k as usize).min(levels.len() - 1)],
+                    ..*inst
+                };
+                match *d {
+                    LodDraw::Level(k) | LodDraw::Dissolve { level: k, .. } => {
+                        instances.push(at(k));
+                        draws.push(LodDraw::Level(k));
+                    }
+                    LodDraw::Alpha { from, to, p }
+                    | LodDraw::Morph {
+                        fine: from,
+                        coarse: to,
+                        t: p,
+                    } => {
+                        for (level, incoming) in [(from, false), (to, true)] {
+                            instances.push(at(level));
+                            draws.push(LodDraw::Dissolve { level, p, incoming });
+                        }
+                    }
+                }
             }
         }
         let drawn = &self.drawn;

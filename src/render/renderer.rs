@@ -18,6 +18,13 @@
 //! faded level has opacity 0 and the image is exactly the outgoing level; at p = 1 exactly the
 //! incoming one; at p = ½ both halves show the depth-nearest of the two levels, so the switch of
 //! roles is seamless.
+//!
+//! Trees change level by a screen-door cross-dissolve instead ([`LodDraw::Dissolve`]): their
+//! billboard-cloud levels have no vertices in common to morph, and blending thousands of
+//! overlapping cut-out leaves would need sorting. Both levels are drawn opaque, the incoming one
+//! only where a fixed per-pixel threshold lies below p and the outgoing one only where it does
+//! not, so each pixel shows exactly one of them, the share of the incoming one grows evenly with
+//! p, and p = 0 and p = 1 are exactly the two levels.
 
 use super::character::{self, GpuCharacter};
 use super::gpu::Gpu;
@@ -161,6 +168,9 @@ pub struct FrameStats {
 const PASS_OPAQUE: u64 = 0;
 const PASS_MORPH: u64 = 1;
 const PASS_FADE: u64 = 2;
+/// The outgoing half of a dissolve: drawn with the opaque draws, but its shadow is the
+/// incoming half's.
+const PASS_DISSOLVE_OUT: u64 = 3;
 
 /// A group of instances drawn by one instanced call. The fields are packed into a sort key:
 /// pass, side, model, method slot, level, hops.
@@ -625,11 +635,22 @@ impl SceneRenderer {
                 let key = |pass, level: usize, hops: usize| {
                     DrawKey::new(pass, side_index, inst.model, slot, level as u8, hops as u8).0
                 };
-                stats.instances += 1;
-                // The level the instance asked for (a tree's level is a character of its own,
-                // drawn at its only level).
-                stats.levels[(draw.nearest_level() as usize).min(MAX_LEVELS - 1)] += 1;
-                stats.in_transition += draw.in_transition() as u64;
+                // The outgoing half of a dissolve is the same instance as its incoming half,
+                // which counts it.
+                let second_half = matches!(
+                    draw,
+                    LodDraw::Dissolve {
+                        incoming: false,
+                        ..
+                    }
+                );
+                if !second_half {
+                    stats.instances += 1;
+                    // The level the instance asked for (a tree's level is a character of its
+                    // own, drawn at its only level).
+                    stats.levels[(draw.nearest_level() as usize).min(MAX_LEVELS - 1)] += 1;
+                    stats.in_transition += draw.in_transition() as u64;
+                }
                 let mut count = |k: usize, extra_influences: u32| {
                     let l = &set.levels[k];
                     stats.triangles += l.triangles() as u64;
@@ -668,6 +689,21 @@ impl SceneRenderer {
                         self.keyed.push((key(PASS_OPAQUE, opaque, 0), g));
                         g.lod = [p, 0.0, opacity, faded as f32];
                         self.keyed.push((key(PASS_FADE, faded, 0), g));
+                    }
+                    LodDraw::Dissolve { level, p, incoming } => {
+                        // The foliage shaders keep a pixel where its threshold lies below
+                        // lod.z ≥ 0, or at or above −lod.z − 1 when lod.z < 0 (see
+                        // shaders/character.wgsl): the two halves cover complementary pixels.
+                        let k = (level as usize).min(last);
+                        let p = p.clamp(0.0, 1.0);
+                        let (pass, coverage) = if incoming {
+                            (PASS_OPAQUE, p)
+                        } else {
+                            (PASS_DISSOLVE_OUT, -1.0 - p)
+                        };
+                        g.lod = [p, 0.0, coverage, level as f32];
+                        count(k, 0);
+                        self.keyed.push((key(pass, k, 0), g));
                     }
                 }
             }
@@ -726,11 +762,12 @@ impl SceneRenderer {
         if self.draws.is_empty() {
             return;
         }
-        // Every instance has exactly one opaque draw (opaque level or morph): its shadow goes
-        // with it.
+        // Every instance has exactly one opaque draw (opaque level, morph or the incoming half
+        // of a dissolve): its shadow goes with it.
         if self.shadows {
             pass.set_pipeline(&self.shadow);
-            for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() != PASS_FADE) {
+            let casts = |k: &DrawKey| matches!(k.pass(), PASS_OPAQUE | PASS_MORPH);
+            for (key, range) in self.draws.iter().filter(|(k, _)| casts(k)) {
                 scissor.side(pass, key.side());
                 pass.set_bind_group(1, &self.characters[key.model()].full().bind_group, &[]);
                 pass.draw(0..6, range.clone());

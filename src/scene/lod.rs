@@ -200,6 +200,16 @@ pub enum LodDraw {
         to: u8,
         p: f32,
     },
+    /// One half of a screen-door cross-dissolve between two models drawn as separate
+    /// instances (a tree's billboard-cloud levels, which share no vertices to morph and whose
+    /// overlapping leaves cannot be blended without sorting): every pixel shows either the
+    /// outgoing model or the incoming one, the incoming one where a fixed per-pixel threshold
+    /// lies below `p`. Drawn opaque; `level` is the level it stands for.
+    Dissolve {
+        level: u8,
+        p: f32,
+        incoming: bool,
+    },
 }
 
 impl LodDraw {
@@ -225,6 +235,7 @@ impl LodDraw {
                     to
                 }
             }
+            LodDraw::Dissolve { level, .. } => level,
         }
     }
 
@@ -233,7 +244,7 @@ impl LodDraw {
         match *self {
             LodDraw::Level(_) => 0.0,
             LodDraw::Morph { t, .. } => t,
-            LodDraw::Alpha { p, .. } => p,
+            LodDraw::Alpha { p, .. } | LodDraw::Dissolve { p, .. } => p,
         }
     }
 }
