@@ -21,7 +21,7 @@ fn main() -> Result<()> {
         let tree = lodlab::import::load_model(name)?;
         let f = foliage(&tree).map_err(|e| anyhow!(e))?;
         let start = std::time::Instant::now();
-        let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default())?;
+        let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default(), &|_| {})?;
         println!(
             "\n{name}: chain of {} levels built in {:.2} s; {TREES} trees, {WIDTH}x{HEIGHT}",
             chain.len(),

@@ -16,7 +16,8 @@ pub struct Builtin {
 pub enum Kind {
     /// A subdivided, closed, skinned character (`horse`, `walker`).
     Creature,
-    /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`).
+    /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`,
+    /// and `sapling`, the size of the thesis's tree).
     Tree,
 }
 
@@ -39,6 +40,11 @@ pub const BUILTINS: &[Builtin] = &[
     Builtin {
         name: "conifer",
         file_name: "conifer.glb",
+        kind: Kind::Tree,
+    },
+    Builtin {
+        name: "sapling",
+        file_name: "sapling.glb",
         kind: Kind::Tree,
     },
 ];

@@ -32,7 +32,7 @@ enum Command {
     View(ViewArgs),
     /// Render a scene headless to a PNG and print one JSON line of figures.
     Shot(ShotArgs),
-    /// Regenerate the demo creatures (horse, walker) as .glb files.
+    /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling) as .glb files.
     GenAssets(GenAssetsArgs),
     /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS),
     /// or fetch them from the cache, and print them as a table.

@@ -5,9 +5,10 @@
 //! creatures) and consumed by `bake`. Nothing here knows about the GPU.
 
 use glam::{Affine3A, Mat4, Quat, Vec2, Vec3, Vec4};
+use serde::{Deserialize, Serialize};
 
 /// A translation / rotation / scale triple, as glTF stores a node's local transform.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Trs {
     pub translation: Vec3,
     pub rotation: Quat,
@@ -28,7 +29,7 @@ impl Trs {
 
 /// One node of the skeleton hierarchy. Nodes are stored parents first, so a single forward pass
 /// computes global transforms.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Node {
     pub name: String,
     pub parent: Option<u32>,
@@ -39,7 +40,7 @@ pub struct Node {
 ///
 /// In the notation of Merry et al. §2.1.1, bone `i` has the pose matrix `G_i` (bone space to model
 /// space) and the rest-pose matrix `Ĝ_i`; glTF stores `Ĝ_i⁻¹` directly as the inverse bind matrix.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Skeleton {
     /// All joints and their ancestors, parents before children.
     pub nodes: Vec<Node>,
@@ -59,7 +60,7 @@ impl Skeleton {
 }
 
 /// How a channel's keyframes are interpolated (glTF 2.0 §3.11).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Interpolation {
     Step,
     Linear,
@@ -67,7 +68,7 @@ pub enum Interpolation {
 }
 
 /// Which part of a node's transform a channel drives.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ChannelTarget {
     Translation,
     Rotation,
@@ -75,7 +76,7 @@ pub enum ChannelTarget {
 }
 
 /// One animated property of one node.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Channel {
     pub node: u32,
     pub target: ChannelTarget,
@@ -88,7 +89,7 @@ pub struct Channel {
 }
 
 /// A named animation clip. Clips loop: time is taken modulo `duration`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Clip {
     pub name: String,
     pub duration: f32,
@@ -99,14 +100,14 @@ pub struct Clip {
 }
 
 /// One bone's share of a vertex in classic linear blend skinning.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Influence {
     pub bone: u32,
     pub weight: f32,
 }
 
 /// An indexed triangle mesh with per-vertex skin influences of any count.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SkinnedMesh {
     /// Rest (bind) positions `v̂`, in the mesh space the inverse bind matrices expect.
     pub positions: Vec<Vec3>,
@@ -172,7 +173,7 @@ impl SkinnedMesh {
 }
 
 /// An 8-bit RGBA image, rows top to bottom.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Rgba8Image {
     pub width: u32,
     pub height: u32,
@@ -180,7 +181,7 @@ pub struct Rgba8Image {
 }
 
 /// The part of a glTF material lodlab renders: the base colour.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     pub name: String,
     /// Linear RGBA factor, multiplied with the texture.
@@ -190,7 +191,7 @@ pub struct Material {
 }
 
 /// A skinned, animated character.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Model {
     pub name: String,
     pub mesh: SkinnedMesh,

@@ -276,7 +276,7 @@ fn the_chain_falls_to_a_handful_of_billboards() {
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("broadleaf").unwrap();
     let f = foliage(&tree).unwrap();
-    let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default()).unwrap();
+    let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default(), &|_| {}).unwrap();
     assert!(chain.len() >= 5, "{} levels", chain.len());
     assert_eq!(chain[0].epsilon, 0.0);
     assert_eq!(chain[0].cloud.model, tree);

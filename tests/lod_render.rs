@@ -161,7 +161,9 @@ fn a_thousand_instances_take_a_handful_of_draws() {
         match *d {
             LodDraw::Level(k) => groups.insert((inst.model, 0, k, 0)),
             LodDraw::Morph { fine, coarse, .. } => groups.insert((inst.model, 1, fine, coarse)),
-            LodDraw::Alpha { .. } => unreachable!("the default transition is a morph"),
+            LodDraw::Alpha { .. } | LodDraw::Dissolve { .. } => {
+                unreachable!("the default transition is a morph, and there are no trees")
+            }
         };
     }
     assert_eq!(stats.draw_calls as usize, groups.len());

@@ -137,7 +137,7 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
 /// second bake of the same method comes from the cache.
 #[test]
 fn background_bakes_finish_and_fill_the_cache() {
-    use lodlab::app::levels::{BackgroundBake, LevelSource, Poll};
+    use lodlab::app::levels::{BackgroundBake, LevelSource, Levels, Poll};
     use lodlab::bake::cache::{LodCache, source_hash};
     let dir = tempfile::tempdir().unwrap();
     let sources: Vec<LevelSource> = ["walker"]
@@ -155,25 +155,28 @@ fn background_bakes_finish_and_fill_the_cache() {
         }
     };
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
-    let (packs, fraction) = wait(BackgroundBake::start(
-        sources.clone(),
-        Method::AnimationSpace,
-        cache.clone(),
-    ));
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let bake = |sources: Vec<LevelSource>| {
+        let has_chain = vec![false; sources.len()];
+        let method = Method::AnimationSpace;
+        BackgroundBake::start(gpu.clone(), sources, has_chain, method, cache.clone())
+    };
+    let (packs, fraction) = wait(bake(sources.clone()));
     assert_eq!(fraction, 1.0);
     assert_eq!(packs.len(), 1);
     // A character gets packed levels (a tree would get none: its levels are clouds).
-    let pack = packs[0].as_ref().unwrap().as_ref().unwrap();
+    let Some(Ok(Levels::Pack(pack))) = &packs[0] else {
+        panic!("the walker has no packed levels");
+    };
     assert!(pack.levels.len() >= 4);
     let files = std::fs::read_dir(dir.path()).unwrap().count();
     assert_eq!(files, 1, "one cache file per (model, method)");
     let start = std::time::Instant::now();
-    let (again, _) = wait(BackgroundBake::start(
-        sources,
-        Method::AnimationSpace,
-        cache,
-    ));
-    assert_eq!(again[0].as_ref().unwrap().as_ref().unwrap(), pack);
+    let (again, _) = wait(bake(sources));
+    let Some(Ok(Levels::Pack(again))) = &again[0] else {
+        panic!("the walker has no packed levels the second time");
+    };
+    assert_eq!(again, pack);
     eprintln!("from the cache in {:?}", start.elapsed());
 }
 

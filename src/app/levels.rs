@@ -1,12 +1,15 @@
 //! Levels of detail for the front ends: baked on first use (or read from the cache), in parallel
 //! over models, either at once (`shot`) or on a background thread while the viewer keeps drawing
-//! (the panel shows the progress).
+//! (the panel shows the progress). Characters get progressive-mesh levels by a method; trees
+//! get their billboard-cloud chain, the same for every method, built with the first one.
 
-use crate::bake::cache::LodCache;
+use crate::bake::CharacterBake;
+use crate::bake::cache::{LodCache, Origin};
 use crate::bake::lod::SkinnedLods;
 use crate::bake::lod_pack::LodPack;
 use crate::bake::simplify::Method;
 use crate::model::Model;
+use crate::render::Gpu;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -29,9 +32,21 @@ pub fn runtime_options(model: &Model) -> crate::bake::lod::LodOptions {
 /// `lodlab bake --tolerance` default: the error bound of LOD 1 in pixels.
 pub const DEFAULT_BAKE_TOLERANCE_PX: f32 = 0.5;
 
-/// What baking one model by a method gave: its packed levels, or nothing for a tree (trees get
-/// billboard-cloud levels instead, see [`crate::app::tree_levels`]).
-pub type Baked = Option<Result<LodPack, String>>;
+/// A model's levels as baked.
+pub enum Levels {
+    /// A character's progressive-mesh levels by one method.
+    Pack(LodPack),
+    /// A tree's billboard-cloud chain (level 0 the tree itself), with levels 1… baked for
+    /// the GPU (on the baking thread: their atlases' mipmaps take a while).
+    Tree {
+        chain: Vec<super::tree_levels::TreeLevel>,
+        bakes: Vec<CharacterBake>,
+    },
+}
+
+/// What baking one model by a method gave: its levels, or `None` for a tree whose chain is
+/// there already.
+pub type Baked = Option<Result<Levels, String>>;
 
 /// Is this model a tree (foliage cut out with alpha)?
 pub fn is_tree(model: &Model) -> bool {
@@ -41,10 +56,13 @@ pub fn is_tree(model: &Model) -> bool {
         .any(crate::bake::billboard::is_cut_out)
 }
 
-/// The levels of every model by `method`, in model order, from the cache or baked now.
-/// `progress(i, f)` reports model i's fraction done. Cache warnings go to `warn`.
+/// The levels of every model by `method`, in model order, from the cache or baked now; trees
+/// whose `has_chain` is set are skipped. `progress(i, f)` reports model i's fraction done.
+/// Cache warnings go to `warn`.
 pub fn bake_all(
+    gpu: &Gpu,
     sources: &[LevelSource],
+    has_chain: &[bool],
     method: Method,
     cache: &LodCache,
     progress: &(dyn Fn(usize, f32) + Sync),
@@ -54,20 +72,46 @@ pub fn bake_all(
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
-            if is_tree(&s.model) {
+            if is_tree(&s.model) && has_chain.get(i).copied().unwrap_or(false) {
                 progress(i, 1.0);
                 return None;
             }
-            let options = runtime_options(&s.model);
-            let (lods, origin) =
-                cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
-            if let crate::bake::cache::Origin::Baked { warning: Some(w) } = origin {
+            let (levels, origin) = if is_tree(&s.model) {
+                match tree_levels(gpu, cache, s, &|f| progress(i, f)) {
+                    Ok((levels, origin)) => (Ok(levels), origin),
+                    Err(e) => (Err(format!("{}: {e:#}", s.model.name)), Origin::Cache),
+                }
+            } else {
+                let options = runtime_options(&s.model);
+                let (lods, origin) =
+                    cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
+                (pack(&lods).map(Levels::Pack), origin)
+            };
+            if let Origin::Baked { warning: Some(w) } = origin {
                 warn(w);
             }
             progress(i, 1.0);
-            Some(pack(&lods))
+            Some(levels)
         })
         .collect()
+}
+
+/// A tree's chain from the cache or built now, its levels 1… baked for the GPU.
+fn tree_levels(
+    gpu: &Gpu,
+    cache: &LodCache,
+    s: &LevelSource,
+    progress: &dyn Fn(f32),
+) -> anyhow::Result<(Levels, Origin)> {
+    let opts = Default::default();
+    let (chain, origin) =
+        super::tree_levels::load_or_build_chain(gpu, cache, &s.model, &s.hash, &opts, progress)?;
+    let bakes = chain[1..]
+        .par_iter()
+        .map(|l| CharacterBake::new(&l.cloud.model))
+        .collect::<Result<Vec<_>, String>>()
+        .map_err(anyhow::Error::msg)?;
+    Ok((Levels::Tree { chain, bakes }, origin))
 }
 
 fn pack(lods: &SkinnedLods) -> Result<LodPack, String> {
@@ -91,7 +135,13 @@ pub enum Poll {
 }
 
 impl BackgroundBake {
-    pub fn start(sources: Vec<LevelSource>, method: Method, cache: LodCache) -> BackgroundBake {
+    pub fn start(
+        gpu: Gpu,
+        sources: Vec<LevelSource>,
+        has_chain: Vec<bool>,
+        method: Method,
+        cache: LodCache,
+    ) -> BackgroundBake {
         let progress: Arc<Vec<AtomicU32>> =
             Arc::new((0..sources.len()).map(|_| AtomicU32::new(0)).collect());
         let (tx, rx) = channel();
@@ -101,7 +151,7 @@ impl BackgroundBake {
                 p[i].store((f.clamp(0.0, 1.0) * 1000.0) as u32, Ordering::Relaxed);
             };
             let warn = |w: String| eprintln!("warning: {w}");
-            let packs = bake_all(&sources, method, &cache, &report, &warn);
+            let packs = bake_all(&gpu, &sources, &has_chain, method, &cache, &report, &warn);
             let _ = tx.send(packs);
         });
         BackgroundBake {

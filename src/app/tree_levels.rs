@@ -3,19 +3,22 @@
 
 use crate::bake::billboard::atlas::{atlas_triangles, dilate, layout};
 use crate::bake::billboard::cloud::CloudParams;
+use crate::bake::billboard::siblings::merge_siblings;
 use crate::bake::billboard::wood::{WoodChain, only_foliage};
 use crate::bake::billboard::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
+use crate::bake::cache::{LodCache, Origin};
 use crate::bake::materials::MaterialLayers;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::atlas::render_atlas;
 use anyhow::{Result, anyhow};
+use serde::{Deserialize, Serialize};
 
 /// Texels of dilated colour round every leaf in the atlas.
 const DILATE_RINGS: u32 = 4;
 
 /// What one cloud level is.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CloudLevel {
     pub model: Model,
     pub billboards: usize,
@@ -37,6 +40,13 @@ pub fn cloud_level(
     texels_per_unit: f32,
     wood: &Model,
 ) -> Result<CloudLevel> {
+    let merged;
+    let foliage = if grouping == Grouping::Siblings {
+        merged = merge_siblings(tree, foliage, params.epsilon);
+        &merged
+    } else {
+        foliage
+    };
     let cloud = grouped_cloud(&tree.skeleton, foliage, params, grouping);
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
@@ -79,6 +89,17 @@ pub const METRIC_FRAMES: usize = 5;
 /// its loop; the share of the original's foliage pixels that the two masks disagree on, over
 /// all of them. 0 for identical trees.
 pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) -> Result<f32> {
+    colour_error_over(gpu, original, lod, size, METRIC_FRAMES)
+}
+
+/// [`colour_error`] at `frames` times of the loop (1: the thesis's static colour metric).
+pub fn colour_error_over(
+    gpu: &Gpu,
+    original: &Model,
+    lod: &Model,
+    size: [u32; 2],
+    frames: usize,
+) -> Result<f32> {
     use crate::app::world::{Loaded, World};
     use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
     let world_of = |m: &Model| -> Result<World> {
@@ -116,8 +137,8 @@ pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) ->
             height * 1.25,
         );
         let background = shoot(&mut a, camera, 0.0, true)?;
-        for frame in 0..METRIC_FRAMES {
-            let t = duration * frame as f32 / METRIC_FRAMES as f32;
+        for frame in 0..frames.max(1) {
+            let t = duration * frame as f32 / frames.max(1) as f32;
             let ia = shoot(&mut a, camera, t, false)?;
             let ib = shoot(&mut b, camera, t, false)?;
             for ((p, q), bg) in ia.pixels().zip(ib.pixels()).zip(background.pixels()) {
@@ -132,7 +153,7 @@ pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) ->
 }
 
 /// How a tree's chain of levels is cut.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ChainOptions {
     /// ε of level 1, as a fraction of the tree's height; each level doubles it.
     pub first_epsilon: f32,
@@ -156,7 +177,7 @@ impl Default for ChainOptions {
 }
 
 /// One level of a tree's chain.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TreeLevel {
     /// ε in scene units (0 for the full tree, level 0).
     pub epsilon: f32,
@@ -167,7 +188,7 @@ pub struct TreeLevel {
 
 /// The groupings tried in turn, finest first.
 const GROUPINGS: [Grouping; 5] = [
-    Grouping::PerBone,
+    Grouping::Siblings,
     Grouping::Subtree { forks: 3 },
     Grouping::Subtree { forks: 2 },
     Grouping::Subtree { forks: 1 },
@@ -176,27 +197,21 @@ const GROUPINGS: [Grouping; 5] = [
 
 /// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε doubling
 /// from `first_epsilon`, each with the wood simplified to the same error bound
-/// ([`WoodChain`]). Clouds are built per bone while that pays; where doubling ε would not
+/// ([`WoodChain`]). Clouds are built per bone, sibling bones that move alike within ε
+/// sharing one ([`Grouping::Siblings`]), while that pays; where doubling ε would not
 /// cut the count by a fifth, the leaves are grouped by coarser branch subtrees instead (down
 /// to one cloud for the whole crown), until a level has at most `last_billboards` billboards.
+///
+/// `progress` hears the fraction done (estimated: about eight levels to a chain).
 pub fn tree_chain(
     gpu: &Gpu,
     tree: &Model,
     foliage: &Foliage,
     opts: &ChainOptions,
+    progress: &dyn Fn(f32),
 ) -> Result<Vec<TreeLevel>> {
     let h = crate::bake::billboard::tree_height(tree);
-    let mut levels = vec![TreeLevel {
-        epsilon: 0.0,
-        grouping: None,
-        cloud: CloudLevel {
-            model: tree.clone(),
-            billboards: 0,
-            area: 0.0,
-            texture_bytes: 0,
-        },
-        bake_seconds: 0.0,
-    }];
+    let mut levels = vec![full_tree(tree)];
     let wood = WoodChain::new(tree);
     let mut eps = opts.first_epsilon.max(1e-4) * h;
     let mut g = 0usize;
@@ -227,8 +242,76 @@ pub fn tree_chain(
         if count <= opts.last_billboards {
             break;
         }
+        progress((levels.len() as f32 / 9.0).min(0.95));
         previous = count;
         eps *= 2.0;
     }
     Ok(levels)
+}
+
+/// Level 0 of a tree's chain: the tree itself.
+fn full_tree(tree: &Model) -> TreeLevel {
+    TreeLevel {
+        epsilon: 0.0,
+        grouping: None,
+        cloud: CloudLevel {
+            model: tree.clone(),
+            billboards: 0,
+            area: 0.0,
+            texture_bytes: 0,
+        },
+        bake_seconds: 0.0,
+    }
+}
+
+/// Bump whenever a chain's construction changes its output (the cache's own format version
+/// covers the encoding).
+const CHAIN_VERSION: u32 = 1;
+
+/// The cache key of a tree's chain: its source's hash, the chain options and the versions.
+pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> [u8; 32] {
+    let mut h = blake3::Hasher::new();
+    h.update(b"lodlab tree chain");
+    h.update(&crate::bake::cache::FORMAT_VERSION.to_le_bytes());
+    h.update(&CHAIN_VERSION.to_le_bytes());
+    h.update(source);
+    h.update(&postcard::to_stdvec(opts).unwrap_or_default());
+    *h.finalize().as_bytes()
+}
+
+/// The chain of `tree` (whose source file hashes to `source`) from `cache` if a good one is
+/// there, else built now and stored. The file holds levels 1… (level 0 is the tree). A tree
+/// with no source (all-zero hash: built in memory) is built and not cached.
+pub fn load_or_build_chain(
+    gpu: &Gpu,
+    cache: &LodCache,
+    tree: &Model,
+    source: &[u8; 32],
+    opts: &ChainOptions,
+    progress: &dyn Fn(f32),
+) -> Result<(Vec<TreeLevel>, Origin)> {
+    let build = || -> Result<Vec<TreeLevel>> {
+        let foliage = crate::bake::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
+        let mut chain = tree_chain(gpu, tree, &foliage, opts, progress)?;
+        chain.remove(0);
+        Ok(chain)
+    };
+    let (coarse, origin) = if source == &[0; 32] {
+        (build()?, Origin::Baked { warning: None })
+    } else {
+        let key = chain_key(source, opts);
+        cache.load_or_build(&cache.file(&tree.name, "clouds", &key), &key, build)?
+    };
+    let mut levels = vec![full_tree(tree)];
+    levels.extend(coarse);
+    Ok((levels, origin))
+}
+
+/// The tree standing still in its rest pose: its clips keep their length but move nothing.
+pub fn at_rest(tree: &Model) -> Model {
+    let mut still = tree.clone();
+    for clip in &mut still.clips {
+        clip.channels.clear();
+    }
+    still
 }

@@ -4,7 +4,10 @@
 //! every level side by side from one view (`levels.png`).
 
 use super::report::{plot_error, register_font, write_atomic};
-use super::tree_levels::{ChainOptions, TreeLevel, colour_error, tree_chain};
+use super::tree_levels::{
+    ChainOptions, TreeLevel, at_rest, cloud_level, colour_error, colour_error_over, tree_chain,
+};
+use crate::bake::billboard::cloud::CloudParams;
 use crate::bake::billboard::{Grouping, foliage, tree_height};
 use crate::model::Model;
 use crate::render::Gpu;
@@ -32,6 +35,16 @@ pub struct LevelReport {
     pub bake_seconds: f64,
 }
 
+/// The thesis's own set-up (§8.4): one static cloud for the whole crown, scored by the static
+/// colour metric (one frame, the tree at rest), for comparison with its figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct StaticCloudReport {
+    /// ε as a fraction of the tree's height.
+    pub epsilon: f32,
+    pub billboards: usize,
+    pub colour_error: f32,
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct TreeReport {
     pub model: String,
@@ -42,12 +55,15 @@ pub struct TreeReport {
     /// Seconds to build the whole chain (clouds and atlases).
     pub chain_seconds: f64,
     pub metric: String,
+    /// At the levels' ε: one static cloud for the whole crown, static colour metric.
+    pub static_clouds: Vec<StaticCloudReport>,
 }
 
 fn grouping_name(g: Option<Grouping>) -> String {
     match g {
         None => "full tree".into(),
         Some(Grouping::PerBone) => "per bone".into(),
+        Some(Grouping::Siblings) => "per bone, alike siblings merged".into(),
         Some(Grouping::Subtree { forks: 0 }) => "whole crown".into(),
         Some(Grouping::Subtree { forks }) => format!("subtree below {forks} forks"),
     }
@@ -60,7 +76,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let gpu = Gpu::headless()?;
     let h = tree_height(tree);
     let start = std::time::Instant::now();
-    let chain = tree_chain(&gpu, tree, &f, &ChainOptions::default())?;
+    let chain = tree_chain(&gpu, tree, &f, &ChainOptions::default(), &|_| {})?;
     let chain_seconds = start.elapsed().as_secs_f64();
     let mut levels = Vec::new();
     for (k, l) in chain.iter().enumerate() {
@@ -84,6 +100,31 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             bake_seconds: l.bake_seconds,
         });
     }
+    let still = at_rest(tree);
+    let mut static_clouds = Vec::new();
+    for l in &chain[1..] {
+        let params = CloudParams {
+            epsilon: l.epsilon,
+            ..Default::default()
+        };
+        let density =
+            (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
+        let whole = Grouping::Subtree { forks: 0 };
+        let cloud = cloud_level(&gpu, &still, &f, &params, whole, density, &still)?;
+        let error = colour_error_over(&gpu, &still, &cloud.model, METRIC_SIZE, 1)?;
+        eprintln!(
+            "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",
+            tree.name,
+            l.epsilon / h,
+            cloud.billboards,
+            error
+        );
+        static_clouds.push(StaticCloudReport {
+            epsilon: l.epsilon / h,
+            billboards: cloud.billboards,
+            colour_error: error,
+        });
+    }
     let report = TreeReport {
         model: tree.name.clone(),
         leaves: f.leaves.len(),
@@ -98,6 +139,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             super::tree_levels::METRIC_VIEWS,
             super::tree_levels::METRIC_FRAMES
         ),
+        static_clouds,
     };
     write_atomic(
         &out.join("report.json"),
@@ -130,7 +172,12 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .y_label_area_size(70)
             .build_cartesian_2d(
                 0.0..x1,
-                0.0..(pts.iter().map(|l| l.colour_error).fold(0.05f32, f32::max) as f64 * 1.15),
+                0.0..(pts
+                    .iter()
+                    .map(|l| l.colour_error)
+                    .chain(report.static_clouds.iter().map(|l| l.colour_error))
+                    .fold(0.05f32, f32::max) as f64
+                    * 1.15),
             )
             .map_err(plot_error)?;
         chart
@@ -153,6 +200,37 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .map_err(plot_error)?;
         chart
             .draw_series(series.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+            .map_err(plot_error)?
+            .label("skeleton clouds (the chain), animated")
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+        let green = RGBColor(40, 160, 70);
+        let still: Vec<(f64, f64)> = report
+            .static_clouds
+            .iter()
+            .map(|l| (l.epsilon as f64, l.colour_error as f64))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(
+                still.iter().copied(),
+                green.stroke_width(1),
+            ))
+            .map_err(plot_error)?;
+        chart
+            .draw_series(
+                still
+                    .iter()
+                    .map(|&p| TriangleMarker::new(p, 5, green.filled())),
+            )
+            .map_err(plot_error)?
+            .label("one static cloud, at rest (thesis §8.4)")
+            .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 5, green.filled()));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .label_font(("sans-serif", 15))
+            .draw()
             .map_err(plot_error)?;
 
         let red = RGBColor(220, 50, 40);
@@ -182,6 +260,24 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .map_err(plot_error)?;
         chart
             .draw_series(series.iter().map(|&p| Circle::new(p, 4, red.filled())))
+            .map_err(plot_error)?;
+        let still: Vec<(f64, f64)> = report
+            .static_clouds
+            .iter()
+            .map(|l| (l.epsilon as f64, (l.billboards.max(1) as f64).log10()))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(
+                still.iter().copied(),
+                green.stroke_width(1),
+            ))
+            .map_err(plot_error)?;
+        chart
+            .draw_series(
+                still
+                    .iter()
+                    .map(|&p| TriangleMarker::new(p, 5, green.filled())),
+            )
             .map_err(plot_error)?;
         root.present().map_err(plot_error)?;
     }

@@ -1,7 +1,8 @@
 //! Building a scene for the front ends: load the models, bake them, lay out the crowd, place the
 //! camera. Shared by the viewer, `shot` and the tests, so they all show the same thing.
 
-use super::levels::{Baked, LevelSource, bake_all, is_tree};
+use super::levels::{Baked, LevelSource, Levels, bake_all};
+use super::tree_levels::TreeLevel;
 use crate::bake::CharacterBake;
 use crate::bake::cache::{LodCache, source_hash};
 use crate::bake::lod_pack::LodPack;
@@ -334,75 +335,73 @@ impl World {
         LodCache::new(self.spec.cache_dir.clone())
     }
 
-    /// Uploads the levels of `method` for every model (`packs` in model order) and makes them
-    /// available to selection.
+    /// Which models have their tree chain on the GPU (for [`bake_all`]).
+    pub fn has_chain(&self) -> Vec<bool> {
+        self.tree_levels.iter().map(Option::is_some).collect()
+    }
+
+    /// Uploads the levels of `method` for every model (`packs` in model order, trees' chains
+    /// among them) and makes them available to selection.
     pub fn install_levels(&mut self, gpu: &Gpu, method: Method, packs: Vec<Baked>) -> Result<()> {
         let slot = LodMethod::Simplified(method).index();
         for (m, pack) in packs.into_iter().enumerate() {
-            let Some(pack) = pack else {
-                continue;
-            };
-            let pack = pack.map_err(anyhow::Error::msg)?;
-            self.renderer.add_levels(gpu, m, slot, &pack)?;
-            self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
+            match pack.transpose().map_err(anyhow::Error::msg)? {
+                None => {}
+                Some(Levels::Pack(pack)) => {
+                    self.renderer.add_levels(gpu, m, slot, &pack)?;
+                    self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
+                }
+                Some(Levels::Tree { chain, bakes }) => {
+                    self.install_tree_levels(gpu, m, &chain, &bakes)?
+                }
+            }
         }
         self.lod.reset();
         Ok(())
     }
 
     /// Bakes (or reads from the cache) and uploads the levels of every method the view shows
-    /// that is not there yet, waiting for them.
+    /// that is not there yet, trees' chains with the first, waiting for them.
     pub fn ensure_levels(&mut self, gpu: &Gpu) -> Result<()> {
         for method in self.lod.methods() {
             if let LodMethod::Simplified(m) = method
                 && !self.lod.has(method)
             {
                 let warn = |w: String| eprintln!("warning: {w}");
-                let packs = bake_all(&self.sources, m, &self.cache(), &|_, _| {}, &warn);
+                let has_chain = self.has_chain();
+                let cache = self.cache();
+                let packs = bake_all(gpu, &self.sources, &has_chain, m, &cache, &|_, _| {}, &warn);
                 self.install_levels(gpu, m, packs)?;
             }
         }
-        self.ensure_tree_levels(gpu)
+        Ok(())
     }
 
-    /// Builds, where a simplified method is shown, the billboard-cloud chain of every tree and
-    /// uploads each level as a character of its own; trees then switch between them with the
-    /// same selection and transitions as the characters, their ε as the level error (an alpha
-    /// or morph transition becomes a cross-dissolve, see [`LodDraw::Dissolve`]).
-    pub fn ensure_tree_levels(&mut self, gpu: &Gpu) -> Result<()> {
-        if !self.lod.methods().any(|m| m != LodMethod::None) {
-            return Ok(());
+    /// Uploads every level of tree `m`'s billboard-cloud chain (`bakes`: levels 1…) as a
+    /// character of its own; the tree then switches between them with the same selection and
+    /// transitions as the characters under every simplified method, its ε as the level error
+    /// (an alpha or morph transition becomes a cross-dissolve, see [`LodDraw::Dissolve`]).
+    fn install_tree_levels(
+        &mut self,
+        gpu: &Gpu,
+        m: usize,
+        chain: &[TreeLevel],
+        bakes: &[CharacterBake],
+    ) -> Result<()> {
+        let mut characters = vec![m];
+        for bake in bakes {
+            characters.push(self.renderer.add_character(gpu, bake)?);
         }
-        for m in 0..self.sources.len() {
-            if self.tree_levels[m].is_some() || !is_tree(&self.sources[m].model) {
-                continue;
-            }
-            let tree = &self.sources[m].model;
-            let foliage = crate::bake::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
-            let chain = super::tree_levels::tree_chain(
-                gpu,
-                tree,
-                &foliage,
-                &super::tree_levels::ChainOptions::default(),
-            )?;
-            let mut characters = vec![m];
-            for level in &chain[1..] {
-                let bake = CharacterBake::new(&level.cloud.model)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", tree.name))?;
-                characters.push(self.renderer.add_character(gpu, &bake)?);
-            }
-            let errors: Vec<f32> = chain.iter().map(|l| l.epsilon).collect();
-            let b = &self.bakes[m];
-            for method in LodMethod::ALL.into_iter().skip(1) {
-                self.lod.models[m][method.index()] = Some(LodModel {
-                    errors: errors.clone(),
-                    center: b.bounds.center(),
-                    radius: b.bounds.diagonal() * 0.5,
-                });
-            }
-            self.tree_levels[m] = Some(characters);
+        let errors: Vec<f32> = chain.iter().map(|l| l.epsilon).collect();
+        let b = &self.bakes[m];
+        for method in LodMethod::ALL.into_iter().skip(1) {
+            self.lod.models[m][method.index()] = Some(LodModel {
+                errors: errors.clone(),
+                center: b.bounds.center(),
+                radius: b.bounds.diagonal() * 0.5,
+            });
         }
-        self.lod.reset();
+        self.tree_levels[m] = Some(characters);
         Ok(())
     }
 

@@ -1,6 +1,7 @@
 //! The on-disk cache of level-of-detail bakes, so the viewer starts fast.
 //!
-//! One file per (model, method, parameters). Its name carries a key: a hash of the source
+//! One file per (model, method, parameters): progressive-mesh levels ([`SkinnedLods`]), or a
+//! tree's chain of billboard-cloud levels (see `crate::app::tree_levels`). Its name carries a key: a hash of the source
 //! file's bytes (and of the external buffers a `.gltf` names), the bake parameters and
 //! [`FORMAT_VERSION`]. A changed model or parameter therefore looks for another file. Inside,
 //! a header repeats the version and the key and holds a hash of the payload, so a file from
@@ -8,15 +9,18 @@
 //! never trusted.
 //!
 //! Layout: `LODLABLC` | format version (u32 LE) | key (32 bytes) | payload hash (32 bytes) |
-//! payload length (u64 LE) | payload (postcard-encoded [`SkinnedLods`]).
+//! payload length (u64 LE) | payload (postcard-encoded, then LZ4-compressed: billboard-cloud
+//! atlases are mostly empty texels).
 
 use super::lod::{LodOptions, SkinnedLods};
 use super::simplify::Method;
 use super::simplify::expectation::MIN_SAMPLES;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
 /// Bump whenever the bake's output or its encoding changes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 const MAGIC: &[u8; 8] = b"LODLABLC";
 const HEADER: usize = 8 + 4 + 32 + 32 + 8;
 
@@ -28,8 +32,8 @@ pub struct LodCache {
 
 /// What looking a bake up found.
 #[derive(Debug)]
-pub enum Lookup {
-    Hit(Box<SkinnedLods>),
+pub enum Lookup<T = SkinnedLods> {
+    Hit(Box<T>),
     Miss,
     /// A file was there but cannot be used; the reason is one line.
     Unusable(String),
@@ -49,22 +53,27 @@ impl LodCache {
 
     /// The cache file for a bake.
     pub fn path(&self, model: &str, method: Method, key: &[u8; 32]) -> PathBuf {
-        let name: String = model
-            .chars()
-            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-            .take(40)
-            .collect();
         let method = match method {
             Method::RestPose => "rest-pose",
             Method::AnimationSpace => "as",
             Method::InfluenceSimplification => "as-is",
         };
+        self.file(model, method, key)
+    }
+
+    /// The cache file for a bake of `kind` (a method, or `clouds`) of a model.
+    pub fn file(&self, model: &str, kind: &str, key: &[u8; 32]) -> PathBuf {
+        let name: String = model
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .take(40)
+            .collect();
         let hex: String = key[..8].iter().map(|b| format!("{b:02x}")).collect();
-        self.dir.join(format!("{name}-{method}-{hex}.lods"))
+        self.dir.join(format!("{name}-{kind}-{hex}.lods"))
     }
 
     /// Reads a cached bake, checking its version, key and integrity.
-    pub fn load(&self, path: &Path, key: &[u8; 32]) -> Lookup {
+    pub fn load<T: DeserializeOwned>(&self, path: &Path, key: &[u8; 32]) -> Lookup<T> {
         let bytes = match std::fs::read(path) {
             Ok(b) => b,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Lookup::Miss,
@@ -93,16 +102,25 @@ impl LodCache {
         if blake3::hash(payload).as_bytes() != &bytes[44..76] {
             return Lookup::Unusable("corrupt: its checksum does not match".into());
         }
-        match postcard::from_bytes::<SkinnedLods>(payload) {
-            Ok(lods) => Lookup::Hit(Box::new(lods)),
+        let Ok(payload) = lz4_flex::decompress_size_prepended(payload) else {
+            return Lookup::Unusable("cannot decompress it".into());
+        };
+        match postcard::from_bytes::<T>(&payload) {
+            Ok(value) => Lookup::Hit(Box::new(value)),
             Err(e) => Lookup::Unusable(format!("cannot decode it ({e})")),
         }
     }
 
     /// Writes a bake atomically: a temporary file in the same folder, renamed into place.
-    pub fn store(&self, path: &Path, key: &[u8; 32], lods: &SkinnedLods) -> std::io::Result<()> {
+    pub fn store<T: Serialize>(
+        &self,
+        path: &Path,
+        key: &[u8; 32],
+        value: &T,
+    ) -> std::io::Result<()> {
         std::fs::create_dir_all(&self.dir)?;
-        let payload = postcard::to_stdvec(lods).map_err(std::io::Error::other)?;
+        let payload = postcard::to_stdvec(value).map_err(std::io::Error::other)?;
+        let payload = lz4_flex::compress_prepend_size(&payload);
         let mut bytes = Vec::with_capacity(HEADER + payload.len());
         bytes.extend_from_slice(MAGIC);
         bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
@@ -174,22 +192,38 @@ impl LodCache {
     ) -> (SkinnedLods, Origin) {
         let key = key(source, method, options);
         let path = self.path(&model.name, method, &key);
+        let Ok(found) = self.load_or_build(&path, &key, || {
+            Ok::<_, std::convert::Infallible>(super::lod::bake_lods(
+                model, method, options, progress,
+            ))
+        });
+        found
+    }
+
+    /// What the file at `path` holds under `key` if it is good, else `build()`'s result,
+    /// stored there. A file that cannot be used or written is a warning, never an error.
+    pub fn load_or_build<T: Serialize + DeserializeOwned, E>(
+        &self,
+        path: &Path,
+        key: &[u8; 32],
+        build: impl FnOnce() -> Result<T, E>,
+    ) -> Result<(T, Origin), E> {
         let mut warning = None;
-        match self.load(&path, &key) {
-            Lookup::Hit(lods) => return (*lods, Origin::Cache),
+        match self.load(path, key) {
+            Lookup::Hit(value) => return Ok((*value, Origin::Cache)),
             Lookup::Miss => {}
             Lookup::Unusable(why) => {
                 warning = Some(format!("{}: {why}; rebuilding it", path.display()));
             }
         }
-        let lods = super::lod::bake_lods(model, method, options, progress);
-        if let Err(e) = self.store(&path, &key, &lods) {
+        let value = build()?;
+        if let Err(e) = self.store(path, key, &value) {
             let w = format!("{}: cannot write the cache ({e})", path.display());
             warning = Some(match warning {
                 Some(first) => format!("{first}; {w}"),
                 None => w,
             });
         }
-        (lods, Origin::Baked { warning })
+        Ok((value, Origin::Baked { warning }))
     }
 }

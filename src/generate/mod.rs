@@ -22,6 +22,7 @@ pub fn generate(name: &str) -> Option<Model> {
         "walker" => Some(walker::walker()),
         "broadleaf" => Some(tree::broadleaf()),
         "conifer" => Some(tree::conifer()),
+        "sapling" => Some(tree::sapling()),
         _ => None,
     }
 }

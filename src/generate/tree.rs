@@ -106,6 +106,52 @@ fn broadleaf_species() -> Species {
     }
 }
 
+/// A small broad-leaved tree with about as many leaf quads (672) as the tree of the thesis's
+/// results (§8.4.1: 692 quads), for a direct comparison of billboard counts and colour error.
+fn sapling_species() -> Species {
+    Species {
+        name: "sapling",
+        height: 4.0,
+        trunk_radius: 0.12,
+        trunk_segments: 3,
+        generations: [
+            Generation {
+                children: 4,
+                segments: 2,
+                length: 0.72,
+                angle: 55.0,
+                start: 0.32,
+            },
+            Generation {
+                children: 3,
+                segments: 1,
+                length: 0.6,
+                angle: 40.0,
+                start: 0.3,
+            },
+            Generation {
+                children: 2,
+                segments: 1,
+                length: 0.62,
+                angle: 42.0,
+                start: 0.35,
+            },
+            Generation {
+                children: 2,
+                segments: 1,
+                length: 0.65,
+                angle: 38.0,
+                start: 0.4,
+            },
+        ],
+        conifer: false,
+        leaves_per_bone: 14,
+        leaf_size: 0.5,
+        foliage_from: 4,
+        seed: 5,
+    }
+}
+
 fn conifer_species() -> Species {
     Species {
         name: "conifer",
@@ -655,6 +701,11 @@ fn build(sp: &Species) -> Model {
 /// A broad-leaved tree about 7 m tall.
 pub fn broadleaf() -> Model {
     build(&broadleaf_species())
+}
+
+/// A broad-leaved sapling about 4 m tall, with 672 leaf quads: the size of the thesis's tree.
+pub fn sapling() -> Model {
+    build(&sapling_species())
 }
 
 /// A conifer about 10 m tall.

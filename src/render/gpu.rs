@@ -2,7 +2,9 @@
 
 use anyhow::{Context, Result, anyhow};
 
-/// The device and everything needed to use it.
+/// The device and everything needed to use it. A clone is another handle on the same device
+/// (for work on another thread).
+#[derive(Clone)]
 pub struct Gpu {
     pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,

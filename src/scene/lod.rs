@@ -661,7 +661,7 @@ mod tests {
         let coord = |d: &LodDraw| match *d {
             LodDraw::Level(k) => k as f32,
             LodDraw::Morph { fine, coarse, t } => fine as f32 + t * (coarse - fine) as f32,
-            LodDraw::Alpha { .. } => unreachable!(),
+            LodDraw::Alpha { .. } | LodDraw::Dissolve { .. } => unreachable!(),
         };
         let mut prev: Option<f32> = None;
         let mut z = 0.3f32;

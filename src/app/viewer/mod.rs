@@ -272,11 +272,7 @@ impl Viewer {
                 Poll::Done(packs) => {
                     let method = job.method;
                     self.bake = None;
-                    // Trees get their billboard clouds here, on the GPU (about a second each).
-                    let installed = self
-                        .world
-                        .install_levels(&self.gpu, method, packs)
-                        .and_then(|_| self.world.ensure_tree_levels(&self.gpu));
+                    let installed = self.world.install_levels(&self.gpu, method, packs);
                     if let Err(e) = installed {
                         self.bake_error = Some(format!("{method}: {e:#}"));
                     }
@@ -295,7 +291,9 @@ impl Viewer {
             && self.bake_error.is_none()
         {
             self.bake = Some(BackgroundBake::start(
+                self.gpu.clone(),
                 self.world.sources.clone(),
+                self.world.has_chain(),
                 method,
                 self.world.cache(),
             ));

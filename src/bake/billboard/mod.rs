@@ -10,6 +10,7 @@
 pub mod atlas;
 pub mod cloud;
 pub mod rect;
+pub mod siblings;
 pub mod wood;
 
 use crate::model::Model;
@@ -156,10 +157,14 @@ impl SkeletonCloud {
 }
 
 /// How leaves are split into separate clouds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Grouping {
     /// One cloud per bone (thesis Ch. 7): billboards move exactly as their leaves did.
     PerBone,
+    /// One cloud per set of sibling bones whose leaves move alike within ε (common joint
+    /// rotation, thesis §7.1, see [`siblings`]): the leaves are rebound to one bone of their
+    /// set with [`siblings::merge_siblings`] first, then clouds are built per bone.
+    Siblings,
     /// One cloud per branch subtree hanging below `forks` forks of the skeleton (0: one cloud
     /// for the whole crown). Coarser groups give fewer billboards; a billboard then moves with
     /// the deepest bone its leaves share, and the finer sway below it is lost (the thesis's
@@ -222,7 +227,7 @@ impl BoneTree {
     /// The bone whose cloud a leaf on `bone` joins.
     fn group(&self, bone: u32, grouping: Grouping) -> u32 {
         match grouping {
-            Grouping::PerBone => bone,
+            Grouping::PerBone | Grouping::Siblings => bone,
             Grouping::Subtree { forks } => {
                 let mut b = bone;
                 while let Some(p) = self.parent[b as usize] {
