@@ -1,6 +1,7 @@
 //! Frame times of a forest of 100 trees drawn at each level of their billboard-cloud chain, as
 //! ratios measured in one run: `cargo bench --bench tree_lod` (on lavapipe, or whatever
-//! adapter wgpu picks). Also the wall time of building each chain (clouds and atlases).
+//! adapter wgpu picks). Also the wall time of building each chain (clouds and atlases), and
+//! the ratios net of the frame without trees (sky, ground: the same at every level).
 
 use anyhow::{Result, anyhow};
 use lodlab::app::shot::time_renderer;
@@ -28,33 +29,49 @@ fn main() -> Result<()> {
             start.elapsed().as_secs_f64()
         );
         println!(
-            "{:<5} {:>10} {:>12} {:>14} {:>8} {:>14} {:>8}",
-            "level", "billboards", "triangles", "ms MSAA 4", "vs L0", "ms no MSAA", "vs L0"
+            "{:<5} {:>10} {:>10} {:>10} {:>6} {:>6} {:>10} {:>6} {:>6}",
+            "level",
+            "billboards",
+            "triangles",
+            "ms MSAA 4",
+            "vs L0",
+            "net",
+            "ms 1x",
+            "vs L0",
+            "net"
         );
+        let time = |m: &lodlab::model::Model, count: usize, samples: u32| -> Result<(f64, u64)> {
+            let mut loaded = Loaded::forest_of(m, TREES)?;
+            loaded.spec.count = count;
+            let mut world = World::new(&gpu, loaded, OFFSCREEN_FORMAT, samples)?;
+            let target = Offscreen::new(&gpu, WIDTH, HEIGHT, samples);
+            let triangles = world.prepare(&gpu, [WIDTH, HEIGHT], 2.0, 0.0).triangles;
+            time_renderer(&gpu, &world.renderer, &target, 1)?;
+            Ok((time_renderer(&gpu, &world.renderer, &target, 7)?, triangles))
+        };
+        let empty = [time(&tree, 0, 4)?.0, time(&tree, 0, 1)?.0];
+        println!("no trees: {:.1} ms MSAA 4, {:.1} ms 1x", empty[0], empty[1]);
         let mut l0 = [0.0; 2];
         for (k, level) in chain.iter().enumerate() {
-            let m = &level.cloud.model;
-            let loaded = Loaded::forest_of(m, TREES)?;
             let mut ms = [0.0; 2];
             let mut triangles = 0;
             for (i, samples) in [4, 1].into_iter().enumerate() {
-                let mut world = World::new(&gpu, loaded.clone(), OFFSCREEN_FORMAT, samples)?;
-                let target = Offscreen::new(&gpu, WIDTH, HEIGHT, samples);
-                triangles = world.prepare(&gpu, [WIDTH, HEIGHT], 2.0, 0.0).triangles;
-                time_renderer(&gpu, &world.renderer, &target, 1)?;
-                ms[i] = time_renderer(&gpu, &world.renderer, &target, 7)?;
+                (ms[i], triangles) = time(&level.cloud.model, TREES, samples)?;
                 if k == 0 {
                     l0[i] = ms[i];
                 }
             }
+            let net = |i: usize| (l0[i] - empty[i]) / (ms[i] - empty[i]).max(1e-3);
             println!(
-                "L{k:<4} {:>10} {:>12} {:>14.1} {:>7.1}x {:>14.1} {:>7.1}x",
+                "L{k:<4} {:>10} {:>10} {:>10.1} {:>5.1}x {:>5.1}x {:>10.1} {:>5.1}x {:>5.1}x",
                 level.cloud.billboards,
                 triangles,
                 ms[0],
                 l0[0] / ms[0],
+                net(0),
                 ms[1],
-                l0[1] / ms[1]
+                l0[1] / ms[1],
+                net(1)
             );
         }
     }

@@ -362,3 +362,47 @@ fn simplified_wood_keeps_its_vertices() {
     }
     assert!(last * 10 < wood(&tree));
 }
+
+/// A tree's chain is cached: the second load reads the file, and a damaged file is reported in
+/// one line and rebuilt, never trusted.
+#[test]
+fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
+    use lodlab::app::tree_levels::{ChainOptions, load_or_build_chain};
+    use lodlab::bake::cache::{LodCache, Origin, source_hash};
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let dir = tempfile::tempdir().unwrap();
+    let cache = LodCache::new(Some(dir.path().to_path_buf()));
+    let tree = load_model("sapling").unwrap();
+    let hash = source_hash(&lodlab::import::source_path("sapling")).unwrap();
+    let opts = ChainOptions::default();
+    let load = || load_or_build_chain(&gpu, &cache, &tree, &hash, &opts, &|_| {}).unwrap();
+    let (built, origin) = load();
+    assert_eq!(origin, Origin::Baked { warning: None });
+    let (cached, origin) = load();
+    assert_eq!(origin, Origin::Cache);
+    assert_eq!(cached.len(), built.len());
+    assert!(cached[0].cloud.model == tree, "level 0 is the tree itself");
+    for (a, b) in cached.iter().zip(&built).skip(1) {
+        assert!(a.cloud.model == b.cloud.model);
+        assert_eq!(a.grouping, b.grouping);
+    }
+    let file = std::fs::read_dir(dir.path())
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let mut bytes = std::fs::read(&file).unwrap();
+    let n = bytes.len();
+    bytes[n - 100] ^= 0x5a;
+    std::fs::write(&file, &bytes).unwrap();
+    let (rebuilt, origin) = load();
+    match origin {
+        Origin::Baked { warning: Some(w) } => {
+            assert!(w.contains("corrupt") && !w.contains('\n'), "{w}")
+        }
+        o => panic!("a damaged file was used: {o:?}"),
+    }
+    assert_eq!(rebuilt.len(), built.len());
+    assert_eq!(load().1, Origin::Cache, "the rebuilt chain is stored again");
+}

@@ -133,14 +133,14 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
     }
 }
 
-/// The viewer's background bake: it reports progress, ends with one pack per model, and a
-/// second bake of the same method comes from the cache.
+/// The viewer's background bake: it reports progress, ends with one pack per character and a
+/// billboard-cloud chain per tree, and a second bake of the same method comes from the cache.
 #[test]
 fn background_bakes_finish_and_fill_the_cache() {
     use lodlab::app::levels::{BackgroundBake, LevelSource, Levels, Poll};
     use lodlab::bake::cache::{LodCache, source_hash};
     let dir = tempfile::tempdir().unwrap();
-    let sources: Vec<LevelSource> = ["walker"]
+    let sources: Vec<LevelSource> = ["walker", "sapling"]
         .iter()
         .map(|name| LevelSource {
             model: load_model(name).unwrap(),
@@ -156,28 +156,57 @@ fn background_bakes_finish_and_fill_the_cache() {
     };
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
-    let bake = |sources: Vec<LevelSource>| {
-        let has_chain = vec![false; sources.len()];
+    let bake = |sources: Vec<LevelSource>, has_chain: Vec<bool>| {
         let method = Method::AnimationSpace;
         BackgroundBake::start(gpu.clone(), sources, has_chain, method, cache.clone())
     };
-    let (packs, fraction) = wait(bake(sources.clone()));
+    let (packs, fraction) = wait(bake(sources.clone(), vec![false, false]));
     assert_eq!(fraction, 1.0);
-    assert_eq!(packs.len(), 1);
-    // A character gets packed levels (a tree would get none: its levels are clouds).
+    assert_eq!(packs.len(), 2);
     let Some(Ok(Levels::Pack(pack))) = &packs[0] else {
         panic!("the walker has no packed levels");
     };
     assert!(pack.levels.len() >= 4);
-    let files = std::fs::read_dir(dir.path()).unwrap().count();
-    assert_eq!(files, 1, "one cache file per (model, method)");
-    let start = std::time::Instant::now();
-    let (again, _) = wait(bake(sources));
-    let Some(Ok(Levels::Pack(again))) = &again[0] else {
+    let Some(Ok(Levels::Tree { chain, bakes })) = &packs[1] else {
+        panic!("the sapling has no billboard-cloud chain");
+    };
+    assert!(chain.len() >= 4, "{} levels", chain.len());
+    assert_eq!(
+        bakes.len(),
+        chain.len() - 1,
+        "levels 1… are baked for the GPU"
+    );
+    assert!(chain.last().unwrap().cloud.billboards <= 10);
+    let mut files: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(
+        files.len(),
+        2,
+        "one cache file per (model, method) and per tree: {files:?}"
+    );
+    assert!(files[0].starts_with("sapling-clouds-") && files[1].starts_with("walker-as-"));
+    let (again, _) = wait(bake(sources.clone(), vec![false, false]));
+    let Some(Ok(Levels::Pack(again_pack))) = &again[0] else {
         panic!("the walker has no packed levels the second time");
     };
-    assert_eq!(again, pack);
-    eprintln!("from the cache in {:?}", start.elapsed());
+    assert_eq!(again_pack, pack);
+    let Some(Ok(Levels::Tree { chain: again, .. })) = &again[1] else {
+        panic!("the sapling has no chain the second time");
+    };
+    assert_eq!(again.len(), chain.len());
+    for (a, b) in again.iter().zip(chain) {
+        assert_eq!(
+            (a.epsilon, a.cloud.billboards),
+            (b.epsilon, b.cloud.billboards)
+        );
+        assert!(a.cloud.model == b.cloud.model, "a cached level differs");
+    }
+    // A tree whose chain is on the GPU already is left alone.
+    let (skipped, _) = wait(bake(sources, vec![false, true]));
+    assert!(skipped[1].is_none());
 }
 
 /// Packed levels: every level's indices stay inside it, and every geomorph target is a vertex

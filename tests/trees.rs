@@ -459,3 +459,79 @@ fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
         }
     }
 }
+
+/// `lodlab report TREE --out DIR` end to end, on the sapling (the thesis tree's size): the
+/// JSON of the issue with a level per ε down to 10 billboards or fewer, the thesis's static
+/// series beside it, the plot and the contact sheet of every level.
+#[test]
+fn the_tree_report_writes_its_three_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("report");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(["report", "sapling", "--out", out_dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["model"], "sapling");
+    assert_eq!(json["leaves"], 672);
+    assert_eq!(json["bones"], 95);
+    let levels = json["levels"].as_array().unwrap();
+    assert!(levels.len() >= 5, "{} levels", levels.len());
+    let f = |l: &serde_json::Value, k: &str| l[k].as_f64().unwrap();
+    // L0 is the tree: no billboards, no error.
+    assert_eq!(
+        (f(&levels[0], "epsilon"), f(&levels[0], "colour_error")),
+        (0.0, 0.0)
+    );
+    for l in &levels[1..] {
+        for key in ["area", "texture_bytes", "colour_error", "bake_seconds"] {
+            assert!(f(l, key) >= 0.0, "{key}: {l}");
+        }
+        assert!(f(l, "billboards") >= 1.0 && f(l, "area") > 0.0, "{l}");
+    }
+    for w in levels[1..].windows(2) {
+        assert!(f(&w[1], "epsilon") > f(&w[0], "epsilon"));
+        assert!(f(&w[1], "billboards") < f(&w[0], "billboards"));
+    }
+    assert!(f(levels.last().unwrap(), "billboards") <= 10.0);
+    // Error grows from the first cloud level to the last.
+    assert!(f(&levels[1], "colour_error") < f(levels.last().unwrap(), "colour_error"));
+    assert_eq!(
+        json["static_clouds"].as_array().unwrap().len(),
+        levels.len() - 1
+    );
+    let plot = image::open(out_dir.join("colour-error.png"))
+        .unwrap()
+        .to_rgb8();
+    let blue = plot.pixels().filter(|p| p[2] > 180 && p[0] < 80).count();
+    let red = plot
+        .pixels()
+        .filter(|p| p[0] > 180 && p[1] < 90 && p[2] < 90)
+        .count();
+    assert!(blue > 100 && red > 100, "blue {blue}, red {red}");
+    let sheet = image::open(out_dir.join("levels.png")).unwrap().to_rgb8();
+    let columns = levels.len().min(6) as u32;
+    assert_eq!(sheet.width(), 300 * columns);
+    assert_eq!(
+        sheet.height(),
+        400 * (levels.len() as u32).div_ceil(columns)
+    );
+    // Every tile shows green foliage.
+    for k in 0..levels.len() as u32 {
+        let (x0, y0) = ((k % columns) * 300, (k / columns) * 400);
+        let green = (y0..y0 + 400)
+            .flat_map(|y| (x0..x0 + 300).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let p = sheet.get_pixel(x, y);
+                p[1] as i32 > p[0] as i32 + 15 && p[1] as i32 > p[2] as i32 + 10
+            })
+            .count();
+        assert!(green > 300, "level {k}: {green} green pixels");
+    }
+}
