@@ -34,8 +34,9 @@ enum Command {
     Shot(ShotArgs),
     /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling) as .glb files.
     GenAssets(GenAssetsArgs),
-    /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS),
-    /// or fetch them from the cache, and print them as a table.
+    /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS; a
+    /// tree's chain of billboard clouds), or fetch them from the cache, and print them as a
+    /// table.
     Bake(BakeArgs),
     /// Measure a model's levels of detail: for a character, error curves (report.json,
     /// error.png, as in Merry et al. Figure 7) and bake timings (timings.md, their Table 1);
@@ -45,10 +46,11 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct ReportArgs {
-    /// A built-in asset name (horse, walker) or a glTF path.
+    /// A built-in asset name (horse, walker, broadleaf, conifer, sapling) or a glTF path.
     #[arg(value_name = "MODEL")]
     model: String,
-    /// Folder to write report.json, error.png and timings.md into (created if needed).
+    /// Folder to write the report into (created if needed): report.json, error.png and
+    /// timings.md; for a tree report.json, colour-error.png and levels.png.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Also measure this simplifier on the rest pose at the same triangle counts.
@@ -58,10 +60,11 @@ struct ReportArgs {
 
 #[derive(Args, Debug)]
 struct BakeArgs {
-    /// Models: built-in asset names (horse, walker) or glTF paths.
+    /// Models: built-in asset names (horse, walker, broadleaf, conifer, sapling) or glTF paths.
     #[arg(required = true, value_name = "MODEL")]
     models: Vec<String>,
-    /// Simplification methods, comma separated.
+    /// Simplification methods, comma separated (trees get their billboard clouds whatever
+    /// the methods).
     #[arg(long, default_value = "rest-pose,as,as+is", value_parser = parse_methods)]
     methods: Methods,
     /// Error bound of LOD 1 in pixels, for the model filling 1000 pixels of screen height;
@@ -110,7 +113,8 @@ struct SceneArgs {
     /// Scene to show: crowd (characters) or forest (trees).
     #[arg(long, default_value = "crowd")]
     scene: String,
-    /// Model: a built-in asset (horse, walker) or a glTF path. Repeat for several.
+    /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling) or a glTF path.
+    /// Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
     models: Vec<String>,
     /// Number of characters (or trees) [default: 300 in the crowd, 12 in the forest].

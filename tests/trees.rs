@@ -535,3 +535,47 @@ fn the_tree_report_writes_its_three_files() {
         assert!(green > 300, "level {k}: {green} green pixels");
     }
 }
+
+/// `lodlab bake` builds a tree's chain of billboard clouds (what the viewer then reads from the
+/// cache) beside a character's levels, and a second run finds it cached.
+#[test]
+fn bake_builds_and_caches_a_tree_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let bake = || {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+            .args(["bake", "sapling", "walker", "--methods", "as", "--cache"])
+            .arg(dir.path())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let first = bake();
+    assert!(
+        first.contains("sapling (4780 triangles, 95 bones): billboard clouds"),
+        "{first}"
+    );
+    assert!(
+        first.contains("walker (11712 triangles, 25 bones)"),
+        "{first}"
+    );
+    let rows: Vec<&str> = first
+        .lines()
+        .skip_while(|l| !l.starts_with("sapling"))
+        .skip(2)
+        .take_while(|l| !l.is_empty())
+        .collect();
+    assert!(rows.len() >= 5, "{first}");
+    assert!(
+        rows[0].starts_with("0 ") && rows[0].contains("full tree"),
+        "{}",
+        rows[0]
+    );
+    assert!(!first.contains("cached"), "{first}");
+    let second = bake();
+    assert_eq!(second.matches("cached").count(), 2, "{second}");
+}

@@ -1,6 +1,8 @@
 //! `lodlab bake`: build (or fetch from the cache) the levels of detail of models by several
-//! methods at once, in parallel, and print them as a table.
+//! methods at once, in parallel, and print them as a table. A tree gets its chain of
+//! billboard-cloud levels instead (the same for every method), as the viewer uses it.
 
+use crate::app::levels::is_tree;
 use crate::bake::cache::{LodCache, Origin, source_hash};
 use crate::bake::lod::{LodOptions, SkinnedLods};
 use crate::bake::simplify::Method;
@@ -32,6 +34,23 @@ pub struct Baked {
     pub from_cache: bool,
 }
 
+/// One tree's chain of billboard-cloud levels.
+pub struct TreeBaked {
+    pub model: String,
+    pub source_triangles: usize,
+    pub bones: usize,
+    pub height: f32,
+    pub levels: Vec<crate::app::tree_levels::TreeLevel>,
+    pub from_cache: bool,
+    pub seconds: f64,
+}
+
+/// Everything a `lodlab bake` made, characters and trees.
+pub struct BakeResults {
+    pub characters: Vec<Baked>,
+    pub trees: Vec<TreeBaked>,
+}
+
 /// The model's rest-pose height in scene units.
 pub fn model_height(model: &Model) -> f32 {
     let root = model.skeleton.root_transform;
@@ -53,8 +72,9 @@ pub fn lod_options(model: &Model, tolerance_px: f32, budgets: Option<&[u32]>) ->
 }
 
 /// Loads every model (failing on the first bad one before any work), then bakes every
-/// (model, method) pair in parallel with one progress bar each.
-pub fn run(opts: &BakeOptions) -> Result<Vec<Baked>, InputError> {
+/// (model, method) pair of the characters and the chain of every tree, in parallel, with one
+/// progress bar each.
+pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
     let mut models = Vec::new();
     for name in &opts.models {
         let model = load_model(name)?;
@@ -62,51 +82,97 @@ pub fn run(opts: &BakeOptions) -> Result<Vec<Baked>, InputError> {
         let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
         models.push((model, hash));
     }
+    // Tree chains render their atlases on the GPU.
+    let gpu = match models.iter().any(|(m, _)| is_tree(m)) {
+        true => Some(crate::render::Gpu::headless()?),
+        false => None,
+    };
     let cache = LodCache::new(opts.cache_dir.clone());
     let bars = MultiProgress::new();
     let style = bar_style();
-    let jobs: Vec<(usize, Method, ProgressBar)> = models
+    // A job is a character by one method, or a tree (method `None`).
+    let jobs: Vec<(usize, Option<Method>, ProgressBar)> = models
         .iter()
         .enumerate()
         .flat_map(|(i, (m, _))| {
+            let methods: Vec<Option<Method>> = match is_tree(m) {
+                true => vec![None],
+                false => opts.methods.iter().copied().map(Some).collect(),
+            };
             let (bars, style) = (&bars, &style);
-            opts.methods.iter().map(move |&method| {
+            methods.into_iter().map(move |method| {
                 let bar = bars.add(ProgressBar::new(1000));
                 bar.set_style(style.clone());
-                bar.set_prefix(format!("{} {}", m.name, method));
+                let what = method.map_or("clouds".to_string(), |m| m.to_string());
+                bar.set_prefix(format!("{} {what}", m.name));
                 (i, method, bar)
             })
         })
         .collect();
-    let results: Vec<Baked> = jobs
+    let warn = |origin: &Origin| {
+        if let Origin::Baked { warning: Some(w) } = origin {
+            bars.suspend(|| eprintln!("warning: {w}"));
+        }
+    };
+    let results: Vec<anyhow::Result<Result<Baked, TreeBaked>>> = jobs
         .into_par_iter()
         .map(|(i, method, bar)| {
             let (model, hash) = &models[i];
-            let options = lod_options(model, opts.tolerance_px, opts.budgets.as_deref());
             let progress = |f: f32| bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+            let Some(method) = method else {
+                let start = std::time::Instant::now();
+                let gpu = gpu.as_ref().expect("a GPU when there are trees");
+                let opts = crate::app::tree_levels::ChainOptions::default();
+                let (levels, origin) = crate::app::tree_levels::load_or_build_chain(
+                    gpu, &cache, model, hash, &opts, &progress,
+                )
+                .map_err(|e| anyhow::anyhow!("{}: {e:#}", model.name))?;
+                warn(&origin);
+                let from_cache = origin == Origin::Cache;
+                let seconds = start.elapsed().as_secs_f64();
+                bar.finish_with_message(match from_cache {
+                    true => "cached".to_string(),
+                    false => format!("{seconds:.2} s"),
+                });
+                return Ok(Err(TreeBaked {
+                    model: model.name.clone(),
+                    source_triangles: model.mesh.triangle_count(),
+                    bones: model.skeleton.bone_count(),
+                    height: crate::bake::billboard::tree_height(model),
+                    levels,
+                    from_cache,
+                    seconds,
+                }));
+            };
+            let options = lod_options(model, opts.tolerance_px, opts.budgets.as_deref());
             let (lods, origin) = cache.load_or_bake(model, hash, method, &options, &progress);
+            warn(&origin);
             let from_cache = origin == Origin::Cache;
-            if let Origin::Baked {
-                warning: Some(w), ..
-            } = &origin
-            {
-                bars.suspend(|| eprintln!("warning: {w}"));
-            }
             bar.finish_with_message(if from_cache {
                 "cached".to_string()
             } else {
                 format!("{:.2} s", lods.bake_seconds)
             });
-            Baked {
+            Ok(Ok(Baked {
                 model: model.name.clone(),
                 source_triangles: model.mesh.triangle_count(),
                 bones: model.skeleton.bone_count(),
                 lods,
                 from_cache,
-            }
+            }))
         })
         .collect();
-    Ok(results)
+    let mut out = BakeResults {
+        characters: Vec::new(),
+        trees: Vec::new(),
+    };
+    for r in results {
+        match r? {
+            Ok(character) => out.characters.push(character),
+            Err(tree) => out.trees.push(tree),
+        }
+    }
+    Ok(out)
 }
 
 /// The progress bar of one (model, method) job, shared by `bake` and `report`.
@@ -116,8 +182,46 @@ pub fn bar_style() -> ProgressStyle {
         .progress_chars("=> ")
 }
 
-/// The table `lodlab bake` prints: one block per model, one row per level and method.
-pub fn table(results: &[Baked]) -> String {
+/// The table `lodlab bake` prints: one block per model, one row per level and method (per
+/// level for a tree).
+pub fn table(results: &BakeResults) -> String {
+    let mut out = character_table(&results.characters);
+    for t in &results.trees {
+        out += &format!(
+            "\n{} ({} triangles, {} bones): billboard clouds\n{:<5} {:>9} {:<32} {:>10} {:>9} {:>10} {:>8}\n",
+            t.model,
+            t.source_triangles,
+            t.bones,
+            "level",
+            "ε (× h)",
+            "grouping",
+            "billboards",
+            "triangles",
+            "atlas (KB)",
+            "bake (s)"
+        );
+        for (k, l) in t.levels.iter().enumerate() {
+            let time = match (k, t.from_cache) {
+                (0, false) => format!("{:.2}", t.seconds),
+                (0, true) => "cached".to_string(),
+                _ => String::new(),
+            };
+            out += &format!(
+                "{:<5} {:>9.3} {:<32} {:>10} {:>9} {:>10} {:>8}\n",
+                k,
+                l.epsilon / t.height,
+                crate::app::tree_report::grouping_name(l.grouping),
+                l.cloud.billboards,
+                l.cloud.model.mesh.triangle_count(),
+                l.cloud.texture_bytes / 1024,
+                time
+            );
+        }
+    }
+    out
+}
+
+fn character_table(results: &[Baked]) -> String {
     let mut out = String::new();
     let mut last_model = "";
     for b in results {

@@ -59,7 +59,8 @@ pub struct TreeReport {
     pub static_clouds: Vec<StaticCloudReport>,
 }
 
-fn grouping_name(g: Option<Grouping>) -> String {
+/// How a level's leaves were grouped into clouds, in words.
+pub fn grouping_name(g: Option<Grouping>) -> String {
     match g {
         None => "full tree".into(),
         Some(Grouping::PerBone) => "per bone".into(),
