@@ -141,6 +141,24 @@ pub fn bone_matrices(skeleton: &Skeleton, clip: Option<&Clip>, t: f32) -> Vec<Af
         .collect()
 }
 
+/// The skinning matrices `G_i Ĝ_i⁻¹` (bind pose to scene space) of every bone at `samples`
+/// times evenly over one loop of the model's first clip, starting at its beginning.
+pub fn skinning_over_loop(model: &crate::model::Model, samples: usize) -> Vec<Vec<Affine3A>> {
+    let skeleton = &model.skeleton;
+    let clip = model.clips.first();
+    let duration = clip.map_or(0.0, |c| c.duration);
+    (0..samples)
+        .map(|n| {
+            let t = duration * n as f32 / samples.max(1) as f32;
+            bone_matrices(skeleton, clip, t)
+                .iter()
+                .zip(&skeleton.inverse_bind)
+                .map(|(g, inv)| *g * Affine3A::from_mat4(*inv))
+                .collect()
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,6 +12,7 @@ pub mod lod_error;
 pub mod lod_pack;
 pub mod materials;
 pub mod simplify;
+pub mod spectral;
 pub mod texels;
 pub mod vertex_texture;
 

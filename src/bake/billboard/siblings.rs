@@ -12,9 +12,9 @@
 //! product that is 0 when either factor is, and no sense of where on the branch a leaf hangs.)
 
 use super::Foliage;
-use crate::anim::bone_matrices;
+use crate::anim::skinning_over_loop;
 use crate::model::Model;
-use glam::{Affine3A, Vec3};
+use glam::Vec3;
 
 /// Frames of the loop the deviation is measured at.
 const FRAMES: usize = 24;
@@ -26,18 +26,7 @@ pub fn merge_siblings(model: &Model, foliage: &Foliage, tolerance: f32) -> Folia
     let bones = skeleton.bone_count();
     let parent = super::BoneTree::new(skeleton).parent;
     // Skinning matrices G_i Ĝ_i⁻¹ at evenly spaced times of the loop.
-    let clip = model.clips.first();
-    let duration = clip.map_or(0.0, |c| c.duration);
-    let frames: Vec<Vec<Affine3A>> = (0..FRAMES)
-        .map(|f| {
-            let t = duration * f as f32 / FRAMES as f32;
-            bone_matrices(skeleton, clip, t)
-                .iter()
-                .zip(&skeleton.inverse_bind)
-                .map(|(g, inv)| *g * Affine3A::from_mat4(*inv))
-                .collect()
-        })
-        .collect();
+    let frames = skinning_over_loop(model, FRAMES);
     let centroid = |leaf: usize| {
         let c = &foliage.leaves[leaf].corners;
         c.iter().copied().sum::<Vec3>() / c.len().max(1) as f32
@@ -111,7 +100,9 @@ pub fn merge_siblings(model: &Model, foliage: &Foliage, tolerance: f32) -> Folia
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::anim::bone_matrices;
     use crate::generate::tree::sapling;
+    use glam::Affine3A;
 
     /// With no tolerance nothing merges; with a generous one, sibling leaves share bones, every
     /// leaf's new bone is its own or a sibling of it, and the measured stray stays within the

@@ -1,0 +1,127 @@
+//! Spectral descriptions of foliage motion (Aalborg thesis Ch. 4, §6.1 and §6.3; the thesis
+//! designed them and never built them). Pure CPU.
+//!
+//! - [`leaf_trajectories`] samples every leaf's centroid over one loop of the wind.
+//! - [`dft`] turns each coordinate of a trajectory into a spectrum of whole-cycle cosines.
+//! - [`description`] holds the thesis's three description types (naive, dominating axis,
+//!   axis-phase), each with `describe`, `deviation`, `average` and `apply`, with the errata of
+//!   the brief (`notes/thesis-spectral-animation.md`) applied: NEP instead of bare products,
+//!   dominating axes sign-aligned before their phases are averaged, cosine phases, normalised
+//!   amplitudes.
+//! - [`bins`] reduces a spectrum to K lines per axis (§6.3.3), the record a billboard's vertex
+//!   shader evaluates.
+
+pub mod bins;
+pub mod cluster;
+pub mod description;
+pub mod dft;
+
+use crate::anim::skinning_over_loop;
+use crate::model::Model;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Position samples per loop: a power of two for the FFT, and twice the fastest sway of the
+/// demo trees (whole cycles per loop) with room to spare.
+pub const DEFAULT_SAMPLES: usize = 64;
+/// Lines per axis a billboard keeps (§6.3.3; the default).
+pub const DEFAULT_BINS: usize = 4;
+
+/// Normalised error (thesis App. A): [0, ∞) onto [0, 1).
+pub fn ne(a: f32) -> f32 {
+    1.0 - 1.0 / (1.0 + a.max(0.0))
+}
+
+/// Normalised error product (App. A): large when either error is.
+pub fn nep(a: f32, b: f32) -> f32 {
+    1.0 - 1.0 / ((1.0 + a.max(0.0)) * (1.0 + b.max(0.0)))
+}
+
+/// The angle between two angles, in [0, π] (App. A.4).
+pub fn cyclic_diff(a: f32, b: f32) -> f32 {
+    let d = (a - b).rem_euclid(std::f32::consts::TAU);
+    d.min(std::f32::consts::TAU - d)
+}
+
+/// The weighted cyclic mean of `(angle, weight)` pairs (App. A.4): the angle of the sum of
+/// weighted unit vectors; where they cancel, the heaviest angle.
+pub fn cyclic_mean(items: impl IntoIterator<Item = (f32, f32)>) -> f32 {
+    let (mut s, mut c, mut heaviest) = (0.0f32, 0.0f32, (0.0f32, f32::MIN));
+    for (angle, w) in items {
+        s += w * angle.sin();
+        c += w * angle.cos();
+        if w > heaviest.1 {
+            heaviest = (angle, w);
+        }
+    }
+    if s.hypot(c) > 1e-9 * heaviest.1.abs().max(1e-9) {
+        s.atan2(c)
+    } else {
+        heaviest.0
+    }
+}
+
+/// Every leaf's centroid at `samples` times evenly over one loop of the model's first clip,
+/// in scene space (thesis §4.3: a leaf is represented by its centroid's trajectory). Leaves
+/// are bound to one bone, so the centroid moves with that bone's skinning matrix.
+pub fn leaf_trajectories(
+    model: &Model,
+    foliage: &crate::bake::billboard::Foliage,
+    samples: usize,
+) -> Vec<Vec<Vec3>> {
+    let frames = skinning_over_loop(model, samples);
+    foliage
+        .leaves
+        .par_iter()
+        .zip(&foliage.bones)
+        .map(|(leaf, &bone)| {
+            let c = leaf.corners.iter().copied().sum::<Vec3>() / leaf.corners.len().max(1) as f32;
+            frames
+                .iter()
+                .map(|m| m.get(bone as usize).map_or(c, |m| m.transform_point3(c)))
+                .collect()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::anim::bone_matrices;
+    use glam::Affine3A;
+
+    #[test]
+    fn cyclic_helpers_wrap_round() {
+        use std::f32::consts::{PI, TAU};
+        assert!((cyclic_diff(0.1, TAU - 0.1) - 0.2).abs() < 1e-5);
+        assert!((cyclic_diff(0.0, PI) - PI).abs() < 1e-6);
+        let m = cyclic_mean([(110f32.to_radians(), 1.0), (330f32.to_radians(), 1.0)]);
+        assert!((m.to_degrees() - 40.0).abs() < 1e-3, "{}", m.to_degrees());
+        assert_eq!(ne(0.0), 0.0);
+        assert!(nep(0.0, 3.0) == ne(3.0) && nep(1.0, 1.0) > ne(1.0));
+    }
+
+    /// Trajectories follow the leaves' bones: the first sample is the leaf at the loop's
+    /// start, every leaf moves, twigs more than the trunk's lowest leaves.
+    #[test]
+    fn leaf_trajectories_follow_the_wind() {
+        let tree = crate::generate::tree::sapling();
+        let f = crate::bake::billboard::foliage(&tree).unwrap();
+        let tr = leaf_trajectories(&tree, &f, 16);
+        assert_eq!(tr.len(), f.leaves.len());
+        let clip = tree.clips.first();
+        let g = bone_matrices(&tree.skeleton, clip, 0.0);
+        let b = f.bones[0] as usize;
+        let c = f.leaves[0].corners.iter().copied().sum::<Vec3>() / 4.0;
+        let expect =
+            (g[b] * Affine3A::from_mat4(tree.skeleton.inverse_bind[b])).transform_point3(c);
+        assert!((tr[0][0] - expect).length() < 1e-5);
+        for (i, t) in tr.iter().enumerate() {
+            let spread = t
+                .iter()
+                .map(|p| (*p - t[0]).length())
+                .fold(0.0f32, f32::max);
+            assert!(spread > 1e-3, "leaf {i} does not move");
+        }
+    }
+}
