@@ -6,7 +6,8 @@
 //! largest variance is split by its leaves' distance from their bone's joint (leaves with
 //! equal lever arms move alike) until there are k. Random restarts (k distinct leaves as
 //! centroids) run as well, and the clustering with the lowest total squared deviation is
-//! kept (§6.2, Eq. 3.1).
+//! kept (§6.2, Eq. 3.1). Items carry weights, so that animation zones (App. C.2, see
+//! [`super::Zones`]) count for the leaves they hold.
 
 use super::description::{Description, DescriptionType};
 use rayon::prelude::*;
@@ -43,12 +44,13 @@ pub struct Clusters {
     pub error: f32,
 }
 
-/// Clusters `items` (descriptions of one type) into at most `params.k` clusters. `bones` and
-/// `lever` give every item's bone and its distance from that bone's joint, for the skeleton
-/// initialisation.
+/// Clusters `items` (descriptions of one type, each standing for `weights` leaves: 1, or an
+/// animation zone's count) into at most `params.k` clusters. `bones` and `lever` give every
+/// item's bone and its distance from that bone's joint, for the skeleton initialisation.
 pub fn cluster(
     kind: DescriptionType,
     items: &[Description],
+    weights: &[f32],
     bones: &[u32],
     lever: &[f32],
     params: &ClusterParams,
@@ -61,12 +63,8 @@ pub fn cluster(
             error: 0.0,
         };
     }
-    let mut best = k_means(
-        kind,
-        items,
-        skeleton_start(kind, items, bones, lever, k),
-        params,
-    );
+    let start = skeleton_start(kind, items, weights, bones, lever, k);
+    let mut best = k_means(kind, items, weights, start, params);
     let mut rng = fastrand::Rng::with_seed(params.seed);
     for _ in 0..params.restarts {
         let mut picks: Vec<usize> = (0..items.len()).collect();
@@ -78,7 +76,7 @@ pub fn cluster(
                 .map(|&i| items[i].clone())
                 .collect::<Vec<_>>(),
         );
-        let c = k_means(kind, items, start, params);
+        let c = k_means(kind, items, weights, start, params);
         if c.error < best.error {
             best = c;
         }
@@ -90,6 +88,7 @@ pub fn cluster(
 pub fn skeleton_start(
     kind: DescriptionType,
     items: &[Description],
+    weights: &[f32],
     bones: &[u32],
     lever: &[f32],
     k: usize,
@@ -103,7 +102,8 @@ pub fn skeleton_start(
         by_bone.into_values().collect()
     };
     let average = |g: &[usize]| -> Description {
-        let members: Vec<(&Description, f32)> = g.iter().map(|&i| (&items[i], 1.0)).collect();
+        let members: Vec<(&Description, f32)> =
+            g.iter().map(|&i| (&items[i], weight(weights, i))).collect();
         kind.average(&members)
     };
     let mut centres: Vec<Description> = groups.par_iter().map(|g| average(g)).collect();
@@ -160,10 +160,11 @@ pub fn skeleton_start(
     // Split: the cluster with the largest variance, by lever arm about its mean.
     while groups.len() < k {
         let variance = |g: &[usize], c: &Description| -> f32 {
+            let w: f32 = g.iter().map(|&i| weight(weights, i)).sum();
             g.iter()
-                .map(|&i| items[i].deviation(c).powi(2))
+                .map(|&i| weight(weights, i) * items[i].deviation(c).powi(2))
                 .sum::<f32>()
-                / g.len().max(1) as f32
+                / w.max(1e-9)
         };
         let Some(worst) = (0..groups.len())
             .filter(|&g| groups[g].len() > 1)
@@ -210,10 +211,16 @@ fn nearest_assignment(items: &[Description], centres: &[Description]) -> Vec<u32
         .collect()
 }
 
+/// Item `i`'s weight (1 where none is given).
+fn weight(weights: &[f32], i: usize) -> f32 {
+    weights.get(i).copied().unwrap_or(1.0)
+}
+
 /// Every cluster's average, for the assignment `of` into `k` clusters.
 fn centroids(
     kind: DescriptionType,
     items: &[Description],
+    weights: &[f32],
     of: &[u32],
     k: usize,
 ) -> Vec<Description> {
@@ -223,8 +230,9 @@ fn centroids(
             let members: Vec<(&Description, f32)> = items
                 .iter()
                 .zip(of)
-                .filter(|(_, o)| **o as usize == c)
-                .map(|(d, _)| (d, 1.0))
+                .enumerate()
+                .filter(|(_, (_, o))| **o as usize == c)
+                .map(|(i, (d, _))| (d, weight(weights, i)))
                 .collect();
             kind.average(&members)
         })
@@ -235,12 +243,13 @@ fn centroids(
 fn k_means(
     kind: DescriptionType,
     items: &[Description],
+    weights: &[f32],
     mut of: Vec<u32>,
     params: &ClusterParams,
 ) -> Clusters {
     let k = of.iter().max().map_or(0, |&m| m as usize + 1);
     for _ in 0..params.max_iterations.max(1) {
-        let mut centres = centroids(kind, items, &of, k);
+        let mut centres = centroids(kind, items, weights, &of, k);
         // An emptied cluster takes the item farthest from its centre.
         for c in 0..k {
             if !of.iter().any(|&o| o as usize == c) {
@@ -258,11 +267,12 @@ fn k_means(
         }
         of = next;
     }
-    let centroids = centroids(kind, items, &of, k);
+    let centroids = centroids(kind, items, weights, &of, k);
     let error = items
         .iter()
         .zip(&of)
-        .map(|(d, &o)| d.deviation(&centroids[o as usize]).powi(2))
+        .enumerate()
+        .map(|(i, (d, &o))| weight(weights, i) * d.deviation(&centroids[o as usize]).powi(2))
         .sum();
     Clusters {
         of,
@@ -316,13 +326,13 @@ mod tests {
                 k: 2,
                 ..Default::default()
             };
-            let c = cluster(kind, &items, &bones, &lever, &params);
+            let c = cluster(kind, &items, &[], &bones, &lever, &params);
             assert_eq!(c.centroids.len(), 2);
             for (i, &o) in c.of.iter().enumerate() {
                 assert_eq!(o == c.of[1], i % 2 == 1, "{}: leaf {i}", kind.name());
             }
             // Deterministic.
-            assert_eq!(cluster(kind, &items, &bones, &lever, &params), c);
+            assert_eq!(cluster(kind, &items, &[], &bones, &lever, &params), c);
         }
     }
 
@@ -334,7 +344,7 @@ mod tests {
         let kind = DescriptionType::AxisPhase;
         let items: Vec<Description> = tr.iter().map(|t| kind.describe(&dft, t)).collect();
         for k in [1, 2, 4, 6, 9] {
-            let of = skeleton_start(kind, &items, &bones, &lever, k);
+            let of = skeleton_start(kind, &items, &[], &bones, &lever, k);
             let used: std::collections::BTreeSet<u32> = of.iter().copied().collect();
             assert_eq!(used.len(), k, "k = {k}");
             if k <= 4 {

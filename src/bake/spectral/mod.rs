@@ -62,26 +62,98 @@ pub fn cyclic_mean(items: impl IntoIterator<Item = (f32, f32)>) -> f32 {
 }
 
 /// Every leaf's centroid at `samples` times evenly over one loop of the model's first clip,
-/// in scene space (thesis §4.3: a leaf is represented by its centroid's trajectory). Leaves
-/// are bound to one bone, so the centroid moves with that bone's skinning matrix.
+/// in scene space (thesis §4.3: a leaf is represented by its centroid's trajectory).
 pub fn leaf_trajectories(
     model: &Model,
     foliage: &crate::bake::billboard::Foliage,
     samples: usize,
 ) -> Vec<Vec<Vec3>> {
-    let frames = skinning_over_loop(model, samples);
-    foliage
+    let points: Vec<(Vec3, u32)> = foliage
         .leaves
-        .par_iter()
+        .iter()
         .zip(&foliage.bones)
-        .map(|(leaf, &bone)| {
-            let c = leaf.corners.iter().copied().sum::<Vec3>() / leaf.corners.len().max(1) as f32;
+        .map(|(leaf, &bone)| (leaf_centroid(&leaf.corners), bone))
+        .collect();
+    trajectories(model, &points, samples)
+}
+
+/// The centroid of a leaf's corners.
+pub fn leaf_centroid(corners: &[Vec3]) -> Vec3 {
+    corners.iter().copied().sum::<Vec3>() / corners.len().max(1) as f32
+}
+
+/// The trajectories of rest-pose points each bound rigidly to one bone, at `samples` times
+/// evenly over one loop.
+pub fn trajectories(model: &Model, points: &[(Vec3, u32)], samples: usize) -> Vec<Vec<Vec3>> {
+    let frames = skinning_over_loop(model, samples);
+    points
+        .par_iter()
+        .map(|&(c, bone)| {
             frames
                 .iter()
                 .map(|m| m.get(bone as usize).map_or(c, |m| m.transform_point3(c)))
                 .collect()
         })
         .collect()
+}
+
+/// Animation zones (thesis App. C.2): leaves of one bone within `radius` of a zone's first leaf
+/// (rest pose) move almost alike, so they are described and clustered as one item, weighted by
+/// their count.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Zones {
+    /// The zone of every leaf.
+    pub of: Vec<u32>,
+    /// Per zone: its bone, its leaves' rest centroid and how many leaves it holds.
+    pub bone: Vec<u32>,
+    pub centre: Vec<Vec3>,
+    pub leaves: Vec<u32>,
+}
+
+impl Zones {
+    pub fn new(foliage: &crate::bake::billboard::Foliage, radius: f32) -> Zones {
+        let mut zones = Zones {
+            of: Vec::with_capacity(foliage.leaves.len()),
+            bone: Vec::new(),
+            centre: Vec::new(),
+            leaves: Vec::new(),
+        };
+        // Per bone, the zones opened so far: (zone, its first leaf's centroid).
+        let mut open: std::collections::HashMap<u32, Vec<(u32, Vec3)>> = Default::default();
+        let mut sums: Vec<Vec3> = Vec::new();
+        for (leaf, &bone) in foliage.leaves.iter().zip(&foliage.bones) {
+            let c = leaf_centroid(&leaf.corners);
+            let list = open.entry(bone).or_default();
+            let z = match list.iter().find(|(_, seed)| seed.distance(c) <= radius) {
+                Some(&(z, _)) => z,
+                None => {
+                    let z = zones.bone.len() as u32;
+                    list.push((z, c));
+                    zones.bone.push(bone);
+                    zones.leaves.push(0);
+                    sums.push(Vec3::ZERO);
+                    z
+                }
+            };
+            zones.of.push(z);
+            zones.leaves[z as usize] += 1;
+            sums[z as usize] += c;
+        }
+        zones.centre = sums
+            .iter()
+            .zip(&zones.leaves)
+            .map(|(s, &n)| *s / n.max(1) as f32)
+            .collect();
+        zones
+    }
+
+    pub fn len(&self) -> usize {
+        self.bone.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.bone.is_empty()
+    }
 }
 
 #[cfg(test)]
@@ -112,7 +184,7 @@ mod tests {
         let clip = tree.clips.first();
         let g = bone_matrices(&tree.skeleton, clip, 0.0);
         let b = f.bones[0] as usize;
-        let c = f.leaves[0].corners.iter().copied().sum::<Vec3>() / 4.0;
+        let c = leaf_centroid(&f.leaves[0].corners);
         let expect =
             (g[b] * Affine3A::from_mat4(tree.skeleton.inverse_bind[b])).transform_point3(c);
         assert!((tr[0][0] - expect).length() < 1e-5);
@@ -123,5 +195,27 @@ mod tests {
                 .fold(0.0f32, f32::max);
             assert!(spread > 1e-3, "leaf {i} does not move");
         }
+    }
+}
+
+#[cfg(test)]
+mod zone_tests {
+    use super::*;
+
+    /// Zones never mix bones, hold every leaf once, and stay within their radius.
+    #[test]
+    fn animation_zones_group_nearby_leaves_of_one_bone() {
+        let tree = crate::generate::tree::sapling();
+        let f = crate::bake::billboard::foliage(&tree).unwrap();
+        let zones = Zones::new(&f, 0.3);
+        assert!(zones.len() < f.leaves.len() / 2, "{} zones", zones.len());
+        assert!(zones.len() >= 48, "at least one per foliage bone");
+        assert_eq!(zones.leaves.iter().sum::<u32>() as usize, f.leaves.len());
+        for (leaf, &z) in zones.of.iter().enumerate() {
+            assert_eq!(zones.bone[z as usize], f.bones[leaf]);
+            let c = leaf_centroid(&f.leaves[leaf].corners);
+            assert!(c.distance(zones.centre[z as usize]) <= 0.6 + 1e-4);
+        }
+        assert_eq!(Zones::new(&f, 0.0).len(), f.leaves.len());
     }
 }
