@@ -83,9 +83,11 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
         models.push((model, hash));
     }
     // Tree chains render their atlases on the GPU.
-    let gpu = match models.iter().any(|(m, _)| is_tree(m)) {
-        true => Some(crate::render::Gpu::headless()?),
-        false => None,
+    let has_trees = models.iter().any(|(m, _)| is_tree(m));
+    let gpu = if has_trees {
+        Some(crate::render::Gpu::headless()?)
+    } else {
+        None
     };
     let cache = LodCache::new(opts.cache_dir.clone());
     let bars = MultiProgress::new();
@@ -95,9 +97,10 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
         .iter()
         .enumerate()
         .flat_map(|(i, (m, _))| {
-            let methods: Vec<Option<Method>> = match is_tree(m) {
-                true => vec![None],
-                false => opts.methods.iter().copied().map(Some).collect(),
+            let methods: Vec<Option<Method>> = if is_tree(m) {
+                vec![None]
+            } else {
+                opts.methods.iter().copied().map(Some).collect()
             };
             let (bars, style) = (&bars, &style);
             methods.into_iter().map(move |method| {
@@ -130,9 +133,10 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                 warn(&origin);
                 let from_cache = origin == Origin::Cache;
                 let seconds = start.elapsed().as_secs_f64();
-                bar.finish_with_message(match from_cache {
-                    true => "cached".to_string(),
-                    false => format!("{seconds:.2} s"),
+                bar.finish_with_message(if from_cache {
+                    "cached".to_string()
+                } else {
+                    format!("{seconds:.2} s")
                 });
                 return Ok(Err(TreeBaked {
                     model: model.name.clone(),

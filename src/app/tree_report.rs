@@ -189,42 +189,32 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .axis_desc_style(("sans-serif", 17))
             .draw()
             .map_err(plot_error)?;
-        let series: Vec<(f64, f64)> = pts
+        let chain_errors: Vec<(f64, f64)> = pts
             .iter()
             .map(|l| (l.epsilon as f64, l.colour_error as f64))
             .collect();
-        chart
-            .draw_series(LineSeries::new(
-                series.iter().copied(),
-                colour.stroke_width(2),
-            ))
-            .map_err(plot_error)?;
-        chart
-            .draw_series(series.iter().map(|&p| Circle::new(p, 4, colour.filled())))
-            .map_err(plot_error)?
-            .label("skeleton clouds (the chain), animated")
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+        let chain_label = "skeleton clouds (the chain), animated";
+        series(
+            &mut chart,
+            &chain_errors,
+            colour,
+            Marker::Circle,
+            Some(chain_label),
+        )?;
         let green = RGBColor(40, 160, 70);
-        let still: Vec<(f64, f64)> = report
+        let still_errors: Vec<(f64, f64)> = report
             .static_clouds
             .iter()
             .map(|l| (l.epsilon as f64, l.colour_error as f64))
             .collect();
-        chart
-            .draw_series(LineSeries::new(
-                still.iter().copied(),
-                green.stroke_width(1),
-            ))
-            .map_err(plot_error)?;
-        chart
-            .draw_series(
-                still
-                    .iter()
-                    .map(|&p| TriangleMarker::new(p, 5, green.filled())),
-            )
-            .map_err(plot_error)?
-            .label("one static cloud, at rest (thesis §8.4)")
-            .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 5, green.filled()));
+        let still_label = "one static cloud, at rest (thesis §8.4)";
+        series(
+            &mut chart,
+            &still_errors,
+            green,
+            Marker::Triangle,
+            Some(still_label),
+        )?;
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::LowerRight)
@@ -252,38 +242,80 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .axis_desc_style(("sans-serif", 17))
             .draw()
             .map_err(plot_error)?;
-        let series: Vec<(f64, f64)> = pts
+        let log_count = |n: usize| (n.max(1) as f64).log10();
+        let chain_counts: Vec<(f64, f64)> = pts
             .iter()
-            .map(|l| (l.epsilon as f64, (l.billboards.max(1) as f64).log10()))
+            .map(|l| (l.epsilon as f64, log_count(l.billboards)))
             .collect();
-        chart
-            .draw_series(LineSeries::new(series.iter().copied(), red.stroke_width(2)))
-            .map_err(plot_error)?;
-        chart
-            .draw_series(series.iter().map(|&p| Circle::new(p, 4, red.filled())))
-            .map_err(plot_error)?;
-        let still: Vec<(f64, f64)> = report
+        series(&mut chart, &chain_counts, red, Marker::Circle, None)?;
+        let still_counts: Vec<(f64, f64)> = report
             .static_clouds
             .iter()
-            .map(|l| (l.epsilon as f64, (l.billboards.max(1) as f64).log10()))
+            .map(|l| (l.epsilon as f64, log_count(l.billboards)))
             .collect();
-        chart
-            .draw_series(LineSeries::new(
-                still.iter().copied(),
-                green.stroke_width(1),
-            ))
-            .map_err(plot_error)?;
-        chart
-            .draw_series(
-                still
-                    .iter()
-                    .map(|&p| TriangleMarker::new(p, 5, green.filled())),
-            )
-            .map_err(plot_error)?;
+        series(&mut chart, &still_counts, green, Marker::Triangle, None)?;
         root.present().map_err(plot_error)?;
     }
     let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
     super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+}
+
+/// How a series marks its points: the chain with circles, the thesis's set-up with triangles.
+#[derive(Clone, Copy)]
+enum Marker {
+    Circle,
+    Triangle,
+}
+
+type Chart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// One series: a line through `points` (thicker for circles) and a marker on each, with a
+/// legend entry when it has a label.
+fn series(
+    chart: &mut Chart<'_, '_>,
+    points: &[(f64, f64)],
+    colour: RGBColor,
+    marker: Marker,
+    label: Option<&str>,
+) -> Result<()> {
+    let width = match marker {
+        Marker::Circle => 2,
+        Marker::Triangle => 1,
+    };
+    chart
+        .draw_series(LineSeries::new(
+            points.iter().copied(),
+            colour.stroke_width(width),
+        ))
+        .map_err(plot_error)?;
+    let style = colour.filled();
+    match marker {
+        Marker::Circle => {
+            let drawn = chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 4, style)))
+                .map_err(plot_error)?;
+            if let Some(label) = label {
+                drawn
+                    .label(label)
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, style));
+            }
+        }
+        Marker::Triangle => {
+            let drawn = chart
+                .draw_series(points.iter().map(|&p| TriangleMarker::new(p, 5, style)))
+                .map_err(plot_error)?;
+            if let Some(label) = label {
+                drawn
+                    .label(label)
+                    .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 5, style));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Every level from the same view, side by side, labelled.
