@@ -5,7 +5,7 @@
 
 use anyhow::{Result, anyhow};
 use lodlab::app::shot::time_renderer;
-use lodlab::app::tree_levels::{ChainOptions, tree_chain};
+use lodlab::app::tree_levels::{ChainOptions, CloudLevel, tree_chain};
 use lodlab::app::world::{Loaded, World};
 use lodlab::bake::billboard::foliage;
 use lodlab::render::Gpu;
@@ -40,8 +40,8 @@ fn main() -> Result<()> {
             "vs L0",
             "net"
         );
-        let time = |m: &lodlab::model::Model, count: usize, samples: u32| -> Result<(f64, u64)> {
-            let mut loaded = Loaded::forest_of(m, TREES)?;
+        let time = |l: &CloudLevel, count: usize, samples: u32| -> Result<(f64, u64)> {
+            let mut loaded = Loaded::forest_of(&l.model, l.motion.as_ref(), TREES)?;
             loaded.spec.count = count;
             let mut world = World::new(&gpu, loaded, OFFSCREEN_FORMAT, samples)?;
             let target = Offscreen::new(&gpu, WIDTH, HEIGHT, samples);
@@ -49,14 +49,17 @@ fn main() -> Result<()> {
             time_renderer(&gpu, &world.renderer, &target, 1)?;
             Ok((time_renderer(&gpu, &world.renderer, &target, 7)?, triangles))
         };
-        let empty = [time(&tree, 0, 4)?.0, time(&tree, 0, 1)?.0];
+        let empty = [
+            time(&chain[0].cloud, 0, 4)?.0,
+            time(&chain[0].cloud, 0, 1)?.0,
+        ];
         println!("no trees: {:.1} ms MSAA 4, {:.1} ms 1x", empty[0], empty[1]);
         let mut l0 = [0.0; 2];
         for (k, level) in chain.iter().enumerate() {
             let mut ms = [0.0; 2];
             let mut triangles = 0;
             for (i, samples) in [4, 1].into_iter().enumerate() {
-                (ms[i], triangles) = time(&level.cloud.model, TREES, samples)?;
+                (ms[i], triangles) = time(&level.cloud, TREES, samples)?;
                 if k == 0 {
                     l0[i] = ms[i];
                 }

@@ -47,6 +47,7 @@ fn main() -> Result<()> {
             clip: 0,
             time_offset: 0.3,
             speed: 1.0,
+            wind: 1.0,
             tint: Vec4::ONE,
         });
         println!(

@@ -3,11 +3,20 @@
 // v = Σ_i G_i p_i and n = Σ_i G_i n_i, where the p_i / n_i of a vertex come from the vertex
 // texture (read by vertex_index) and the bone matrices G_i from the animation texture, blended
 // between the two frames around the current time. Layouts are documented in
-// src/bake/anim_texture.rs and src/bake/vertex_texture.rs; `AnimationTexture::sample` is the CPU
-// mirror of `clip_frames` below.
+// src/bake/anim_texture.rs and src/bake/vertex_texture.rs; `AnimationTexture::sample_with` is the
+// CPU mirror of `clip_frames` below, and `CharacterBake::evaluate` of `skin_vertex`.
+//
+// Wind strength s (per instance, 1 for characters) scales the motion about the rest pose, frame
+// 0 of the animation texture: G = Ĝ + s (G(t) − Ĝ). Billboards of a spectral cloud (Aalborg
+// thesis §6.2.1 and §6.4) add their spectral offset Δ(τ), scaled by s, in their bone's space:
+// v = G (p + w Δ(τ)); the offset is the same for all four corners, so the billboard stays rigid.
 
 @group(1) @binding(0) var anim_tex: texture_2d<f32>;
 @group(1) @binding(1) var vertex_tex: texture_2d<f32>;
+// Spectra texture (src/bake/spectral/texture.rs): one row per billboard, texel axis·K + j holding
+// line j of that axis as (cycles, amplitude, phase, 0); one empty texel (K = 0) where nothing
+// moves by spectra.
+@group(1) @binding(5) var spectra_tex: texture_2d<f32>;
 
 // Addressing of a data texture whose width is a power of two: texel i is at
 // (i & mask, i >> shift). Worked out once per vertex, not once per load.
@@ -32,11 +41,15 @@ struct ClipFrames {
     row1: u32,
     // Blend factor towards the later frame.
     blend: f32,
+    // Loop time in [0, 1), for spectral offsets.
+    tau: f32,
+    // Wind strength: 1 plays the clip as it is.
+    wind: f32,
 };
 
 // `clip`: texel of the clip's first frame, frame count, duration, texels per frame (see
 // `AnimationTexture::clip_rows`).
-fn clip_frames(clip: vec4<f32>, time: f32) -> ClipFrames {
+fn clip_frames(clip: vec4<f32>, time: f32, wind: f32) -> ClipFrames {
     let first = u32(clip.x);
     let count = u32(clip.y);
     let duration = clip.z;
@@ -44,8 +57,13 @@ fn clip_frames(clip: vec4<f32>, time: f32) -> ClipFrames {
     var f0 = 0u;
     var f1 = 0u;
     var a = 0.0;
+    var tau = 0.0;
+    if (duration > 0.0) {
+        let u = time / duration;
+        tau = u - floor(u);
+    }
     if (count > 1u && duration > 0.0) {
-        let f = fract(time / duration) * f32(count - 1u);
+        let f = tau * f32(count - 1u);
         f0 = min(u32(floor(f)), count - 1u);
         f1 = min(f0 + 1u, count - 1u);
         a = f - f32(f0);
@@ -55,7 +73,24 @@ fn clip_frames(clip: vec4<f32>, time: f32) -> ClipFrames {
     out.row0 = first + f0 * stride;
     out.row1 = first + f1 * stride;
     out.blend = a;
+    out.tau = tau;
+    out.wind = wind;
     return out;
+}
+
+// The offset of spectra row `row` at loop time `tau`: Σ_axes Σ_j a cos(2π m τ + φ). Mirror of
+// `SpectraTexture::offset`.
+fn spectral_offset(row: u32, bins: u32, tau: f32) -> vec3<f32> {
+    var d = vec3<f32>(0.0);
+    for (var axis = 0u; axis < 3u; axis = axis + 1u) {
+        var s = 0.0;
+        for (var j = 0u; j < bins; j = j + 1u) {
+            let line = textureLoad(spectra_tex, vec2<u32>(axis * bins + j, row), 0);
+            s += line.y * cos(6.283185307 * line.x * tau + line.z);
+        }
+        d[axis] = s;
+    }
+    return d;
 }
 
 struct SkinnedVertex {
@@ -73,17 +108,36 @@ fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
     let first = u32(header.x);
     let packed = u32(header.y);
     let count = packed % 256u;
+    // A billboard of a spectral cloud: its row's offset, in its bone's space.
+    var offset = vec3<f32>(0.0);
+    let bins = textureDimensions(spectra_tex).x / 3u;
+    if (bins > 0u) {
+        let row = u32(texel(vertex_tex, vl, 2u * vertex_index + 1u).y);
+        if (row > 0u) {
+            offset = frames.wind * spectral_offset(row - 1u, bins, frames.tau);
+        }
+    }
     var pos = vec3<f32>(0.0);
     var nrm = vec3<f32>(0.0);
     for (var i = 0u; i < count; i = i + 1u) {
-        let p = texel(vertex_tex, vl, first + 2u * i);
+        let stored = texel(vertex_tex, vl, first + 2u * i);
+        let p = stored + vec4<f32>(offset * stored.w, 0.0);
         let nb = texel(vertex_tex, vl, first + 2u * i + 1u);
         let bone = 3u * u32(nb.w);
         let a = frames.row0 + bone;
         let b = frames.row1 + bone;
-        let r0 = mix(texel(anim_tex, al, a), texel(anim_tex, al, b), frames.blend);
-        let r1 = mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), frames.blend);
-        let r2 = mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), frames.blend);
+        var r0 = mix(texel(anim_tex, al, a), texel(anim_tex, al, b), frames.blend);
+        var r1 = mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), frames.blend);
+        var r2 = mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), frames.blend);
+        if (frames.wind != 1.0) {
+            // The rest pose is frame 0: bone b's rows are texels 3b, 3b + 1, 3b + 2.
+            let q0 = texel(anim_tex, al, bone);
+            let q1 = texel(anim_tex, al, bone + 1u);
+            let q2 = texel(anim_tex, al, bone + 2u);
+            r0 = q0 + (r0 - q0) * frames.wind;
+            r1 = q1 + (r1 - q1) * frames.wind;
+            r2 = q2 + (r2 - q2) * frames.wind;
+        }
         pos += vec3<f32>(dot(r0, p), dot(r1, p), dot(r2, p));
         nrm += vec3<f32>(dot(r0.xyz, nb.xyz), dot(r1.xyz, nb.xyz), dot(r2.xyz, nb.xyz));
     }
@@ -110,7 +164,7 @@ struct Instance {
     @location(2) row2: vec4<f32>,
     // The clip as a frame range of the animation texture (see `clip_frames`).
     @location(3) clip: vec4<f32>,
-    // x: time offset in seconds; y: playback speed.
+    // x: time offset in seconds; y: playback speed; z: wind strength (1: the clip as it is).
     @location(4) timing: vec4<f32>,
     @location(5) tint: vec4<f32>,
     // x: transition t (geomorph: 0 the drawn level, 1 its target hops levels coarser), −1 when
@@ -129,5 +183,5 @@ fn instance_vector(inst: Instance, v: vec3<f32>) -> vec3<f32> {
 }
 
 fn instance_frames(inst: Instance) -> ClipFrames {
-    return clip_frames(inst.clip, frame.time.x * inst.timing.y + inst.timing.x);
+    return clip_frames(inst.clip, frame.time.x * inst.timing.y + inst.timing.x, inst.timing.z);
 }

@@ -215,12 +215,15 @@ fn foliage_that_the_method_does_not_expect() {
 /// managed 7%).
 #[test]
 fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
-    use lodlab::app::tree_levels::{cloud_level, colour_error};
+    use lodlab::app::tree_levels::{CloudKind, CloudLevel, cloud_level, colour_error};
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     for name in ["broadleaf", "conifer"] {
         let tree = load_model(name).unwrap();
         if name == "broadleaf" {
-            assert_eq!(colour_error(&gpu, &tree, &tree, [800, 600]).unwrap(), 0.0);
+            assert_eq!(
+                colour_error(&gpu, &tree, &CloudLevel::full(&tree), [800, 600]).unwrap(),
+                0.0
+            );
         }
         let f = foliage(&tree).unwrap();
         let h = tree_height(&tree);
@@ -233,13 +236,13 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             &tree,
             &f,
             &params,
-            Grouping::PerBone,
+            &CloudKind::Skeleton(Grouping::PerBone),
             800.0 / h,
             &tree,
         )
         .unwrap();
         assert_eq!(level.billboards, f.leaves.len());
-        let e = colour_error(&gpu, &tree, &level.model, [800, 600]).unwrap();
+        let e = colour_error(&gpu, &tree, &level, [800, 600]).unwrap();
         assert!(e <= 0.02, "{name}: colour error {e} at ε = 0");
         if name != "broadleaf" {
             continue;
@@ -254,13 +257,13 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             &tree,
             &f,
             &coarse,
-            Grouping::PerBone,
+            &CloudKind::Skeleton(Grouping::PerBone),
             800.0 / h,
             &tree,
         )
         .unwrap();
         assert!(level.billboards * 10 < f.leaves.len());
-        let e2 = colour_error(&gpu, &tree, &level.model, [800, 600]).unwrap();
+        let e2 = colour_error(&gpu, &tree, &level, [800, 600]).unwrap();
         assert!(
             e2 > e && e2 < 0.5,
             "{name}: colour error {e2} at ε = 0.05 h"
@@ -384,7 +387,7 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     assert!(cached[0].cloud.model == tree, "level 0 is the tree itself");
     for (a, b) in cached.iter().zip(&built).skip(1) {
         assert!(a.cloud.model == b.cloud.model);
-        assert_eq!(a.grouping, b.grouping);
+        assert_eq!(a.kind, b.kind);
     }
     let file = std::fs::read_dir(dir.path())
         .unwrap()

@@ -72,6 +72,7 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
                 clip: 0,
                 time_offset: 0.0,
                 speed: 1.0,
+                wind: 1.0,
                 tint: Vec4::ONE,
             };
             let mut tracker = LodTracker::default();

@@ -214,7 +214,7 @@ pub fn table(results: &BakeResults) -> String {
                 "{:<5} {:>9.3} {:<32} {:>10} {:>9} {:>10} {:>8}\n",
                 k,
                 l.epsilon / t.height,
-                crate::app::tree_report::grouping_name(l.grouping),
+                crate::app::tree_levels::CloudKind::name(l.kind.as_ref()),
                 l.cloud.billboards,
                 l.cloud.model.mesh.triangle_count(),
                 l.cloud.texture_bytes / 1024,

@@ -108,7 +108,7 @@ fn tree_levels(
         super::tree_levels::load_or_build_chain(gpu, cache, &s.model, &s.hash, &opts, progress)?;
     let bakes = chain[1..]
         .par_iter()
-        .map(|l| CharacterBake::new(&l.cloud.model))
+        .map(|l| CharacterBake::with_motion(&l.cloud.model, l.cloud.motion.as_ref()))
         .collect::<Result<Vec<_>, String>>()
         .map_err(anyhow::Error::msg)?;
     Ok((Levels::Tree { chain, bakes }, origin))

@@ -8,6 +8,9 @@ use crate::bake::billboard::wood::{WoodChain, only_foliage};
 use crate::bake::billboard::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::materials::MaterialLayers;
+use crate::bake::spectral::cloud::{SpectralParams, spectral_cloud};
+use crate::bake::spectral::description::DescriptionType;
+use crate::bake::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::atlas::render_atlas;
@@ -17,10 +20,44 @@ use serde::{Deserialize, Serialize};
 /// Texels of dilated colour round every leaf in the atlas.
 const DILATE_RINGS: u32 = 4;
 
+/// How a level's leaves become billboards.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum CloudKind {
+    /// Skeleton clouds (thesis Ch. 7): clouds by bone groups, billboards skinned to a bone.
+    Skeleton(Grouping),
+    /// Spectral clouds (thesis Ch. 6): clouds by motion clusters, billboards skinned to their
+    /// leaves' shared bone plus a spectral offset (§6.4).
+    Spectral(SpectralParams),
+}
+
+impl CloudKind {
+    /// In words, for tables and reports.
+    pub fn name(kind: Option<&CloudKind>) -> String {
+        match kind {
+            None => "full tree".into(),
+            Some(CloudKind::Skeleton(Grouping::PerBone)) => "per bone".into(),
+            Some(CloudKind::Skeleton(Grouping::Siblings)) => {
+                "per bone, alike siblings merged".into()
+            }
+            Some(CloudKind::Skeleton(Grouping::Subtree { forks: 0 })) => "whole crown".into(),
+            Some(CloudKind::Skeleton(Grouping::Subtree { forks })) => {
+                format!("subtree below {forks} forks")
+            }
+            Some(CloudKind::Spectral(p)) => {
+                format!("spectral, {} clusters, {}", p.clusters, p.kind.name())
+            }
+        }
+    }
+}
+
 /// What one cloud level is.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CloudLevel {
     pub model: Model,
+    /// A spectral cloud's billboard motion (None: billboards follow their bones only).
+    pub motion: Option<SpectralMotion>,
+    /// Clouds it was built as: bone groups, or motion clusters.
+    pub groups: usize,
     pub billboards: usize,
     /// Total billboard area, scene units².
     pub area: f32,
@@ -28,26 +65,38 @@ pub struct CloudLevel {
     pub texture_bytes: usize,
 }
 
-/// The tree drawn with a billboard cloud of its foliage at `params`, grouped by `grouping`,
-/// with `texels_per_unit` texels per scene unit in the atlas. The wood is that of `wood`
-/// (the tree itself, or the tree with its wood simplified).
+/// The tree drawn with a billboard cloud of its foliage at `params`, made as `kind`, with
+/// `texels_per_unit` texels per scene unit in the atlas. The wood is that of `wood` (the tree
+/// itself, or the tree with its wood simplified).
 pub fn cloud_level(
     gpu: &Gpu,
     tree: &Model,
     foliage: &Foliage,
     params: &CloudParams,
-    grouping: Grouping,
+    kind: &CloudKind,
     texels_per_unit: f32,
     wood: &Model,
 ) -> Result<CloudLevel> {
     let merged;
-    let foliage = if grouping == Grouping::Siblings {
-        merged = merge_siblings(tree, foliage, params.epsilon);
-        &merged
-    } else {
-        foliage
+    let (foliage, cloud, lines, groups) = match kind {
+        CloudKind::Skeleton(grouping) => {
+            let foliage = if *grouping == Grouping::Siblings {
+                merged = merge_siblings(tree, foliage, params.epsilon);
+                &merged
+            } else {
+                foliage
+            };
+            let cloud = grouped_cloud(&tree.skeleton, foliage, params, *grouping);
+            let mut bones = cloud.bones.clone();
+            bones.sort_unstable();
+            bones.dedup();
+            (foliage, cloud, None, bones.len())
+        }
+        CloudKind::Spectral(sp) => {
+            let s = spectral_cloud(tree, foliage, params, sp);
+            (foliage, s.cloud, Some((s.lines, sp.bins)), s.clusters)
+        }
     };
-    let cloud = grouped_cloud(&tree.skeleton, foliage, params, grouping);
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
     let triangles = atlas_triangles(&cloud.billboards, &atlas_layout, params.epsilon, |leaf| {
@@ -70,11 +119,29 @@ pub fn cloud_level(
     let leaf = MaterialLayers::bake(std::slice::from_ref(leaf_material));
     let mut atlas = render_atlas(gpu, &atlas_layout, &triangles, &leaf)?;
     dilate(&mut atlas.pixels, atlas.width, atlas.height, DILATE_RINGS);
+    let texture_bytes = atlas.pixels.len();
+    let model = cloud_model(wood, &cloud, &atlas_layout, atlas);
+    // The billboards' corners are the model's last vertices, four per billboard in order.
+    let motion = match lines {
+        Some((lines, bins)) => {
+            let spectra = SpectraTexture::new(&lines, bins).map_err(|e| anyhow!(e))?;
+            let wood_vertices = model.mesh.vertex_count() - 4 * lines.len();
+            let mut vertex_rows = vec![NO_ROW; wood_vertices];
+            vertex_rows.extend((0..lines.len() as u32).flat_map(|b| [b; 4]));
+            Some(SpectralMotion {
+                spectra,
+                vertex_rows,
+            })
+        }
+        None => None,
+    };
     Ok(CloudLevel {
         billboards: cloud.billboards.len(),
+        groups,
         area: cloud.total_area(),
-        texture_bytes: atlas.pixels.len(),
-        model: cloud_model(wood, &cloud, &atlas_layout, atlas),
+        texture_bytes,
+        model,
+        motion,
     })
 }
 
@@ -88,7 +155,7 @@ pub const METRIC_FRAMES: usize = 5;
 /// `size`, from [`METRIC_VIEWS`] views round it at ground level and [`METRIC_FRAMES`] times of
 /// its loop; the share of the original's foliage pixels that the two masks disagree on, over
 /// all of them. 0 for identical trees.
-pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) -> Result<f32> {
+pub fn colour_error(gpu: &Gpu, original: &Model, lod: &CloudLevel, size: [u32; 2]) -> Result<f32> {
     colour_error_over(gpu, original, lod, size, METRIC_FRAMES)
 }
 
@@ -96,19 +163,20 @@ pub fn colour_error(gpu: &Gpu, original: &Model, lod: &Model, size: [u32; 2]) ->
 pub fn colour_error_over(
     gpu: &Gpu,
     original: &Model,
-    lod: &Model,
+    lod: &CloudLevel,
     size: [u32; 2],
     frames: usize,
 ) -> Result<f32> {
     use crate::app::world::{Loaded, World};
     use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-    let world_of = |m: &Model| -> Result<World> {
-        let mut w = World::new(gpu, Loaded::forest_of(m, 1)?, OFFSCREEN_FORMAT, 1)?;
+    let world_of = |m: &Model, motion: Option<&SpectralMotion>| -> Result<World> {
+        let mut w = World::new(gpu, Loaded::forest_of(m, motion, 1)?, OFFSCREEN_FORMAT, 1)?;
         w.renderer.shadows = false;
         Ok(w)
     };
-    let mut a = world_of(&only_foliage(original))?;
-    let mut b = world_of(&only_foliage(lod))?;
+    let mut a = world_of(&only_foliage(original), None)?;
+    let (lod_foliage, lod_motion) = foliage_of(lod);
+    let mut b = world_of(&lod_foliage, lod_motion.as_ref())?;
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
     let height = bounds.size().y.max(1e-3);
@@ -152,6 +220,57 @@ pub fn colour_error_over(
     Ok(wrong as f32 / covered.max(1) as f32)
 }
 
+/// Which clouds a tree's chain is made of (the viewer's level policy, less "full").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ChainStyle {
+    /// Skeleton clouds all the way: per bone with alike siblings merged, then coarser
+    /// branch subtrees (issue 5's chain).
+    Skeleton,
+    /// Spectral clouds from level 1 on.
+    Spectral,
+    /// Skeleton clouds while grouping by bones pays, then spectral clouds at a distance (the
+    /// thesis's proposal, §6.5 and Ch. 9: skeleton clouds near, spectral far).
+    Automatic,
+}
+
+impl ChainStyle {
+    pub const ALL: [ChainStyle; 3] = [
+        ChainStyle::Automatic,
+        ChainStyle::Skeleton,
+        ChainStyle::Spectral,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ChainStyle::Skeleton => "skeleton",
+            ChainStyle::Spectral => "spectral",
+            ChainStyle::Automatic => "automatic",
+        }
+    }
+}
+
+/// A level's foliage alone (wood left out), with its motion. `only_foliage` keeps the
+/// billboards' corners in order, and they were the model's last vertices, so their rows keep
+/// their order too.
+fn foliage_of(level: &CloudLevel) -> (Model, Option<SpectralMotion>) {
+    let model = only_foliage(&level.model);
+    let motion = level.motion.as_ref().map(|m| SpectralMotion {
+        spectra: m.spectra.clone(),
+        vertex_rows: m
+            .vertex_rows
+            .iter()
+            .copied()
+            .filter(|&r| r != NO_ROW)
+            .collect(),
+    });
+    debug_assert!(
+        motion
+            .as_ref()
+            .is_none_or(|m| m.vertex_rows.len() == model.mesh.vertex_count())
+    );
+    (model, motion)
+}
+
 /// How a tree's chain of levels is cut.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ChainOptions {
@@ -162,6 +281,14 @@ pub struct ChainOptions {
     /// Screen tolerance the levels are made for, pixels: an atlas gets about two texels per
     /// screen pixel at the distance where its ε projects to this.
     pub tolerance_px: f32,
+    pub style: ChainStyle,
+    /// Spectral clouds: the description type their clustering and motion use, and the
+    /// lines kept per axis (K).
+    pub description: DescriptionType,
+    pub bins: usize,
+    /// Spectral clouds from level 1 start with this many motion clusters (halved level by
+    /// level).
+    pub first_clusters: usize,
     pub seed: u64,
 }
 
@@ -171,6 +298,10 @@ impl Default for ChainOptions {
             first_epsilon: 0.005,
             last_billboards: 10,
             tolerance_px: 1.5,
+            style: ChainStyle::Automatic,
+            description: DescriptionType::AxisPhase,
+            bins: crate::bake::spectral::DEFAULT_BINS,
+            first_clusters: 64,
             seed: 1,
         }
     }
@@ -181,7 +312,8 @@ impl Default for ChainOptions {
 pub struct TreeLevel {
     /// ε in scene units (0 for the full tree, level 0).
     pub epsilon: f32,
-    pub grouping: Option<Grouping>,
+    /// How its leaves became billboards (None for the full tree).
+    pub kind: Option<CloudKind>,
     pub cloud: CloudLevel,
     pub bake_seconds: f64,
 }
@@ -197,10 +329,15 @@ const GROUPINGS: [Grouping; 5] = [
 
 /// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε doubling
 /// from `first_epsilon`, each with the wood simplified to the same error bound
-/// ([`WoodChain`]). Clouds are built per bone, sibling bones that move alike within ε
-/// sharing one ([`Grouping::Siblings`]), while that pays; where doubling ε would not
-/// cut the count by a fifth, the leaves are grouped by coarser branch subtrees instead (down
-/// to one cloud for the whole crown), until a level has at most `last_billboards` billboards.
+/// ([`WoodChain`]), until a level has at most `last_billboards` billboards.
+///
+/// Skeleton clouds are built per bone, sibling bones that move alike within ε sharing one
+/// ([`Grouping::Siblings`]), while that pays. Where doubling ε would not cut the count by a
+/// fifth, bones no longer make good groups: the [`ChainStyle::Skeleton`] chain then groups the
+/// leaves by coarser branch subtrees (down to one cloud for the whole crown), the
+/// [`ChainStyle::Automatic`] one goes on with spectral clouds of half as many motion clusters
+/// as the last level had bone groups. Spectral clouds halve their cluster count level by level
+/// (and again at the same ε where a level would not cut the count by a fifth).
 ///
 /// `progress` hears the fraction done (estimated: about eight levels to a chain).
 pub fn tree_chain(
@@ -215,7 +352,10 @@ pub fn tree_chain(
     let wood = WoodChain::new(tree);
     let mut eps = opts.first_epsilon.max(1e-4) * h;
     let mut g = 0usize;
+    // Motion clusters, once the chain has turned spectral.
+    let mut clusters = (opts.style == ChainStyle::Spectral).then_some(opts.first_clusters.max(1));
     let mut previous = usize::MAX;
+    let mut previous_groups = usize::MAX;
     for _ in 0..40 {
         let start = std::time::Instant::now();
         let params = CloudParams {
@@ -223,19 +363,43 @@ pub fn tree_chain(
             seed: opts.seed,
             ..Default::default()
         };
+        let kind = match clusters {
+            Some(k) => CloudKind::Spectral(SpectralParams {
+                kind: opts.description,
+                clusters: k,
+                bins: opts.bins,
+                seed: opts.seed,
+                ..Default::default()
+            }),
+            None => CloudKind::Skeleton(GROUPINGS[g]),
+        };
         // About two texels per screen pixel where this level comes in.
         let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
         let base = wood.tree_at(tree, eps);
-        let cloud = cloud_level(gpu, tree, foliage, &params, GROUPINGS[g], density, &base)?;
+        let cloud = cloud_level(gpu, tree, foliage, &params, &kind, density, &base)?;
         let count = cloud.billboards;
         // A level that hardly improves on the last: group coarser at the same ε instead.
-        if count as f32 > 0.8 * previous as f32 && g + 1 < GROUPINGS.len() {
-            g += 1;
-            continue;
+        if count as f32 > 0.8 * previous as f32 {
+            match clusters {
+                None if opts.style == ChainStyle::Automatic => {
+                    clusters = Some((previous_groups / 2).max(1));
+                    continue;
+                }
+                None if g + 1 < GROUPINGS.len() => {
+                    g += 1;
+                    continue;
+                }
+                Some(k) if k > 1 => {
+                    clusters = Some(k / 2);
+                    continue;
+                }
+                _ => {}
+            }
         }
+        previous_groups = cloud.groups;
         levels.push(TreeLevel {
             epsilon: eps,
-            grouping: Some(GROUPINGS[g]),
+            kind: Some(kind),
             cloud,
             bake_seconds: start.elapsed().as_secs_f64(),
         });
@@ -244,6 +408,7 @@ pub fn tree_chain(
         }
         progress((levels.len() as f32 / 9.0).min(0.95));
         previous = count;
+        clusters = clusters.map(|k| (k / 2).max(1));
         eps *= 2.0;
     }
     Ok(levels)
@@ -253,20 +418,29 @@ pub fn tree_chain(
 fn full_tree(tree: &Model) -> TreeLevel {
     TreeLevel {
         epsilon: 0.0,
-        grouping: None,
-        cloud: CloudLevel {
+        kind: None,
+        cloud: CloudLevel::full(tree),
+        bake_seconds: 0.0,
+    }
+}
+
+impl CloudLevel {
+    /// The tree itself, leaves and all, as a level.
+    pub fn full(tree: &Model) -> CloudLevel {
+        CloudLevel {
             model: tree.clone(),
+            motion: None,
+            groups: 0,
             billboards: 0,
             area: 0.0,
             texture_bytes: 0,
-        },
-        bake_seconds: 0.0,
+        }
     }
 }
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 1;
+const CHAIN_VERSION: u32 = 2;
 
 /// The cache key of a tree's chain: its source's hash, the chain options and the versions.
 pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> [u8; 32] {

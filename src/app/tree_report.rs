@@ -5,7 +5,8 @@
 
 use super::report::{plot_error, register_font, write_atomic};
 use super::tree_levels::{
-    ChainOptions, TreeLevel, at_rest, cloud_level, colour_error, colour_error_over, tree_chain,
+    ChainOptions, CloudKind, TreeLevel, at_rest, cloud_level, colour_error, colour_error_over,
+    tree_chain,
 };
 use crate::bake::billboard::cloud::CloudParams;
 use crate::bake::billboard::{Grouping, foliage, tree_height};
@@ -59,17 +60,6 @@ pub struct TreeReport {
     pub static_clouds: Vec<StaticCloudReport>,
 }
 
-/// How a level's leaves were grouped into clouds, in words.
-pub fn grouping_name(g: Option<Grouping>) -> String {
-    match g {
-        None => "full tree".into(),
-        Some(Grouping::PerBone) => "per bone".into(),
-        Some(Grouping::Siblings) => "per bone, alike siblings merged".into(),
-        Some(Grouping::Subtree { forks: 0 }) => "whole crown".into(),
-        Some(Grouping::Subtree { forks }) => format!("subtree below {forks} forks"),
-    }
-}
-
 /// Builds the chain of `tree`, measures it and writes the three files into `out`.
 pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let f = foliage(tree).map_err(|e| anyhow!("{}: {e}", tree.name))?;
@@ -81,7 +71,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let chain_seconds = start.elapsed().as_secs_f64();
     let mut levels = Vec::new();
     for (k, l) in chain.iter().enumerate() {
-        let error = colour_error(&gpu, tree, &l.cloud.model, METRIC_SIZE)?;
+        let error = colour_error(&gpu, tree, &l.cloud, METRIC_SIZE)?;
         eprintln!(
             "lodlab: {} L{k}: ε {:.4} h, {} billboards, colour error {:.3}",
             tree.name,
@@ -92,7 +82,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         levels.push(LevelReport {
             epsilon: l.epsilon / h,
             epsilon_m: l.epsilon,
-            grouping: grouping_name(l.grouping),
+            grouping: CloudKind::name(l.kind.as_ref()),
             billboards: l.cloud.billboards,
             triangles: l.cloud.model.mesh.triangle_count(),
             area: l.cloud.area,
@@ -110,9 +100,9 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         };
         let density =
             (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
-        let whole = Grouping::Subtree { forks: 0 };
-        let cloud = cloud_level(&gpu, &still, &f, &params, whole, density, &still)?;
-        let error = colour_error_over(&gpu, &still, &cloud.model, METRIC_SIZE, 1)?;
+        let whole = CloudKind::Skeleton(Grouping::Subtree { forks: 0 });
+        let cloud = cloud_level(&gpu, &still, &f, &params, &whole, density, &still)?;
+        let error = colour_error_over(&gpu, &still, &cloud, METRIC_SIZE, 1)?;
         eprintln!(
             "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",
             tree.name,
@@ -329,8 +319,8 @@ fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Pat
         image::RgbImage::from_pixel(tw * columns, th * rows, image::Rgb([255, 255, 255]));
     let target = Offscreen::new(gpu, tw, th, 4);
     for (k, l) in chain.iter().enumerate() {
-        let m = &l.cloud.model;
-        let mut world = World::new(gpu, Loaded::forest_of(m, 1)?, OFFSCREEN_FORMAT, 4)?;
+        let loaded = Loaded::forest_of(&l.cloud.model, l.cloud.motion.as_ref(), 1)?;
+        let mut world = World::new(gpu, loaded, OFFSCREEN_FORMAT, 4)?;
         let height = world.bakes[0].bounds.size().y;
         world.camera = crate::scene::Camera::new(
             glam::Vec3::new(0.0, height * 0.5, 0.0),

@@ -253,10 +253,16 @@ pub struct Loaded {
 }
 
 impl Loaded {
-    /// A forest of `count` copies of a model built in memory (a tree's level, say), not read
-    /// from a file: it has no source to cache levels under.
-    pub fn forest_of(model: &Model, count: usize) -> Result<Loaded> {
-        let bake = CharacterBake::new(model).map_err(|e| anyhow::anyhow!("{}: {e}", model.name))?;
+    /// A forest of `count` copies of a model built in memory (a tree's level, say, with its
+    /// spectral motion if it has one), not read from a file: it has no source to cache levels
+    /// under.
+    pub fn forest_of(
+        model: &Model,
+        motion: Option<&crate::bake::spectral::texture::SpectralMotion>,
+        count: usize,
+    ) -> Result<Loaded> {
+        let bake = CharacterBake::with_motion(model, motion)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", model.name))?;
         Ok(Loaded {
             spec: SceneSpec {
                 scene: "forest".into(),

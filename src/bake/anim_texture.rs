@@ -3,6 +3,9 @@
 //!
 //! Layout, by linear texel index (see [`super::texels`]): frame `f` (counted over all clips)
 //! and bone `b` occupy the three texels `3 (f B + b) + r`, row `r` of the 3×4 matrix `G_b`.
+//! Frame 0 is the rest pose (the nodes' own transforms, no clip): the shader scales an
+//! instance's motion by its wind strength s as `Ĝ + s (G − Ĝ)` ([`AnimationTexture::sample_with`]),
+//! which moves every vertex `s` times as far from where it rests. Clips start at frame 1.
 //! Which frames belong to which clip is in [`AnimationTexture::clips`]; the renderer hands the
 //! vertex shader each instance's clip as a frame range ([`AnimationTexture::clip_rows`]), so
 //! the shader reads nothing but matrices.
@@ -43,7 +46,7 @@ impl AnimationTexture {
         let skel = &model.skeleton;
         let bones = skel.bone_count() as u32;
         let mut clips = Vec::new();
-        let mut frames: Vec<Vec<Affine3A>> = Vec::new();
+        let mut frames: Vec<Vec<Affine3A>> = vec![crate::anim::bone_matrices(skel, None, 0.0)];
         let sources: Vec<Option<&crate::model::Clip>> = if model.clips.is_empty() {
             vec![None]
         } else {
@@ -108,22 +111,50 @@ impl AnimationTexture {
     /// The bone matrices the vertex shader uses at `time` seconds into `clip` (looping): the
     /// two frames around the time, blended linearly, exactly as `shaders/skinning.wgsl` does.
     pub fn sample(&self, clip: usize, time: f32) -> Vec<Affine3A> {
+        self.sample_with(clip, time, 1.0)
+    }
+
+    /// [`Self::sample`] with the motion scaled by the wind strength `wind`: every matrix
+    /// `Ĝ + wind · (G − Ĝ)` about the rest pose Ĝ (frame 0), as the shader does where the
+    /// instance's strength is not 1.
+    pub fn sample_with(&self, clip: usize, time: f32, wind: f32) -> Vec<Affine3A> {
         let c = &self.clips[clip];
         let (f0, f1, a) = frame_pair(c.frame_count, c.duration, time);
+        let lerp = |m0: Affine3A, m1: Affine3A, a: f32| Affine3A {
+            matrix3: Mat3A::from_cols(
+                m0.matrix3.x_axis.lerp(m1.matrix3.x_axis, a),
+                m0.matrix3.y_axis.lerp(m1.matrix3.y_axis, a),
+                m0.matrix3.z_axis.lerp(m1.matrix3.z_axis, a),
+            ),
+            translation: m0.translation.lerp(m1.translation, a),
+        };
         (0..self.bones)
             .map(|b| {
                 let m0 = self.matrix(c.first_frame + f0, b);
                 let m1 = self.matrix(c.first_frame + f1, b);
-                Affine3A {
-                    matrix3: Mat3A::from_cols(
-                        m0.matrix3.x_axis.lerp(m1.matrix3.x_axis, a),
-                        m0.matrix3.y_axis.lerp(m1.matrix3.y_axis, a),
-                        m0.matrix3.z_axis.lerp(m1.matrix3.z_axis, a),
-                    ),
-                    translation: m0.translation.lerp(m1.translation, a),
+                let g = lerp(m0, m1, a);
+                if wind == 1.0 {
+                    g
+                } else {
+                    let rest = self.matrix(0, b);
+                    Affine3A {
+                        matrix3: rest.matrix3 + (g.matrix3 - rest.matrix3) * wind,
+                        translation: rest.translation + (g.translation - rest.translation) * wind,
+                    }
                 }
             })
             .collect()
+    }
+
+    /// Loop time in [0, 1) of `time` seconds into `clip`, as the shader computes it for the
+    /// spectral offsets.
+    pub fn loop_time(&self, clip: usize, time: f32) -> f32 {
+        let c = &self.clips[clip];
+        if c.duration <= 0.0 {
+            return 0.0;
+        }
+        let u = time / c.duration;
+        u - u.floor()
     }
 }
 

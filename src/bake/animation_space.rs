@@ -31,6 +31,10 @@ pub struct AnimationSpaceMesh {
     pub uvs: Vec<Vec2>,
     pub materials: Vec<u16>,
     pub indices: Vec<u32>,
+    /// Per vertex, the row of the spectra texture whose offset moves it
+    /// ([`crate::bake::spectral::texture::NO_ROW`]: none); empty where nothing moves by
+    /// spectra (every character, and every level but a spectral cloud's).
+    pub spectral_rows: Vec<u32>,
 }
 
 impl AnimationSpaceMesh {
@@ -58,6 +62,7 @@ impl AnimationSpaceMesh {
             uvs: mesh.uvs.clone(),
             materials: mesh.materials.clone(),
             indices: mesh.indices.clone(),
+            spectral_rows: Vec::new(),
         }
     }
 
@@ -100,6 +105,11 @@ impl AnimationSpaceMesh {
             uvs: order.iter().map(|&v| self.uvs[v]).collect(),
             materials: order.iter().map(|&v| self.materials[v]).collect(),
             indices: indices.iter().map(|&i| remap[i as usize]).collect(),
+            spectral_rows: if self.spectral_rows.is_empty() {
+                Vec::new()
+            } else {
+                order.iter().map(|&v| self.spectral_rows[v]).collect()
+            },
         };
         out.offsets.push(0);
         for &v in &order {

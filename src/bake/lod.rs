@@ -208,6 +208,7 @@ impl<'a> Replay<'a> {
                 .map(|&r| self.base.materials[r as usize])
                 .collect(),
             indices,
+            spectral_rows: Vec::new(),
         };
         for &r in &used {
             compact.influences.extend_from_slice(self.influences_of(r));

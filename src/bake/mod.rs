@@ -21,6 +21,7 @@ use anim_texture::AnimationTexture;
 use animation_space::AnimationSpaceMesh;
 use glam::{Vec2, Vec3};
 use materials::MaterialLayers;
+use spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
 use vertex_texture::VertexTexture;
 
 /// A vertex for the trivial unskinned calibration shader: the first frame of the first clip,
@@ -48,11 +49,30 @@ pub struct CharacterBake {
     pub animation_space: AnimationSpaceMesh,
     /// Some material has cut-out alpha (foliage): drawn two-sided and alpha-tested.
     pub alpha_tested: bool,
+    /// A spectral cloud's spectra texture (the vertices that read it have their rows in
+    /// `animation_space.spectral_rows`).
+    pub spectra: Option<SpectraTexture>,
 }
 
 impl CharacterBake {
     pub fn new(model: &Model) -> Result<Self, String> {
-        let am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
+        Self::with_motion(model, None)
+    }
+
+    /// [`Self::new`] for a level whose billboards also move by `motion` (a spectral cloud).
+    pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
+        let mut am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
+        if let Some(m) = motion {
+            if m.vertex_rows.len() != am.vertex_count()
+                || m.vertex_rows
+                    .iter()
+                    .any(|&r| r != NO_ROW && r >= m.spectra.rows)
+            {
+                return Err("spectral motion does not fit the model's vertices".into());
+            }
+            am.spectral_rows = m.vertex_rows.clone();
+        }
+        let am = am.optimized_for_gpu();
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
         let vertices = VertexTexture::pack(&[&am], &[])?;
         let materials = MaterialLayers::bake(&model.materials);
@@ -96,7 +116,34 @@ impl CharacterBake {
                         .is_some_and(|t| t.pixels.chunks_exact(4).any(|px| px[3] < 128))
             }),
             animation_space: am,
+            spectra: motion.map(|m| m.spectra.clone()),
         })
+    }
+
+    /// The CPU reference of the vertex shader's skinning (`skin_vertex` in
+    /// `shaders/skinning.wgsl`): positions and normals at `time` seconds into `clip`, the
+    /// motion scaled by the wind strength `wind`, spectral offsets included:
+    /// `v = Σ G_i (p_i + w_i · Δ(τ))`.
+    pub fn evaluate(&self, clip: usize, time: f32, wind: f32) -> (Vec<Vec3>, Vec<Vec3>) {
+        let g = self.animation.sample_with(clip, time, wind);
+        let am = &self.animation_space;
+        let Some(spectra) = &self.spectra else {
+            return am.evaluate(&g);
+        };
+        let tau = self.animation.loop_time(clip, time);
+        let mut moved = am.clone();
+        for v in 0..am.vertex_count() {
+            let row = am.spectral_rows.get(v).copied().unwrap_or(NO_ROW);
+            if row == NO_ROW {
+                continue;
+            }
+            let d = spectra.offset(row, tau, wind);
+            let (a, b) = (am.offsets[v] as usize, am.offsets[v + 1] as usize);
+            for inf in &mut moved.influences[a..b] {
+                inf.p += (d * inf.p.w).extend(0.0);
+            }
+        }
+        moved.evaluate(&g)
     }
 
     pub fn triangle_count(&self) -> usize {

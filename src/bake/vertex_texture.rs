@@ -4,8 +4,10 @@
 //!
 //! Layout, by linear texel index (see [`super::texels`]):
 //! - texel `2v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
-//! - texel `2v + 1`: `(geomorph target, 0, 0, 0)`: the vertex (index into this texture) that `v`
-//!   morphs into at the next coarser level (Houle & Poulin §5.1); itself on the coarsest level;
+//! - texel `2v + 1`: `(geomorph target, spectral row + 1, 0, 0)`: the vertex (index into this
+//!   texture) that `v` morphs into at the next coarser level (Houle & Poulin §5.1), itself on
+//!   the coarsest level; and the row of the spectra texture whose offset moves it, 0 for none
+//!   (see [`crate::bake::spectral::texture`]);
 //! - each influence two texels: `p_i` as `(x, y, z, w)`, then `(n_i.x, n_i.y, n_i.z, bone)`.
 //!
 //! Integers are stored as floats, exact up to 2^24 texels. The levels of detail of a model share
@@ -83,7 +85,11 @@ impl VertexTexture {
                     Some(g) => base_vertices[k + 1] + g[v],
                     None => base_vertices[k] + v as u32,
                 };
-                headers.push([target as f32, 0.0, 0.0, 0.0]);
+                let row = match mesh.spectral_rows.get(v) {
+                    Some(&r) if r != crate::bake::spectral::texture::NO_ROW => r as f32 + 1.0,
+                    _ => 0.0,
+                };
+                headers.push([target as f32, row, 0.0, 0.0]);
                 for inf in infs {
                     body.push(inf.p.to_array());
                     body.push([inf.n.x, inf.n.y, inf.n.z, inf.bone as f32]);
@@ -131,6 +137,7 @@ mod tests {
             uvs: vec![Vec2::new(0.1, 0.2), Vec2::new(0.3, 0.4)],
             materials: vec![0, 3],
             indices: vec![],
+            spectral_rows: vec![crate::bake::spectral::texture::NO_ROW, 7],
         };
         let t = VertexTexture::pack(&[&mesh, &mesh], &[&[1, 1]]).unwrap();
         assert_eq!(t.base_vertices, vec![0, 2]);
@@ -139,6 +146,9 @@ mod tests {
         assert_eq!(t.grid.get(3)[0], 3.0);
         assert_eq!(t.grid.get(2 * 3 + 1)[0], 3.0);
         assert_eq!(t.grid.get(2 * 2 + 1)[0], 2.0);
+        // Vertex 1 reads spectra row 7 (stored plus one); vertex 0 none.
+        assert_eq!(t.grid.get(1)[1], 0.0);
+        assert_eq!(t.grid.get(3)[1], 8.0);
         // A map that does not fit the next level is refused.
         assert!(VertexTexture::pack(&[&mesh, &mesh], &[&[0, 2]]).is_err());
         let h = t.grid.get(2 * 3);

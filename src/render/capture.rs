@@ -27,6 +27,19 @@ pub fn capture_skinned(
     time: f32,
     transform: Affine3A,
 ) -> Result<Vec<Vec4>> {
+    capture_skinned_in_wind(gpu, renderer, model, clip, time, transform, 1.0)
+}
+
+/// [`capture_skinned`] with the instance's wind strength `wind`.
+pub fn capture_skinned_in_wind(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    model: usize,
+    clip: u32,
+    time: f32,
+    transform: Affine3A,
+    wind: f32,
+) -> Result<Vec<Vec4>> {
     let Some(character) = renderer.characters().get(model) else {
         bail!("no character {model}");
     };
@@ -60,13 +73,14 @@ pub fn capture_skinned(
         }],
     });
     let rows = &character.clip_rows;
-    let instance = GpuInstance::new(
+    let mut instance = GpuInstance::new(
         &transform,
         rows[(clip as usize).min(rows.len() - 1)],
         0.0,
         1.0,
         Vec4::ONE,
     );
+    instance.timing[2] = wind;
     let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("capture instance"),
         contents: bytemuck::bytes_of(&instance),

@@ -28,6 +28,9 @@ pub struct GpuCharacter {
     pub static_vertices: wgpu::Buffer,
     anim_view: wgpu::TextureView,
     materials_view: wgpu::TextureView,
+    /// The spectra texture of a spectral cloud; one empty texel for everything else (the
+    /// shader reads K as a third of its width, so K = 0 there).
+    spectra_view: wgpu::TextureView,
     shadow_buffer: wgpu::Buffer,
     /// Indexed by [`crate::scene::LodMethod::index`]; slot 0 (`none`) is always there.
     sets: Vec<Option<GpuLodSet>>,
@@ -42,7 +45,8 @@ pub struct GpuLodSet {
     pub bind_group: wgpu::BindGroup,
 }
 
-/// Layout of group 1: animation texture, vertex texture, material layers, sampler, shadow.
+/// Layout of group 1: animation texture, vertex texture, material layers, sampler, shadow,
+/// spectra texture.
 pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let data_texture = |binding| wgpu::BindGroupLayoutEntry {
         binding,
@@ -85,18 +89,24 @@ pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 },
                 count: None,
             },
+            data_texture(5),
         ],
     })
 }
 
 fn data_texture(gpu: &Gpu, label: &str, grid: &TexelGrid) -> wgpu::Texture {
+    float_texture(gpu, label, grid.width, grid.height, grid.bytes())
+}
+
+/// An `Rgba32Float` texture the vertex shader reads with `textureLoad`.
+fn float_texture(gpu: &Gpu, label: &str, width: u32, height: u32, bytes: &[u8]) -> wgpu::Texture {
     gpu.device.create_texture_with_data(
         &gpu.queue,
         &wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
-                width: grid.width,
-                height: grid.height,
+                width,
+                height,
                 depth_or_array_layers: 1,
             },
             mip_level_count: 1,
@@ -107,7 +117,7 @@ fn data_texture(gpu: &Gpu, label: &str, grid: &TexelGrid) -> wgpu::Texture {
             view_formats: &[],
         },
         wgpu::util::TextureDataOrder::LayerMajor,
-        grid.bytes(),
+        bytes,
     )
 }
 
@@ -124,6 +134,16 @@ impl GpuCharacter {
             &format!("{} animation", bake.name),
             &bake.animation.grid,
         );
+        let spectra = match &bake.spectra {
+            Some(s) if s.rows > 0 => float_texture(
+                gpu,
+                &format!("{} spectra", bake.name),
+                s.width(),
+                s.rows,
+                s.bytes(),
+            ),
+            _ => float_texture(gpu, "no spectra", 1, 1, &[0; 16]),
+        };
         let m = &bake.materials;
         let material_data: Vec<u8> = m.mips.concat();
         let materials = gpu.device.create_texture_with_data(
@@ -183,6 +203,7 @@ impl GpuCharacter {
                 ..Default::default()
             }),
             shadow_buffer,
+            spectra_view: spectra.create_view(&Default::default()),
             sets: Vec::new(),
         };
         character.add_set(gpu, layout, sampler, 0, &LodPack::full_detail(bake));
@@ -230,6 +251,10 @@ impl GpuCharacter {
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: self.shadow_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&self.spectra_view),
                 },
             ],
         });

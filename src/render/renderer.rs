@@ -209,6 +209,9 @@ pub struct SceneRenderer {
     pub lighting: Lighting,
     pub shader: CharacterShader,
     pub shadows: bool,
+    /// Scales every tree's own wind strength (foliage only; characters play their clips as
+    /// they are).
+    pub wind: f32,
     frame_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
     pub(crate) frame_layout: wgpu::BindGroupLayout,
@@ -506,6 +509,7 @@ impl SceneRenderer {
             lighting: Lighting::default(),
             shader: CharacterShader::Skinned,
             shadows: true,
+            wind: 1.0,
             frame_buffer,
             frame_bind_group,
             frame_layout,
@@ -632,6 +636,11 @@ impl SceneRenderer {
                     inst.speed,
                     inst.tint,
                 );
+                g.timing[2] = if c.two_sided {
+                    inst.wind * self.wind
+                } else {
+                    inst.wind
+                };
                 let key = |pass, level: usize, hops: usize| {
                     DrawKey::new(pass, side_index, inst.model, slot, level as u8, hops as u8).0
                 };

@@ -95,7 +95,7 @@ pub struct GpuInstance {
     pub rows: [[f32; 4]; 3],
     /// The clip as a frame range: [`crate::bake::anim_texture::AnimationTexture::clip_rows`].
     pub clip: [f32; 4],
-    /// Time offset in seconds, playback speed, two spare.
+    /// Time offset in seconds, playback speed, wind strength (1: the clip as it is), spare.
     pub timing: [f32; 4],
     pub tint: [f32; 4],
     /// Level of detail: transition t (−1 outside transitions), geomorph hops, opacity, level.
@@ -119,7 +119,7 @@ impl GpuInstance {
                 [m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z],
             ],
             clip: clip_rows,
-            timing: [time_offset, speed, 0.0, 0.0],
+            timing: [time_offset, speed, 1.0, 0.0],
             tint: tint.to_array(),
             lod: [-1.0, 0.0, 1.0, 0.0],
         }

@@ -68,6 +68,9 @@ pub struct Agent {
     pub speed: f32,
     /// Ground speed in metres per second at playback speed 1.
     pub ground_speed: f32,
+    /// Wind strength: how far its animation moves it from rest (1: the clip as it is; trees
+    /// get their own, so a forest does not sway in step).
+    pub wind: f32,
     pub tint: Vec4,
     pub path: Path,
 }
@@ -81,6 +84,8 @@ pub struct Instance {
     /// Animation time is `scene time · speed + time_offset`.
     pub time_offset: f32,
     pub speed: f32,
+    /// Wind strength (see [`Agent::wind`]).
+    pub wind: f32,
     pub tint: Vec4,
 }
 
@@ -121,6 +126,7 @@ impl Agent {
             clip: self.clip as u32,
             time_offset: self.phase,
             speed: self.speed,
+            wind: self.wind,
             tint: self.tint,
         }
     }
@@ -139,6 +145,7 @@ impl Crowd {
                 .unwrap_or(0);
             return Crowd {
                 agents: vec![Agent {
+                    wind: 1.0,
                     model: 0,
                     clip,
                     phase: 0.0,
@@ -201,6 +208,7 @@ impl Crowd {
             let jitter = Vec2::new(rng.f32() - 0.5, rng.f32() - 0.5) * plaza_cell * 0.2;
             let position = Vec2::new(a.cos(), a.sin()) * r + jitter;
             agents.push(Agent {
+                wind: 1.0,
                 model: m,
                 clip,
                 phase: rng.f32() * 10.0,
@@ -253,6 +261,7 @@ impl Crowd {
                     .zip(&left[..take])
                 {
                     agents.push(Agent {
+                        wind: 1.0,
                         model: m,
                         clip,
                         phase: rng.f32() * 10.0,

@@ -41,6 +41,12 @@ pub fn layout(models: &[CrowdModel], count: usize, seed: u64) -> Crowd {
         );
         agents.push(Agent {
             model: m,
+            // Gusts differ from tree to tree: between 0.6 and 1.4 of the clip's sway.
+            wind: if count == 1 {
+                1.0
+            } else {
+                0.6 + 0.8 * rng.f32()
+            },
             clip: 0,
             phase: if count == 1 { 0.0 } else { rng.f32() * 30.0 },
             speed: if count == 1 {

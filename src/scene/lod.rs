@@ -462,6 +462,7 @@ mod tests {
             clip: 0,
             time_offset: 0.0,
             speed: 1.0,
+            wind: 1.0,
             tint: Vec4::ONE,
         }
     }

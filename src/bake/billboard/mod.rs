@@ -282,7 +282,20 @@ pub fn grouped_cloud(
             }
         })
         .collect();
-    let mut groups: Vec<u32> = group_of.clone();
+    cloud_of_groups(skeleton, foliage, params, &group_of)
+}
+
+/// A billboard cloud of the foliage, one cloud per distinct value of `group_of` (one per leaf),
+/// in parallel; every billboard is bound to the deepest bone its leaves share.
+pub fn cloud_of_groups(
+    skeleton: &crate::model::Skeleton,
+    foliage: &Foliage,
+    params: &CloudParams,
+    group_of: &[u32],
+) -> SkeletonCloud {
+    let tree = BoneTree::new(skeleton);
+    let bone_count = tree.parent.len() as u32;
+    let mut groups: Vec<u32> = group_of.to_vec();
     groups.sort_unstable();
     groups.dedup();
     let per_group: Vec<Vec<Billboard>> = groups

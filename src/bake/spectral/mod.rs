@@ -10,11 +10,16 @@
 //!   amplitudes.
 //! - [`bins`] reduces a spectrum to K lines per axis (§6.3.3), the record a billboard's vertex
 //!   shader evaluates.
+//! - [`cluster`] groups leaves by how they move (§6.2, App. C), [`cloud`] builds a billboard
+//!   cloud per cluster whose billboards follow their leaves' shared bone and add the residual
+//!   motion as lines (§6.4), and [`texture`] lays those lines out for the vertex shader.
 
 pub mod bins;
+pub mod cloud;
 pub mod cluster;
 pub mod description;
 pub mod dft;
+pub mod texture;
 
 use crate::anim::skinning_over_loop;
 use crate::model::Model;
@@ -85,7 +90,12 @@ pub fn leaf_centroid(corners: &[Vec3]) -> Vec3 {
 /// The trajectories of rest-pose points each bound rigidly to one bone, at `samples` times
 /// evenly over one loop.
 pub fn trajectories(model: &Model, points: &[(Vec3, u32)], samples: usize) -> Vec<Vec<Vec3>> {
-    let frames = skinning_over_loop(model, samples);
+    trajectories_in(&skinning_over_loop(model, samples), points)
+}
+
+/// [`trajectories`] through skinning matrices already sampled over the loop (one `Vec` of
+/// bone matrices per sample, as [`skinning_over_loop`] gives them).
+pub fn trajectories_in(frames: &[Vec<glam::Affine3A>], points: &[(Vec3, u32)]) -> Vec<Vec<Vec3>> {
     points
         .par_iter()
         .map(|&(c, bone)| {
