@@ -1,6 +1,7 @@
 //! A tree's foliage as a billboard cloud, end to end: the cloud (CPU), its atlas (rendered on
 //! the GPU, then dilated), and the tree model that draws it.
 
+use crate::anim::skinning_over_loop;
 use crate::bake::billboard::atlas::{atlas_triangles, dilate, layout};
 use crate::bake::billboard::cloud::CloudParams;
 use crate::bake::billboard::siblings::merge_siblings;
@@ -10,6 +11,7 @@ use crate::bake::cache::{LodCache, Origin};
 use crate::bake::materials::MaterialLayers;
 use crate::bake::spectral::cloud::{SpectralParams, spectral_cloud};
 use crate::bake::spectral::description::DescriptionType;
+use crate::bake::spectral::metrics::{AnimationError, animation_error, traced_leaves};
 use crate::bake::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
 use crate::model::Model;
 use crate::render::Gpu;
@@ -58,6 +60,8 @@ pub struct CloudLevel {
     pub motion: Option<SpectralMotion>,
     /// Clouds it was built as: bone groups, or motion clusters.
     pub groups: usize,
+    /// How far its billboards' motion strays from the leaves' (0 for the full tree).
+    pub animation: AnimationError,
     pub billboards: usize,
     /// Total billboard area, scene units².
     pub area: f32,
@@ -78,6 +82,7 @@ pub fn cloud_level(
     wood: &Model,
 ) -> Result<CloudLevel> {
     let merged;
+    let original = foliage;
     let (foliage, cloud, lines, groups) = match kind {
         CloudKind::Skeleton(grouping) => {
             let foliage = if *grouping == Grouping::Siblings {
@@ -120,6 +125,14 @@ pub fn cloud_level(
     let mut atlas = render_atlas(gpu, &atlas_layout, &triangles, &leaf)?;
     dilate(&mut atlas.pixels, atlas.width, atlas.height, DILATE_RINGS);
     let texture_bytes = atlas.pixels.len();
+    let animation = animation_error(
+        tree,
+        original,
+        &cloud,
+        lines.as_ref().map(|(l, _)| l.as_slice()),
+        &skinning_over_loop(tree, crate::bake::spectral::DEFAULT_SAMPLES),
+        &traced_leaves(original),
+    );
     let model = cloud_model(wood, &cloud, &atlas_layout, atlas);
     // The billboards' corners are the model's last vertices, four per billboard in order.
     let motion = match lines {
@@ -138,6 +151,7 @@ pub fn cloud_level(
     Ok(CloudLevel {
         billboards: cloud.billboards.len(),
         groups,
+        animation,
         area: cloud.total_area(),
         texture_bytes,
         model,
@@ -431,6 +445,7 @@ impl CloudLevel {
             model: tree.clone(),
             motion: None,
             groups: 0,
+            animation: AnimationError::default(),
             billboards: 0,
             area: 0.0,
             texture_bytes: 0,

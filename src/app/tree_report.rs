@@ -1,15 +1,22 @@
 //! `lodlab report TREE`: a tree's chain of billboard-cloud levels measured as in the Aalborg
-//! thesis (§5.1.3, §8.4): per level ε, billboards, area, texture memory, colour error and bake
-//! time (`report.json`), colour error and billboard count against ε (`colour-error.png`), and
-//! every level side by side from one view (`levels.png`).
+//! thesis (§5.1.3, §5.1.4, §8.4): per level ε, billboards, area, texture memory, colour error,
+//! animation errors and bake time (`report.json`), colour error and billboard count against ε
+//! (`colour-error.png`), every level side by side from one view (`levels.png`), and a few
+//! leaves' trajectories against their billboards' (`motion.png`).
+//!
+//! Besides the chain (skeleton clouds, then spectral ones), the report measures the
+//! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
+//! counts) and the spectral levels rebuilt with each description type (`description_types`).
 
 use super::report::{plot_error, register_font, write_atomic};
 use super::tree_levels::{
-    ChainOptions, CloudKind, TreeLevel, at_rest, cloud_level, colour_error, colour_error_over,
-    tree_chain,
+    ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, colour_error,
+    colour_error_over, tree_chain,
 };
 use crate::bake::billboard::cloud::CloudParams;
 use crate::bake::billboard::{Grouping, foliage, tree_height};
+use crate::bake::spectral::cloud::SpectralParams;
+use crate::bake::spectral::description::DescriptionType;
 use crate::model::Model;
 use crate::render::Gpu;
 use anyhow::{Context, Result, anyhow};
@@ -33,6 +40,25 @@ pub struct LevelReport {
     pub area: f32,
     pub texture_bytes: usize,
     pub colour_error: f32,
+    /// Mean RMS distance over the loop between a leaf and its projection on its billboard,
+    /// in tree heights (see [`crate::bake::spectral::metrics`]).
+    pub anim_rms: f32,
+    /// Mean dominating-axis spectral amplitude error (thesis §5.1.4), in [0, 1).
+    pub anim_spectral: f32,
+    pub bake_seconds: f64,
+}
+
+/// A spectral level rebuilt with one description type.
+#[derive(Clone, Debug, Serialize)]
+pub struct DescriptionReport {
+    /// The chain level it stands in for.
+    pub level: usize,
+    pub description: String,
+    pub epsilon: f32,
+    pub clusters: usize,
+    pub billboards: usize,
+    pub anim_rms: f32,
+    pub anim_spectral: f32,
     pub bake_seconds: f64,
 }
 
@@ -58,6 +84,11 @@ pub struct TreeReport {
     pub metric: String,
     /// At the levels' ε: one static cloud for the whole crown, static colour metric.
     pub static_clouds: Vec<StaticCloudReport>,
+    /// The skeleton-only chain's levels where it differs from the chain (coarser branch
+    /// subtrees instead of spectral clouds).
+    pub skeleton_levels: Vec<LevelReport>,
+    /// The chain's spectral levels with each description type.
+    pub description_types: Vec<DescriptionReport>,
 }
 
 /// Builds the chain of `tree`, measures it and writes the three files into `out`.
@@ -67,19 +98,22 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let gpu = Gpu::headless()?;
     let h = tree_height(tree);
     let start = std::time::Instant::now();
-    let chain = tree_chain(&gpu, tree, &f, &ChainOptions::default(), &|_| {})?;
+    let opts = ChainOptions::default();
+    let chain = tree_chain(&gpu, tree, &f, &opts, &|_| {})?;
     let chain_seconds = start.elapsed().as_secs_f64();
-    let mut levels = Vec::new();
-    for (k, l) in chain.iter().enumerate() {
+    let measure = |k: usize, l: &TreeLevel, what: &str| -> Result<LevelReport> {
         let error = colour_error(&gpu, tree, &l.cloud, METRIC_SIZE)?;
+        let anim = &l.cloud.animation;
         eprintln!(
-            "lodlab: {} L{k}: ε {:.4} h, {} billboards, colour error {:.3}",
+            "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3}, animation error {:.4} h / {:.3}",
             tree.name,
             l.epsilon / h,
             l.cloud.billboards,
-            error
+            error,
+            anim.rms,
+            anim.spectral
         );
-        levels.push(LevelReport {
+        Ok(LevelReport {
             epsilon: l.epsilon / h,
             epsilon_m: l.epsilon,
             grouping: CloudKind::name(l.kind.as_ref()),
@@ -88,8 +122,60 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             area: l.cloud.area,
             texture_bytes: l.cloud.texture_bytes,
             colour_error: error,
+            anim_rms: anim.rms,
+            anim_spectral: anim.spectral,
             bake_seconds: l.bake_seconds,
-        });
+        })
+    };
+    let mut levels = Vec::new();
+    for (k, l) in chain.iter().enumerate() {
+        levels.push(measure(k, l, "")?);
+    }
+    // The skeleton-only chain, where it parts from this one.
+    let skeleton_opts = ChainOptions {
+        style: ChainStyle::Skeleton,
+        ..opts
+    };
+    let skeleton_chain = tree_chain(&gpu, tree, &f, &skeleton_opts, &|_| {})?;
+    let mut skeleton_levels = Vec::new();
+    let mut skeleton_shown = Vec::new();
+    for (k, l) in skeleton_chain.iter().enumerate() {
+        if chain.get(k).is_some_and(|c| c.kind == l.kind) {
+            continue;
+        }
+        skeleton_levels.push(measure(k, l, "skeleton-only ")?);
+        skeleton_shown.push(l);
+    }
+    // The spectral levels with every description type.
+    let mut description_types = Vec::new();
+    for (k, l) in chain.iter().enumerate() {
+        let Some(CloudKind::Spectral(sp)) = l.kind else {
+            continue;
+        };
+        let params = CloudParams {
+            epsilon: l.epsilon,
+            seed: opts.seed,
+            ..Default::default()
+        };
+        let density = (2.0 * opts.tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
+        for description in DescriptionType::ALL {
+            let start = std::time::Instant::now();
+            let kind = CloudKind::Spectral(SpectralParams {
+                kind: description,
+                ..sp
+            });
+            let cloud = cloud_level(&gpu, tree, &f, &params, &kind, density, tree)?;
+            description_types.push(DescriptionReport {
+                level: k,
+                description: description.name().into(),
+                epsilon: l.epsilon / h,
+                clusters: sp.clusters,
+                billboards: cloud.billboards,
+                anim_rms: cloud.animation.rms,
+                anim_spectral: cloud.animation.spectral,
+                bake_seconds: start.elapsed().as_secs_f64(),
+            });
+        }
     }
     let still = at_rest(tree);
     let mut static_clouds = Vec::new();
@@ -131,6 +217,8 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             super::tree_levels::METRIC_FRAMES
         ),
         static_clouds,
+        skeleton_levels,
+        description_types,
     };
     write_atomic(
         &out.join("report.json"),
@@ -138,7 +226,141 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     )?;
     plot(&report, &out.join("colour-error.png"))?;
     contact_sheet(&gpu, &chain, &report, &out.join("levels.png"))?;
+    // The finest spectral level against the skeleton-only level at the same ε.
+    let spectral = chain
+        .iter()
+        .position(|l| matches!(l.kind, Some(CloudKind::Spectral(_))));
+    let pair = spectral.map(|k| {
+        (
+            (k, &chain[k]),
+            skeleton_chain
+                .get(k)
+                .or(skeleton_chain.last())
+                .map(|l| (k.min(skeleton_chain.len() - 1), l)),
+        )
+    });
+    motion_plot(&report, pair, &out.join("motion.png"))?;
     Ok(report)
+}
+
+/// A few leaves' sway over one loop (their x and z about their mean), against where their
+/// billboards take them: a spectral level, and the skeleton-only level at the same ε.
+type Shown<'a> = (usize, &'a TreeLevel);
+
+fn motion_plot(
+    report: &TreeReport,
+    pair: Option<(Shown<'_>, Option<Shown<'_>>)>,
+    path: &Path,
+) -> Result<()> {
+    register_font();
+    let (w, h) = (1200u32, 900u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let Some(((sk, spectral), skeleton)) = pair else {
+            root.titled(
+                &format!("{}: no spectral level in the chain", report.model),
+                ("sans-serif", 24),
+            )
+            .map_err(plot_error)?;
+            root.present().map_err(plot_error)?;
+            drop(root);
+            let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
+            return super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8());
+        };
+        let root = root
+            .titled(
+                &format!(
+                    "{}: leaves' sway over one loop (x and z about the leaf's mean, m)",
+                    report.model
+                ),
+                ("sans-serif", 22),
+            )
+            .map_err(plot_error)?;
+        let traces = &spectral.cloud.animation.traces;
+        let rows = traces.len().max(1);
+        let cells = root.split_evenly((rows, 2));
+        let black = RGBColor(20, 20, 20);
+        let blue = RGBColor(30, 100, 220);
+        let orange = RGBColor(230, 120, 20);
+        for (i, trace) in traces.iter().enumerate() {
+            let other = skeleton.and_then(|(_, l)| {
+                l.cloud
+                    .animation
+                    .traces
+                    .iter()
+                    .find(|t| t.leaf == trace.leaf)
+            });
+            for (axis, name) in [(0usize, "x"), (2, "z")] {
+                let mean = trace.original.iter().map(|p| p[axis]).sum::<f32>()
+                    / trace.original.len().max(1) as f32;
+                let curve = |t: &[glam::Vec3]| -> Vec<(f64, f64)> {
+                    let n = t.len().max(1) as f64;
+                    t.iter()
+                        .enumerate()
+                        .map(|(s, p)| (s as f64 / n, (p[axis] - mean) as f64))
+                        .collect()
+                };
+                let mut curves = vec![(curve(&trace.original), black, "leaf".to_string())];
+                curves.push((
+                    curve(&trace.billboard),
+                    blue,
+                    format!("spectral L{sk} ({} billboards)", spectral.cloud.billboards),
+                ));
+                if let (Some(t), Some((k, l))) = (other, skeleton) {
+                    curves.push((
+                        curve(&t.billboard),
+                        orange,
+                        format!("skeleton L{k} ({} billboards)", l.cloud.billboards),
+                    ));
+                }
+                let span = curves
+                    .iter()
+                    .flat_map(|(c, _, _)| c.iter().map(|p| p.1.abs()))
+                    .fold(0.01f64, f64::max)
+                    * 1.15;
+                let mut chart = ChartBuilder::on(&cells[2 * i + axis / 2])
+                    .caption(
+                        format!("leaf {} along {name}", trace.leaf),
+                        ("sans-serif", 17),
+                    )
+                    .margin(12)
+                    .x_label_area_size(32)
+                    .y_label_area_size(60)
+                    .build_cartesian_2d(0.0..1.0, -span..span)
+                    .map_err(plot_error)?;
+                chart
+                    .configure_mesh()
+                    .x_desc("loop time")
+                    .label_style(("sans-serif", 13))
+                    .draw()
+                    .map_err(plot_error)?;
+                for (points, colour, label) in curves {
+                    chart
+                        .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+                        .map_err(plot_error)?
+                        .label(label)
+                        .legend(move |(x, y)| {
+                            PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
+                        });
+                }
+                if i == 0 && axis == 0 {
+                    chart
+                        .configure_series_labels()
+                        .position(SeriesLabelPosition::UpperRight)
+                        .border_style(BLACK)
+                        .background_style(WHITE.mix(0.9))
+                        .label_font(("sans-serif", 13))
+                        .draw()
+                        .map_err(plot_error)?;
+                }
+            }
+        }
+        root.present().map_err(plot_error)?;
+    }
+    let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
+    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
 }
 
 /// Colour error (top) and billboard count (bottom, log scale) against ε.
@@ -183,7 +405,7 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .iter()
             .map(|l| (l.epsilon as f64, l.colour_error as f64))
             .collect();
-        let chain_label = "skeleton clouds (the chain), animated";
+        let chain_label = "the chain (skeleton clouds, then spectral), animated";
         series(
             &mut chart,
             &chain_errors,
@@ -204,6 +426,19 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             green,
             Marker::Triangle,
             Some(still_label),
+        )?;
+        let orange = RGBColor(230, 120, 20);
+        let skeleton_errors: Vec<(f64, f64)> = report
+            .skeleton_levels
+            .iter()
+            .map(|l| (l.epsilon as f64, l.colour_error as f64))
+            .collect();
+        series(
+            &mut chart,
+            &skeleton_errors,
+            orange,
+            Marker::Triangle,
+            Some("skeleton clouds only (branch subtrees), animated"),
         )?;
         chart
             .configure_series_labels()
@@ -244,6 +479,12 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .map(|l| (l.epsilon as f64, log_count(l.billboards)))
             .collect();
         series(&mut chart, &still_counts, green, Marker::Triangle, None)?;
+        let skeleton_counts: Vec<(f64, f64)> = report
+            .skeleton_levels
+            .iter()
+            .map(|l| (l.epsilon as f64, log_count(l.billboards)))
+            .collect();
+        series(&mut chart, &skeleton_counts, orange, Marker::Triangle, None)?;
         root.present().map_err(plot_error)?;
     }
     let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;

@@ -19,6 +19,7 @@ pub mod cloud;
 pub mod cluster;
 pub mod description;
 pub mod dft;
+pub mod metrics;
 pub mod texture;
 
 use crate::anim::skinning_over_loop;
