@@ -110,16 +110,20 @@ struct GenAssetsArgs {
 /// Which scene and which characters.
 #[derive(Args, Debug, Clone)]
 struct SceneArgs {
-    /// Scene to show: crowd (characters) or forest (trees).
-    #[arg(long, default_value = "crowd")]
+    /// Scene to show: mixed (the crowd walking in a clearing of the forest), crowd
+    /// (characters) or forest (trees).
+    #[arg(long, default_value = "mixed")]
     scene: String,
     /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling) or a glTF path.
     /// Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
     models: Vec<String>,
-    /// Number of characters (or trees) [default: 300 in the crowd, 12 in the forest].
+    /// Number of characters (or trees in the forest) [default: 300 characters, 500 trees].
     #[arg(long)]
     count: Option<usize>,
+    /// Trees round the mixed scene's clearing.
+    #[arg(long, default_value_t = lodlab::app::world::DEFAULT_MIXED_TREES)]
+    trees: usize,
     /// Play this clip on every model that has it (default: a mix).
     #[arg(long)]
     clip: Option<String>,
@@ -139,6 +143,7 @@ impl SceneArgs {
             count: self
                 .count
                 .unwrap_or_else(|| lodlab::app::world::default_count(&self.scene)),
+            trees: self.trees,
             clip: self.clip.clone(),
             seed: self.seed,
             cache_dir: self.cache.clone(),

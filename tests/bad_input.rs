@@ -174,7 +174,15 @@ fn gltf_with_an_external_buffer_loads() {
 #[test]
 fn cli_refuses_an_unwritable_output_before_rendering() {
     let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
-        .args(["shot", "--count", "1", "--out", "/no/such/folder/x.png"])
+        .args([
+            "shot",
+            "--scene",
+            "crowd",
+            "--count",
+            "1",
+            "--out",
+            "/no/such/folder/x.png",
+        ])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
@@ -204,7 +212,7 @@ fn cli_reports_bad_models_in_one_line_with_exit_code_1() {
     let out_png = dir.path().join("out.png");
     for f in &files {
         let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
-            .args(["shot", "--count", "3", "--out"])
+            .args(["shot", "--scene", "crowd", "--count", "3", "--out"])
             .arg(&out_png)
             .arg("--model")
             .arg(f)

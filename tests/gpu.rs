@@ -162,8 +162,10 @@ fn adapter_is_chosen_by_name() {
     let out = dir.path().join("a.png");
     let run = |name: Option<&str>| {
         let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"));
-        c.args(["shot", "--count", "0", "--size", "32x32", "--out"])
-            .arg(&out);
+        c.args([
+            "shot", "--scene", "crowd", "--count", "0", "--size", "32x32", "--out",
+        ])
+        .arg(&out);
         match name {
             Some(n) => c.env("WGPU_ADAPTER_NAME", n),
             None => c.env_remove("WGPU_ADAPTER_NAME"),

@@ -461,8 +461,10 @@ fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
 }
 
 /// `lodlab report TREE --out DIR` end to end, on the sapling (the thesis tree's size): the
-/// JSON of the issue with a level per ε down to 10 billboards or fewer, the thesis's static
-/// series beside it, the plot and the contact sheet of every level.
+/// JSON of the issues with a level per ε down to 10 billboards or fewer, skeleton clouds
+/// first and spectral ones at the coarse end, animation errors per level, the thesis's static
+/// series, the skeleton-only levels and every description type beside it, the plot, the
+/// contact sheet of every level and the motion plot.
 #[test]
 fn the_tree_report_writes_its_three_files() {
     let dir = tempfile::tempdir().unwrap();
@@ -500,6 +502,60 @@ fn the_tree_report_writes_its_three_files() {
         assert!(f(&w[1], "billboards") < f(&w[0], "billboards"));
     }
     assert!(f(levels.last().unwrap(), "billboards") <= 10.0);
+    // Skeleton clouds near, spectral clouds far (the automatic chain).
+    let kinds: Vec<&str> = levels
+        .iter()
+        .map(|l| l["grouping"].as_str().unwrap())
+        .collect();
+    assert!(kinds[1].starts_with("per bone"), "{kinds:?}");
+    let first_spectral = kinds.iter().position(|k| k.starts_with("spectral"));
+    let first_spectral = first_spectral.expect("spectral levels at the coarse end");
+    assert!(
+        kinds[first_spectral..]
+            .iter()
+            .all(|k| k.starts_with("spectral"))
+    );
+    // Animation errors: none for the tree, some for every cloud, growing to the coarse end.
+    assert_eq!(f(&levels[0], "anim_rms"), 0.0);
+    for l in &levels[1..] {
+        assert!(
+            f(l, "anim_rms") > 0.0 && f(l, "anim_spectral") >= 0.0,
+            "{l}"
+        );
+        assert!(f(l, "anim_spectral") < 1.0);
+    }
+    assert!(f(&levels[1], "anim_rms") < f(levels.last().unwrap(), "anim_rms"));
+    let skeleton = json["skeleton_levels"].as_array().unwrap();
+    assert!(!skeleton.is_empty());
+    assert!(
+        skeleton
+            .iter()
+            .all(|l| !l["grouping"].as_str().unwrap().starts_with("spectral"))
+    );
+    let types = json["description_types"].as_array().unwrap();
+    assert_eq!(types.len(), 3 * (levels.len() - first_spectral));
+    for name in ["naive", "dominating-axis", "axis-phase"] {
+        assert!(
+            types
+                .iter()
+                .any(|t| t["description"] == name && f(t, "anim_rms") > 0.0)
+        );
+    }
+    let motion = image::open(out_dir.join("motion.png")).unwrap().to_rgb8();
+    let curve = |r: u8, g: u8, b: u8| {
+        motion
+            .pixels()
+            .filter(|p| p[0].abs_diff(r) < 30 && p[1].abs_diff(g) < 30 && p[2].abs_diff(b) < 30)
+            .count()
+    };
+    // The leaves (black), the spectral billboards (blue) and the skeleton ones (orange).
+    for (name, n) in [
+        ("black", curve(20, 20, 20)),
+        ("blue", curve(30, 100, 220)),
+        ("orange", curve(230, 120, 20)),
+    ] {
+        assert!(n > 500, "{name}: {n} pixels of its curves");
+    }
     // Error grows from the first cloud level to the last.
     assert!(f(&levels[1], "colour_error") < f(levels.last().unwrap(), "colour_error"));
     assert_eq!(

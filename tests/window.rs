@@ -27,7 +27,11 @@ fn luma_stats(img: &image::RgbaImage, x0: u32, y0: u32, x1: u32, y1: u32) -> (f3
 fn viewer_window_shows_the_scene_and_the_panel() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("window.png");
-    let out = run_viewer(&["view", "--count", "12"], dir.path(), &shot);
+    let out = run_viewer(
+        &["view", "--scene", "crowd", "--count", "12"],
+        dir.path(),
+        &shot,
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "viewer failed: {stderr}");
     check_screenshot(&shot);
@@ -39,6 +43,8 @@ fn viewer_compares_two_methods_side_by_side() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("compare.png");
     let args = [
+        "--scene",
+        "crowd",
         "--count",
         "30",
         "--compare",
@@ -126,7 +132,7 @@ fn viewer_without_a_display_points_to_shot_and_exits_2() {
     // `lodlab`, `lodlab view` and `lodlab` with the viewer's options are the same command.
     let forms: [&[&str]; 3] = [
         &[],
-        &["view", "--count", "5"],
+        &["view", "--scene", "crowd", "--count", "5"],
         &["--count", "5", "--model", "walker"],
     ];
     for args in forms {

@@ -455,7 +455,7 @@ impl CloudLevel {
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 2;
+const CHAIN_VERSION: u32 = 3;
 
 /// The cache key of a tree's chain: its source's hash, the chain options and the versions.
 pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> [u8; 32] {

@@ -19,8 +19,12 @@ use anyhow::{Result, bail};
 use glam::Vec3;
 use std::path::PathBuf;
 
-/// Scenes lodlab knows.
-pub const SCENES: &[&str] = &["crowd", "forest"];
+/// Scenes lodlab knows: the crowd walking round a clearing in the forest, the crowd alone,
+/// the forest alone.
+pub const SCENES: &[&str] = &["mixed", "crowd", "forest"];
+
+/// Trees round the mixed scene's clearing unless told.
+pub const DEFAULT_MIXED_TREES: usize = 500;
 
 /// Models of the default crowd.
 pub const DEFAULT_MODELS: &[&str] = &["horse", "walker"];
@@ -31,7 +35,7 @@ pub const DEFAULT_TREES: &[&str] = &["broadleaf", "conifer"];
 /// How many instances a scene shows unless told.
 pub fn default_count(scene: &str) -> usize {
     match scene {
-        "forest" => 12,
+        "forest" => 500,
         _ => 300,
     }
 }
@@ -43,6 +47,8 @@ pub struct SceneSpec {
     /// Built-in asset names or glTF paths; empty means the scene's default.
     pub models: Vec<String>,
     pub count: usize,
+    /// Trees round the clearing of the mixed scene (`count` is its characters).
+    pub trees: usize,
     /// Play this clip (by name) on every model that has it.
     pub clip: Option<String>,
     pub seed: u64,
@@ -56,6 +62,7 @@ impl Default for SceneSpec {
             scene: "crowd".into(),
             models: Vec::new(),
             count: 300,
+            trees: DEFAULT_MIXED_TREES,
             clip: None,
             seed: 1,
             cache_dir: None,
@@ -79,10 +86,10 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
         );
     }
     let names: Vec<String> = if spec.models.is_empty() {
-        let defaults = if spec.scene == "forest" {
-            DEFAULT_TREES
-        } else {
-            DEFAULT_MODELS
+        let defaults: Vec<&str> = match spec.scene.as_str() {
+            "forest" => DEFAULT_TREES.to_vec(),
+            "mixed" => [DEFAULT_MODELS, DEFAULT_TREES].concat(),
+            _ => DEFAULT_MODELS.to_vec(),
         };
         defaults.iter().map(|s| s.to_string()).collect()
     } else {
@@ -107,6 +114,9 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
         Some(m) if m < bakes.len() => vec![m],
         _ => (0..bakes.len()).collect(),
     };
+    if spec.scene == "mixed" && only.is_none() {
+        return mixed_crowd(spec, bakes);
+    }
     let crowd_models: Vec<CrowdModel> = chosen
         .iter()
         .map(|&m| {
@@ -144,6 +154,57 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
     };
     for a in &mut crowd.agents {
         a.model = chosen[a.model];
+    }
+    crowd
+}
+
+/// The mixed scene: the crowd of the characters among `bakes` walking in a clearing, and
+/// `spec.trees` trees of the rest round it, their trunks clear of the outermost lane and their
+/// crowns over it.
+fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
+    let (trees, characters): (Vec<usize>, Vec<usize>) =
+        (0..bakes.len()).partition(|&m| bakes[m].alpha_tested);
+    let part = |scene: &str, models: &[usize], count: usize| {
+        let mut sub = layout_crowd(
+            &SceneSpec {
+                scene: scene.into(),
+                count,
+                ..spec.clone()
+            },
+            &models.iter().map(|&m| bakes[m].clone()).collect::<Vec<_>>(),
+            None,
+        );
+        for a in &mut sub.agents {
+            a.model = models[a.model];
+        }
+        sub
+    };
+    let mut crowd = part("crowd", &characters, spec.count);
+    if !trees.is_empty() && spec.trees > 0 {
+        let models: Vec<CrowdModel> = trees
+            .iter()
+            .map(|&m| CrowdModel {
+                clip_speeds: vec![0.0],
+                bounds: bakes[m].bounds,
+            })
+            .collect();
+        let mut forest = crate::scene::forest::around(
+            &models,
+            spec.trees,
+            spec.seed,
+            crowd
+                .radius
+                .max(if crowd.agents.is_empty() { 0.0 } else { 4.0 })
+                + 1.0,
+        );
+        for a in &mut forest.agents {
+            a.model = trees[a.model];
+        }
+        // The camera frames the crowd, with the forest round and behind it.
+        if crowd.agents.is_empty() {
+            crowd.radius = forest.radius;
+        }
+        crowd.agents.extend(forest.agents);
     }
     crowd
 }

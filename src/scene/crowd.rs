@@ -71,6 +71,8 @@ pub struct Agent {
     /// Wind strength: how far its animation moves it from rest (1: the clip as it is; trees
     /// get their own, so a forest does not sway in step).
     pub wind: f32,
+    /// Uniform scale of the model (1 for characters; trees vary).
+    pub scale: f32,
     pub tint: Vec4,
     pub path: Path,
 }
@@ -113,7 +115,8 @@ impl Agent {
                 (pos, tangent.x.atan2(tangent.y))
             }
         };
-        Affine3A::from_rotation_translation(
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(self.scale),
             Quat::from_rotation_y(heading),
             Vec3::new(pos.x, 0.0, pos.y),
         )
@@ -146,6 +149,7 @@ impl Crowd {
             return Crowd {
                 agents: vec![Agent {
                     wind: 1.0,
+                    scale: 1.0,
                     model: 0,
                     clip,
                     phase: 0.0,
@@ -209,6 +213,7 @@ impl Crowd {
             let position = Vec2::new(a.cos(), a.sin()) * r + jitter;
             agents.push(Agent {
                 wind: 1.0,
+                scale: 1.0,
                 model: m,
                 clip,
                 phase: rng.f32() * 10.0,
@@ -262,6 +267,7 @@ impl Crowd {
                 {
                     agents.push(Agent {
                         wind: 1.0,
+                        scale: 1.0,
                         model: m,
                         clip,
                         phase: rng.f32() * 10.0,

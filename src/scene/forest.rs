@@ -1,13 +1,20 @@
-//! The forest: trees standing on a jittered grid, each turned and phased at random so that they
-//! do not sway in step. Deterministic for a seed. The layout is a [`Crowd`] of agents that stand
-//! still, so everything downstream (instances, selection, drawing) treats trees and characters
-//! alike.
+//! The forest: trees standing on a jittered grid, each turned, scaled, phased and given its own
+//! wind strength at random so that they do not sway in step. Deterministic for a seed. The
+//! layout is a [`Crowd`] of agents that stand still, so everything downstream (instances,
+//! selection, drawing) treats trees and characters alike. [`around`] lays a forest round a
+//! clearing where a crowd walks (the mixed scene).
 
 use super::crowd::{Agent, Crowd, CrowdModel, Path};
 use glam::{Vec2, Vec4};
 
 /// Lays out `count` trees of `models` (taken in turn).
 pub fn layout(models: &[CrowdModel], count: usize, seed: u64) -> Crowd {
+    around(models, count, seed, 0.0)
+}
+
+/// Lays out `count` trees of `models` (taken in turn) on the grid cells nearest the centre
+/// whose trunks stand at least `clearing` from it (0: a square patch from the centre out).
+pub fn around(models: &[CrowdModel], count: usize, seed: u64, clearing: f32) -> Crowd {
     if models.is_empty() || count == 0 {
         return Crowd::default();
     }
@@ -18,17 +25,37 @@ pub fn layout(models: &[CrowdModel], count: usize, seed: u64) -> Crowd {
         .map(|m| m.bounds.size().x.max(m.bounds.size().z))
         .fold(1.0f32, f32::max);
     let spacing = crown * 1.05;
-    let side = (count as f32).sqrt().ceil() as usize;
-    let half = (side as f32 - 1.0) * 0.5;
+    let cells: Vec<Vec2> = if clearing <= 0.0 {
+        // Row by row: a square patch.
+        let side = (count as f32).sqrt().ceil() as usize;
+        let half = (side as f32 - 1.0) * 0.5;
+        (0..count)
+            .map(|i| Vec2::new((i % side) as f32 - half, (i / side) as f32 - half) * spacing)
+            .collect()
+    } else {
+        // The cells nearest the centre outside the clearing: a ring round it.
+        let cleared = (clearing / spacing).ceil();
+        let side = ((count as f32 + std::f32::consts::PI * cleared * cleared).sqrt() + 2.0).ceil()
+            as usize
+            * 2
+            + 1;
+        let half = (side as f32 - 1.0) * 0.5;
+        let mut cells: Vec<Vec2> = (0..side * side)
+            .map(|i| Vec2::new((i % side) as f32 - half, (i / side) as f32 - half) * spacing)
+            .filter(|c| c.length() >= clearing)
+            .collect();
+        cells.sort_by(|a, b| a.length().total_cmp(&b.length()));
+        cells.truncate(count);
+        cells
+    };
     let mut agents = Vec::with_capacity(count);
     let mut radius = 0.0f32;
-    for i in 0..count {
-        let (gx, gz) = ((i % side) as f32 - half, (i / side) as f32 - half);
+    for (i, cell) in cells.into_iter().enumerate() {
         let jitter = Vec2::new(rng.f32() - 0.5, rng.f32() - 0.5) * spacing * 0.3;
-        let position = if count == 1 {
+        let position = if count == 1 && clearing <= 0.0 {
             Vec2::ZERO
         } else {
-            Vec2::new(gx, gz) * spacing + jitter
+            cell + jitter
         };
         radius = radius.max(position.length() + crown * 0.5);
         let m = i % models.len();
@@ -46,6 +73,12 @@ pub fn layout(models: &[CrowdModel], count: usize, seed: u64) -> Crowd {
                 1.0
             } else {
                 0.6 + 0.8 * rng.f32()
+            },
+            // Sizes vary by about a quarter either way.
+            scale: if count == 1 {
+                1.0
+            } else {
+                0.8 + 0.45 * rng.f32()
             },
             clip: 0,
             phase: if count == 1 { 0.0 } else { rng.f32() * 30.0 },
@@ -73,6 +106,32 @@ mod tests {
     use super::*;
     use crate::model::Bounds;
     use glam::Vec3;
+
+    /// Round a clearing, every trunk stands outside it, as many trees as asked, each with its
+    /// own wind and size.
+    #[test]
+    fn a_forest_round_a_clearing_keeps_out_of_it() {
+        let m = CrowdModel {
+            clip_speeds: vec![0.0],
+            bounds: Bounds {
+                min: Vec3::new(-2.0, 0.0, -2.0),
+                max: Vec3::new(2.0, 8.0, 2.0),
+            },
+        };
+        let f = around(std::slice::from_ref(&m), 200, 5, 30.0);
+        assert_eq!(f.agents.len(), 200);
+        for a in &f.agents {
+            let Path::Still { position, .. } = a.path else {
+                panic!("trees do not walk")
+            };
+            // Cells lie outside the clearing; jitter moves a trunk by under a third of a cell.
+            assert!(position.length() > 30.0 - 4.2 * 0.3, "{position}");
+            assert!((0.6..=1.4).contains(&a.wind) && (0.8..=1.25).contains(&a.scale));
+        }
+        let winds: std::collections::BTreeSet<u32> =
+            f.agents.iter().map(|a| (a.wind * 1000.0) as u32).collect();
+        assert!(winds.len() > 150, "winds vary tree to tree");
+    }
 
     #[test]
     fn trees_stand_apart_and_the_layout_is_deterministic() {

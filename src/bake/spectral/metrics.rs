@@ -43,6 +43,9 @@ pub struct LeafTrace {
     pub billboard: Vec<Vec3>,
 }
 
+/// One leaf's RMS and spectral error, and its trajectories if traced.
+type LeafError = (f32, f32, Option<LeafTrace>);
+
 /// The animation error of `cloud` (built from `foliage`, the tree's own leaves and bones)
 /// over `frames` (skinning matrices sampled evenly over the loop, see
 /// [`crate::anim::skinning_over_loop`]). `lines` are a spectral cloud's per-billboard lines in
@@ -64,7 +67,7 @@ pub fn animation_error(
         .collect();
     let dft = Dft::new(frames.len());
     let n = frames.len().max(1) as f32;
-    let per_billboard: Vec<Vec<(u32, f32, f32, Option<LeafTrace>)>> = cloud
+    let per_billboard: Vec<Vec<LeafError>> = cloud
         .billboards
         .par_iter()
         .zip(&cloud.bones)
@@ -109,19 +112,19 @@ pub fn animation_error(
                         }
                     };
                     let spectral = ne(spectrum(&original).amplitude_distance(&spectrum(&moved)));
-                    let trace = traced.contains(&leaf).then(|| LeafTrace {
+                    let trace = traced.contains(&leaf).then_some(LeafTrace {
                         leaf,
                         original,
                         billboard: moved,
                     });
-                    (leaf, rms, spectral, trace)
+                    (rms, spectral, trace)
                 })
                 .collect()
         })
         .collect();
     let mut out = AnimationError::default();
     let mut count = 0usize;
-    for (_, rms, spectral, trace) in per_billboard.into_iter().flatten() {
+    for (rms, spectral, trace) in per_billboard.into_iter().flatten() {
         out.rms += rms;
         out.spectral += spectral;
         count += 1;
