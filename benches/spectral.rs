@@ -2,6 +2,8 @@
 //! `cargo bench --bench spectral`. Times sampling the trajectories, describing every leaf (or
 //! every animation zone, App. C.2) by each description type, and k-means into k clusters, and
 //! prints the clustering error (Σ weight · deviation², so zones count for their leaves).
+//! Then times a whole spectral cloud (analysis, clustering, clouds and every billboard's
+//! lines) of a broadleaf grown to about 10,000 leaves.
 
 use anyhow::{Result, anyhow};
 use lodlab::bake::billboard::{foliage, tree_height};
@@ -13,6 +15,46 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 fn main() -> Result<()> {
+    {
+        use lodlab::bake::billboard::cloud::CloudParams;
+        use lodlab::bake::spectral::cloud::{SpectralParams, spectral_cloud};
+        let tree = lodlab::generate::tree::dense_broadleaf(93);
+        let f = foliage(&tree).map_err(|e| anyhow!(e))?;
+        let h = tree_height(&tree);
+        println!(
+            "{}: {} leaves; whole spectral cloud at ε 0.32 h (zones of 0.03 h):",
+            tree.name,
+            f.leaves.len()
+        );
+        println!(
+            "{:<16} {:>4} {:>11} {:>11}",
+            "type", "k", "billboards", "seconds"
+        );
+        for kind in DescriptionType::ALL {
+            for k in [16, 64] {
+                let start = Instant::now();
+                let c = spectral_cloud(
+                    &tree,
+                    &f,
+                    &CloudParams {
+                        epsilon: 0.32 * h,
+                        ..Default::default()
+                    },
+                    &SpectralParams {
+                        kind,
+                        clusters: k,
+                        ..Default::default()
+                    },
+                );
+                println!(
+                    "{:<16} {k:>4} {:>11} {:>11.3}",
+                    kind.name(),
+                    c.cloud.billboards.len(),
+                    start.elapsed().as_secs_f64()
+                );
+            }
+        }
+    }
     for name in ["broadleaf", "conifer"] {
         let tree = lodlab::import::load_model(name)?;
         let f = foliage(&tree).map_err(|e| anyhow!(e))?;

@@ -703,6 +703,16 @@ pub fn broadleaf() -> Model {
     build(&broadleaf_species())
 }
 
+/// The broad-leaved tree with `leaves_per_bone` leaf quads on each twig bone instead of 42
+/// (93 gives about 10,000 leaves): for timing bakes at a given leaf count. Not an asset.
+pub fn dense_broadleaf(leaves_per_bone: usize) -> Model {
+    build(&Species {
+        name: "broadleaf-dense",
+        leaves_per_bone,
+        ..broadleaf_species()
+    })
+}
+
 /// A broad-leaved sapling about 4 m tall, with 672 leaf quads: the size of the thesis's tree.
 pub fn sapling() -> Model {
     build(&sapling_species())
