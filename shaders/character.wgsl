@@ -72,6 +72,23 @@ fn vs_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
     );
 }
 
+// Billboard outlines (the foliage panel's debug view): the billboards' sides as lines, skinned
+// like the billboards and pulled a little towards the eye so that they are not lost in the
+// billboard's own depth.
+@vertex
+fn vs_outline(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
+    let s = skin_vertex(vi, instance_frames(inst));
+    var out = finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+    out.world = mix(out.world, frame.camera_pos.xyz, 0.004);
+    out.clip = frame.view_proj * vec4<f32>(out.world, 1.0);
+    return out;
+}
+
+@fragment
+fn fs_outline(in: VsOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(apply_fog(vec3<f32>(1.0, 0.25, 0.85), in.world), 0.6);
+}
+
 // Debug colours: one per level of detail (level coordinates between two levels blend).
 fn level_color(level: f32) -> vec3<f32> {
     var palette = array<vec3<f32>, 12>(
@@ -122,7 +139,7 @@ fn fs_foliage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec
         discard;
     }
     let n = normalize(in.normal) * select(-1.0, 1.0, front);
-    return vec4<f32>(lit(in, texel.rgb, n), 1.0);
+    return vec4<f32>(lit_as(in, texel.rgb, n, foliage_view()), 1.0);
 }
 
 // Foliage with multisampling and alpha to coverage: the alpha is sharpened to about a pixel
@@ -135,14 +152,23 @@ fn fs_foliage_coverage(in: VsOut, @builtin(front_facing) front: bool) -> @locati
         discard;
     }
     let n = normalize(in.normal) * select(-1.0, 1.0, front);
-    return vec4<f32>(lit(in, texel.rgb, n), a);
+    return vec4<f32>(lit_as(in, texel.rgb, n, foliage_view()), a);
+}
+
+// The debug view of foliage: the foliage tint (frame.time.z, the level tint or 0) where it is
+// on, else the view of everything (frame.time.y).
+fn foliage_view() -> u32 {
+    return max(u32(frame.time.y), u32(frame.time.z));
 }
 
 // The character's colour: material (or a debug view's colour), sun and sky light, rim, fog.
 fn lit(in: VsOut, albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    var base = albedo * in.tint.rgb;
     // frame.time.y: the debug view (see `DebugView` in src/render/renderer.rs).
-    let view = u32(frame.time.y);
+    return lit_as(in, albedo, n, u32(frame.time.y));
+}
+
+fn lit_as(in: VsOut, albedo: vec3<f32>, n: vec3<f32>, view: u32) -> vec3<f32> {
+    var base = albedo * in.tint.rgb;
     if (view == 1u) {
         base = level_color(in.lod.x);
     } else if (view == 2u) {

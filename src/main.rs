@@ -2,7 +2,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use lodlab::app::shot::{self, ShotLod, ShotOptions};
+use lodlab::app::tree_levels::{ChainOptions, FoliagePolicy, FoliageView, MIN_EPSILON_GROWTH};
 use lodlab::app::world::SceneSpec;
+use lodlab::bake::spectral::description::DescriptionType;
 use lodlab::render::DebugView;
 use lodlab::scene::{Camera, Drive, LodMethod, LodPolicy, Transition};
 use std::path::PathBuf;
@@ -182,6 +184,94 @@ struct LodArgs {
     /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
     #[arg(long, value_name = "A,B", value_parser = parse_compare)]
     compare: Option<(LodMethod, LodMethod)>,
+    #[command(flatten)]
+    foliage: FoliageArgs,
+}
+
+/// Trees: what they become under a simplified method and how they look.
+#[derive(Args, Debug, Clone)]
+struct FoliageArgs {
+    /// Trees' level policy: automatic (skeleton clouds near, spectral clouds far), skeleton,
+    /// spectral, or full (every leaf at every distance).
+    #[arg(long, default_value = "automatic", value_parser = parse_foliage)]
+    foliage: FoliagePolicy,
+    /// ε of a tree's first cloud level, as a fraction of its height.
+    #[arg(long, default_value_t = ChainOptions::default().first_epsilon, value_parser = parse_first_epsilon)]
+    first_epsilon: f32,
+    /// Factor from one cloud level's ε to the next (1.25 to 8).
+    #[arg(long, default_value_t = ChainOptions::default().epsilon_growth, value_parser = parse_epsilon_growth)]
+    epsilon_growth: f32,
+    /// Spectral description type of spectral clouds: naive, dominating-axis, axis-phase.
+    #[arg(long, default_value = "axis-phase", value_parser = parse_description)]
+    description: DescriptionType,
+    /// Frequency lines kept per axis by spectral clouds (K, 1 to 16).
+    #[arg(long, default_value_t = lodlab::bake::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
+    bins: u16,
+    /// Wind strength: scales every tree's sway (0: still air; 1: as baked).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_wind)]
+    wind: f32,
+    /// Draw the outlines of the billboards.
+    #[arg(long)]
+    outlines: bool,
+    /// Colour trees by level of detail (characters keep their colours).
+    #[arg(long)]
+    foliage_tint: bool,
+}
+
+impl FoliageArgs {
+    fn view(&self) -> FoliageView {
+        FoliageView {
+            policy: self.foliage,
+            chain: ChainOptions {
+                first_epsilon: self.first_epsilon,
+                epsilon_growth: self.epsilon_growth,
+                description: self.description,
+                bins: self.bins as usize,
+                ..Default::default()
+            },
+            wind: self.wind,
+            outlines: self.outlines,
+            tint: self.foliage_tint,
+        }
+    }
+}
+
+fn parse_foliage(s: &str) -> Result<FoliagePolicy, String> {
+    FoliagePolicy::parse(s).ok_or_else(|| {
+        format!("'{s}' is not a foliage policy (automatic, skeleton, spectral, full)")
+    })
+}
+
+fn parse_description(s: &str) -> Result<DescriptionType, String> {
+    DescriptionType::parse(s).ok_or_else(|| {
+        format!("'{s}' is not a description type (naive, dominating-axis, axis-phase)")
+    })
+}
+
+fn parse_in(s: &str, what: &str, range: std::ops::RangeInclusive<f32>) -> Result<f32, String> {
+    parse_number(s).and_then(|x| {
+        if range.contains(&x) {
+            Ok(x)
+        } else {
+            Err(format!(
+                "{what} '{s}' must be between {} and {}",
+                range.start(),
+                range.end()
+            ))
+        }
+    })
+}
+
+fn parse_first_epsilon(s: &str) -> Result<f32, String> {
+    parse_in(s, "first epsilon", 0.0005..=0.2)
+}
+
+fn parse_epsilon_growth(s: &str) -> Result<f32, String> {
+    parse_in(s, "epsilon growth", MIN_EPSILON_GROWTH..=8.0)
+}
+
+fn parse_wind(s: &str) -> Result<f32, String> {
+    parse_in(s, "wind strength", 0.0..=5.0)
 }
 
 impl LodArgs {
@@ -207,6 +297,7 @@ impl LodArgs {
                 zone_width: self.zone_width,
             },
             debug: self.debug_view,
+            foliage: self.foliage.view(),
             ..Default::default()
         }
     }

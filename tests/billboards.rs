@@ -409,3 +409,67 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     assert_eq!(rebuilt.len(), built.len());
     assert_eq!(load().1, Origin::Cache, "the rebuilt chain is stored again");
 }
+
+/// A cloud level's billboard outlines (the viewer's debug view) are the four sides of every
+/// billboard: four lines each, every corner on exactly two of them, no diagonal; the full tree
+/// has none.
+#[test]
+fn billboard_outlines_are_the_four_sides_of_every_billboard() {
+    use lodlab::bake::CharacterBake;
+    use lodlab::bake::billboard::{atlas, cloud_model};
+    let m = load_model("sapling").unwrap();
+    let c = cloud(&m, 0.08, 1);
+    let layout = atlas::layout(&c.billboards, 64.0).unwrap();
+    let image = lodlab::model::Rgba8Image {
+        width: layout.width,
+        height: layout.height,
+        pixels: vec![200; (4 * layout.width * layout.height) as usize],
+    };
+    let level = cloud_model(&m, &c, &layout, image);
+    let bake = CharacterBake::new(&level).unwrap();
+    let lines = &bake.outlines;
+    assert_eq!(lines.len(), 8 * c.billboards.len());
+    let mut degree = std::collections::HashMap::<u32, usize>::new();
+    for &v in lines {
+        *degree.entry(v).or_default() += 1;
+    }
+    assert_eq!(degree.len(), 4 * c.billboards.len());
+    assert!(degree.values().all(|&d| d == 2));
+    // Every corner on two lines, in cycles of four: each billboard's lines close round it
+    // (its two triangles have no edge joining the other two corners).
+    let mut adjacent = std::collections::HashMap::<u32, Vec<u32>>::new();
+    for l in lines.chunks_exact(2) {
+        adjacent.entry(l[0]).or_default().push(l[1]);
+        adjacent.entry(l[1]).or_default().push(l[0]);
+    }
+    let mut seen = std::collections::HashSet::new();
+    for &start in adjacent.keys() {
+        let mut stack = vec![start];
+        let mut size = 0;
+        while let Some(v) = stack.pop() {
+            if seen.insert(v) {
+                size += 1;
+                stack.extend(&adjacent[&v]);
+            }
+        }
+        assert!(size == 0 || size == 4, "a loop of {size} corners");
+    }
+    // A side is shorter than the diagonal of its billboard: every line is a side.
+    let (pos, _) = bake.evaluate(0, 0.0, 1.0);
+    let longest_diagonal = c
+        .billboards
+        .iter()
+        .map(|b| b.corners[0].distance(b.corners[2]))
+        .fold(0.0f32, f32::max);
+    let longest_side = c
+        .billboards
+        .iter()
+        .flat_map(|b| (0..4).map(move |k| b.corners[k].distance(b.corners[(k + 1) % 4])))
+        .fold(0.0f32, f32::max);
+    assert!(longest_side < longest_diagonal);
+    for l in lines.chunks_exact(2) {
+        let d = pos[l[0] as usize].distance(pos[l[1] as usize]);
+        assert!(d <= longest_side * 1.001 + 1e-4, "a line of {d} is no side");
+    }
+    assert!(CharacterBake::new(&m).unwrap().outlines.is_empty());
+}

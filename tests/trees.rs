@@ -635,3 +635,134 @@ fn bake_builds_and_caches_a_tree_chain() {
     let second = bake();
     assert_eq!(second.matches("cached").count(), 2, "{second}");
 }
+
+/// The foliage panel's choices, through the world the viewer and `shot` share: the level
+/// policy decides which chain trees switch along (none for `full`), a chain already on the
+/// GPU comes back without a bake while new cutting options ask for one, billboard outlines
+/// draw over billboards only, and the level tint colours the trees.
+#[test]
+fn the_foliage_policy_decides_what_trees_become() {
+    use lodlab::app::tree_levels::{FoliagePolicy, FoliageView};
+    use lodlab::app::world::{Loaded, SceneSpec, World};
+    use lodlab::render::Gpu;
+    use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+    use lodlab::scene::{LodMethod, LodPolicy, Transition};
+    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let dir = tempfile::tempdir().unwrap();
+    let spec = SceneSpec {
+        scene: "forest".into(),
+        models: vec!["sapling".into()],
+        count: 12,
+        cache_dir: Some(dir.path().to_path_buf()),
+        ..Default::default()
+    };
+    let mut world = World::new(&gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();
+    world.renderer.shadows = false;
+    world.lod.method = LodMethod::ALL[3];
+    world.lod.policy = LodPolicy {
+        transition: Transition::Pop,
+        tolerance_px: 4.0,
+        ..Default::default()
+    };
+    let (w, h) = (320u32, 180u32);
+    let target = Offscreen::new(&gpu, w, h, 1);
+    let shoot = |world: &mut World, foliage: &FoliageView| {
+        world.apply_foliage(foliage);
+        world.ensure_levels(&gpu).unwrap();
+        let stats = world.prepare(&gpu, [w, h], 1.0, 0.0);
+        world
+            .renderer
+            .render_to(&gpu, &target.targets, &target.view);
+        (stats, target.read_rgba(&gpu).unwrap())
+    };
+    let kinds = |world: &World| -> Vec<&'static str> {
+        let chains = world.shown_chains();
+        assert_eq!(chains.len(), 1);
+        assert!(chains[0].1, "the chain shown is the one asked for");
+        chains[0].2.iter().map(|l| l.kind).collect()
+    };
+
+    // Full: no chain is built, every tree stays at level 0.
+    let full = FoliageView {
+        policy: FoliagePolicy::Full,
+        ..Default::default()
+    };
+    let (stats, plain) = shoot(&mut world, &full);
+    assert!(world.shown_chains().is_empty());
+    assert_eq!(stats.levels[0] as u64, stats.instances);
+    let full_triangles = stats.triangles;
+
+    // Skeleton clouds all the way, then spectral clouds from level 1.
+    let skeleton = FoliageView {
+        policy: FoliagePolicy::Skeleton,
+        ..full
+    };
+    let (stats, _) = shoot(&mut world, &skeleton);
+    let k = kinds(&world);
+    assert_eq!(k[0], "full");
+    assert!(k[1..].iter().all(|&k| k == "skeleton"), "{k:?}");
+    assert!(stats.levels[1..].iter().sum::<u32>() > 0);
+    assert!(stats.triangles < full_triangles);
+    let spectral = FoliageView {
+        policy: FoliagePolicy::Spectral,
+        ..full
+    };
+    shoot(&mut world, &spectral);
+    let k = kinds(&world);
+    assert!(k[1..].iter().all(|&k| k == "spectral"), "{k:?}");
+
+    // Back to skeleton clouds: still on the GPU, nothing to bake.
+    world.apply_foliage(&skeleton);
+    assert_eq!(world.missing_levels(), None);
+    assert!(kinds(&world)[1..].iter().all(|&k| k == "skeleton"));
+    // Other cutting options need a chain of their own; until it comes, the old one shows.
+    let mut coarser = skeleton;
+    coarser.chain.first_epsilon *= 4.0;
+    world.apply_foliage(&coarser);
+    assert!(world.missing_levels().is_some());
+    assert!(!world.shown_chains()[0].1);
+    shoot(&mut world, &coarser);
+    assert!(world.shown_chains()[0].1);
+
+    // Outlines draw over billboards, and there are none at full detail.
+    let (_, bare) = shoot(&mut world, &skeleton);
+    let outlined = FoliageView {
+        outlines: true,
+        ..skeleton
+    };
+    let (_, lines) = shoot(&mut world, &outlined);
+    let magenta = |img: &image::RgbaImage| {
+        img.pixels()
+            .filter(|p| p[0] > 150 && p[2] > 120 && p[1] < 150)
+            .count()
+    };
+    assert!(
+        magenta(&lines) > magenta(&bare) + 200,
+        "outlines: {} magenta pixels, {} without",
+        magenta(&lines),
+        magenta(&bare)
+    );
+    let (_, full_outlined) = shoot(
+        &mut world,
+        &FoliageView {
+            outlines: true,
+            ..full
+        },
+    );
+    assert_eq!(full_outlined.as_raw(), plain.as_raw());
+
+    // The level tint repaints the trees.
+    let (_, tinted) = shoot(
+        &mut world,
+        &FoliageView {
+            tint: true,
+            ..skeleton
+        },
+    );
+    let changed = bare
+        .pixels()
+        .zip(tinted.pixels())
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > 30))
+        .count();
+    assert!(changed > 2000, "the tint changed {changed} pixels");
+}

@@ -3,6 +3,7 @@
 //! (the panel shows the progress). Characters get progressive-mesh levels by a method; trees
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
+use super::tree_levels::ChainOptions;
 use crate::bake::CharacterBake;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::lod::SkinnedLods;
@@ -44,8 +45,8 @@ pub enum Levels {
     },
 }
 
-/// What baking one model by a method gave: its levels, or `None` for a tree whose chain is
-/// there already.
+/// What baking one model by a method gave: its levels, or `None` for a model skipped (it had
+/// what it needs).
 pub type Baked = Option<Result<Levels, String>>;
 
 /// Is this model a tree (foliage cut out with alpha)?
@@ -56,14 +57,16 @@ pub fn is_tree(model: &Model) -> bool {
         .any(crate::bake::billboard::is_cut_out)
 }
 
-/// The levels of every model by `method`, in model order, from the cache or baked now; trees
-/// whose `has_chain` is set are skipped. `progress(i, f)` reports model i's fraction done.
-/// Cache warnings go to `warn`.
+/// The levels of every model, in model order, from the cache or baked now: characters' by
+/// `method`, trees' chains cut by `chain`; models whose `skip` is set are left out.
+/// `progress(i, f)` reports model i's fraction done. Cache warnings go to `warn`.
+#[allow(clippy::too_many_arguments)]
 pub fn bake_all(
     gpu: &Gpu,
     sources: &[LevelSource],
-    has_chain: &[bool],
+    skip: &[bool],
     method: Method,
+    chain: &ChainOptions,
     cache: &LodCache,
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
@@ -72,12 +75,12 @@ pub fn bake_all(
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
-            if is_tree(&s.model) && has_chain.get(i).copied().unwrap_or(false) {
+            if skip.get(i).copied().unwrap_or(false) {
                 progress(i, 1.0);
                 return None;
             }
             let (levels, origin) = if is_tree(&s.model) {
-                match tree_levels(gpu, cache, s, &|f| progress(i, f)) {
+                match tree_levels(gpu, cache, s, chain, &|f| progress(i, f)) {
                     Ok((levels, origin)) => (Ok(levels), origin),
                     Err(e) => (Err(format!("{}: {e:#}", s.model.name)), Origin::Cache),
                 }
@@ -101,11 +104,11 @@ fn tree_levels(
     gpu: &Gpu,
     cache: &LodCache,
     s: &LevelSource,
+    opts: &ChainOptions,
     progress: &dyn Fn(f32),
 ) -> anyhow::Result<(Levels, Origin)> {
-    let opts = Default::default();
     let (chain, origin) =
-        super::tree_levels::load_or_build_chain(gpu, cache, &s.model, &s.hash, &opts, progress)?;
+        super::tree_levels::load_or_build_chain(gpu, cache, &s.model, &s.hash, opts, progress)?;
     let bakes = chain[1..]
         .par_iter()
         .map(|l| CharacterBake::with_motion(&l.cloud.model, l.cloud.motion.as_ref()))
@@ -121,6 +124,8 @@ fn pack(lods: &SkinnedLods) -> Result<LodPack, String> {
 /// A bake running on its own thread.
 pub struct BackgroundBake {
     pub method: Method,
+    /// How the trees' chains it builds are cut.
+    pub chain: ChainOptions,
     /// Per model, progress in thousandths.
     progress: Arc<Vec<AtomicU32>>,
     result: Receiver<Vec<Baked>>,
@@ -138,8 +143,9 @@ impl BackgroundBake {
     pub fn start(
         gpu: Gpu,
         sources: Vec<LevelSource>,
-        has_chain: Vec<bool>,
+        skip: Vec<bool>,
         method: Method,
+        chain: ChainOptions,
         cache: LodCache,
     ) -> BackgroundBake {
         let progress: Arc<Vec<AtomicU32>> =
@@ -151,11 +157,14 @@ impl BackgroundBake {
                 p[i].store((f.clamp(0.0, 1.0) * 1000.0) as u32, Ordering::Relaxed);
             };
             let warn = |w: String| eprintln!("warning: {w}");
-            let packs = bake_all(&gpu, &sources, &has_chain, method, &cache, &report, &warn);
+            let packs = bake_all(
+                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn,
+            );
             let _ = tx.send(packs);
         });
         BackgroundBake {
             method,
+            chain,
             progress,
             result: rx,
         }

@@ -1,5 +1,6 @@
 //! `lodlab shot`: render a scene headless and deterministically to a PNG.
 
+use super::tree_levels::FoliageView;
 use super::world::{Loaded, SceneSpec, World};
 use crate::render::targets::Offscreen;
 use crate::render::{CharacterShader, DebugView, FrameStats, Gpu};
@@ -34,6 +35,8 @@ pub struct ShotLod {
     pub compare: Option<LodMethod>,
     pub policy: LodPolicy,
     pub debug: DebugView,
+    /// What trees become, and how they look.
+    pub foliage: FoliageView,
     /// Selection runs over this many seconds before the shot's time at 60 Hz, so that the
     /// frame shows the transitions a viewer would be in the middle of.
     pub settle_seconds: f32,
@@ -46,6 +49,7 @@ impl Default for ShotLod {
             compare: None,
             policy: LodPolicy::default(),
             debug: DebugView::Shaded,
+            foliage: FoliageView::default(),
             settle_seconds: 1.0,
         }
     }
@@ -75,6 +79,8 @@ pub struct ShotReport {
     pub drive: String,
     pub tolerance_px: f32,
     pub debug_view: String,
+    /// What trees become under a simplified method (the foliage level policy).
+    pub foliage: String,
     /// Instances by level of detail, finest first (the last bin holds coarser ones too).
     pub levels: Vec<u32>,
     pub in_transition: u64,
@@ -142,6 +148,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
     world.lod.compare = lod.compare;
     world.lod.policy = lod.policy;
     world.renderer.debug = lod.debug;
+    world.apply_foliage(&lod.foliage);
     if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
         anyhow::bail!("--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)");
     }
@@ -192,6 +199,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         .into(),
         tolerance_px: lod.policy.tolerance_px,
         debug_view: lod.debug.name().into(),
+        foliage: lod.foliage.policy.name().into(),
         levels: histogram(&stats.levels),
         in_transition: stats.in_transition,
         frame_ms,

@@ -263,6 +263,82 @@ impl ChainStyle {
     }
 }
 
+/// What trees become under a simplified method: the foliage panel's level policy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FoliagePolicy {
+    /// Trees keep every leaf (level 0) at every distance.
+    Full,
+    /// The skeleton-cloud chain ([`ChainStyle::Skeleton`]).
+    Skeleton,
+    /// The spectral-cloud chain ([`ChainStyle::Spectral`]).
+    Spectral,
+    /// Skeleton clouds near, spectral clouds far ([`ChainStyle::Automatic`]).
+    #[default]
+    Automatic,
+}
+
+impl FoliagePolicy {
+    pub const ALL: [FoliagePolicy; 4] = [
+        FoliagePolicy::Automatic,
+        FoliagePolicy::Skeleton,
+        FoliagePolicy::Spectral,
+        FoliagePolicy::Full,
+    ];
+
+    /// The chain the trees switch along; None: they stay full.
+    pub fn chain_style(self) -> Option<ChainStyle> {
+        match self {
+            FoliagePolicy::Full => None,
+            FoliagePolicy::Skeleton => Some(ChainStyle::Skeleton),
+            FoliagePolicy::Spectral => Some(ChainStyle::Spectral),
+            FoliagePolicy::Automatic => Some(ChainStyle::Automatic),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FoliagePolicy::Full => "full",
+            FoliagePolicy::Skeleton => "skeleton clouds",
+            FoliagePolicy::Spectral => "spectral clouds",
+            FoliagePolicy::Automatic => "automatic",
+        }
+    }
+
+    /// From its name or the first word of it (`full`, `skeleton`, `spectral`, `automatic`).
+    pub fn parse(s: &str) -> Option<FoliagePolicy> {
+        let s = s.trim().to_ascii_lowercase();
+        FoliagePolicy::ALL
+            .into_iter()
+            .find(|p| p.name() == s || p.name().split(' ').next() == Some(s.as_str()))
+    }
+}
+
+/// How trees are shown: the foliage panel's choices, and the same on the command line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FoliageView {
+    pub policy: FoliagePolicy,
+    /// How the trees' chains are cut; its style follows the policy.
+    pub chain: ChainOptions,
+    /// Scales every tree's own wind strength (0: still air).
+    pub wind: f32,
+    /// Draw the billboards' outlines over them.
+    pub outlines: bool,
+    /// Colour trees by level (the characters keep their colours).
+    pub tint: bool,
+}
+
+impl Default for FoliageView {
+    fn default() -> Self {
+        FoliageView {
+            policy: FoliagePolicy::default(),
+            chain: ChainOptions::default(),
+            wind: 1.0,
+            outlines: false,
+            tint: false,
+        }
+    }
+}
+
 /// A level's foliage alone (wood left out), with its motion. `only_foliage` keeps the
 /// billboards' corners in order, and they were the model's last vertices, so their rows keep
 /// their order too.
@@ -288,8 +364,10 @@ fn foliage_of(level: &CloudLevel) -> (Model, Option<SpectralMotion>) {
 /// How a tree's chain of levels is cut.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ChainOptions {
-    /// ε of level 1, as a fraction of the tree's height; each level doubles it.
+    /// ε of level 1, as a fraction of the tree's height.
     pub first_epsilon: f32,
+    /// Each level's ε is the last one's times this (2: ε doubles level by level).
+    pub epsilon_growth: f32,
     /// The chain ends at the first level with this many billboards or fewer.
     pub last_billboards: usize,
     /// Screen tolerance the levels are made for, pixels: an atlas gets about two texels per
@@ -310,6 +388,7 @@ impl Default for ChainOptions {
     fn default() -> Self {
         ChainOptions {
             first_epsilon: 0.005,
+            epsilon_growth: 2.0,
             last_billboards: 10,
             tolerance_px: 1.5,
             style: ChainStyle::Automatic,
@@ -341,8 +420,11 @@ const GROUPINGS: [Grouping; 5] = [
     Grouping::Subtree { forks: 0 },
 ];
 
-/// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε doubling
-/// from `first_epsilon`, each with the wood simplified to the same error bound
+/// Levels must coarsen: ε grows by at least this factor from one to the next.
+pub const MIN_EPSILON_GROWTH: f32 = 1.25;
+
+/// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε growing
+/// by `epsilon_growth` (doubling by default) from `first_epsilon`, each with the wood simplified to the same error bound
 /// ([`WoodChain`]), until a level has at most `last_billboards` billboards.
 ///
 /// Skeleton clouds are built per bone, sibling bones that move alike within ε sharing one
@@ -423,7 +505,7 @@ pub fn tree_chain(
         progress((levels.len() as f32 / 9.0).min(0.95));
         previous = count;
         clusters = clusters.map(|k| (k / 2).max(1));
-        eps *= 2.0;
+        eps *= opts.epsilon_growth.max(MIN_EPSILON_GROWTH);
     }
     Ok(levels)
 }

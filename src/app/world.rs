@@ -2,7 +2,7 @@
 //! camera. Shared by the viewer, `shot` and the tests, so they all show the same thing.
 
 use super::levels::{Baked, LevelSource, Levels, bake_all};
-use super::tree_levels::TreeLevel;
+use super::tree_levels::{ChainOptions, CloudKind, FoliagePolicy, FoliageView, TreeLevel};
 use crate::bake::CharacterBake;
 use crate::bake::cache::{LodCache, source_hash};
 use crate::bake::lod_pack::LodPack;
@@ -261,11 +261,58 @@ pub struct World {
     pub renderer: SceneRenderer,
     pub lod: LodView,
     instances: Vec<Instance>,
-    /// Per model: for a tree whose billboard-cloud chain is built, the renderer's character of
+    /// Per model: for a tree whose billboard-cloud chain is shown, the renderer's character of
     /// every level (level 0 the tree itself).
     tree_levels: Vec<Option<Vec<usize>>>,
+    /// Every tree chain on the GPU, the shown ones and a few earlier ones (switching back to
+    /// them is instant).
+    chains: Vec<InstalledChain>,
+    /// Renderer characters of chains let go, to be reused.
+    free_characters: Vec<usize>,
     /// The instances and draws of a frame with trees turned into their level's character.
     drawn: [(Vec<Instance>, Vec<LodDraw>); 2],
+}
+
+/// Chains kept on the GPU per tree, the shown one included.
+const CHAINS_KEPT_PER_TREE: usize = 3;
+
+/// A tree's billboard-cloud chain on the GPU.
+struct InstalledChain {
+    model: usize,
+    /// How it was cut.
+    opts: ChainOptions,
+    /// The renderer's character of every level (level 0 the tree itself).
+    characters: Vec<usize>,
+    levels: Vec<LevelSummary>,
+}
+
+/// One level of a tree's chain, as the foliage panel lists it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelSummary {
+    /// ε in scene units (0: the full tree).
+    pub epsilon: f32,
+    /// What it is, in a word: full, skeleton or spectral.
+    pub kind: &'static str,
+    pub billboards: usize,
+    pub triangles: usize,
+    /// RMS animation error, in tree heights.
+    pub anim_rms: f32,
+}
+
+impl LevelSummary {
+    fn of(level: &TreeLevel) -> LevelSummary {
+        LevelSummary {
+            epsilon: level.epsilon,
+            kind: match level.kind {
+                None => "full",
+                Some(CloudKind::Skeleton(_)) => "skeleton",
+                Some(CloudKind::Spectral(_)) => "spectral",
+            },
+            billboards: level.cloud.billboards,
+            triangles: level.cloud.model.mesh.triangle_count(),
+            anim_rms: level.cloud.animation.rms,
+        }
+    }
 }
 
 /// What levels of detail are shown and how: the user's choices and the per-instance state.
@@ -274,6 +321,12 @@ pub struct LodView {
     pub method: LodMethod,
     /// Compare mode: the right half of the view shows this method, the left half `method`.
     pub compare: Option<LodMethod>,
+    /// What trees become under a simplified method, and how their chains are cut (its style
+    /// follows the policy). Change both through [`World::set_foliage`].
+    foliage: FoliagePolicy,
+    chain: ChainOptions,
+    /// Which models are trees.
+    trees: Vec<bool>,
     trackers: [LodTracker; 2],
     draws: [Vec<LodDraw>; 2],
     /// Per model, per method slot: what selection needs, once the levels are on the GPU.
@@ -293,9 +346,37 @@ impl LodView {
         }
     }
 
-    /// Are the levels of `method` uploaded for every model?
+    /// Are the levels of `method` uploaded for every model (trees kept full need none)?
     pub fn has(&self, method: LodMethod) -> bool {
-        method == LodMethod::None || self.models.iter().all(|m| m[method.index()].is_some())
+        method == LodMethod::None
+            || self
+                .models
+                .iter()
+                .zip(&self.trees)
+                .all(|(m, &tree)| m[method.index()].is_some() || self.stays_full(tree))
+    }
+
+    fn stays_full(&self, tree: bool) -> bool {
+        tree && self.foliage == FoliagePolicy::Full
+    }
+
+    /// What selection uses for model `m` under the method in `slot`: its levels by that
+    /// method where they are there (and, for a tree, where the policy is not to keep it
+    /// full), else its full detail alone.
+    fn model(&self, m: usize, slot: usize) -> Option<&LodModel> {
+        let slots = self.models.get(m)?;
+        let full = self.trees.get(m).is_some_and(|&t| self.stays_full(t));
+        let chosen = if full { None } else { slots[slot].as_ref() };
+        chosen.or(slots[0].as_ref())
+    }
+
+    pub fn foliage(&self) -> FoliagePolicy {
+        self.foliage
+    }
+
+    /// The chain options trees are wanted in.
+    pub fn chain(&self) -> ChainOptions {
+        self.chain
     }
 
     /// What the instances drew on each side in the last frame.
@@ -372,6 +453,9 @@ impl World {
             policy: LodPolicy::default(),
             method: LodMethod::None,
             compare: None,
+            foliage: FoliagePolicy::default(),
+            chain: ChainOptions::default(),
+            trees: bakes.iter().map(|b| b.alpha_tested).collect(),
             trackers: Default::default(),
             draws: Default::default(),
             models: bakes
@@ -391,6 +475,8 @@ impl World {
             camera,
             renderer,
             tree_levels: vec![None; n_models],
+            chains: Vec::new(),
+            free_characters: Vec::new(),
             lod,
             instances: Vec::new(),
             drawn: Default::default(),
@@ -402,14 +488,74 @@ impl World {
         LodCache::new(self.spec.cache_dir.clone())
     }
 
-    /// Which models have their tree chain on the GPU (for [`bake_all`]).
-    pub fn has_chain(&self) -> Vec<bool> {
-        self.tree_levels.iter().map(Option::is_some).collect()
+    /// Per model, whether it already has what showing `method` needs, so that a bake may
+    /// leave it out (for [`bake_all`]): a character its levels by the method, a tree its chain
+    /// cut as [`LodView::chain`] says (or nothing, where the policy keeps trees full).
+    pub fn has_levels(&self, method: Method) -> Vec<bool> {
+        let slot = LodMethod::Simplified(method).index();
+        (0..self.bakes.len())
+            .map(|m| {
+                if self.lod.trees[m] {
+                    self.lod.foliage == FoliagePolicy::Full || self.shown_chain(m).is_some()
+                } else {
+                    self.lod.models[m][slot].is_some()
+                }
+            })
+            .collect()
+    }
+
+    /// The simplified method to bake next for what the view shows, if anything is missing.
+    pub fn missing_levels(&self) -> Option<Method> {
+        self.lod.methods().find_map(|m| match m {
+            LodMethod::Simplified(s) if self.has_levels(s).contains(&false) => Some(s),
+            _ => None,
+        })
+    }
+
+    /// The installed chain of tree `m` cut as wanted now, if there is one.
+    fn shown_chain(&self, m: usize) -> Option<usize> {
+        self.chains
+            .iter()
+            .position(|c| c.model == m && c.opts == self.lod.chain)
+    }
+
+    /// Sets what trees become and how their chains are cut. Trees whose chain for the new
+    /// options is on the GPU switch to it at once; the others keep what they show until it is
+    /// installed ([`World::missing_levels`] asks for it). Every instance's level is reset.
+    pub fn set_foliage(&mut self, policy: FoliagePolicy, chain: ChainOptions) {
+        let mut chain = chain;
+        chain.style = policy.chain_style().unwrap_or(self.lod.chain.style);
+        if policy == self.lod.foliage && chain == self.lod.chain {
+            return;
+        }
+        self.lod.foliage = policy;
+        self.lod.chain = chain;
+        for m in 0..self.bakes.len() {
+            if let Some(c) = self.shown_chain(m) {
+                self.show_chain(c);
+            }
+        }
+        self.lod.reset();
+    }
+
+    /// Shows the trees as `foliage` says: their level policy and chains (see
+    /// [`World::set_foliage`]), wind, outlines and tint.
+    pub fn apply_foliage(&mut self, foliage: &FoliageView) {
+        self.set_foliage(foliage.policy, foliage.chain);
+        self.renderer.wind = foliage.wind;
+        self.renderer.outlines = foliage.outlines;
+        self.renderer.foliage_tint = foliage.tint;
     }
 
     /// Uploads the levels of `method` for every model (`packs` in model order, trees' chains
-    /// among them) and makes them available to selection.
-    pub fn install_levels(&mut self, gpu: &Gpu, method: Method, packs: Vec<Baked>) -> Result<()> {
+    /// cut as `chain` among them) and makes them available to selection.
+    pub fn install_levels(
+        &mut self,
+        gpu: &Gpu,
+        method: Method,
+        chain: &ChainOptions,
+        packs: Vec<Baked>,
+    ) -> Result<()> {
         let slot = LodMethod::Simplified(method).index();
         for (m, pack) in packs.into_iter().enumerate() {
             match pack.transpose().map_err(anyhow::Error::msg)? {
@@ -418,9 +564,10 @@ impl World {
                     self.renderer.add_levels(gpu, m, slot, &pack)?;
                     self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
                 }
-                Some(Levels::Tree { chain, bakes }) => {
-                    self.install_tree_levels(gpu, m, &chain, &bakes)?
-                }
+                Some(Levels::Tree {
+                    chain: levels,
+                    bakes,
+                }) => self.install_tree_levels(gpu, m, chain, &levels, &bakes)?,
             }
         }
         self.lod.reset();
@@ -428,38 +575,85 @@ impl World {
     }
 
     /// Bakes (or reads from the cache) and uploads the levels of every method the view shows
-    /// that is not there yet, trees' chains with the first, waiting for them.
+    /// that is not there yet, and the trees' chains as wanted, waiting for them.
     pub fn ensure_levels(&mut self, gpu: &Gpu) -> Result<()> {
-        for method in self.lod.methods() {
-            if let LodMethod::Simplified(m) = method
-                && !self.lod.has(method)
-            {
-                let warn = |w: String| eprintln!("warning: {w}");
-                let has_chain = self.has_chain();
-                let cache = self.cache();
-                let packs = bake_all(gpu, &self.sources, &has_chain, m, &cache, &|_, _| {}, &warn);
-                self.install_levels(gpu, m, packs)?;
+        while let Some(m) = self.missing_levels() {
+            let warn = |w: String| eprintln!("warning: {w}");
+            let skip = self.has_levels(m);
+            let chain = self.lod.chain;
+            let cache = self.cache();
+            let packs = bake_all(
+                gpu,
+                &self.sources,
+                &skip,
+                m,
+                &chain,
+                &cache,
+                &|_, _| {},
+                &warn,
+            );
+            // A model that failed is reported by install_levels; none is retried for ever.
+            self.install_levels(gpu, m, &chain, packs)?;
+            if self.missing_levels() == Some(m) {
+                bail!("{m}: levels are still missing after baking them");
             }
         }
         Ok(())
     }
 
-    /// Uploads every level of tree `m`'s billboard-cloud chain (`bakes`: levels 1…) as a
-    /// character of its own; the tree then switches between them with the same selection and
+    /// Uploads every level of tree `m`'s billboard-cloud chain, cut as `opts` (`bakes`: levels
+    /// 1…), as a character of its own, and shows it if it is the chain wanted (or the tree
+    /// shows none yet). The tree then switches between its levels with the same selection and
     /// transitions as the characters under every simplified method, its ε as the level error
     /// (an alpha or morph transition becomes a cross-dissolve, see [`LodDraw::Dissolve`]).
+    /// The tree's oldest chains beyond [`CHAINS_KEPT_PER_TREE`] are let go.
     fn install_tree_levels(
         &mut self,
         gpu: &Gpu,
         m: usize,
+        opts: &ChainOptions,
         chain: &[TreeLevel],
         bakes: &[CharacterBake],
     ) -> Result<()> {
         let mut characters = vec![m];
         for bake in bakes {
-            characters.push(self.renderer.add_character(gpu, bake)?);
+            let c = match self.free_characters.pop() {
+                Some(c) => self.renderer.replace_character(gpu, c, bake)?,
+                None => self.renderer.add_character(gpu, bake)?,
+            };
+            characters.push(c);
         }
-        let errors: Vec<f32> = chain.iter().map(|l| l.epsilon).collect();
+        self.chains.retain(|c| c.model != m || c.opts != *opts);
+        self.chains.push(InstalledChain {
+            model: m,
+            opts: *opts,
+            characters,
+            levels: chain.iter().map(LevelSummary::of).collect(),
+        });
+        if *opts == self.lod.chain || self.tree_levels[m].is_none() {
+            self.show_chain(self.chains.len() - 1);
+        }
+        // Let the oldest chains of this tree go, never the shown one.
+        let shown = self.tree_levels[m].clone();
+        while self.chains.iter().filter(|c| c.model == m).count() > CHAINS_KEPT_PER_TREE {
+            let Some(old) = self
+                .chains
+                .iter()
+                .position(|c| c.model == m && Some(&c.characters) != shown.as_ref())
+            else {
+                break;
+            };
+            let gone = self.chains.remove(old);
+            self.free_characters.extend(&gone.characters[1..]);
+        }
+        Ok(())
+    }
+
+    /// Shows installed chain `c` for its tree: selection switches along its levels.
+    fn show_chain(&mut self, c: usize) {
+        let chain = &self.chains[c];
+        let m = chain.model;
+        let errors: Vec<f32> = chain.levels.iter().map(|l| l.epsilon).collect();
         let b = &self.bakes[m];
         for method in LodMethod::ALL.into_iter().skip(1) {
             self.lod.models[m][method.index()] = Some(LodModel {
@@ -468,8 +662,22 @@ impl World {
                 radius: b.bounds.diagonal() * 0.5,
             });
         }
-        self.tree_levels[m] = Some(characters);
-        Ok(())
+        self.tree_levels[m] = Some(chain.characters.clone());
+    }
+
+    /// The chain each tree shows: its name, whether it is cut as wanted now, and its levels.
+    pub fn shown_chains(&self) -> Vec<(String, bool, &[LevelSummary])> {
+        self.chains
+            .iter()
+            .filter(|c| self.tree_levels[c.model].as_ref() == Some(&c.characters))
+            .map(|c| {
+                (
+                    self.bakes[c.model].name.clone(),
+                    c.opts == self.lod.chain,
+                    c.levels.as_slice(),
+                )
+            })
+            .collect()
     }
 
     /// Re-lays the crowd for a new count, clip or model choice without reloading anything:
@@ -494,19 +702,23 @@ impl World {
             height as f32,
             self.camera.near_far().0,
         );
-        let lod = &mut self.lod;
+        // The trackers and draws step out while selection reads the rest of the view.
+        let mut trackers = std::mem::take(&mut self.lod.trackers);
+        let mut draws = std::mem::take(&mut self.lod.draws);
+        let lod = &self.lod;
         for (side, method) in lod.methods().enumerate() {
-            let slot = if lod.has(method) { method.index() } else { 0 };
-            let models = &lod.models;
-            lod.trackers[side].update_with(
+            let slot = method.index();
+            trackers[side].update_with(
                 &lod.policy,
-                |m| models.get(m).and_then(|s| s[slot].as_ref()),
+                |m| lod.model(m, slot),
                 &self.instances,
                 &screen,
                 dt,
-                &mut lod.draws[side],
+                &mut draws[side],
             );
         }
+        self.lod.trackers = trackers;
+        self.lod.draws = draws;
     }
 
     /// Runs selection over the `seconds` before `time` at 60 frames per second, so that a

@@ -52,6 +52,9 @@ pub struct CharacterBake {
     /// A spectral cloud's spectra texture (the vertices that read it have their rows in
     /// `animation_space.spectral_rows`).
     pub spectra: Option<SpectraTexture>,
+    /// A billboard cloud's billboard outlines as a line list over `indices`' vertices (empty
+    /// for everything else): what the viewer's "billboard outlines" draw.
+    pub outlines: Vec<u32>,
 }
 
 impl CharacterBake {
@@ -115,6 +118,13 @@ impl CharacterBake {
                         .as_ref()
                         .is_some_and(|t| t.pixels.chunks_exact(4).any(|px| px[3] < 128))
             }),
+            outlines: model
+                .materials
+                .iter()
+                .position(|m| m.name == billboard::BILLBOARD_MATERIAL)
+                .map_or_else(Vec::new, |b| {
+                    billboard::billboard_outlines(&am.indices, &am.materials, b as u16)
+                }),
             animation_space: am,
             spectra: motion.map(|m| m.spectra.clone()),
         })

@@ -32,6 +32,9 @@ pub struct GpuCharacter {
     /// shader reads K as a third of its width, so K = 0 there).
     spectra_view: wgpu::TextureView,
     shadow_buffer: wgpu::Buffer,
+    /// A billboard cloud's billboard outlines: a line-list index buffer over the full-detail
+    /// vertices, and its index count.
+    pub outlines: Option<(wgpu::Buffer, u32)>,
     /// Indexed by [`crate::scene::LodMethod::index`]; slot 0 (`none`) is always there.
     sets: Vec<Option<GpuLodSet>>,
 }
@@ -189,6 +192,16 @@ impl GpuCharacter {
                 contents: bytemuck::bytes_of(&shadow),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
+        let outlines = (!bake.outlines.is_empty()).then(|| {
+            let buffer = gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("billboard outlines"),
+                    contents: bytemuck::cast_slice(&bake.outlines),
+                    usage: wgpu::BufferUsages::INDEX,
+                });
+            (buffer, bake.outlines.len() as u32)
+        });
         let mut character = GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
@@ -204,6 +217,7 @@ impl GpuCharacter {
             }),
             shadow_buffer,
             spectra_view: spectra.create_view(&Default::default()),
+            outlines,
             sets: Vec::new(),
         };
         character.add_set(gpu, layout, sampler, 0, &LodPack::full_detail(bake));

@@ -212,6 +212,11 @@ pub struct SceneRenderer {
     /// Scales every tree's own wind strength (foliage only; characters play their clips as
     /// they are).
     pub wind: f32,
+    /// Draw the outlines of billboard clouds' billboards over them.
+    pub outlines: bool,
+    /// Tint foliage (trees) by level whatever the debug view, so that a tree's level shows
+    /// while the characters keep their colours.
+    pub foliage_tint: bool,
     frame_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
     pub(crate) frame_layout: wgpu::BindGroupLayout,
@@ -227,6 +232,8 @@ pub struct SceneRenderer {
     wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
     foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
+    /// Billboard outlines: lines over the billboards, tested against depth.
+    outline: wgpu::RenderPipeline,
     plain: wgpu::RenderPipeline,
     sky: wgpu::RenderPipeline,
     ground: wgpu::RenderPipeline,
@@ -279,6 +286,7 @@ struct PipelineSpec<'a> {
     alpha_to_coverage: bool,
     /// Depth bias: pulls a surface lying on another towards the eye.
     bias: wgpu::DepthBiasState,
+    topology: wgpu::PrimitiveTopology,
 }
 
 impl<'a> PipelineSpec<'a> {
@@ -296,6 +304,7 @@ impl<'a> PipelineSpec<'a> {
             polygon_mode: wgpu::PolygonMode::Fill,
             alpha_to_coverage: false,
             bias: Default::default(),
+            topology: wgpu::PrimitiveTopology::TriangleList,
         }
     }
 }
@@ -329,6 +338,7 @@ fn pipeline(
             buffers: spec.buffers,
         },
         primitive: wgpu::PrimitiveState {
+            topology: spec.topology,
             cull_mode: spec.cull,
             polygon_mode: spec.polygon_mode,
             ..Default::default()
@@ -456,6 +466,19 @@ impl SceneRenderer {
             build(&with_characters, foliage("foliage", "vs_main")),
             build(&with_characters, foliage("geomorphed foliage", "vs_morph")),
         );
+        let outline = build(
+            &with_characters,
+            PipelineSpec {
+                fs: "fs_outline",
+                depth: Depth::TestOnly,
+                // Half see-through: where thousands of fine billboards crowd, the leaves
+                // still show.
+                blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                cull: None,
+                topology: wgpu::PrimitiveTopology::LineList,
+                ..character("billboard outlines", "vs_outline")
+            },
+        );
         let wireframe = device
             .features()
             .contains(wgpu::Features::POLYGON_MODE_LINE)
@@ -510,6 +533,8 @@ impl SceneRenderer {
             shader: CharacterShader::Skinned,
             shadows: true,
             wind: 1.0,
+            outlines: false,
+            foliage_tint: false,
             frame_buffer,
             frame_bind_group,
             frame_layout,
@@ -523,6 +548,7 @@ impl SceneRenderer {
             fade_color,
             wireframe,
             foliage,
+            outline,
             plain,
             sky,
             ground,
@@ -558,6 +584,23 @@ impl SceneRenderer {
         Ok(self.characters.len() - 1)
     }
 
+    /// Uploads `bake` in place of character `index` (one no instance draws any more), freeing
+    /// what that one held; returns `index`.
+    pub fn replace_character(
+        &mut self,
+        gpu: &Gpu,
+        index: usize,
+        bake: &CharacterBake,
+    ) -> Result<usize> {
+        if index >= self.characters.len() {
+            bail!("no character {index}");
+        }
+        let added = self.add_character(gpu, bake)?;
+        self.characters.swap_remove(index);
+        debug_assert_eq!(added, self.characters.len());
+        Ok(index)
+    }
+
     /// Uploads one method's levels of detail of character `model` into `slot`
     /// ([`crate::scene::LodMethod::index`]). Done once per (model, method).
     pub fn add_levels(
@@ -590,8 +633,15 @@ impl SceneRenderer {
     /// Uploads the frame's uniforms and instances (one buffer write each) and plans the draws:
     /// one per (side, model, level, transition state).
     pub fn prepare(&mut self, gpu: &Gpu, view: &FrameView, sides: &[Side]) -> FrameStats {
-        let uniforms =
-            FrameUniforms::new(view, &self.lighting, [self.debug.shader_mode(), 0.0, 0.0]);
+        let uniforms = FrameUniforms::new(
+            view,
+            &self.lighting,
+            [
+                self.debug.shader_mode(),
+                DebugView::LodTint.shader_mode() * self.foliage_tint as u8 as f32,
+                0.0,
+            ],
+        );
         gpu.queue
             .write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
 
@@ -786,6 +836,9 @@ impl SceneRenderer {
         if self.shader == CharacterShader::Plain || wireframe {
             return;
         }
+        if self.outlines {
+            self.draw_outlines(pass, &mut scissor);
+        }
         for pipeline in [&self.fade_depth, &self.fade_color] {
             let mut set = false;
             for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
@@ -796,6 +849,29 @@ impl SceneRenderer {
                 scissor.side(pass, key.side());
                 self.draw_group(pass, key, range);
             }
+        }
+    }
+
+    /// The outlines of the billboards of every billboard-cloud draw (both halves of a
+    /// dissolve: each shows its own billboards' outlines where it shows its billboards).
+    fn draw_outlines(&self, pass: &mut wgpu::RenderPass<'_>, scissor: &mut Scissor) {
+        let mut set = false;
+        for (key, range) in &self.draws {
+            let c = &self.characters[key.model()];
+            let Some((buffer, count)) = &c.outlines else {
+                continue;
+            };
+            if !matches!(key.pass(), PASS_OPAQUE | PASS_DISSOLVE_OUT) {
+                continue;
+            }
+            if !set {
+                pass.set_pipeline(&self.outline);
+                set = true;
+            }
+            scissor.side(pass, key.side());
+            pass.set_bind_group(1, &c.full().bind_group, &[]);
+            pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..*count, 0, range.clone());
         }
     }
 

@@ -163,7 +163,13 @@ struct Viewer {
     bake: Option<BackgroundBake>,
     /// What the last bake failed with.
     bake_error: Option<String>,
+    /// When the foliage settings last changed: a new chain is baked once they have been still
+    /// for [`SETTLE_BEFORE_BAKE`] (not for every step of a slider's drag).
+    foliage_changed: Instant,
 }
+
+/// How long the foliage settings must stay put before their chains are baked.
+const SETTLE_BEFORE_BAKE: std::time::Duration = std::time::Duration::from_millis(400);
 
 impl Viewer {
     fn new(event_loop: &ActiveEventLoop, options: &ViewOptions, loaded: Loaded) -> Result<Viewer> {
@@ -200,6 +206,7 @@ impl Viewer {
         world.lod.compare = options.lod.compare;
         world.lod.policy = options.lod.policy;
         world.renderer.debug = options.lod.debug;
+        world.apply_foliage(&options.lod.foliage);
         if options.screenshot.is_some() {
             // A screenshot shows the levels asked for, so it waits for them.
             world.ensure_levels(&gpu)?;
@@ -236,6 +243,7 @@ impl Viewer {
             compare: world.lod.compare,
             policy: world.lod.policy,
             debug: world.renderer.debug,
+            foliage: options.lod.foliage,
         };
         Ok(Viewer {
             adapter: gpu.info.name.clone(),
@@ -261,6 +269,7 @@ impl Viewer {
             frames: 0,
             bake: None,
             bake_error: None,
+            foliage_changed: Instant::now() - SETTLE_BEFORE_BAKE,
         })
     }
 
@@ -270,9 +279,9 @@ impl Viewer {
             match job.poll() {
                 Poll::Running => return Ok(()),
                 Poll::Done(packs) => {
-                    let method = job.method;
+                    let (method, chain) = (job.method, job.chain);
                     self.bake = None;
-                    let installed = self.world.install_levels(&self.gpu, method, packs);
+                    let installed = self.world.install_levels(&self.gpu, method, &chain, packs);
                     if let Err(e) = installed {
                         self.bake_error = Some(format!("{method}: {e:#}"));
                     }
@@ -283,18 +292,16 @@ impl Viewer {
                 }
             }
         }
-        let missing = self.world.lod.methods().into_iter().find_map(|m| match m {
-            LodMethod::Simplified(s) if !self.world.lod.has(m) => Some(s),
-            _ => None,
-        });
-        if let Some(method) = missing
+        if let Some(method) = self.world.missing_levels()
             && self.bake_error.is_none()
+            && self.foliage_changed.elapsed() >= SETTLE_BEFORE_BAKE
         {
             self.bake = Some(BackgroundBake::start(
                 self.gpu.clone(),
                 self.world.sources.clone(),
-                self.world.has_chain(),
+                self.world.has_levels(method),
                 method,
+                self.world.lod.chain(),
                 self.world.cache(),
             ));
         }
@@ -390,6 +397,8 @@ impl Viewer {
             bake_error: self.bake_error.as_deref(),
             wireframe: self.world.renderer.has_wireframe(),
             ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
+            trees: self.world.bakes.iter().any(|b| b.alpha_tested),
+            chains: self.world.shown_chains(),
         };
         let (settings, history) = (&mut self.settings, &self.history);
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
@@ -540,6 +549,12 @@ impl Viewer {
         }
         lod.policy = s.policy;
         self.world.renderer.debug = s.debug;
+        let chain_before = (self.world.lod.foliage(), self.world.lod.chain());
+        self.world.apply_foliage(&s.foliage);
+        if (self.world.lod.foliage(), self.world.lod.chain()) != chain_before {
+            self.foliage_changed = Instant::now();
+            self.bake_error = None;
+        }
     }
 
     fn free_egui_textures(&mut self, ids: &[egui::TextureId]) {

@@ -1,6 +1,9 @@
 //! The egui side panel: statistics, levels of detail, comparison, debug views, and the crowd's
 //! controls.
 
+use crate::app::tree_levels::{FoliagePolicy, FoliageView, MIN_EPSILON_GROWTH};
+use crate::app::world::LevelSummary;
+use crate::bake::spectral::description::DescriptionType;
 use crate::render::{DebugView, FrameStats};
 use crate::scene::{Drive, LodMethod, LodPolicy, Transition};
 use std::collections::VecDeque;
@@ -128,6 +131,7 @@ pub struct Settings {
     pub compare: Option<LodMethod>,
     pub policy: LodPolicy,
     pub debug: DebugView,
+    pub foliage: FoliageView,
 }
 
 /// Facts the panel shows.
@@ -146,6 +150,10 @@ pub struct Info<'a> {
     pub wireframe: bool,
     /// Which methods' levels are on the GPU, in [`LodMethod::ALL`] order.
     pub ready: [bool; 4],
+    /// Does the scene have trees?
+    pub trees: bool,
+    /// The chain each tree shows: its name, whether it is cut as the panel says, its levels.
+    pub chains: Vec<(String, bool, &'a [LevelSummary])>,
 }
 
 /// What the panel asks for beyond changing [`Settings`].
@@ -169,6 +177,10 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     ui.separator();
     debug_views(ui, s, info);
     ui.separator();
+    if info.trees {
+        foliage(ui, s, info);
+        ui.separator();
+    }
 
     ui.strong("Crowd");
     if ui
@@ -454,6 +466,94 @@ fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     if let Some(l) = legend {
         ui.label(egui::RichText::new(l).small());
     }
+}
+
+/// Trees: the level policy, how their chains are cut, wind, outlines, tint, and the levels of
+/// the chains shown.
+fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
+    let f = &mut s.foliage;
+    ui.strong("Foliage");
+    egui::ComboBox::from_label("level policy")
+        .selected_text(f.policy.name())
+        .show_ui(ui, |ui| {
+            for p in FoliagePolicy::ALL {
+                ui.selectable_value(&mut f.policy, p, p.name());
+            }
+        });
+    if s.method == LodMethod::None && f.policy != FoliagePolicy::Full {
+        ui.label(
+            egui::RichText::new("method none: trees are drawn full; pick a method to see clouds")
+                .small(),
+        );
+    }
+    let clouds = f.policy != FoliagePolicy::Full;
+    let spectral = matches!(f.policy, FoliagePolicy::Spectral | FoliagePolicy::Automatic);
+    ui.add_enabled_ui(clouds, |ui| {
+        let c = &mut f.chain;
+        ui.add(
+            egui::Slider::new(&mut c.first_epsilon, 0.001..=0.05)
+                .logarithmic(true)
+                .text("ε of level 1")
+                .custom_formatter(|x, _| format!("{:.2}% h", x * 100.0)),
+        )
+        .on_hover_text("ε of the first cloud level, as a share of the tree's height");
+        ui.add(
+            egui::Slider::new(&mut c.epsilon_growth, MIN_EPSILON_GROWTH..=4.0)
+                .text("ε per level")
+                .custom_formatter(|x, _| format!("×{x:.2}")),
+        )
+        .on_hover_text("each level's ε is the last one's times this");
+        ui.add_enabled_ui(spectral, |ui| {
+            egui::ComboBox::from_label("description")
+                .selected_text(c.description.name())
+                .show_ui(ui, |ui| {
+                    for d in DescriptionType::ALL {
+                        ui.selectable_value(&mut c.description, d, d.name());
+                    }
+                });
+            ui.add(egui::Slider::new(&mut c.bins, 1..=16).text("K lines per axis"));
+        });
+    });
+    ui.add(egui::Slider::new(&mut f.wind, 0.0..=3.0).text("wind strength"));
+    ui.checkbox(&mut f.outlines, "billboard outlines");
+    ui.checkbox(&mut f.tint, "tint trees by level");
+    for (name, current, levels) in &info.chains {
+        let title = if *current {
+            format!("{name}: {} levels", levels.len())
+        } else {
+            format!("{name}: {} levels (earlier settings)", levels.len())
+        };
+        egui::CollapsingHeader::new(title)
+            .id_salt(("chain", name))
+            .show(ui, |ui| chain_table(ui, name, levels));
+    }
+}
+
+/// A tree's levels: ε, kind, billboards, triangles and animation error, each level's row
+/// marked in its tint colour.
+fn chain_table(ui: &mut egui::Ui, name: &str, levels: &[LevelSummary]) {
+    egui::Grid::new(("levels", name))
+        .num_columns(5)
+        .striped(true)
+        .show(ui, |ui| {
+            for h in ["", "ε (m)", "kind", "billb.", "anim"] {
+                ui.label(egui::RichText::new(h).small().strong());
+            }
+            ui.end_row();
+            for (k, l) in levels.iter().enumerate() {
+                ui.colored_label(level_color(k), format!("L{k}"));
+                ui.label(format!("{:.3}", l.epsilon));
+                ui.label(l.kind);
+                ui.label(thousands(l.billboards as u64))
+                    .on_hover_text(format!(
+                        "{} triangles with the wood",
+                        thousands(l.triangles as u64)
+                    ));
+                ui.label(format!("{:.3}", l.anim_rms))
+                    .on_hover_text("RMS animation error, in tree heights");
+                ui.end_row();
+            }
+        });
 }
 
 /// The divider and the method names over the 3D view in compare mode.
