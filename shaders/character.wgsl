@@ -46,12 +46,20 @@ fn finish(inst: Instance, position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>,
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
-    let s = skin_vertex(vi, instance_frames(inst));
-    return finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+    return skinned(vi, inst);
 }
 
 @vertex
 fn vs_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
+    return morphed(vi, inst);
+}
+
+fn skinned(vi: u32, inst: Instance) -> VsOut {
+    let s = skin_vertex(vi, instance_frames(inst));
+    return finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+}
+
+fn morphed(vi: u32, inst: Instance) -> VsOut {
     let frames = instance_frames(inst);
     let t = clamp(inst.lod.x, 0.0, 1.0);
     let u = 1.0 - t;
@@ -77,8 +85,7 @@ fn vs_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
 // billboard's own depth.
 @vertex
 fn vs_outline(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
-    let s = skin_vertex(vi, instance_frames(inst));
-    var out = finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+    var out = skinned(vi, inst);
     out.world = mix(out.world, frame.camera_pos.xyz, 0.004);
     out.clip = frame.view_proj * vec4<f32>(out.world, 1.0);
     return out;
@@ -125,34 +132,91 @@ fn pixel_threshold(pixel: vec2<f32>) -> f32 {
 // comment at the top of src/render/renderer.rs): lod.z ≥ 0 keeps the pixels whose threshold lies
 // below it (1, outside dissolves, keeps all), lod.z < 0 those whose threshold is at or above
 // −lod.z − 1, so the incoming and outgoing halves of one dissolve cover complementary pixels.
-fn dissolved(in: VsOut) -> bool {
+fn dissolved(in: FoliageOut) -> bool {
     let x = pixel_threshold(in.clip.xy);
-    return select(x >= in.lod.z, x < -in.lod.z - 1.0, in.lod.z < 0.0);
+    return select(x >= in.coverage, x < -in.coverage - 1.0, in.coverage < 0.0);
+}
+
+// Foliage is lit per vertex: leaves and billboards are flat, so sun, sky and rim light are the
+// same at every pixel of one; branches are thin. A forest is drawn as millions of small
+// alpha-tested triangles, and on a software rasterizer the per-pixel lighting was about two
+// fifths of the frame. Both faces are lit (foliage is two-sided) and the fragment picks the
+// one it sees; the debug view's colour and the fog factor come along.
+struct FoliageOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) material: u32,
+    @location(2) tint: vec3<f32>,
+    // Light on the front and on the back face: rgb multiplies the base colour, w scales the
+    // rim light (the horizon colour).
+    @location(3) front: vec4<f32>,
+    @location(4) back: vec4<f32>,
+    // The debug view's colour (a = 1) in place of the texture's, or a = 0.
+    @location(5) debug: vec4<f32>,
+    @location(6) fog: f32,
+    // The dissolve's coverage (lod.z of the instance).
+    @location(7) @interpolate(flat) coverage: f32,
+};
+
+fn side_light(n: vec3<f32>, v: vec3<f32>) -> vec4<f32> {
+    return vec4<f32>(shade(vec3<f32>(1.0), n), pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12);
+}
+
+fn foliage_out(o: VsOut) -> FoliageOut {
+    let n = normalize(o.normal);
+    let v = normalize(frame.camera_pos.xyz - o.world);
+    var out: FoliageOut;
+    out.clip = o.clip;
+    out.uv = o.uv;
+    out.material = o.material;
+    out.tint = o.tint.rgb;
+    out.front = side_light(n, v);
+    out.back = side_light(-n, v);
+    out.debug = debug_color(o.lod, o.influences, foliage_view());
+    out.fog = fog_factor(o.world);
+    out.coverage = o.lod.z;
+    return out;
+}
+
+@vertex
+fn vs_foliage(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
+    return foliage_out(skinned(vi, inst));
+}
+
+@vertex
+fn vs_foliage_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
+    return foliage_out(morphed(vi, inst));
+}
+
+// The lit colour of a foliage fragment of texture colour `texel` (see `lit`, per vertex).
+fn foliage_color(in: FoliageOut, texel: vec3<f32>, front: bool) -> vec3<f32> {
+    let base = select(texel * in.tint, in.debug.rgb, in.debug.a > 0.5);
+    let l = select(in.back, in.front, front);
+    let c = base * l.rgb + frame.sky_horizon.rgb * l.w;
+    return mix(c, frame.sky_horizon.rgb, in.fog);
 }
 
 // Foliage without multisampling: the texture's alpha cuts the leaf shape out; both sides are
 // drawn, lit from the side that faces the viewer.
 @fragment
-fn fs_foliage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+fn fs_foliage(in: FoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     if (texel.a < 0.5 || dissolved(in)) {
         discard;
     }
-    let n = normalize(in.normal) * select(-1.0, 1.0, front);
-    return vec4<f32>(lit_as(in, texel.rgb, n, foliage_view()), 1.0);
+    return vec4<f32>(foliage_color(in, texel.rgb, front), 1.0);
 }
 
 // Foliage with multisampling and alpha to coverage: the alpha is sharpened to about a pixel
 // around the 0.5 contour, so the cut edge is antialiased but does not dissolve into a dither.
 @fragment
-fn fs_foliage_coverage(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+fn fs_foliage_coverage(in: FoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     let a = clamp((texel.a - 0.5) / max(fwidth(texel.a), 1e-4) + 0.5, 0.0, 1.0);
     if (dissolved(in)) {
         discard;
     }
-    let n = normalize(in.normal) * select(-1.0, 1.0, front);
-    return vec4<f32>(lit_as(in, texel.rgb, n, foliage_view()), a);
+    return vec4<f32>(foliage_color(in, texel.rgb, front), a);
 }
 
 // The debug view of foliage: the foliage tint (frame.time.z, the level tint or 0) where it is
@@ -161,22 +225,25 @@ fn foliage_view() -> u32 {
     return max(u32(frame.time.y), u32(frame.time.z));
 }
 
-// The character's colour: material (or a debug view's colour), sun and sky light, rim, fog.
-fn lit(in: VsOut, albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    // frame.time.y: the debug view (see `DebugView` in src/render/renderer.rs).
-    return lit_as(in, albedo, n, u32(frame.time.y));
-}
-
-fn lit_as(in: VsOut, albedo: vec3<f32>, n: vec3<f32>, view: u32) -> vec3<f32> {
-    var base = albedo * in.tint.rgb;
+// The colour debug view `view` (see `DebugView` in src/render/renderer.rs) paints a surface
+// with (a = 1), or a = 0 where it keeps the material's.
+fn debug_color(lod: vec4<f32>, influences: f32, view: u32) -> vec4<f32> {
     if (view == 1u) {
-        base = level_color(in.lod.x);
+        return vec4<f32>(level_color(lod.x), 1.0);
     } else if (view == 2u) {
-        base = select(vec3<f32>(0.55), heat(in.lod.y), in.lod.y >= 0.0);
+        return vec4<f32>(select(vec3<f32>(0.55), heat(lod.y), lod.y >= 0.0), 1.0);
     } else if (view == 3u) {
         // One influence is cold, eight or more hot.
-        base = heat((in.influences - 1.0) / 7.0);
+        return vec4<f32>(heat((influences - 1.0) / 7.0), 1.0);
     }
+    return vec4<f32>(0.0);
+}
+
+// The character's colour: material (or a debug view's colour), sun and sky light, rim, fog.
+fn lit(in: VsOut, albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    // frame.time.y: the debug view.
+    let d = debug_color(in.lod, in.influences, u32(frame.time.y));
+    let base = select(albedo * in.tint.rgb, d.rgb, d.a > 0.5);
     var c = shade(base, n);
     // A touch of rim light separates figures from the ground at a distance.
     let v = normalize(frame.camera_pos.xyz - in.world);

@@ -42,7 +42,11 @@ fn shade(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 
 // Exponential distance fog towards the horizon colour.
 fn apply_fog(color: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
+    return mix(color, frame.sky_horizon.rgb, fog_factor(world));
+}
+
+// How much of the horizon colour the fog lays over a point, 0..1.
+fn fog_factor(world: vec3<f32>) -> f32 {
     let d = max(distance(world, frame.camera_pos.xyz) - frame.fog.y, 0.0);
-    let f = 1.0 - exp(-d * frame.fog.x);
-    return mix(color, frame.sky_horizon.rgb, clamp(f, 0.0, 1.0));
+    return clamp(1.0 - exp(-d * frame.fog.x), 0.0, 1.0);
 }

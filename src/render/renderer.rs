@@ -463,8 +463,11 @@ impl SceneRenderer {
             }
         };
         let foliage = (
-            build(&with_characters, foliage("foliage", "vs_main")),
-            build(&with_characters, foliage("geomorphed foliage", "vs_morph")),
+            build(&with_characters, foliage("foliage", "vs_foliage")),
+            build(
+                &with_characters,
+                foliage("geomorphed foliage", "vs_foliage_morph"),
+            ),
         );
         let outline = build(
             &with_characters,
