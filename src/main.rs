@@ -207,6 +207,10 @@ struct FoliageArgs {
     /// Frequency lines kept per axis by spectral clouds (K, 1 to 16).
     #[arg(long, default_value_t = lodlab::bake::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
     bins: u16,
+    /// Plain SCA: spectral billboards hang from the root with all their leaves' motion in
+    /// their spectra, instead of following the leaves' shared bone (thesis §6.4).
+    #[arg(long)]
+    plain_sca: bool,
     /// Wind strength: scales every tree's sway (0: still air; 1: as baked).
     #[arg(long, default_value_t = 1.0, value_parser = parse_wind)]
     wind: f32,
@@ -227,6 +231,7 @@ impl FoliageArgs {
                 epsilon_growth: self.epsilon_growth,
                 description: self.description,
                 bins: self.bins as usize,
+                shared_bone: !self.plain_sca,
                 ..Default::default()
             },
             wind: self.wind,

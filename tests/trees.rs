@@ -533,14 +533,17 @@ fn the_tree_report_writes_its_three_files() {
             .all(|l| !l["grouping"].as_str().unwrap().starts_with("spectral"))
     );
     let types = json["description_types"].as_array().unwrap();
-    assert_eq!(types.len(), 3 * (levels.len() - first_spectral));
+    // Every description type with the shared bone, and the chain's own type as plain SCA.
+    assert_eq!(types.len(), 4 * (levels.len() - first_spectral));
     for name in ["naive", "dominating-axis", "axis-phase"] {
-        assert!(
-            types
-                .iter()
-                .any(|t| t["description"] == name && f(t, "anim_rms") > 0.0)
-        );
+        assert!(types.iter().any(|t| t["description"] == name
+            && t["shared_bone"] == true
+            && f(t, "anim_rms") > 0.0));
     }
+    assert_eq!(
+        types.iter().filter(|t| t["shared_bone"] == false).count(),
+        levels.len() - first_spectral
+    );
     let motion = image::open(out_dir.join("motion.png")).unwrap().to_rgb8();
     let curve = |r: u8, g: u8, b: u8| {
         motion

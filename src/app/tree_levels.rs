@@ -45,9 +45,12 @@ impl CloudKind {
             Some(CloudKind::Skeleton(Grouping::Subtree { forks })) => {
                 format!("subtree below {forks} forks")
             }
-            Some(CloudKind::Spectral(p)) => {
-                format!("spectral, {} clusters, {}", p.clusters, p.kind.name())
-            }
+            Some(CloudKind::Spectral(p)) => format!(
+                "spectral, {} clusters, {}{}",
+                p.clusters,
+                p.kind.name(),
+                if p.shared_bone { "" } else { ", plain SCA" }
+            ),
         }
     }
 }
@@ -378,6 +381,9 @@ pub struct ChainOptions {
     /// lines kept per axis (K).
     pub description: DescriptionType,
     pub bins: usize,
+    /// Spectral clouds: billboards follow their leaves' shared bone (§6.4), or hang from the
+    /// root with all the motion in their spectra (plain SCA, §6.2).
+    pub shared_bone: bool,
     /// Spectral clouds from level 1 start with this many motion clusters (halved level by
     /// level).
     pub first_clusters: usize,
@@ -394,6 +400,7 @@ impl Default for ChainOptions {
             style: ChainStyle::Automatic,
             description: DescriptionType::AxisPhase,
             bins: crate::bake::spectral::DEFAULT_BINS,
+            shared_bone: true,
             first_clusters: 64,
             seed: 1,
         }
@@ -464,6 +471,7 @@ pub fn tree_chain(
                 kind: opts.description,
                 clusters: k,
                 bins: opts.bins,
+                shared_bone: opts.shared_bone,
                 seed: opts.seed,
                 ..Default::default()
             }),
@@ -537,7 +545,7 @@ impl CloudLevel {
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 3;
+const CHAIN_VERSION: u32 = 4;
 
 /// The cache key of a tree's chain: its source's hash, the chain options and the versions.
 pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> [u8; 32] {

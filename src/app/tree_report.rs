@@ -6,7 +6,8 @@
 //!
 //! Besides the chain (skeleton clouds, then spectral ones), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
-//! counts) and the spectral levels rebuilt with each description type (`description_types`).
+//! counts) and the spectral levels rebuilt with each description type and as plain SCA
+//! (`description_types`).
 
 use super::report::{plot_error, register_font, write_atomic};
 use super::tree_levels::{
@@ -54,6 +55,8 @@ pub struct DescriptionReport {
     /// The chain level it stands in for.
     pub level: usize,
     pub description: String,
+    /// Billboards follow their leaves' shared bone (§6.4); false: plain SCA.
+    pub shared_bone: bool,
     pub epsilon: f32,
     pub clusters: usize,
     pub billboards: usize,
@@ -87,7 +90,7 @@ pub struct TreeReport {
     /// The skeleton-only chain's levels where it differs from the chain (coarser branch
     /// subtrees instead of spectral clouds).
     pub skeleton_levels: Vec<LevelReport>,
-    /// The chain's spectral levels with each description type.
+    /// The chain's spectral levels with each description type, and as plain SCA.
     pub description_types: Vec<DescriptionReport>,
 }
 
@@ -158,16 +161,23 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             ..Default::default()
         };
         let density = (2.0 * opts.tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
-        for description in DescriptionType::ALL {
+        // Every description type with the shared bone, and the chain's own without it.
+        let variants = DescriptionType::ALL
+            .map(|d| (d, true))
+            .into_iter()
+            .chain([(sp.kind, false)]);
+        for (description, shared_bone) in variants {
             let start = std::time::Instant::now();
             let kind = CloudKind::Spectral(SpectralParams {
                 kind: description,
+                shared_bone,
                 ..sp
             });
             let cloud = cloud_level(&gpu, tree, &f, &params, &kind, density, tree)?;
             description_types.push(DescriptionReport {
                 level: k,
                 description: description.name().into(),
+                shared_bone,
                 epsilon: l.epsilon / h,
                 clusters: sp.clusters,
                 billboards: cloud.billboards,

@@ -512,6 +512,11 @@ fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
                     }
                 });
             ui.add(egui::Slider::new(&mut c.bins, 1..=16).text("K lines per axis"));
+            ui.checkbox(&mut c.shared_bone, "shared bone (§6.4)")
+                .on_hover_text(
+                    "billboards follow their leaves' deepest shared bone; off: plain SCA, \
+                     billboards hang from the root with all the motion in their spectra",
+                );
         });
     });
     ui.add(egui::Slider::new(&mut f.wind, 0.0..=3.0).text("wind strength"));

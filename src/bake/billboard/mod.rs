@@ -260,6 +260,16 @@ impl BoneTree {
     }
 }
 
+/// The root of the bone hierarchy that `bone` belongs to.
+pub fn root_bone(skeleton: &crate::model::Skeleton, bone: u32) -> u32 {
+    let tree = BoneTree::new(skeleton);
+    let mut b = bone;
+    while let Some(p) = tree.parent.get(b as usize).copied().flatten() {
+        b = p;
+    }
+    b
+}
+
 /// A billboard cloud of the foliage, one cloud per group of `grouping`, in parallel; every
 /// billboard is bound to the deepest bone its leaves share. Leaf indices in the billboards are
 /// indices into `foliage.leaves`; ε is in scene units.

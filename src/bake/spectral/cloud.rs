@@ -23,7 +23,7 @@ use super::dft::Dft;
 use super::{Zones, trajectories_in};
 use crate::anim::skinning_over_loop;
 use crate::bake::billboard::cloud::CloudParams;
-use crate::bake::billboard::{Foliage, SkeletonCloud, cloud_of_groups, tree_height};
+use crate::bake::billboard::{Foliage, SkeletonCloud, cloud_of_groups, root_bone, tree_height};
 use crate::model::Model;
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
@@ -41,6 +41,10 @@ pub struct SpectralParams {
     pub samples: usize,
     /// Animation zone radius as a fraction of the tree's height (App. C.2).
     pub zone_radius: f32,
+    /// §6.4: every billboard follows its leaves' deepest shared bone and its spectra hold only
+    /// the rest of their motion. Off: the plain Spectral Clustering Algorithm (§6.2), every
+    /// billboard held by the skeleton's root and all of its leaves' motion in its spectra.
+    pub shared_bone: bool,
     pub seed: u64,
 }
 
@@ -52,6 +56,7 @@ impl Default for SpectralParams {
             bins: super::DEFAULT_BINS,
             samples: super::DEFAULT_SAMPLES,
             zone_radius: 0.03,
+            shared_bone: true,
             seed: 1,
         }
     }
@@ -118,7 +123,12 @@ pub fn spectral_cloud(
     );
     let group_of: Vec<u32> = zones.of.iter().map(|&z| clusters.of[z as usize]).collect();
     let made = clusters.centroids.len();
-    let billboards = cloud_of_groups(skeleton, foliage, cloud, &group_of);
+    let mut billboards = cloud_of_groups(skeleton, foliage, cloud, &group_of);
+    if !params.shared_bone {
+        for bone in &mut billboards.bones {
+            *bone = root_bone(skeleton, *bone);
+        }
+    }
 
     // Residual motion seen from each billboard's bone i: r(t) = Ĝ_i⁻¹ S_i(t)⁻¹ S_b(t) c for a
     // zone centre c on bone b (S the skinning matrices), i.e. the leaves' motion with the
@@ -235,5 +245,49 @@ mod tests {
         for l in c.lines.iter().flatten() {
             assert_eq!(l.len(), params.bins);
         }
+    }
+
+    /// Without the shared bone (plain SCA), every billboard hangs from the skeleton's root and
+    /// its spectra carry all of its leaves' motion: they sway wider than the residual that is
+    /// left when the billboard follows its branch.
+    #[test]
+    fn plain_sca_holds_billboards_by_the_root_with_all_the_motion() {
+        let tree = crate::generate::tree::sapling();
+        let f = foliage(&tree).unwrap();
+        let h = tree_height(&tree);
+        let cloud = CloudParams {
+            epsilon: 0.08 * h,
+            ..Default::default()
+        };
+        let shared = SpectralParams {
+            clusters: 6,
+            ..Default::default()
+        };
+        let plain = SpectralParams {
+            shared_bone: false,
+            ..shared
+        };
+        let a = spectral_cloud(&tree, &f, &cloud, &shared);
+        let b = spectral_cloud(&tree, &f, &cloud, &plain);
+        let roots: Vec<u32> = (0..tree.skeleton.bone_count() as u32)
+            .filter(|&i| root_bone(&tree.skeleton, i) == i)
+            .collect();
+        assert!(b.cloud.bones.iter().all(|bone| roots.contains(bone)));
+        assert!(a.cloud.bones.iter().any(|bone| !roots.contains(bone)));
+        let sway = |c: &SpectralCloud| -> f32 {
+            c.lines
+                .iter()
+                .flatten()
+                .flatten()
+                .map(|l| l.amplitude)
+                .sum::<f32>()
+                / c.lines.len().max(1) as f32
+        };
+        assert!(
+            sway(&b) > 1.5 * sway(&a),
+            "plain SCA sways {} per billboard, shared bone {}",
+            sway(&b),
+            sway(&a)
+        );
     }
 }
