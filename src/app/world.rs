@@ -623,7 +623,18 @@ impl World {
             };
             characters.push(c);
         }
-        self.chains.retain(|c| c.model != m || c.opts != *opts);
+        // A chain cut the same way again replaces the old one, whose characters are reused.
+        if let Some(old) = self
+            .chains
+            .iter()
+            .position(|c| c.model == m && c.opts == *opts)
+        {
+            let old = self.chains.remove(old);
+            if self.tree_levels[m].as_ref() == Some(&old.characters) {
+                self.tree_levels[m] = None;
+            }
+            self.free_characters.extend(&old.characters[1..]);
+        }
         self.chains.push(InstalledChain {
             model: m,
             opts: *opts,
