@@ -44,6 +44,67 @@ enum Command {
     /// error.png, as in Merry et al. Figure 7) and bake timings (timings.md, their Table 1);
     /// for a tree, its billboard-cloud chain (report.json, colour-error.png, levels.png).
     Report(ReportArgs),
+    /// Measure frame times of level-of-detail methods on a scene, headless, along a fixed
+    /// camera path, interleaved in one process, against a trivial unskinned shader drawing the
+    /// same triangles; print a Markdown table.
+    Bench(BenchArgs),
+}
+
+#[derive(Args, Debug)]
+struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Methods to measure, comma separated, in this order.
+    #[arg(long, default_value = "none,rest-pose,as,as+is", value_parser = parse_lod_methods)]
+    methods: LodMethods,
+    #[command(flatten)]
+    policy: PolicyArgs,
+    #[command(flatten)]
+    foliage: FoliageArgs,
+    /// Image size.
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Multisampling: 1 (off) or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_samples)]
+    msaa: u32,
+    /// Seconds of measuring, all methods together (their calibration included).
+    #[arg(long, default_value_t = 30.0, value_parser = parse_non_negative)]
+    seconds: f32,
+    /// Seconds of unmeasured warm-up frames first.
+    #[arg(long, default_value_t = 3.0, value_parser = parse_non_negative)]
+    warmup: f32,
+    /// Frames per method, instead of as many as fit --seconds.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    frames: Option<u32>,
+    /// Camera path: orbit (one turn, swinging from near to far and back) or spiral (inwards).
+    #[arg(long, default_value = "orbit", value_parser = ["orbit", "spiral"])]
+    path: String,
+    /// Seconds the camera path lasts.
+    #[arg(long, default_value_t = 20.0, value_parser = parse_non_negative)]
+    path_seconds: f32,
+    /// Also write the figures as JSON.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Also write the Markdown table to a file.
+    #[arg(long, value_name = "FILE")]
+    markdown: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug)]
+struct LodMethods(Vec<LodMethod>);
+
+fn parse_lod_methods(s: &str) -> Result<LodMethods, String> {
+    let mut out = Vec::new();
+    for part in s.split(',').filter(|p| !p.trim().is_empty()) {
+        let m = parse_method(part.trim())?;
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    }
+    if out.is_empty() {
+        return Err("no method given".into());
+    }
+    Ok(LodMethods(out))
 }
 
 #[derive(Args, Debug)]
@@ -160,6 +221,21 @@ struct LodArgs {
     /// for shot, the full-detail baseline].
     #[arg(long, value_parser = parse_method)]
     method: Option<LodMethod>,
+    #[command(flatten)]
+    policy: PolicyArgs,
+    /// Debug view: shaded, lod, transition, wireframe, influences.
+    #[arg(long, default_value = "shaded", value_parser = parse_debug_view)]
+    debug_view: DebugView,
+    /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
+    #[arg(long, value_name = "A,B", value_parser = parse_compare)]
+    compare: Option<(LodMethod, LodMethod)>,
+    #[command(flatten)]
+    foliage: FoliageArgs,
+}
+
+/// How instances choose and change levels.
+#[derive(Args, Debug, Clone)]
+struct PolicyArgs {
     /// Transition between levels: pop, alpha, morph.
     #[arg(long, default_value = "morph", value_parser = parse_transition)]
     transition: Transition,
@@ -178,14 +254,23 @@ struct LodArgs {
     /// Hysteresis: the fraction of the tolerance a coarser level must undercut (0 to 0.9).
     #[arg(long, default_value_t = 0.2, value_parser = parse_hysteresis)]
     hysteresis: f32,
-    /// Debug view: shaded, lod, transition, wireframe, influences.
-    #[arg(long, default_value = "shaded", value_parser = parse_debug_view)]
-    debug_view: DebugView,
-    /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
-    #[arg(long, value_name = "A,B", value_parser = parse_compare)]
-    compare: Option<(LodMethod, LodMethod)>,
-    #[command(flatten)]
-    foliage: FoliageArgs,
+}
+
+impl PolicyArgs {
+    fn policy(&self) -> LodPolicy {
+        LodPolicy {
+            tolerance_px: self.tolerance,
+            hysteresis: self.hysteresis,
+            transition: self.transition,
+            drive: if self.drive == "zone" {
+                Drive::Zone
+            } else {
+                Drive::Time
+            },
+            duration: self.duration,
+            zone_width: self.zone_width,
+        }
+    }
 }
 
 /// Trees: what they become under a simplified method and how they look.
@@ -289,18 +374,7 @@ impl LodArgs {
         ShotLod {
             method,
             compare,
-            policy: LodPolicy {
-                tolerance_px: self.tolerance,
-                hysteresis: self.hysteresis,
-                transition: self.transition,
-                drive: if self.drive == "zone" {
-                    Drive::Zone
-                } else {
-                    Drive::Time
-                },
-                duration: self.duration,
-                zone_width: self.zone_width,
-            },
+            policy: self.policy.policy(),
             debug: self.debug_view,
             foliage: self.foliage.view(),
             ..Default::default()
@@ -532,6 +606,34 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 pct(c.as_is_le_as),
                 a.out.display()
             );
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Bench(a)) => {
+            use lodlab::app::bench;
+            bench::check_outputs(&[&a.json, &a.markdown])?;
+            let report = bench::run(&bench::BenchOptions {
+                spec: a.scene.spec(),
+                methods: a.methods.0,
+                policy: a.policy.policy(),
+                foliage: a.foliage.view(),
+                width: a.size.0,
+                height: a.size.1,
+                samples: a.msaa,
+                seconds: a.seconds,
+                warmup: a.warmup,
+                frames: a.frames.map(|f| f as usize),
+                path: a.path,
+                path_seconds: a.path_seconds,
+                progress: true,
+            })?;
+            let table = bench::markdown(&report);
+            print!("{table}");
+            if let Some(p) = &a.json {
+                bench::write_text(p, &serde_json::to_string_pretty(&report)?)?;
+            }
+            if let Some(p) = &a.markdown {
+                bench::write_text(p, &table)?;
+            }
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::View(a)) => view(a),

@@ -1,6 +1,7 @@
 //! Front ends: the command-line tools and the viewer.
 
 pub mod bake;
+pub mod bench;
 pub mod gen_assets;
 pub mod levels;
 pub mod report;

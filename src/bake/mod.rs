@@ -19,13 +19,13 @@ pub mod vertex_texture;
 use crate::model::{Bounds, Model};
 use anim_texture::AnimationTexture;
 use animation_space::AnimationSpaceMesh;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use materials::MaterialLayers;
 use spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
 use vertex_texture::VertexTexture;
 
-/// A vertex for the trivial unskinned calibration shader: the first frame of the first clip,
-/// baked into plain positions.
+/// A vertex for the trivial unskinned calibration shader: one fixed pose baked into plain
+/// positions (see [`vertex_texture::VertexTexture::static_vertices`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct StaticVertex {
@@ -42,8 +42,6 @@ pub struct CharacterBake {
     pub vertices: VertexTexture,
     pub indices: Vec<u32>,
     pub materials: MaterialLayers,
-    /// The same triangles as plain vertices, for the unskinned calibration draw.
-    pub static_vertices: Vec<StaticVertex>,
     /// Bounds over the sampled frames of every clip, in scene units, model-local.
     pub bounds: Bounds,
     pub animation_space: AnimationSpaceMesh,
@@ -80,18 +78,6 @@ impl CharacterBake {
         let vertices = VertexTexture::pack(&[&am], &[])?;
         let materials = MaterialLayers::bake(&model.materials);
 
-        let (pos, nrm) = am.evaluate(&animation.sample(0, 0.0));
-        let static_vertices = pos
-            .iter()
-            .zip(&nrm)
-            .zip(&am.uvs)
-            .map(|((p, n), uv): ((&Vec3, &Vec3), &Vec2)| StaticVertex {
-                position: p.to_array(),
-                normal: n.normalize_or(Vec3::Y).to_array(),
-                uv: uv.to_array(),
-            })
-            .collect();
-
         // Bounds over a few frames of every clip: enough for framing, shadows and culling.
         let mut points = Vec::new();
         for (c, clip) in animation.clips.iter().enumerate() {
@@ -110,7 +96,6 @@ impl CharacterBake {
             vertices,
             indices: am.indices.clone(),
             materials,
-            static_vertices,
             bounds,
             alpha_tested: model.materials.iter().any(|m| {
                 m.base_color[3] < 0.5

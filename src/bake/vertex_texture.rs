@@ -15,8 +15,10 @@
 //! `vertex_index` lands on its headers, and the geomorph targets of level k are vertices of level
 //! k+1, so a morph over several levels follows the targets hop by hop.
 
-use super::animation_space::AnimationSpaceMesh;
+use super::StaticVertex;
+use super::animation_space::{AnimationSpaceMesh, transform_homogeneous};
 use super::texels::TexelGrid;
+use glam::{Affine3A, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
 /// Influence counts are packed below this; materials above.
@@ -105,6 +107,37 @@ impl VertexTexture {
             influence_count: influence_count as u32,
         })
     }
+
+    /// Every vertex of every packed mesh posed by `pose` (one matrix per bone), read back from
+    /// the texels: v = Σ G_i p_i and n = Σ G_i n_i, as `skin_vertex` in shaders/skinning.wgsl
+    /// computes them, without spectral offsets. What the unskinned calibration draw reads from a
+    /// vertex buffer, so that it draws exactly the triangles of whatever levels the skinned
+    /// draw shows.
+    pub fn static_vertices(&self, pose: &[Affine3A]) -> Vec<StaticVertex> {
+        (0..self.vertex_count as usize)
+            .map(|v| {
+                let header = self.grid.get(2 * v);
+                let first = header[0] as usize;
+                let count = header[1] as u32 % MATERIAL_STRIDE;
+                let (mut position, mut normal) = (Vec3::ZERO, Vec3::ZERO);
+                for i in 0..count as usize {
+                    let p = Vec4::from(self.grid.get(first + 2 * i));
+                    let nb = self.grid.get(first + 2 * i + 1);
+                    let g = pose
+                        .get(nb[3] as usize)
+                        .copied()
+                        .unwrap_or(Affine3A::IDENTITY);
+                    position += transform_homogeneous(&g, p);
+                    normal += g.transform_vector3(Vec3::new(nb[0], nb[1], nb[2]));
+                }
+                StaticVertex {
+                    position: position.to_array(),
+                    normal: normal.normalize_or(Vec3::Y).to_array(),
+                    uv: [header[2], header[3]],
+                }
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -159,5 +192,24 @@ mod tests {
         assert_eq!(t.grid.get(first), [0.0, 1.0, 0.0, 0.25]);
         assert_eq!(t.grid.get(first + 1)[3], 1.0);
         assert_eq!(t.grid.get(first + 3)[3], 2.0);
+
+        // Read back and posed, every packed vertex is where the mesh itself puts it.
+        let pose: Vec<Affine3A> = (0..5)
+            .map(|b| {
+                Affine3A::from_rotation_translation(
+                    glam::Quat::from_rotation_y(0.3 * b as f32),
+                    Vec3::new(b as f32, 0.5, -1.0),
+                )
+            })
+            .collect();
+        let (positions, normals) = mesh.evaluate(&pose);
+        let posed = t.static_vertices(&pose);
+        assert_eq!(posed.len(), 4);
+        for (k, v) in posed.iter().enumerate() {
+            let i = k % 2;
+            assert!(Vec3::from(v.position).distance(positions[i]) < 1e-5);
+            assert!(Vec3::from(v.normal).distance(normals[i].normalize()) < 1e-5);
+            assert_eq!(v.uv, mesh.uvs[i].to_array());
+        }
     }
 }

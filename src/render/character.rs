@@ -24,8 +24,9 @@ pub struct GpuCharacter {
     pub two_sided: bool,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
-    /// The full-detail triangles in one fixed pose, for the plain calibration shader.
-    pub static_vertices: wgpu::Buffer,
+    /// The pose the plain calibration shader draws every set in: the first frame of the
+    /// first clip.
+    calibration_pose: Vec<glam::Affine3A>,
     anim_view: wgpu::TextureView,
     materials_view: wgpu::TextureView,
     /// The spectra texture of a spectral cloud; one empty texel for everything else (the
@@ -45,6 +46,9 @@ pub struct GpuLodSet {
     pub index_buffer: wgpu::Buffer,
     /// The number of vertices the vertex texture holds, over all levels.
     pub vertex_count: u32,
+    /// The same vertices in one fixed pose, for the plain calibration shader (it draws the
+    /// same levels with the same indices).
+    pub static_vertices: wgpu::Buffer,
     pub bind_group: wgpu::BindGroup,
 }
 
@@ -168,13 +172,6 @@ impl GpuCharacter {
             wgpu::util::TextureDataOrder::MipMajor,
             &material_data,
         );
-        let static_vertices = gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("static vertices"),
-                contents: bytemuck::cast_slice(&bake.static_vertices),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
         // The blob shadow covers the footprint of the animated bounds.
         let b = bake.bounds;
         let shadow = ShadowUniform {
@@ -209,7 +206,7 @@ impl GpuCharacter {
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),
-            static_vertices,
+            calibration_pose: bake.animation.sample(0, 0.0),
             anim_view: anim.create_view(&Default::default()),
             materials_view: materials.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2Array),
@@ -242,6 +239,15 @@ impl GpuCharacter {
                 usage: wgpu::BufferUsages::INDEX,
             });
         let verts_view = verts.create_view(&Default::default());
+        let static_vertices = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("static vertices"),
+                contents: bytemuck::cast_slice(
+                    &pack.vertices.static_vertices(&self.calibration_pose),
+                ),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.name),
             layout,
@@ -279,6 +285,7 @@ impl GpuCharacter {
             levels: pack.levels.clone(),
             index_buffer,
             vertex_count: pack.vertices.vertex_count,
+            static_vertices,
             bind_group,
         });
     }

@@ -7,6 +7,7 @@ pub mod gpu;
 pub mod renderer;
 pub mod shaders;
 pub mod targets;
+pub mod timer;
 pub mod uniforms;
 
 pub use gpu::Gpu;

@@ -895,14 +895,18 @@ impl SceneRenderer {
         if self.shader == CharacterShader::Plain {
             pass.set_pipeline(&self.plain);
             pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
+            // Every draw's own level, faded and outgoing halves included: the triangles the
+            // frame statistics count.
             for (key, range) in &self.draws {
                 scissor.side(pass, key.side());
                 let c = &self.characters[key.model()];
-                let set = c.full();
+                let set = c.set(key.slot()).unwrap_or_else(|| c.full());
+                let level = &set.levels[key.level().min(set.levels.len() - 1)];
                 pass.set_bind_group(1, &set.bind_group, &[]);
-                pass.set_vertex_buffer(0, c.static_vertices.slice(..));
+                pass.set_vertex_buffer(0, set.static_vertices.slice(..));
                 pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..set.levels[0].index_count, 0, range.clone());
+                let indices = level.first_index..level.first_index + level.index_count;
+                pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
             }
             pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
             return;
@@ -967,12 +971,25 @@ impl SceneRenderer {
         target: &wgpu::TextureView,
         viewport: Option<[u32; 4]>,
     ) {
+        self.encode_timed(encoder, targets, target, viewport, None);
+    }
+
+    /// [`Self::encode`], the pass's GPU time written by `timer` where one is given.
+    pub fn encode_timed(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &super::targets::RenderTargets,
+        target: &wgpu::TextureView,
+        viewport: Option<[u32; 4]>,
+        timer: Option<&super::timer::PassTimer>,
+    ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("scene"),
             color_attachments: &[Some(
                 targets.color(target, wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
             )],
             depth_stencil_attachment: Some(targets.depth()),
+            timestamp_writes: timer.map(|t| t.writes()),
             ..Default::default()
         });
         let view = viewport.unwrap_or([0, 0, targets.width, targets.height]);
@@ -989,8 +1006,23 @@ impl SceneRenderer {
         targets: &super::targets::RenderTargets,
         target: &wgpu::TextureView,
     ) -> wgpu::SubmissionIndex {
+        self.render_timed(gpu, targets, target, None)
+    }
+
+    /// [`Self::render_to`], the scene pass timed by `timer` where one is given (read it with
+    /// [`super::timer::PassTimer::read_ms`]).
+    pub fn render_timed(
+        &self,
+        gpu: &Gpu,
+        targets: &super::targets::RenderTargets,
+        target: &wgpu::TextureView,
+        timer: Option<&super::timer::PassTimer>,
+    ) -> wgpu::SubmissionIndex {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        self.encode(&mut enc, targets, target, None);
+        self.encode_timed(&mut enc, targets, target, None, timer);
+        if let Some(t) = timer {
+            t.resolve(&mut enc);
+        }
         gpu.queue.submit([enc.finish()])
     }
 }

@@ -1,0 +1,449 @@
+//! `lodlab bench`: frame times of several level-of-detail methods on one scene, headless, along
+//! a fixed camera path, measured in one process.
+//!
+//! How it measures, and why:
+//! - Every measured frame is a point of the camera path ([`CameraPath`]) at a path time fixed in
+//!   advance, and shows what a viewer running at 60 Hz would show there: selection runs over
+//!   the second before it at 60 steps, from a clean state. So the frames are the same on every
+//!   machine and for every method, however slowly they render, and transitions are caught in
+//!   the middle as a viewer sees them.
+//! - Methods are measured interleaved in short blocks (A B C D A B C D …), so that a drift of the
+//!   machine (another process, the clock, the temperature) spreads over all of them instead of
+//!   favouring whichever ran first.
+//! - Each frame is drawn twice: skinned as the method draws it, then the very same triangles
+//!   by the trivial unskinned shader (the calibration). A method's efficiency is its triangles
+//!   per second over the calibration's on the same triangles: 1 means skinning and shading
+//!   cost nothing beyond raw triangle drawing. It is a ratio measured in one run, comparable
+//!   across machines.
+//! - The time of a frame is the GPU time of its render pass from timestamp queries where the
+//!   adapter has them, otherwise the wall time from submit to completion.
+
+use super::shot::{check_writable, histogram};
+use super::tree_levels::FoliageView;
+use super::world::{Loaded, SceneSpec, World};
+use crate::render::targets::Offscreen;
+use crate::render::timer::PassTimer;
+use crate::render::{CharacterShader, FrameStats, Gpu};
+use crate::scene::lod::MAX_LEVELS;
+use crate::scene::{CameraPath, Drive, LodMethod, LodPolicy};
+use anyhow::{Context, Result, bail};
+use indicatif::ProgressBar;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Selection runs this many 60 Hz steps before every measured frame.
+const SETTLE_STEPS: usize = 60;
+/// Frames per method when the budget allows fewer: below this a median means little.
+pub const MIN_FRAMES: usize = 6;
+/// At most this many frames of one method in a row.
+const MAX_BLOCK: usize = 5;
+
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    pub spec: SceneSpec,
+    /// Measured in this order, interleaved.
+    pub methods: Vec<LodMethod>,
+    pub policy: LodPolicy,
+    pub foliage: FoliageView,
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+    /// Seconds of measuring, all methods and their calibration together.
+    pub seconds: f32,
+    /// Seconds of unmeasured frames first (pipelines, caches, clocks settle).
+    pub warmup: f32,
+    /// Frames per method, instead of as many as fit `seconds`.
+    pub frames: Option<usize>,
+    /// The camera path (see [`crate::scene::camera_path::PATHS`]) and its length in seconds.
+    pub path: String,
+    pub path_seconds: f32,
+    pub progress: bool,
+}
+
+/// What `--json` writes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BenchReport {
+    pub adapter: String,
+    pub driver: String,
+    pub backend: String,
+    pub size: [u32; 2],
+    pub msaa: u32,
+    pub scene: String,
+    /// Instances in the scene (characters and trees), before culling.
+    pub instances: usize,
+    /// "gpu timestamps" or "wall clock".
+    pub timing: String,
+    pub frames_per_method: usize,
+    pub path: String,
+    pub path_seconds: f32,
+    pub transition: String,
+    pub drive: String,
+    pub tolerance_px: f32,
+    pub calibration: Calibration,
+    pub methods: BTreeMap<String, MethodFigures>,
+    /// The methods in the order they were given (`methods` is keyed by name).
+    pub order: Vec<String>,
+}
+
+/// The machine's raw throughput: the trivial unskinned shader on the frames of the method that
+/// draws the most triangles (full detail where `none` is measured).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Calibration {
+    pub triangles_per_second: f64,
+    pub method: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MethodFigures {
+    pub median_ms: f64,
+    pub p5_ms: f64,
+    pub p95_ms: f64,
+    /// 1000 / median_ms.
+    pub fps: f64,
+    /// Means per frame over the path.
+    pub triangles: u64,
+    pub vertices: u64,
+    pub influences: u64,
+    /// Triangles per second over the calibration's on the same triangles.
+    pub efficiency: f64,
+    /// Median frame time of the same triangles drawn by the trivial unskinned shader.
+    pub calibration_ms: f64,
+    /// Mean instances per level of detail, finest first.
+    pub lod_histogram: Vec<u32>,
+    /// Mean instances in a transition per frame.
+    pub in_transition: f64,
+}
+
+/// The frame times and statistics of one method.
+#[derive(Default)]
+struct Samples {
+    skinned: Vec<f64>,
+    plain: Vec<f64>,
+    triangles: u64,
+    vertices: u64,
+    influences: u64,
+    levels: [u64; MAX_LEVELS],
+    in_transition: u64,
+}
+
+/// The scene, its target and its timer: what a frame needs.
+struct Bench {
+    gpu: Gpu,
+    world: World,
+    target: Offscreen,
+    timer: Option<PassTimer>,
+    path: CameraPath,
+    fov_y: f32,
+    size: [u32; 2],
+}
+
+impl Bench {
+    /// Shows path time `t` as a 60 Hz viewer of `method` would, from a clean state.
+    fn show(&mut self, method: LodMethod, t: f32) -> FrameStats {
+        let world = &mut self.world;
+        world.lod.method = method;
+        world.lod.reset();
+        let dt = 1.0 / 60.0;
+        for k in (0..=SETTLE_STEPS).rev() {
+            let tk = t - k as f32 * dt;
+            world.camera = self.path.at(tk, self.fov_y);
+            world.select(self.size[1], tk, dt);
+        }
+        world.upload(&self.gpu, self.size[0] as f32 / self.size[1] as f32, t)
+    }
+
+    /// Renders what is shown with `shader` and returns the frame's time in milliseconds.
+    fn time(&mut self, shader: CharacterShader) -> Result<f64> {
+        self.world.renderer.shader = shader;
+        let start = Instant::now();
+        self.world.renderer.render_timed(
+            &self.gpu,
+            &self.target.targets,
+            &self.target.view,
+            self.timer.as_ref(),
+        );
+        let ms = match &self.timer {
+            Some(timer) => timer.read_ms(&self.gpu)?,
+            None => {
+                self.gpu.wait()?;
+                start.elapsed().as_secs_f64() * 1e3
+            }
+        };
+        self.world.renderer.shader = CharacterShader::Skinned;
+        Ok(ms)
+    }
+}
+
+/// Path time of frame `i` of `n`: the middles of `n` equal stretches of the path.
+fn path_time(path: &CameraPath, i: usize, n: usize) -> f32 {
+    path.duration() * (i as f32 + 0.5) / n as f32
+}
+
+pub fn run(o: &BenchOptions) -> Result<BenchReport> {
+    if o.methods.is_empty() {
+        bail!("no method to measure");
+    }
+    if !(o.seconds.is_finite() && o.seconds > 0.0) || !(o.warmup.is_finite() && o.warmup >= 0.0) {
+        bail!("--seconds must be positive and --warmup not negative");
+    }
+    let loaded = Loaded::new(o.spec.clone())?;
+    let gpu = Gpu::headless()?;
+    eprintln!("lodlab: adapter {}", gpu.describe());
+    let target = Offscreen::new(&gpu, o.width, o.height, o.samples);
+    let mut world = World::new(
+        &gpu,
+        loaded,
+        crate::render::targets::OFFSCREEN_FORMAT,
+        o.samples,
+    )?;
+    world.lod.policy = o.policy;
+    world.apply_foliage(&o.foliage);
+    for &m in &o.methods {
+        world.lod.method = m;
+        world.ensure_levels(&gpu)?;
+    }
+    let home = world.camera;
+    let path = CameraPath::named(&o.path, &home, o.path_seconds)
+        .with_context(|| format!("'{}' is not a camera path", o.path))?;
+    let timer = PassTimer::new(&gpu);
+    let mut bench = Bench {
+        gpu,
+        world,
+        target,
+        timer,
+        path,
+        fov_y: home.fov_y,
+        size: [o.width, o.height],
+    };
+
+    // Warm-up: round after round of every method, at points spread along the path, until the
+    // time is up; the last round's times estimate what a round costs.
+    let warm = Instant::now();
+    let mut round_ms;
+    let mut k = 0;
+    loop {
+        round_ms = 0.0;
+        for &m in &o.methods {
+            bench.show(m, path_time(&path, k % 7, 7));
+            round_ms +=
+                bench.time(CharacterShader::Skinned)? + bench.time(CharacterShader::Plain)?;
+        }
+        k += 1;
+        if warm.elapsed().as_secs_f32() >= o.warmup {
+            break;
+        }
+    }
+    let n = o.frames.unwrap_or_else(|| {
+        ((o.seconds as f64 * 1e3 / round_ms.max(1e-3)).floor() as usize).clamp(MIN_FRAMES, 3600)
+    });
+    let block = (n / 4).clamp(1, MAX_BLOCK);
+
+    let bar = if o.progress {
+        let bar = ProgressBar::new((n * o.methods.len()) as u64);
+        bar.set_style(super::bake::bar_style());
+        bar.set_prefix("bench");
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let mut samples: Vec<Samples> = o.methods.iter().map(|_| Samples::default()).collect();
+    for start in (0..n).step_by(block) {
+        for (s, &m) in samples.iter_mut().zip(&o.methods) {
+            bar.set_message(m.name());
+            for i in start..(start + block).min(n) {
+                let stats = bench.show(m, path_time(&path, i, n));
+                s.skinned.push(bench.time(CharacterShader::Skinned)?);
+                s.plain.push(bench.time(CharacterShader::Plain)?);
+                s.triangles += stats.triangles;
+                s.vertices += stats.vertices;
+                s.influences += stats.influences;
+                s.in_transition += stats.in_transition;
+                for (sum, &c) in s.levels.iter_mut().zip(&stats.levels) {
+                    *sum += c as u64;
+                }
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+
+    let mut methods = BTreeMap::new();
+    for (s, m) in samples.iter().zip(&o.methods) {
+        methods.insert(m.name().to_string(), figures(s, n));
+    }
+    let (cal_method, cal) = o
+        .methods
+        .iter()
+        .map(|m| (m.name(), &methods[m.name()]))
+        .max_by_key(|(_, f)| f.triangles)
+        .expect("at least one method");
+    let calibration = Calibration {
+        triangles_per_second: cal.triangles as f64 / (cal.calibration_ms * 1e-3).max(1e-9),
+        method: cal_method.to_string(),
+    };
+    let gpu = &bench.gpu;
+    Ok(BenchReport {
+        adapter: gpu.info.name.clone(),
+        driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info)
+            .trim()
+            .to_string(),
+        backend: gpu.backend_name(),
+        size: [o.width, o.height],
+        msaa: o.samples,
+        scene: o.spec.scene.clone(),
+        instances: bench.world.crowd.agents.len(),
+        timing: if bench.timer.is_some() {
+            "gpu timestamps"
+        } else {
+            "wall clock"
+        }
+        .into(),
+        frames_per_method: n,
+        path: o.path.clone(),
+        path_seconds: path.duration(),
+        transition: o.policy.transition.name().into(),
+        drive: match o.policy.drive {
+            Drive::Time => "time",
+            Drive::Zone => "zone",
+        }
+        .into(),
+        tolerance_px: o.policy.tolerance_px,
+        calibration,
+        methods,
+        order: o.methods.iter().map(|m| m.name().to_string()).collect(),
+    })
+}
+
+fn figures(s: &Samples, n: usize) -> MethodFigures {
+    let n = n.max(1) as u64;
+    let median_ms = percentile(&s.skinned, 0.5);
+    let calibration_ms = percentile(&s.plain, 0.5);
+    let mean_levels: Vec<u32> = s
+        .levels
+        .iter()
+        .map(|&c| (c as f64 / n as f64).round() as u32)
+        .collect();
+    MethodFigures {
+        median_ms,
+        p5_ms: percentile(&s.skinned, 0.05),
+        p95_ms: percentile(&s.skinned, 0.95),
+        fps: 1e3 / median_ms.max(1e-9),
+        triangles: s.triangles / n,
+        vertices: s.vertices / n,
+        influences: s.influences / n,
+        efficiency: calibration_ms / median_ms.max(1e-9),
+        calibration_ms,
+        lod_histogram: histogram(&mean_levels),
+        in_transition: s.in_transition as f64 / n as f64,
+    }
+}
+
+/// The `q` quantile of `values`, linearly interpolated between the closest ranks.
+pub fn percentile(values: &[f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let x = q.clamp(0.0, 1.0) * (v.len() - 1) as f64;
+    let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
+    v[lo] + (v[hi] - v[lo]) * (x - lo as f64)
+}
+
+/// The report as Markdown: a line on the set-up, the calibration, and a table, one row per
+/// method in the order measured.
+pub fn markdown(r: &BenchReport) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "lodlab bench: {} scene, {} instances, {}x{}, MSAA {}, {} transitions ({}-driven), \
+         tolerance {} px; {} frames per method along the {} path ({} s); {}.",
+        r.scene,
+        r.instances,
+        r.size[0],
+        r.size[1],
+        r.msaa,
+        r.transition,
+        r.drive,
+        r.tolerance_px,
+        r.frames_per_method,
+        r.path,
+        r.path_seconds,
+        if r.timing == "gpu timestamps" {
+            "GPU time from timestamp queries"
+        } else {
+            "wall time per frame (no timestamp queries)"
+        }
+    );
+    let _ = writeln!(
+        out,
+        "\nAdapter: {} ({}, driver {}).\n\nCalibration: {:.2} M triangles/s (trivial unskinned \
+         shader on the frames of `{}`).\n",
+        r.adapter,
+        r.backend,
+        if r.driver.is_empty() { "?" } else { &r.driver },
+        r.calibration.triangles_per_second * 1e-6,
+        r.calibration.method
+    );
+    out.push_str(
+        "| method | median ms | p5 ms | p95 ms | FPS | triangles | vertices | influences | \
+         efficiency | instances per level |\n",
+    );
+    out.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+    for name in &r.order {
+        let Some(f) = r.methods.get(name) else {
+            continue;
+        };
+        let levels: Vec<String> = f.lod_histogram.iter().map(u32::to_string).collect();
+        let _ = writeln!(
+            out,
+            "| {name} | {:.1} | {:.1} | {:.1} | {:.1} | {} | {} | {} | {:.2} | {} |",
+            f.median_ms,
+            f.p5_ms,
+            f.p95_ms,
+            f.fps,
+            f.triangles,
+            f.vertices,
+            f.influences,
+            f.efficiency,
+            levels.join(" / ")
+        );
+    }
+    out
+}
+
+/// Writes `text` to `path` through a temporary file and a rename.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    let tmp = super::shot::temp_path(path);
+    std::fs::write(&tmp, text).with_context(|| format!("{}: cannot write", path.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
+
+/// Checks that the output files can be written, before any measuring.
+pub fn check_outputs(paths: &[&Option<PathBuf>]) -> Result<()> {
+    for p in paths.iter().filter_map(|p| p.as_ref()) {
+        check_writable(p)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_interpolate_between_ranks() {
+        let v = [5.0, 1.0, 3.0, 2.0, 4.0];
+        assert_eq!(percentile(&v, 0.5), 3.0);
+        assert_eq!(percentile(&v, 0.0), 1.0);
+        assert_eq!(percentile(&v, 1.0), 5.0);
+        assert!((percentile(&v, 0.05) - 1.2).abs() < 1e-12);
+        assert!((percentile(&v, 0.95) - 4.8).abs() < 1e-12);
+        assert_eq!(percentile(&[2.0, 4.0], 0.5), 3.0);
+        assert_eq!(percentile(&[], 0.5), 0.0);
+    }
+}

@@ -1,0 +1,129 @@
+//! `lodlab bench` as a user runs it, on a small scene (lavapipe in CI).
+
+use lodlab::generate::cylinder::bent_cylinder;
+use lodlab::generate::glb::to_glb;
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+fn cylinder_glb(dir: &Path) -> String {
+    let p = dir.join("cylinder.glb");
+    std::fs::write(&p, to_glb(&bent_cylinder(24, 16))).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn bench_writes_json_and_a_table_of_every_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = cylinder_glb(dir.path());
+    let json = dir.path().join("bench.json");
+    let md = dir.path().join("bench.md");
+    let cache = dir.path().join("cache");
+    let s = |p: &Path| p.display().to_string();
+    let out = lodlab(&[
+        "bench",
+        "--scene",
+        "crowd",
+        "--model",
+        &model,
+        "--count",
+        "12",
+        "--size",
+        "160x90",
+        "--msaa",
+        "1",
+        "--frames",
+        "3",
+        "--warmup",
+        "0",
+        "--json",
+        &s(&json),
+        "--markdown",
+        &s(&md),
+        "--cache",
+        &s(&cache),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(!r["adapter"].as_str().unwrap().is_empty());
+    assert!(!r["backend"].as_str().unwrap().is_empty());
+    assert_eq!(r["size"], serde_json::json!([160, 90]));
+    assert_eq!(r["scene"], "crowd");
+    assert_eq!(r["instances"], 12);
+    assert_eq!(r["frames_per_method"], 3);
+    assert!(r["calibration"]["triangles_per_second"].as_f64().unwrap() > 0.0);
+    assert_eq!(r["calibration"]["method"], "none");
+    let methods = r["methods"].as_object().unwrap();
+    assert_eq!(methods.len(), 4);
+    let full = bent_cylinder(24, 16).mesh.indices.len() as u64 / 3;
+    for name in ["none", "rest-pose", "as", "as+is"] {
+        let m = &methods[name];
+        let f = |k: &str| m[k].as_f64().unwrap_or_else(|| panic!("{name}: {k}"));
+        assert!(f("p5_ms") > 0.0 && f("p5_ms") <= f("median_ms"), "{name}");
+        assert!(f("median_ms") <= f("p95_ms"), "{name}");
+        assert!((f("fps") * f("median_ms") - 1000.0).abs() < 1e-6, "{name}");
+        assert!(f("efficiency") > 0.0 && f("calibration_ms") > 0.0, "{name}");
+        let triangles = m["triangles"].as_u64().unwrap();
+        assert!(
+            triangles > 0 && triangles <= 12 * full,
+            "{name}: {triangles}"
+        );
+        assert!(m["vertices"].as_u64().unwrap() > 0);
+        assert!(m["influences"].as_u64().unwrap() > 0);
+        let histogram: Vec<u64> = m["lod_histogram"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect();
+        assert!(histogram.iter().sum::<u64>() > 0, "{name}");
+        if name == "none" {
+            assert_eq!(histogram.len(), 1, "full detail is level 0 only");
+            // Whole characters at full detail (both are means over the frames).
+            assert!(
+                triangles.abs_diff(histogram[0] * full) <= full,
+                "{triangles}"
+            );
+        }
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.starts_with(&format!("| {name} |"))),
+            "{stdout}"
+        );
+    }
+    // Levels of detail never draw more than full detail along the same frames.
+    let none = methods["none"]["triangles"].as_u64().unwrap();
+    assert!(methods["as+is"]["triangles"].as_u64().unwrap() <= none);
+    // The Markdown file is the table printed.
+    assert_eq!(std::fs::read_to_string(&md).unwrap(), stdout);
+}
+
+#[test]
+fn bench_refuses_an_unwritable_output_before_measuring() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("missing").join("bench.json");
+    let out = lodlab(&[
+        "bench",
+        "--json",
+        &json.display().to_string(),
+        "--frames",
+        "1",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("bench.json"), "{err}");
+}
