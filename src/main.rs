@@ -48,6 +48,46 @@ enum Command {
     /// camera path, interleaved in one process, against a trivial unskinned shader drawing the
     /// same triangles; print a Markdown table.
     Bench(BenchArgs),
+    /// Record a clip for a perceptual study: offline at a fixed time step along a camera path
+    /// (by default an inward spiral round 100 copies of one model), as H.264 MP4.
+    Record(RecordArgs),
+}
+
+#[derive(Args, Debug)]
+struct RecordArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Level-of-detail method: none, rest-pose, as, as+is.
+    #[arg(long, default_value = "as+is", value_parser = parse_method)]
+    method: LodMethod,
+    #[command(flatten)]
+    policy: PolicyArgs,
+    /// Debug view: shaded, lod, transition, wireframe, influences (lod tints by level).
+    #[arg(long, default_value = "shaded", value_parser = parse_debug_view)]
+    debug_view: DebugView,
+    #[command(flatten)]
+    foliage: FoliageArgs,
+    /// Video size (even sides).
+    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Multisampling: 1 (off) or 4.
+    #[arg(long, default_value_t = 4, value_parser = parse_samples)]
+    msaa: u32,
+    /// Frames a second.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=240))]
+    fps: u32,
+    /// Length of the clip in seconds.
+    #[arg(long, default_value_t = 8.0, value_parser = parse_non_negative)]
+    seconds: f32,
+    /// Camera path over the clip: spiral (inwards, Merry et al. §6.2) or orbit.
+    #[arg(long, default_value = "spiral", value_parser = ["spiral", "orbit"])]
+    path: String,
+    /// The MP4 file to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write every frame as a PNG into this folder (new or empty).
+    #[arg(long, value_name = "DIR")]
+    frames_dir: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -174,9 +214,10 @@ struct GenAssetsArgs {
 #[derive(Args, Debug, Clone)]
 struct SceneArgs {
     /// Scene to show: mixed (the crowd walking in a clearing of the forest), crowd
-    /// (characters) or forest (trees).
-    #[arg(long, default_value = "mixed")]
-    scene: String,
+    /// (characters), forest (trees) or study (copies of one model) [default: mixed; study for
+    /// record].
+    #[arg(long)]
+    scene: Option<String>,
     /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling) or a glTF path.
     /// Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
@@ -200,12 +241,18 @@ struct SceneArgs {
 
 impl SceneArgs {
     fn spec(&self) -> SceneSpec {
+        self.spec_or("mixed")
+    }
+
+    /// The scene asked for, `default` where none is.
+    fn spec_or(&self, default: &str) -> SceneSpec {
+        let scene = self.scene.clone().unwrap_or_else(|| default.to_string());
         SceneSpec {
-            scene: self.scene.clone(),
-            models: self.models.clone(),
             count: self
                 .count
-                .unwrap_or_else(|| lodlab::app::world::default_count(&self.scene)),
+                .unwrap_or_else(|| lodlab::app::world::default_count(&scene)),
+            scene,
+            models: self.models.clone(),
             trees: self.trees,
             clip: self.clip.clone(),
             seed: self.seed,
@@ -634,6 +681,29 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             if let Some(p) = &a.markdown {
                 bench::write_text(p, &table)?;
             }
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Record(a)) => {
+            let report = lodlab::app::record::run(&lodlab::app::record::RecordOptions {
+                spec: a.scene.spec_or("study"),
+                lod: ShotLod {
+                    method: a.method,
+                    policy: a.policy.policy(),
+                    debug: a.debug_view,
+                    foliage: a.foliage.view(),
+                    ..Default::default()
+                },
+                width: a.size.0,
+                height: a.size.1,
+                samples: a.msaa,
+                fps: a.fps,
+                seconds: a.seconds,
+                path: a.path,
+                out: a.out,
+                frames_dir: a.frames_dir,
+                progress: true,
+            })?;
+            println!("{}", serde_json::to_string(&report)?);
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::View(a)) => view(a),

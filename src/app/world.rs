@@ -20,8 +20,9 @@ use glam::Vec3;
 use std::path::PathBuf;
 
 /// Scenes lodlab knows: the crowd walking round a clearing in the forest, the crowd alone,
-/// the forest alone.
-pub const SCENES: &[&str] = &["mixed", "crowd", "forest"];
+/// the forest alone, and the user-study scene (Merry et al. §6.2: copies of one model, by
+/// default 100 horses).
+pub const SCENES: &[&str] = &["mixed", "crowd", "forest", "study"];
 
 /// Trees round the mixed scene's clearing unless told.
 pub const DEFAULT_MIXED_TREES: usize = 500;
@@ -36,6 +37,7 @@ pub const DEFAULT_TREES: &[&str] = &["broadleaf", "conifer"];
 pub fn default_count(scene: &str) -> usize {
     match scene {
         "forest" => 500,
+        "study" => 100,
         _ => 300,
     }
 }
@@ -85,10 +87,17 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
             SCENES.join(", ")
         );
     }
+    if spec.scene == "study" && spec.models.len() > 1 {
+        bail!(
+            "the study scene shows copies of one model, not {} (--model once)",
+            spec.models.len()
+        );
+    }
     let names: Vec<String> = if spec.models.is_empty() {
         let defaults: Vec<&str> = match spec.scene.as_str() {
             "forest" => DEFAULT_TREES.to_vec(),
             "mixed" => [DEFAULT_MODELS, DEFAULT_TREES].concat(),
+            "study" => DEFAULT_MODELS[..1].to_vec(),
             _ => DEFAULT_MODELS.to_vec(),
         };
         defaults.iter().map(|s| s.to_string()).collect()

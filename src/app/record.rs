@@ -1,0 +1,191 @@
+//! `lodlab record`: a clip for a perceptual study (Merry et al. §6.2), rendered offline.
+//!
+//! Frame k shows scene time k / fps, the camera on its path at that time, and selection steps
+//! by exactly 1 / fps between frames: a clip is the same however slowly the machine renders
+//! it. Before the first frame, selection runs over the second before it at 60 Hz, so the clip
+//! opens with the levels and transitions a viewer would be in the middle of.
+
+use super::shot::{ShotLod, check_writable, write_png};
+use super::video::Mp4Video;
+use super::world::{Loaded, SceneSpec, World};
+use crate::render::targets::Offscreen;
+use crate::render::{DebugView, Gpu};
+use crate::scene::{CameraPath, Drive};
+use anyhow::{Context, Result, bail};
+use indicatif::ProgressBar;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct RecordOptions {
+    pub spec: SceneSpec,
+    /// Method, transition, tolerance, debug view, foliage (no comparison: a study shows one
+    /// method per clip).
+    pub lod: ShotLod,
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+    pub fps: u32,
+    pub seconds: f32,
+    /// The camera path (see [`crate::scene::camera_path::PATHS`]), over the whole clip.
+    pub path: String,
+    pub out: PathBuf,
+    /// Also write every frame as a PNG here.
+    pub frames_dir: Option<PathBuf>,
+    pub progress: bool,
+}
+
+/// What `record` prints (one JSON line) and `study make` keeps per clip.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct RecordReport {
+    pub out: String,
+    pub scene: String,
+    pub models: Vec<String>,
+    pub count: usize,
+    pub method: String,
+    pub transition: String,
+    pub drive: String,
+    pub tolerance_px: f32,
+    pub debug_view: String,
+    pub path: String,
+    pub size: [u32; 2],
+    pub fps: u32,
+    pub seconds: f32,
+    pub frames: u32,
+    /// Means per frame, and the influences over all frames (what Merry et al. matched
+    /// conditions by).
+    pub triangles_per_frame: f64,
+    pub influences_per_frame: f64,
+    pub total_influences: u64,
+    pub render_seconds: f64,
+}
+
+/// Frames of a clip: `seconds × fps`, rounded.
+pub fn frame_count(seconds: f32, fps: u32) -> u32 {
+    (seconds as f64 * fps as f64).round() as u32
+}
+
+/// Checks a frames folder: created if missing; refused if it holds anything, so that no file
+/// of the user's is overwritten.
+fn prepare_frames_dir(dir: &Path) -> Result<()> {
+    if dir.is_file() {
+        bail!("{}: is a file, not a folder for frames", dir.display());
+    }
+    if dir.is_dir() {
+        let mut entries =
+            std::fs::read_dir(dir).with_context(|| format!("{}: cannot read", dir.display()))?;
+        if entries.next().is_some() {
+            bail!(
+                "{}: not empty; frames go into an empty or new folder",
+                dir.display()
+            );
+        }
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
+}
+
+pub fn run(o: &RecordOptions) -> Result<RecordReport> {
+    check_writable(&o.out)?;
+    if !(o.seconds.is_finite() && o.seconds > 0.0) {
+        bail!("--seconds must be positive");
+    }
+    let frames = frame_count(o.seconds, o.fps);
+    if frames == 0 {
+        bail!("{} s at {} fps is no frame", o.seconds, o.fps);
+    }
+    let lod = &o.lod;
+    if lod.compare.is_some() {
+        bail!("a clip shows one method; record the two of a comparison as two clips");
+    }
+    // The encoder checks size and rate before anything is rendered.
+    let mut video = Mp4Video::create(&o.out, o.width, o.height, o.fps)?;
+    if let Some(dir) = &o.frames_dir {
+        prepare_frames_dir(dir)?;
+    }
+    let loaded = Loaded::new(o.spec.clone())?;
+    let gpu = Gpu::headless()?;
+    eprintln!("lodlab: adapter {}", gpu.describe());
+    let target = Offscreen::new(&gpu, o.width, o.height, o.samples);
+    let mut world = World::new(
+        &gpu,
+        loaded,
+        crate::render::targets::OFFSCREEN_FORMAT,
+        o.samples,
+    )?;
+    world.lod.method = lod.method;
+    world.lod.policy = lod.policy;
+    world.renderer.debug = lod.debug;
+    world.apply_foliage(&lod.foliage);
+    if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
+        bail!("--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)");
+    }
+    world.ensure_levels(&gpu)?;
+    let home = world.camera;
+    let path = CameraPath::named(&o.path, &home, o.seconds)
+        .with_context(|| format!("'{}' is not a camera path", o.path))?;
+    let aspect = o.width as f32 / o.height as f32;
+
+    // The second before the clip at 60 Hz, then frame after frame at the clip's rate.
+    let settle = 1.0 / 60.0;
+    for k in (1..=60).rev() {
+        let t = -(k as f32) * settle;
+        world.camera = path.at(t, home.fov_y);
+        world.select(o.height, t, settle);
+    }
+    let bar = if o.progress {
+        let bar = ProgressBar::new(frames as u64);
+        bar.set_style(super::bake::bar_style());
+        bar.set_prefix("record");
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let started = Instant::now();
+    let dt = 1.0 / o.fps as f32;
+    let (mut triangles, mut influences) = (0u64, 0u64);
+    for k in 0..frames {
+        let t = k as f32 * dt;
+        world.camera = path.at(t, home.fov_y);
+        world.select(o.height, t, if k == 0 { settle } else { dt });
+        let stats = world.upload(&gpu, aspect, t);
+        triangles += stats.triangles;
+        influences += stats.influences;
+        world
+            .renderer
+            .render_to(&gpu, &target.targets, &target.view);
+        let image = target.read_rgba(&gpu)?;
+        video.push(image.as_raw())?;
+        if let Some(dir) = &o.frames_dir {
+            write_png(&dir.join(format!("frame_{k:04}.png")), &image)?;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let written = video.frames();
+    video.finish()?;
+    Ok(RecordReport {
+        out: o.out.display().to_string(),
+        scene: o.spec.scene.clone(),
+        models: world.bakes.iter().map(|b| b.name.clone()).collect(),
+        count: world.crowd.agents.len(),
+        method: lod.method.name().into(),
+        transition: lod.policy.transition.name().into(),
+        drive: match lod.policy.drive {
+            Drive::Time => "time",
+            Drive::Zone => "zone",
+        }
+        .into(),
+        tolerance_px: lod.policy.tolerance_px,
+        debug_view: lod.debug.name().into(),
+        path: o.path.clone(),
+        size: [o.width, o.height],
+        fps: o.fps,
+        seconds: o.seconds,
+        frames: written,
+        triangles_per_frame: triangles as f64 / frames as f64,
+        influences_per_frame: influences as f64 / frames as f64,
+        total_influences: influences,
+        render_seconds: started.elapsed().as_secs_f64(),
+    })
+}
