@@ -186,7 +186,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     if o.methods.is_empty() {
         bail!("no method to measure");
     }
-    if !(o.seconds.is_finite() && o.seconds > 0.0) || !(o.warmup.is_finite() && o.warmup >= 0.0) {
+    if !(o.seconds.is_finite() && o.seconds > 0.0 && o.warmup.is_finite() && o.warmup >= 0.0) {
         bail!("--seconds must be positive and --warmup not negative");
     }
     let loaded = Loaded::new(o.spec.clone())?;
