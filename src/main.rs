@@ -1,6 +1,7 @@
 //! The `lodlab` command line.
 
 use clap::{Args, Parser, Subcommand};
+use lodlab::app::report::write_atomic;
 use lodlab::app::shot::{self, ShotLod, ShotOptions};
 use lodlab::app::tree_levels::{ChainOptions, FoliagePolicy, FoliageView, MIN_EPSILON_GROWTH};
 use lodlab::app::world::SceneSpec;
@@ -51,6 +52,62 @@ enum Command {
     /// Record a clip for a perceptual study: offline at a fixed time step along a camera path
     /// (by default an inward spiral round 100 copies of one model), as H.264 MP4.
     Record(RecordArgs),
+    /// A perceptual study (Merry et al. §6.2): make its clips and sessions from a plan, run a
+    /// participant's session in a window, analyze the answers.
+    Study(StudyArgs),
+}
+
+#[derive(Args, Debug)]
+struct StudyArgs {
+    #[command(subcommand)]
+    command: StudyCommand,
+}
+
+#[derive(Subcommand, Debug)]
+enum StudyCommand {
+    /// Render every distinct clip of a plan once and write one session list per participant.
+    Make {
+        /// The study plan (TOML; docs/study-plan.toml is an example).
+        #[arg(long)]
+        plan: PathBuf,
+        /// Folder of the study (new or empty, or one made from the same plan, whose clips are
+        /// kept).
+        #[arg(long)]
+        out: PathBuf,
+        /// Cache folder of baked levels of detail.
+        #[arg(long, value_name = "DIR")]
+        cache: Option<PathBuf>,
+        /// Multisampling of the clips: 1 (off) or 4.
+        #[arg(long, default_value_t = 4, value_parser = parse_samples)]
+        msaa: u32,
+    },
+    /// Run a participant's session: each pair's clips one after the other, then a forced
+    /// choice (keys 1 and 2); every answer is saved at once, and a session resumes where it
+    /// stopped.
+    Run {
+        /// Folder of the study.
+        dir: PathBuf,
+        /// The participant (P01, P02, …: see the study's sessions/ folder).
+        #[arg(long)]
+        participant: String,
+        /// Full screen.
+        #[arg(long)]
+        fullscreen: bool,
+        /// Window size.
+        #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Answer without a window, e.g. 1,2,2,1: each trial's clips are still played
+        /// (decoded at their own rate) before its answer is recorded; stops when the answers
+        /// run out. For demonstrations and tests.
+        #[arg(long, value_name = "1,2,...")]
+        script: Option<String>,
+    },
+    /// Per condition: preference counts and share, two-sided binomial (sign) test, training
+    /// answers left out; writes analysis.md, analysis.json and preferences.png into the folder.
+    Analyze {
+        /// Folder of the study.
+        dir: PathBuf,
+    },
 }
 
 #[derive(Args, Debug)]
@@ -676,10 +733,10 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             let table = bench::markdown(&report);
             print!("{table}");
             if let Some(p) = &a.json {
-                bench::write_text(p, &serde_json::to_string_pretty(&report)?)?;
+                write_atomic(p, serde_json::to_string_pretty(&report)?.as_bytes())?;
             }
             if let Some(p) = &a.markdown {
-                bench::write_text(p, &table)?;
+                write_atomic(p, table.as_bytes())?;
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -706,8 +763,79 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string(&report)?);
             Ok(ExitCode::SUCCESS)
         }
+        Some(Command::Study(a)) => study(a.command),
         Some(Command::View(a)) => view(a),
         None => view(cli.view),
+    }
+}
+
+fn study(command: StudyCommand) -> anyhow::Result<ExitCode> {
+    use lodlab::app::study;
+    match command {
+        StudyCommand::Make {
+            plan,
+            out,
+            cache,
+            msaa,
+        } => {
+            let m = study::make(&study::MakeOptions {
+                plan,
+                out: out.clone(),
+                cache_dir: cache,
+                samples: msaa,
+                progress: true,
+            })?;
+            let trials = study::session::plan_session(&m, &m.participants[0]).len();
+            println!(
+                "{}: {} clips, {} conditions, {} participants with {trials} trials each",
+                out.display(),
+                m.clips.len(),
+                m.conditions.len(),
+                m.participants.len()
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        StudyCommand::Run {
+            dir,
+            participant,
+            fullscreen,
+            size,
+            script,
+        } => {
+            let mut session = study::session::Session::open(&dir, &participant)?;
+            if let Some(script) = script {
+                let answers: Vec<u8> = script
+                    .split(',')
+                    .map(|a| match a.trim() {
+                        "1" => Ok(1),
+                        "2" => Ok(2),
+                        other => Err(anyhow::anyhow!(
+                            "--script: '{other}' is not an answer (1 or 2)"
+                        )),
+                    })
+                    .collect::<anyhow::Result<_>>()?;
+                let given = study::session::run_scripted(&mut session, &answers)?;
+                println!(
+                    "{participant}: {given} answer(s) recorded; {} of {} answered",
+                    session.answered(),
+                    session.total()
+                );
+                return Ok(ExitCode::SUCCESS);
+            }
+            study::window::run(
+                session,
+                study::window::RunOptions {
+                    fullscreen,
+                    width: size.0,
+                    height: size.1,
+                },
+            )
+        }
+        StudyCommand::Analyze { dir } => {
+            let a = study::analyze::run(&dir)?;
+            print!("{}", study::analyze::markdown(&a));
+            Ok(ExitCode::SUCCESS)
+        }
     }
 }
 

@@ -31,7 +31,7 @@ use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Selection runs this many 60 Hz steps before every measured frame.
@@ -413,14 +413,6 @@ pub fn markdown(r: &BenchReport) -> String {
         );
     }
     out
-}
-
-/// Writes `text` to `path` through a temporary file and a rename.
-pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    let tmp = super::shot::temp_path(path);
-    std::fs::write(&tmp, text).with_context(|| format!("{}: cannot write", path.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
-    Ok(())
 }
 
 /// Checks that the output files can be written, before any measuring.

@@ -7,6 +7,7 @@ pub mod levels;
 pub mod record;
 pub mod report;
 pub mod shot;
+pub mod study;
 pub mod tree_levels;
 pub mod tree_report;
 pub mod video;

@@ -11,7 +11,7 @@ use openh264::encoder::{
     Encoder, EncoderConfig, FrameRate, FrameType, IntraFramePeriod, QpRange, RateControlMode,
     UsageType,
 };
-use openh264::formats::{RgbaSliceU8, YUVBuffer};
+use openh264::formats::{RgbaSliceU8, YUVBuffer, YUVSource};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -261,50 +261,106 @@ pub struct VideoInfo {
     pub decoded: u32,
 }
 
-/// Parses an MP4 file's first video track and decodes every sample: how many frames it holds,
-/// and how many decode to a picture.
+/// Parses an MP4 file's video track and decodes every sample: how many frames it holds, and
+/// how many decode to a picture.
 pub fn probe(path: &Path) -> Result<VideoInfo> {
-    let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let size = bytes.len() as u64;
-    let mut reader = mp4::Mp4Reader::read_header(std::io::Cursor::new(bytes), size)
-        .map_err(|e| anyhow!("{}: not an MP4 file: {e}", path.display()))?;
-    let (&id, track) = reader
-        .tracks()
-        .iter()
-        .find(|(_, t)| matches!(t.track_type(), Ok(mp4::TrackType::Video)))
-        .ok_or_else(|| anyhow!("{}: no video track", path.display()))?;
-    let (width, height, fps) = (track.width(), track.height(), track.frame_rate());
-    let frames = track.sample_count();
-    let avc = &track
-        .trak
-        .mdia
-        .minf
-        .stbl
-        .stsd
-        .avc1
-        .as_ref()
-        .ok_or_else(|| anyhow!("{}: the video is not H.264", path.display()))?
-        .avcc;
-    let mut header = Vec::new();
-    for set in avc
-        .sequence_parameter_sets
-        .iter()
-        .chain(&avc.picture_parameter_sets)
-    {
-        header.extend_from_slice(&[0, 0, 0, 1]);
-        header.extend_from_slice(&set.bytes);
-    }
-    let mut decoder = openh264::decoder::Decoder::new()
-        .map_err(|e| anyhow!("cannot start the H.264 decoder: {e}"))?;
+    let mut clip = ClipReader::open(path)?;
     let mut decoded = 0;
-    for k in 1..=frames {
-        let Some(sample) = reader
-            .read_sample(id, k)
+    while clip.next_frame()?.is_some() {
+        decoded += 1;
+    }
+    Ok(VideoInfo {
+        frames: clip.frames,
+        width: clip.width,
+        height: clip.height,
+        fps: clip.fps,
+        decoded,
+    })
+}
+
+/// Plays an MP4 file's H.264 video track frame by frame, as RGBA pictures.
+pub struct ClipReader {
+    path: PathBuf,
+    reader: mp4::Mp4Reader<std::io::Cursor<Vec<u8>>>,
+    track: u32,
+    /// SPS and PPS in Annex B, fed to the decoder before the first sample.
+    header: Vec<u8>,
+    decoder: openh264::decoder::Decoder,
+    next: u32,
+    pub frames: u32,
+    pub width: u16,
+    pub height: u16,
+    pub fps: f64,
+}
+
+impl ClipReader {
+    pub fn open(path: &Path) -> Result<ClipReader> {
+        let bytes =
+            std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        let size = bytes.len() as u64;
+        let reader = mp4::Mp4Reader::read_header(std::io::Cursor::new(bytes), size)
+            .map_err(|e| anyhow!("{}: not an MP4 file: {e}", path.display()))?;
+        let (&track, t) = reader
+            .tracks()
+            .iter()
+            .find(|(_, t)| matches!(t.track_type(), Ok(mp4::TrackType::Video)))
+            .ok_or_else(|| anyhow!("{}: no video track", path.display()))?;
+        let avc = &t
+            .trak
+            .mdia
+            .minf
+            .stbl
+            .stsd
+            .avc1
+            .as_ref()
+            .ok_or_else(|| anyhow!("{}: the video is not H.264", path.display()))?
+            .avcc;
+        let mut header = Vec::new();
+        for set in avc
+            .sequence_parameter_sets
+            .iter()
+            .chain(&avc.picture_parameter_sets)
+        {
+            header.extend_from_slice(&[0, 0, 0, 1]);
+            header.extend_from_slice(&set.bytes);
+        }
+        let (frames, width, height, fps) =
+            (t.sample_count(), t.width(), t.height(), t.frame_rate());
+        let decoder = openh264::decoder::Decoder::new()
+            .map_err(|e| anyhow!("cannot start the H.264 decoder: {e}"))?;
+        Ok(ClipReader {
+            path: path.to_path_buf(),
+            reader,
+            track,
+            header,
+            decoder,
+            next: 1,
+            frames,
+            width,
+            height,
+            fps,
+        })
+    }
+
+    /// The next frame as RGBA8 pixels, `None` after the last. A sample that decodes to no
+    /// picture is an error: every frame of a clip must show.
+    pub fn next_frame(&mut self) -> Result<Option<image::RgbaImage>> {
+        if self.next > self.frames {
+            return Ok(None);
+        }
+        let k = self.next;
+        self.next += 1;
+        let path = &self.path;
+        let sample = self
+            .reader
+            .read_sample(self.track, k)
             .map_err(|e| anyhow!("{}: sample {k}: {e}", path.display()))?
-        else {
-            continue;
+            .ok_or_else(|| anyhow!("{}: sample {k} is missing", path.display()))?;
+        let mut annex_b = if k == 1 {
+            self.header.clone()
+        } else {
+            Vec::new()
         };
-        let mut annex_b = if k == 1 { header.clone() } else { Vec::new() };
         let mut rest = &sample.bytes[..];
         while rest.len() >= 4 {
             let n = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
@@ -315,15 +371,16 @@ pub fn probe(path: &Path) -> Result<VideoInfo> {
             annex_b.extend_from_slice(body);
             rest = &rest[4 + n..];
         }
-        if let Ok(Some(_)) = decoder.decode(&annex_b) {
-            decoded += 1;
-        }
+        let yuv = self
+            .decoder
+            .decode(&annex_b)
+            .map_err(|e| anyhow!("{}: frame {k} does not decode: {e}", path.display()))?
+            .ok_or_else(|| anyhow!("{}: frame {k} decodes to no picture", path.display()))?;
+        let (w, h) = yuv.dimensions();
+        let mut rgba = vec![0u8; w * h * 4];
+        yuv.write_rgba8(&mut rgba);
+        let image = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+            .ok_or_else(|| anyhow!("{}: frame {k} has a bad size", path.display()))?;
+        Ok(Some(image))
     }
-    Ok(VideoInfo {
-        frames,
-        width,
-        height,
-        fps,
-        decoded,
-    })
 }

@@ -52,7 +52,7 @@ pub struct ViewOptions {
 }
 
 /// Is there a display server to talk to? On Linux and the BSDs that means X11 or Wayland.
-fn display_available() -> bool {
+pub(crate) fn display_available() -> bool {
     if cfg!(all(unix, not(target_os = "macos"))) {
         std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
             || std::env::var_os("WAYLAND_DISPLAY").is_some_and(|d| !d.is_empty())

@@ -1,0 +1,376 @@
+//! `lodlab study`: a perceptual study of level-of-detail methods run the way Merry, Marais &
+//! Gain §6.2 ran theirs.
+//!
+//! - [`make`]: a plan (models, method pairs, pixel tolerances, participants) becomes one clip
+//!   per distinct (model, method, tolerance), rendered once by `record`, and one session list per
+//!   participant: every pair in both orders (to cancel ordering bias), shuffled per participant,
+//!   after a training block of one sample per condition in a random order whose answers are
+//!   discarded (the paper found a learning effect in its pilot).
+//! - [`session`]: a participant's run: each pair's clips one after the other, never side by
+//!   side, then a forced choice; every answer appended to `answers.csv` and flushed at once, so
+//!   that a crash loses nothing and a session resumes where it stopped.
+//! - [`analyze`]: per condition, the preference counts and share, and a two-sided binomial (sign)
+//!   test, training answers excluded; a Markdown table and a bar chart.
+
+pub mod analyze;
+pub mod session;
+pub mod window;
+
+use super::record::{self, RecordOptions, RecordReport};
+use super::report::write_atomic;
+use super::shot::ShotLod;
+use super::world::SceneSpec;
+use crate::scene::{LodMethod, LodPolicy, Transition};
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The study's description, as `plan.toml` holds it (see docs/study-plan.toml).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    /// Models shown, one per clip (built-in names or glTF paths).
+    pub models: Vec<String>,
+    /// Method pairs compared, e.g. [["rest-pose", "as"], ["as", "as+is"]].
+    pub pairs: Vec<[String; 2]>,
+    /// Pixel tolerances the methods run at.
+    pub tolerances: Vec<f32>,
+    pub participants: usize,
+    /// Copies of the model in every clip.
+    #[serde(default = "default_count")]
+    pub count: usize,
+    #[serde(default = "default_seconds")]
+    pub seconds: f32,
+    #[serde(default = "default_fps")]
+    pub fps: u32,
+    /// "WIDTHxHEIGHT".
+    #[serde(default = "default_size")]
+    pub size: String,
+    #[serde(default = "default_transition")]
+    pub transition: String,
+    #[serde(default = "default_path")]
+    pub path: String,
+    /// Seeds the participants' orders.
+    #[serde(default)]
+    pub seed: u64,
+    /// A training block before the test (answers discarded).
+    #[serde(default = "default_training")]
+    pub training: bool,
+}
+
+fn default_count() -> usize {
+    100
+}
+fn default_seconds() -> f32 {
+    8.0
+}
+fn default_fps() -> u32 {
+    30
+}
+fn default_size() -> String {
+    "1280x720".into()
+}
+fn default_transition() -> String {
+    "morph".into()
+}
+fn default_path() -> String {
+    "spiral".into()
+}
+fn default_training() -> bool {
+    true
+}
+
+/// One comparison: a model, two methods at one tolerance.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Condition {
+    pub model: String,
+    pub method_a: String,
+    pub method_b: String,
+    pub tolerance_px: f32,
+}
+
+impl Condition {
+    /// "horse, rest-pose vs as, 1.5 px".
+    pub fn label(&self) -> String {
+        format!(
+            "{}, {} vs {}, {} px",
+            self.model, self.method_a, self.method_b, self.tolerance_px
+        )
+    }
+}
+
+/// A rendered clip of the study.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Clip {
+    pub model: String,
+    pub method: String,
+    pub tolerance_px: f32,
+    /// Relative to the study folder.
+    pub file: String,
+    pub record: Option<RecordReport>,
+}
+
+/// `DIR/study.json`: the plan, its conditions and its clips.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    pub plan: Plan,
+    pub conditions: Vec<Condition>,
+    pub clips: Vec<Clip>,
+    pub participants: Vec<String>,
+}
+
+pub const MANIFEST: &str = "study.json";
+pub const ANSWERS: &str = "answers.csv";
+pub const SESSIONS: &str = "sessions";
+pub const CLIPS: &str = "clips";
+
+impl Plan {
+    pub fn read(path: &Path) -> Result<Plan> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let plan: Plan = toml::from_str(&text).map_err(|e| {
+            let msg = e.message().replace('\n', " ");
+            anyhow::anyhow!("{}: not a study plan: {}", path.display(), msg.trim())
+        })?;
+        plan.check()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        Ok(plan)
+    }
+
+    /// Everything a study needs to make sense, said in one line where it does not.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        if self.models.is_empty() || self.pairs.is_empty() || self.tolerances.is_empty() {
+            return Err("a plan needs models, pairs and tolerances".into());
+        }
+        if self.participants == 0 {
+            return Err("a plan needs at least one participant".into());
+        }
+        for [a, b] in &self.pairs {
+            for m in [a, b] {
+                if LodMethod::parse(m).is_none() {
+                    return Err(format!(
+                        "'{m}' is not a method (none, rest-pose, as, as+is)"
+                    ));
+                }
+            }
+            if LodMethod::parse(a) == LodMethod::parse(b) {
+                return Err(format!("pair {a} vs {b} compares a method with itself"));
+            }
+        }
+        if let Some(t) = self.tolerances.iter().find(|t| !(0.25..=16.0).contains(*t)) {
+            return Err(format!("tolerance {t} must be between 0.25 and 16 pixels"));
+        }
+        if Transition::parse(&self.transition).is_none() {
+            return Err(format!(
+                "'{}' is not a transition (pop, alpha, morph)",
+                self.transition
+            ));
+        }
+        if !crate::scene::camera_path::PATHS.contains(&self.path.as_str()) {
+            return Err(format!("'{}' is not a camera path", self.path));
+        }
+        self.size()?;
+        if !(self.seconds.is_finite() && self.seconds > 0.0) || self.fps == 0 || self.count == 0 {
+            return Err("seconds, fps and count must be positive".into());
+        }
+        Ok(())
+    }
+
+    pub fn size(&self) -> std::result::Result<(u32, u32), String> {
+        let bad = || format!("size '{}' is not WIDTHxHEIGHT", self.size);
+        let (w, h) = self.size.split_once(['x', 'X']).ok_or_else(bad)?;
+        let w: u32 = w.trim().parse().map_err(|_| bad())?;
+        let h: u32 = h.trim().parse().map_err(|_| bad())?;
+        if w < 16 || h < 16 || w > 8192 || h > 8192 {
+            return Err(bad());
+        }
+        Ok((w, h))
+    }
+
+    /// Every (model, pair, tolerance), in plan order.
+    pub fn conditions(&self) -> Vec<Condition> {
+        let mut out = Vec::new();
+        for model in &self.models {
+            for [a, b] in &self.pairs {
+                for &t in &self.tolerances {
+                    out.push(Condition {
+                        model: model.clone(),
+                        method_a: a.clone(),
+                        method_b: b.clone(),
+                        tolerance_px: t,
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// The distinct clips the conditions need, each once.
+    pub fn clips(&self) -> Vec<Clip> {
+        let mut out: Vec<Clip> = Vec::new();
+        for c in self.conditions() {
+            for m in [&c.method_a, &c.method_b] {
+                if out.iter().any(|k| {
+                    k.model == c.model && k.method == *m && k.tolerance_px == c.tolerance_px
+                }) {
+                    continue;
+                }
+                out.push(Clip {
+                    model: c.model.clone(),
+                    method: m.clone(),
+                    tolerance_px: c.tolerance_px,
+                    file: clip_file(&c.model, m, c.tolerance_px),
+                    record: None,
+                });
+            }
+        }
+        out
+    }
+
+    /// Participant ids: P01, P02, …
+    pub fn participant_ids(&self) -> Vec<String> {
+        let width = self.participants.to_string().len().max(2);
+        (1..=self.participants)
+            .map(|k| format!("P{k:0width$}"))
+            .collect()
+    }
+}
+
+/// `clips/horse-as-is-1.5px.mp4`: the model's file stem, the method with '+' spelled out.
+fn clip_file(model: &str, method: &str, tolerance: f32) -> String {
+    let stem = Path::new(model)
+        .file_stem()
+        .map_or_else(|| model.to_string(), |s| s.to_string_lossy().into_owned());
+    let safe = |s: &str| {
+        s.replace('+', "-")
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect::<String>()
+    };
+    format!(
+        "{CLIPS}/{}-{}-{}px.mp4",
+        safe(&stem),
+        safe(method),
+        tolerance
+    )
+}
+
+/// Options of `study make` beyond the plan.
+#[derive(Clone, Debug)]
+pub struct MakeOptions {
+    pub plan: PathBuf,
+    pub out: PathBuf,
+    pub cache_dir: Option<PathBuf>,
+    pub samples: u32,
+    pub progress: bool,
+}
+
+/// Renders the plan's clips (those not already there from an earlier run of the same plan)
+/// and writes the manifest and every participant's session list.
+pub fn make(o: &MakeOptions) -> Result<Manifest> {
+    let plan = Plan::read(&o.plan)?;
+    let manifest_path = o.out.join(MANIFEST);
+    // A folder already holding another study (or answers) is not overwritten.
+    let mut earlier = Vec::new();
+    if manifest_path.exists() {
+        let old: Manifest = read_manifest(&o.out)?;
+        earlier = old.clips.clone();
+        if old.plan != plan {
+            bail!(
+                "{}: holds a study of another plan; make the new one in another folder",
+                o.out.display()
+            );
+        }
+    } else if o.out.is_dir()
+        && std::fs::read_dir(&o.out)
+            .with_context(|| format!("{}: cannot read", o.out.display()))?
+            .next()
+            .is_some()
+    {
+        bail!(
+            "{}: not empty and not a study; make the study in a new or empty folder",
+            o.out.display()
+        );
+    }
+    std::fs::create_dir_all(o.out.join(CLIPS))
+        .with_context(|| format!("{}: cannot create", o.out.display()))?;
+    let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
+    let transition = Transition::parse(&plan.transition).expect("checked");
+    let mut clips = plan.clips();
+    let total = clips.len();
+    for (k, clip) in clips.iter_mut().enumerate() {
+        let file = o.out.join(&clip.file);
+        if file.exists() {
+            eprintln!("clip {}/{total}: {} (there already)", k + 1, clip.file);
+            clip.record = earlier
+                .iter()
+                .find(|c| c.file == clip.file)
+                .and_then(|c| c.record.clone());
+            continue;
+        }
+        eprintln!("clip {}/{total}: {}", k + 1, clip.file);
+        let report = record::run(&RecordOptions {
+            spec: SceneSpec {
+                scene: "study".into(),
+                models: vec![clip.model.clone()],
+                count: plan.count,
+                cache_dir: o.cache_dir.clone(),
+                ..Default::default()
+            },
+            lod: ShotLod {
+                method: LodMethod::parse(&clip.method).expect("checked"),
+                policy: LodPolicy {
+                    tolerance_px: clip.tolerance_px,
+                    transition,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            width,
+            height,
+            samples: o.samples,
+            fps: plan.fps,
+            seconds: plan.seconds,
+            path: plan.path.clone(),
+            out: file,
+            frames_dir: None,
+            progress: o.progress,
+        })?;
+        clip.record = Some(report);
+    }
+    let manifest = Manifest {
+        conditions: plan.conditions(),
+        participants: plan.participant_ids(),
+        plan,
+        clips,
+    };
+    let sessions = o.out.join(SESSIONS);
+    std::fs::create_dir_all(&sessions)
+        .with_context(|| format!("{}: cannot create", sessions.display()))?;
+    for id in &manifest.participants {
+        let trials = session::plan_session(&manifest, id);
+        write_atomic(
+            &sessions.join(format!("{id}.json")),
+            serde_json::to_string_pretty(&trials)?.as_bytes(),
+        )?;
+    }
+    write_atomic(
+        &manifest_path,
+        serde_json::to_string_pretty(&manifest)?.as_bytes(),
+    )?;
+    Ok(manifest)
+}
+
+pub fn read_manifest(dir: &Path) -> Result<Manifest> {
+    let path = dir.join(MANIFEST);
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    serde_json::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: not a study manifest: {e}", path.display()))
+}

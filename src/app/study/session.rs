@@ -1,0 +1,334 @@
+//! A participant's session: the trials in their order, the answers file, and resuming.
+
+use super::{ANSWERS, Manifest, SESSIONS};
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Training answers are collected exactly like the others and discarded (Merry et al. §6.2).
+pub const TRAINING: &str = "training";
+pub const TEST: &str = "test";
+
+/// One sample: a condition's two clips in the order shown.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Trial {
+    /// 1-based, in the order the participant sees them.
+    pub trial: usize,
+    pub block: String,
+    /// Index into the manifest's conditions.
+    pub condition: usize,
+    /// Methods of the first and the second clip shown.
+    pub first: String,
+    pub second: String,
+    /// Clip files, relative to the study folder.
+    pub first_clip: String,
+    pub second_clip: String,
+}
+
+/// The trials of participant `id`: a training block of one sample per condition, each in a
+/// random order (when the plan has training), then every condition in both orders; each block
+/// shuffled. Seeded by the plan's seed and the participant id, so `make` always writes the
+/// same lists.
+pub fn plan_session(m: &Manifest, id: &str) -> Vec<Trial> {
+    let seed = m.plan.seed
+        ^ u64::from_le_bytes(
+            blake3::hash(id.as_bytes()).as_bytes()[..8]
+                .try_into()
+                .expect("8 bytes"),
+        );
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let clip = |model: &str, method: &str, t: f32| {
+        m.clips
+            .iter()
+            .find(|c| c.model == model && c.method == method && c.tolerance_px == t)
+            .map(|c| c.file.clone())
+            .expect("every condition's clips are in the manifest")
+    };
+    let make = |block: &str, orders: &[(usize, bool)]| -> Vec<Trial> {
+        orders
+            .iter()
+            .map(|&(k, a_first)| {
+                let c = &m.conditions[k];
+                let (first, second) = if a_first {
+                    (&c.method_a, &c.method_b)
+                } else {
+                    (&c.method_b, &c.method_a)
+                };
+                Trial {
+                    trial: 0,
+                    block: block.into(),
+                    condition: k,
+                    first: first.clone(),
+                    second: second.clone(),
+                    first_clip: clip(&c.model, first, c.tolerance_px),
+                    second_clip: clip(&c.model, second, c.tolerance_px),
+                }
+            })
+            .collect()
+    };
+    let n = m.conditions.len();
+    let mut training: Vec<(usize, bool)> = if m.plan.training {
+        (0..n).map(|k| (k, rng.bool())).collect()
+    } else {
+        Vec::new()
+    };
+    rng.shuffle(&mut training);
+    let mut test: Vec<(usize, bool)> = (0..n).flat_map(|k| [(k, true), (k, false)]).collect();
+    rng.shuffle(&mut test);
+    let mut trials = make(TRAINING, &training);
+    trials.extend(make(TEST, &test));
+    for (i, t) in trials.iter_mut().enumerate() {
+        t.trial = i + 1;
+    }
+    trials
+}
+
+/// One line of `answers.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Answer {
+    pub participant: String,
+    pub trial: usize,
+    pub block: String,
+    pub model: String,
+    pub method_a: String,
+    pub method_b: String,
+    pub tolerance_px: f32,
+    pub first: String,
+    pub second: String,
+    /// 1: the first clip shown looked better; 2: the second.
+    pub choice: u8,
+    /// The method of the clip chosen.
+    pub preferred: String,
+    /// Seconds since the Unix epoch.
+    pub time: u64,
+}
+
+pub const HEADER: &str = "participant,trial,block,model,method_a,method_b,tolerance_px,first,second,choice,preferred,unix_time";
+
+/// A field without the separator or a line break.
+fn field(s: &str) -> String {
+    s.replace([',', '\n', '\r'], ";")
+}
+
+impl Answer {
+    fn line(&self) -> String {
+        format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            field(&self.participant),
+            self.trial,
+            field(&self.block),
+            field(&self.model),
+            field(&self.method_a),
+            field(&self.method_b),
+            self.tolerance_px,
+            field(&self.first),
+            field(&self.second),
+            self.choice,
+            field(&self.preferred),
+            self.time
+        )
+    }
+
+    fn parse(line: &str) -> Option<Answer> {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 12 {
+            return None;
+        }
+        let choice: u8 = f[9].parse().ok().filter(|c| *c == 1 || *c == 2)?;
+        Some(Answer {
+            participant: f[0].into(),
+            trial: f[1].parse().ok()?,
+            block: f[2].into(),
+            model: f[3].into(),
+            method_a: f[4].into(),
+            method_b: f[5].into(),
+            tolerance_px: f[6].parse().ok()?,
+            first: f[7].into(),
+            second: f[8].into(),
+            choice,
+            preferred: f[10].into(),
+            time: f[11].parse().ok()?,
+        })
+    }
+}
+
+/// Every complete answer in `DIR/answers.csv` (none when there is no file yet), and how many
+/// lines could not be read (a line cut short by a crash mid-write, say).
+pub fn read_answers(dir: &Path) -> Result<(Vec<Answer>, usize)> {
+    let path = dir.join(ANSWERS);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0)),
+        Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
+    };
+    let mut answers = Vec::new();
+    let mut bad = 0;
+    for line in text
+        .lines()
+        .filter(|l| !l.trim().is_empty() && *l != HEADER)
+    {
+        match Answer::parse(line) {
+            Some(a) => answers.push(a),
+            None => bad += 1,
+        }
+    }
+    Ok((answers, bad))
+}
+
+/// Appends one answer and makes it durable before returning: the line is written whole, then
+/// flushed and synced to the disk.
+pub fn append_answer(dir: &Path, answer: &Answer) -> Result<()> {
+    let path = dir.join(ANSWERS);
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    let mut text = String::new();
+    if file.metadata().map(|m| m.len() == 0).unwrap_or(true) {
+        text.push_str(HEADER);
+        text.push('\n');
+    }
+    text.push_str(&answer.line());
+    file.write_all(text.as_bytes())
+        .and_then(|_| file.flush())
+        .and_then(|_| file.sync_data())
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
+
+/// A participant's place in their session.
+pub struct Session {
+    pub dir: PathBuf,
+    pub participant: String,
+    pub manifest: Manifest,
+    pub trials: Vec<Trial>,
+    /// Trials answered so far, by their number.
+    answered: Vec<bool>,
+}
+
+impl Session {
+    /// Opens participant `id`'s session in study folder `dir`, with the answers already given.
+    pub fn open(dir: &Path, id: &str) -> Result<Session> {
+        let manifest = super::read_manifest(dir)?;
+        if !manifest.participants.iter().any(|p| p == id) {
+            bail!(
+                "{}: no participant '{id}' in this study (participants: {})",
+                dir.display(),
+                manifest.participants.join(", ")
+            );
+        }
+        let path = dir.join(SESSIONS).join(format!("{id}.json"));
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let trials: Vec<Trial> = serde_json::from_str(&text)
+            .map_err(|e| anyhow::anyhow!("{}: not a session list: {e}", path.display()))?;
+        let (answers, bad) = read_answers(dir)?;
+        if bad > 0 {
+            eprintln!(
+                "warning: {}: {bad} line(s) could not be read and are ignored",
+                dir.join(ANSWERS).display()
+            );
+        }
+        let mut answered = vec![false; trials.len() + 1];
+        for a in answers.iter().filter(|a| a.participant == id) {
+            if let Some(slot) = answered.get_mut(a.trial) {
+                *slot = true;
+            }
+        }
+        Ok(Session {
+            dir: dir.to_path_buf(),
+            participant: id.to_string(),
+            manifest,
+            trials,
+            answered,
+        })
+    }
+
+    /// The next trial without an answer.
+    pub fn current(&self) -> Option<&Trial> {
+        self.trials.iter().find(|t| !self.answered[t.trial])
+    }
+
+    pub fn answered(&self) -> usize {
+        self.answered.iter().filter(|&&a| a).count()
+    }
+
+    pub fn total(&self) -> usize {
+        self.trials.len()
+    }
+
+    /// A clip's file.
+    pub fn clip(&self, file: &str) -> PathBuf {
+        self.dir.join(file)
+    }
+
+    /// Records the participant's choice (1 or 2) for the current trial, durably.
+    pub fn answer(&mut self, choice: u8) -> Result<()> {
+        if choice != 1 && choice != 2 {
+            bail!("a choice is 1 or 2, not {choice}");
+        }
+        let Some(t) = self.current().cloned() else {
+            bail!("the session is complete");
+        };
+        let c = &self.manifest.conditions[t.condition];
+        let answer = Answer {
+            participant: self.participant.clone(),
+            trial: t.trial,
+            block: t.block.clone(),
+            model: c.model.clone(),
+            method_a: c.method_a.clone(),
+            method_b: c.method_b.clone(),
+            tolerance_px: c.tolerance_px,
+            first: t.first.clone(),
+            second: t.second.clone(),
+            choice,
+            preferred: if choice == 1 {
+                t.first.clone()
+            } else {
+                t.second.clone()
+            },
+            time: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs()),
+        };
+        append_answer(&self.dir, &answer)?;
+        self.answered[t.trial] = true;
+        Ok(())
+    }
+}
+
+/// Runs a session without a window, the answers given in advance (`1` or `2` each): every clip
+/// is still decoded frame by frame at its own rate, as the window would play it. Stops when
+/// the session is complete or the answers run out. Returns the answers recorded.
+pub fn run_scripted(session: &mut Session, answers: &[u8]) -> Result<usize> {
+    let mut given = 0;
+    for &choice in answers {
+        let Some(t) = session.current().cloned() else {
+            break;
+        };
+        for file in [&t.first_clip, &t.second_clip] {
+            play_paced(&session.clip(file))?;
+        }
+        session.answer(choice)?;
+        given += 1;
+    }
+    Ok(given)
+}
+
+/// Decodes a clip frame by frame, one frame per 1 / fps seconds.
+fn play_paced(path: &Path) -> Result<()> {
+    let mut clip = crate::app::video::ClipReader::open(path)?;
+    let period = std::time::Duration::from_secs_f64(1.0 / clip.fps.max(1.0));
+    let start = std::time::Instant::now();
+    let mut k = 0u32;
+    while clip.next_frame()?.is_some() {
+        k += 1;
+        let due = start + period * k;
+        if let Some(wait) = due.checked_duration_since(std::time::Instant::now()) {
+            std::thread::sleep(wait);
+        }
+    }
+    Ok(())
+}

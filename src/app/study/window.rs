@@ -1,0 +1,452 @@
+//! `lodlab study run`: a participant's session in a window. Each trial plays its two clips one
+//! after the other, full size on black, never side by side (Merry et al. §6.2: so that clips
+//! are judged as wholes, not compared pixel by pixel), then asks for a forced choice with the
+//! keys 1 and 2. Escape leaves; the answers given so far are on disk and the session resumes
+//! at the next trial.
+
+use super::session::Session;
+use crate::app::video::ClipReader;
+use crate::app::viewer::display_available;
+use crate::render::Gpu;
+use anyhow::{Context, Result, anyhow};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, KeyEvent, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Fullscreen, Window, WindowId};
+
+/// Grey screen between the two clips of a trial, and after the second.
+const GAP: Duration = Duration::from_millis(800);
+
+pub struct RunOptions {
+    pub fullscreen: bool,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Where the participant is.
+enum Stage {
+    /// Before the first trial (or a resumed one): press space.
+    Welcome,
+    /// A short grey screen, then clip `which` (1 or 2) of the current trial.
+    Gap {
+        until: Instant,
+        which: u8,
+    },
+    Playing {
+        which: u8,
+        clip: Box<ClipReader>,
+        started: Instant,
+        shown: u32,
+    },
+    /// Waiting for 1 or 2.
+    Ask,
+    Done,
+}
+
+pub fn run(mut session: Session, o: RunOptions) -> Result<ExitCode> {
+    if !display_available() {
+        eprintln!("lodlab: no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset)");
+        return Ok(ExitCode::from(2));
+    }
+    let event_loop = EventLoop::new().context("cannot open a window")?;
+    let stage = if session.current().is_some() {
+        Stage::Welcome
+    } else {
+        Stage::Done
+    };
+    let mut app = App {
+        options: o,
+        window: None,
+        stage,
+        error: None,
+        session: &mut session,
+    };
+    event_loop.run_app(&mut app).context("window event loop")?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(ExitCode::SUCCESS),
+    }
+}
+
+struct App<'a> {
+    options: RunOptions,
+    window: Option<StudyWindow>,
+    stage: Stage,
+    error: Option<anyhow::Error>,
+    session: &'a mut Session,
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_none() {
+            match StudyWindow::new(event_loop, &self.options) {
+                Ok(w) => self.window = Some(w),
+                Err(e) => {
+                    self.error = Some(e);
+                    event_loop.exit();
+                }
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match self.handle(&event) {
+            Ok(true) => {}
+            Ok(false) => event_loop.exit(),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(w) = &self.window {
+            w.window.request_redraw();
+        }
+    }
+}
+
+impl App<'_> {
+    /// One window event; `Ok(false)` closes the window.
+    fn handle(&mut self, event: &WindowEvent) -> Result<bool> {
+        let Some(w) = &mut self.window else {
+            return Ok(true);
+        };
+        let _ = w.egui.on_window_event(&w.window, event);
+        match event {
+            WindowEvent::CloseRequested => return Ok(false),
+            WindowEvent::Resized(size) => w.resize(size.width, size.height),
+            WindowEvent::KeyboardInput {
+                event:
+                    KeyEvent {
+                        logical_key,
+                        state: ElementState::Pressed,
+                        repeat: false,
+                        ..
+                    },
+                ..
+            } => return self.key(logical_key),
+            WindowEvent::RedrawRequested => {
+                self.advance()?;
+                let text = self.caption();
+                let w = self.window.as_mut().expect("checked above");
+                w.draw(&text)?;
+            }
+            _ => {}
+        }
+        Ok(true)
+    }
+
+    fn key(&mut self, key: &Key) -> Result<bool> {
+        if matches!(key, Key::Named(NamedKey::Escape)) {
+            return Ok(false);
+        }
+        let choice = match key {
+            Key::Character(c) if c == "1" => Some(1),
+            Key::Character(c) if c == "2" => Some(2),
+            _ => None,
+        };
+        match (&self.stage, choice) {
+            (Stage::Welcome, None) if matches!(key, Key::Named(NamedKey::Space)) => {
+                self.stage = Stage::Gap {
+                    until: Instant::now() + GAP,
+                    which: 1,
+                };
+            }
+            (Stage::Ask, Some(c)) => {
+                self.session.answer(c)?;
+                self.stage = if self.session.current().is_some() {
+                    Stage::Gap {
+                        until: Instant::now() + GAP,
+                        which: 1,
+                    }
+                } else {
+                    Stage::Done
+                };
+            }
+            _ => {}
+        }
+        Ok(true)
+    }
+
+    /// Moves the stage on with the clock, and puts the frame due on screen.
+    fn advance(&mut self) -> Result<()> {
+        let now = Instant::now();
+        match &mut self.stage {
+            Stage::Gap { until, which } if now >= *until => {
+                let which = *which;
+                let t = self.session.current().context("a trial to play")?;
+                let file = if which == 1 {
+                    &t.first_clip
+                } else {
+                    &t.second_clip
+                };
+                let clip = ClipReader::open(&self.session.clip(file))?;
+                self.stage = Stage::Playing {
+                    which,
+                    clip: Box::new(clip),
+                    started: now,
+                    shown: 0,
+                };
+            }
+            Stage::Playing {
+                which,
+                clip,
+                started,
+                shown,
+            } => {
+                // Frames are due at the clip's own rate; a late one is decoded and skipped.
+                let due = ((now - *started).as_secs_f64() * clip.fps).floor() as u32 + 1;
+                let mut latest = None;
+                while *shown < due.min(clip.frames) {
+                    latest = clip.next_frame()?;
+                    *shown += 1;
+                }
+                if let (Some(image), Some(w)) = (latest, self.window.as_mut()) {
+                    w.show_frame(&image);
+                }
+                if *shown >= clip.frames && due > clip.frames {
+                    let which = *which;
+                    if let Some(w) = self.window.as_mut() {
+                        w.hide_frame();
+                    }
+                    self.stage = if which == 1 {
+                        Stage::Gap {
+                            until: now + GAP,
+                            which: 2,
+                        }
+                    } else {
+                        Stage::Ask
+                    };
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// What the screen says at this stage (nothing while a clip plays).
+    fn caption(&self) -> String {
+        let s = &self.session;
+        let progress = format!("{} of {} answered", s.answered(), s.total());
+        match &self.stage {
+            Stage::Welcome => format!(
+                "Participant {}\n\nYou will see pairs of short clips, one after the other.\n\
+                 After each pair, press 1 if the first looked better, 2 if the second did.\n\n\
+                 Press space to start. Escape stops; you can go on later.\n\n{progress}",
+                s.participant
+            ),
+            Stage::Gap { which, .. } => format!("Clip {which}"),
+            Stage::Playing { .. } => String::new(),
+            Stage::Ask => format!(
+                "Which clip looked better?\n\n1: the first      2: the second\n\n{progress}"
+            ),
+            Stage::Done => {
+                "Thank you: the session is complete.\n\nEscape closes the window.".to_string()
+            }
+        }
+    }
+}
+
+/// The window, its surface and egui, which draws everything (clips are egui textures).
+struct StudyWindow {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    gpu: Gpu,
+    egui: egui_winit::State,
+    renderer: egui_wgpu::Renderer,
+    frame: Option<egui::TextureHandle>,
+    showing: bool,
+}
+
+impl StudyWindow {
+    fn new(event_loop: &ActiveEventLoop, o: &RunOptions) -> Result<StudyWindow> {
+        let mut attributes = Window::default_attributes()
+            .with_title("lodlab study")
+            .with_inner_size(winit::dpi::PhysicalSize::new(o.width, o.height));
+        if o.fullscreen {
+            attributes = attributes.with_fullscreen(Some(Fullscreen::Borderless(None)));
+        }
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .context("cannot open a window")?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance
+            .create_surface(window.clone())
+            .context("cannot draw into the window")?;
+        let gpu = Gpu::with_instance(instance, Some(&surface))?;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
+            config.format = srgb;
+        }
+        config.present_mode = wgpu::PresentMode::AutoVsync;
+        surface.configure(&gpu.device, &config);
+        let egui = egui_winit::State::new(
+            egui::Context::default(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let renderer = egui_wgpu::Renderer::new(
+            &gpu.device,
+            config.format,
+            egui_wgpu::RendererOptions::default(),
+        );
+        Ok(StudyWindow {
+            window,
+            surface,
+            config,
+            gpu,
+            egui,
+            renderer,
+            frame: None,
+            showing: false,
+        })
+    }
+
+    fn resize(&mut self, width: u32, height: u32) {
+        self.config.width = width.max(1);
+        self.config.height = height.max(1);
+        self.surface.configure(&self.gpu.device, &self.config);
+    }
+
+    fn show_frame(&mut self, image: &image::RgbaImage) {
+        let size = [image.width() as usize, image.height() as usize];
+        let colour = egui::ColorImage::from_rgba_unmultiplied(size, image.as_raw());
+        match &mut self.frame {
+            Some(t) => t.set(colour, egui::TextureOptions::LINEAR),
+            None => {
+                self.frame = Some(self.egui.egui_ctx().load_texture(
+                    "clip",
+                    colour,
+                    egui::TextureOptions::LINEAR,
+                ))
+            }
+        }
+        self.showing = true;
+    }
+
+    fn hide_frame(&mut self) {
+        self.showing = false;
+    }
+
+    /// One frame: the clip's picture (as large as fits, on black) or the caption (on grey).
+    fn draw(&mut self, caption: &str) -> Result<()> {
+        let raw = self.egui.take_egui_input(&self.window);
+        let frame = self.frame.clone().filter(|_| self.showing);
+        let output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
+            let fill = if frame.is_some() {
+                egui::Color32::BLACK
+            } else {
+                egui::Color32::from_gray(96)
+            };
+            egui::CentralPanel::default()
+                .frame(egui::Frame::NONE.fill(fill))
+                .show(ui, |ui| {
+                    let area = ui.available_rect_before_wrap();
+                    if let Some(t) = &frame {
+                        let [w, h] = t.size().map(|x| x as f32);
+                        let scale = (area.width() / w).min(area.height() / h);
+                        let rect =
+                            egui::Rect::from_center_size(area.center(), egui::vec2(w, h) * scale);
+                        ui.painter().image(
+                            t.id(),
+                            rect,
+                            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                            egui::Color32::WHITE,
+                        );
+                    } else {
+                        // Wrapped to the window, centred both ways.
+                        ui.centered_and_justified(|ui| {
+                            ui.label(
+                                egui::RichText::new(caption)
+                                    .size(22.0)
+                                    .color(egui::Color32::WHITE),
+                            );
+                        });
+                    }
+                });
+        });
+        self.egui
+            .handle_platform_output(&self.window, output.platform_output);
+        let ppp = output.pixels_per_point;
+        let primitives = self.egui.egui_ctx().tessellate(output.shapes, ppp);
+        for (id, deltas) in &output.textures_delta.set {
+            for delta in deltas {
+                self.renderer
+                    .update_texture(&self.gpu.device, &self.gpu.queue, *id, delta);
+            }
+        }
+        let surface_frame = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(f)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(());
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                let (w, h) = (self.config.width, self.config.height);
+                self.resize(w, h);
+                return Ok(());
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                return Err(anyhow!("the window's surface failed validation"));
+            }
+        };
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [self.config.width, self.config.height],
+            pixels_per_point: ppp,
+        };
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut buffers = self.renderer.update_buffers(
+            &self.gpu.device,
+            &self.gpu.queue,
+            &mut encoder,
+            &primitives,
+            &screen,
+        );
+        let view = surface_frame.texture.create_view(&Default::default());
+        {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("study"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            self.renderer.render(&mut pass, &primitives, &screen);
+        }
+        buffers.push(encoder.finish());
+        self.gpu.queue.submit(buffers);
+        self.window.pre_present_notify();
+        self.gpu.queue.present(surface_frame);
+        for id in &output.textures_delta.free {
+            self.renderer.free_texture(id);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,253 @@
+//! `lodlab study make → run → analyze` end to end on a small plan (lavapipe in CI): balanced
+//! sessions, answers that survive a killed process, a session resumed where it stopped, and the
+//! analysis of what was answered.
+
+use lodlab::app::study::analyze::binomial_two_sided;
+use lodlab::app::study::session::{Trial, read_answers};
+use lodlab::app::video::probe;
+use lodlab::generate::cylinder::bent_cylinder;
+use lodlab::generate::glb::to_glb;
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stderr),
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+fn session(dir: &Path, id: &str) -> Vec<Trial> {
+    let text = std::fs::read_to_string(dir.join("sessions").join(format!("{id}.json"))).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Answers that always prefer the pair's second method (the plan lists the newer one second).
+fn prefer_b(trials: &[Trial], pairs: &[(&str, &str)]) -> String {
+    trials
+        .iter()
+        .map(|t| {
+            let b = pairs[t.condition].1;
+            if t.first == b { "1" } else { "2" }
+        })
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn answers_of(dir: &Path, id: &str) -> usize {
+    read_answers(dir)
+        .map(|(a, _)| a.iter().filter(|a| a.participant == id).count())
+        .unwrap_or(0)
+}
+
+#[test]
+fn a_study_is_made_run_and_analyzed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("cylinder.glb");
+    std::fs::write(&model, to_glb(&bent_cylinder(24, 16))).unwrap();
+    let pairs = [("rest-pose", "as"), ("as", "as+is"), ("rest-pose", "as+is")];
+    let plan = tmp.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "models = [\"{}\"]\npairs = [{}]\ntolerances = [2.0]\nparticipants = 2\n\
+             count = 6\nseconds = 0.5\nfps = 10\nsize = \"64x48\"\nseed = 3\n",
+            model.display(),
+            pairs
+                .iter()
+                .map(|(a, b)| format!("[\"{a}\", \"{b}\"]"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("study");
+    let d = dir.display().to_string();
+    let cache = tmp.path().join("cache").display().to_string();
+    let plan_s = plan.display().to_string();
+    ok(&lodlab(&[
+        "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--msaa", "1",
+    ]));
+
+    // Every distinct clip once: three methods at one tolerance, 5 frames each.
+    let clips: Vec<_> = std::fs::read_dir(dir.join("clips")).unwrap().collect();
+    assert_eq!(clips.len(), 3);
+    for c in clips {
+        let info = probe(&c.unwrap().path()).unwrap();
+        assert_eq!((info.frames, info.decoded), (5, 5));
+    }
+
+    // Balanced sessions: training first, one sample per condition; then every condition in
+    // both orders exactly once; orders differ between participants.
+    let sessions: Vec<Vec<Trial>> = ["P01", "P02"].iter().map(|id| session(&dir, id)).collect();
+    for trials in &sessions {
+        assert_eq!(trials.len(), 3 + 6);
+        assert!(trials[..3].iter().all(|t| t.block == "training"));
+        assert!(trials[3..].iter().all(|t| t.block == "test"));
+        let mut training: Vec<usize> = trials[..3].iter().map(|t| t.condition).collect();
+        training.sort();
+        assert_eq!(training, vec![0, 1, 2]);
+        let mut orders: HashMap<(usize, String), usize> = HashMap::new();
+        for t in &trials[3..] {
+            let (a, b) = pairs[t.condition];
+            assert!(
+                (t.first == a && t.second == b) || (t.first == b && t.second == a),
+                "{t:?}"
+            );
+            assert!(t.first_clip.contains(&t.first.replace('+', "-")));
+            *orders.entry((t.condition, t.first.clone())).or_default() += 1;
+        }
+        assert_eq!(orders.len(), 6, "each condition in both orders");
+        assert!(orders.values().all(|&n| n == 1));
+        for (k, t) in trials.iter().enumerate() {
+            assert_eq!(t.trial, k + 1);
+        }
+    }
+    let order = |s: &[Trial]| {
+        s.iter()
+            .map(|t| (t.condition, t.first.clone()))
+            .collect::<Vec<_>>()
+    };
+    assert_ne!(order(&sessions[0]), order(&sessions[1]));
+    // Making it again from the same plan keeps everything; another plan is refused.
+    ok(&lodlab(&[
+        "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--msaa", "1",
+    ]));
+    assert_eq!(session(&dir, "P01"), sessions[0]);
+    let other = tmp.path().join("other.toml");
+    std::fs::write(
+        &other,
+        std::fs::read_to_string(&plan)
+            .unwrap()
+            .replace("participants = 2", "participants = 3"),
+    )
+    .unwrap();
+    let o = lodlab(&[
+        "study",
+        "make",
+        "--plan",
+        &other.display().to_string(),
+        "--out",
+        &d,
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+
+    // Participant 1 answers everything in one go.
+    let script1 = prefer_b(&sessions[0], &pairs);
+    ok(&lodlab(&[
+        "study",
+        "run",
+        &d,
+        "--participant",
+        "P01",
+        "--script",
+        &script1,
+    ]));
+    assert_eq!(answers_of(&dir, "P01"), 9);
+
+    // Participant 2's session is killed part-way: the answers given survive whole.
+    let script2 = prefer_b(&sessions[1], &pairs);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args([
+            "study",
+            "run",
+            &d,
+            "--participant",
+            "P02",
+            "--script",
+            &script2,
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while answers_of(&dir, "P02") < 2 {
+        assert!(start.elapsed() < Duration::from_secs(120), "no answers");
+        assert!(child.try_wait().unwrap().is_none(), "ended before the kill");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let (answers, bad) = read_answers(&dir).unwrap();
+    assert_eq!(bad, 0, "no line cut short");
+    let given = answers.iter().filter(|a| a.participant == "P02").count();
+    assert!((2..9).contains(&given), "{given}");
+    // Resumed: only the trials left are played and answered.
+    let left: Vec<&str> = script2.split(',').skip(given).collect();
+    ok(&lodlab(&[
+        "study",
+        "run",
+        &d,
+        "--participant",
+        "P02",
+        "--script",
+        &left.join(","),
+    ]));
+    let (answers, _) = read_answers(&dir).unwrap();
+    let mut p2: Vec<usize> = answers
+        .iter()
+        .filter(|a| a.participant == "P02")
+        .map(|a| a.trial)
+        .collect();
+    p2.sort();
+    assert_eq!(p2, (1..=9).collect::<Vec<_>>(), "every trial once");
+    // A finished session records nothing more.
+    ok(&lodlab(&[
+        "study",
+        "run",
+        &d,
+        "--participant",
+        "P02",
+        "--script",
+        "1,1",
+    ]));
+    assert_eq!(answers_of(&dir, "P02"), 9);
+    // An unknown participant is one line, exit 1.
+    let o = lodlab(&["study", "run", &d, "--participant", "P09", "--script", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(String::from_utf8_lossy(&o.stderr).trim().lines().count(), 1);
+
+    // Analysis: training left out; every test answer preferred B: 4 of 4 per condition.
+    let o = lodlab(&["study", "analyze", &d]);
+    ok(&o);
+    let a: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("analysis.json")).unwrap()).unwrap();
+    assert_eq!(a["participants"], 2);
+    assert_eq!(a["training_answers_left_out"], 6);
+    let conditions = a["conditions"].as_array().unwrap();
+    assert_eq!(conditions.len(), 3);
+    for (c, (ma, mb)) in conditions.iter().zip(pairs) {
+        assert_eq!(c["condition"]["method_a"], ma);
+        assert_eq!(c["condition"]["method_b"], mb);
+        assert_eq!(c["answers"], 4);
+        assert_eq!(c["prefer_b"], 4);
+        assert_eq!(c["share_b"], 1.0);
+        let p = c["p_value"].as_f64().unwrap();
+        assert!((p - binomial_two_sided(4, 4)).abs() < 1e-12 && (p - 0.125).abs() < 1e-12);
+    }
+    let md = std::fs::read_to_string(dir.join("analysis.md")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stdout), md);
+    assert!(
+        md.contains("| rest-pose vs as |") || md.contains("rest-pose vs as |"),
+        "{md}"
+    );
+    let chart = image::open(dir.join("preferences.png")).unwrap().to_rgb8();
+    // The bars are drawn: some pixels in the bars' blue or grey.
+    let bars = chart
+        .pixels()
+        .filter(|p| p.0 == [170, 180, 195] || p.0 == [40, 110, 200])
+        .count();
+    assert!(bars > 500, "{bars}");
+}
