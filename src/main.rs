@@ -279,7 +279,8 @@ struct SceneArgs {
     /// Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
     models: Vec<String>,
-    /// Number of characters (or trees in the forest) [default: 300 characters, 500 trees].
+    /// Number of characters (or trees in the forest) [default: 300 characters, 500 trees, 100
+    /// copies in the study scene].
     #[arg(long)]
     count: Option<usize>,
     /// Trees round the mixed scene's clearing.
