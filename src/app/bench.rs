@@ -18,14 +18,14 @@
 //! - The time of a frame is the GPU time of its render pass from timestamp queries where the
 //!   adapter has them, otherwise the wall time from submit to completion.
 
-use super::shot::{check_writable, histogram};
+use super::shot::{Headless, ShotLod, check_writable, histogram};
 use super::tree_levels::FoliageView;
-use super::world::{Loaded, SceneSpec, World};
+use super::world::{SceneSpec, World};
 use crate::render::targets::Offscreen;
 use crate::render::timer::PassTimer;
 use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::scene::lod::MAX_LEVELS;
-use crate::scene::{CameraPath, Drive, LodMethod, LodPolicy};
+use crate::scene::{CameraPath, LodMethod, LodPolicy};
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -189,22 +189,16 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     if !(o.seconds.is_finite() && o.seconds > 0.0 && o.warmup.is_finite() && o.warmup >= 0.0) {
         bail!("--seconds must be positive and --warmup not negative");
     }
-    let loaded = Loaded::new(o.spec.clone())?;
-    let gpu = Gpu::headless()?;
-    eprintln!("lodlab: adapter {}", gpu.describe());
-    let target = Offscreen::new(&gpu, o.width, o.height, o.samples);
-    let mut world = World::new(
-        &gpu,
-        loaded,
-        crate::render::targets::OFFSCREEN_FORMAT,
-        o.samples,
-    )?;
-    world.lod.policy = o.policy;
-    world.apply_foliage(&o.foliage);
-    for &m in &o.methods {
-        world.lod.method = m;
-        world.ensure_levels(&gpu)?;
+    let mut scene = Headless::new(&o.spec, o.width, o.height, o.samples)?;
+    for &method in &o.methods {
+        scene.show(&ShotLod {
+            method,
+            policy: o.policy,
+            foliage: o.foliage,
+            ..Default::default()
+        })?;
     }
+    let Headless { gpu, target, world } = scene;
     let home = world.camera;
     let path = CameraPath::named(&o.path, &home, o.path_seconds)
         .with_context(|| format!("'{}' is not a camera path", o.path))?;
@@ -305,11 +299,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         path: o.path.clone(),
         path_seconds: path.duration(),
         transition: o.policy.transition.name().into(),
-        drive: match o.policy.drive {
-            Drive::Time => "time",
-            Drive::Zone => "zone",
-        }
-        .into(),
+        drive: o.policy.drive.name().into(),
         tolerance_px: o.policy.tolerance_px,
         calibration,
         methods,

@@ -12,4 +12,5 @@ pub mod tree_levels;
 pub mod tree_report;
 pub mod video;
 pub mod viewer;
+pub mod window;
 pub mod world;

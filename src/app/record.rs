@@ -5,12 +5,10 @@
 //! it. Before the first frame, selection runs over the second before it at 60 Hz, so the clip
 //! opens with the levels and transitions a viewer would be in the middle of.
 
-use super::shot::{ShotLod, check_writable, write_png};
+use super::shot::{Headless, ShotLod, check_writable, write_png};
 use super::video::Mp4Video;
-use super::world::{Loaded, SceneSpec, World};
-use crate::render::targets::Offscreen;
-use crate::render::{DebugView, Gpu};
-use crate::scene::{CameraPath, Drive};
+use super::world::SceneSpec;
+use crate::scene::CameraPath;
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -103,24 +101,13 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
     if let Some(dir) = &o.frames_dir {
         prepare_frames_dir(dir)?;
     }
-    let loaded = Loaded::new(o.spec.clone())?;
-    let gpu = Gpu::headless()?;
-    eprintln!("lodlab: adapter {}", gpu.describe());
-    let target = Offscreen::new(&gpu, o.width, o.height, o.samples);
-    let mut world = World::new(
-        &gpu,
-        loaded,
-        crate::render::targets::OFFSCREEN_FORMAT,
-        o.samples,
-    )?;
-    world.lod.method = lod.method;
-    world.lod.policy = lod.policy;
-    world.renderer.debug = lod.debug;
-    world.apply_foliage(&lod.foliage);
-    if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
-        bail!("--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)");
-    }
-    world.ensure_levels(&gpu)?;
+    let mut scene = Headless::new(&o.spec, o.width, o.height, o.samples)?;
+    scene.show(lod)?;
+    let Headless {
+        gpu,
+        target,
+        mut world,
+    } = scene;
     let home = world.camera;
     let path = CameraPath::named(&o.path, &home, o.seconds)
         .with_context(|| format!("'{}' is not a camera path", o.path))?;
@@ -171,11 +158,7 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
         count: world.crowd.agents.len(),
         method: lod.method.name().into(),
         transition: lod.policy.transition.name().into(),
-        drive: match lod.policy.drive {
-            Drive::Time => "time",
-            Drive::Zone => "zone",
-        }
-        .into(),
+        drive: lod.policy.drive.name().into(),
         tolerance_px: lod.policy.tolerance_px,
         debug_view: lod.debug.name().into(),
         path: o.path.clone(),

@@ -422,9 +422,13 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
             .map_err(plot_error)?;
         root.present().map_err(plot_error)?;
     }
+    write_plot(path, w, h, buf)
+}
+
+/// Writes a plot drawn into an RGB buffer `w`×`h` as a PNG.
+pub(crate) fn write_plot(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
     let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
-    let rgba = image::DynamicImage::ImageRgb8(rgb).to_rgba8();
-    super::shot::write_png(path, &rgba)
+    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
 }
 
 pub(crate) fn plot_error<E: std::fmt::Display>(e: E) -> anyhow::Error {

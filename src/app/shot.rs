@@ -128,31 +128,67 @@ pub fn time_renderer(
     Ok(median(times))
 }
 
+/// A scene rendered without a window: a device, a target of the given size and the world.
+pub struct Headless {
+    pub gpu: Gpu,
+    pub target: Offscreen,
+    pub world: World,
+}
+
+impl Headless {
+    /// Loads the models of `spec` (bad input fails here, before any GPU work), opens a device
+    /// and builds the world into a `width`×`height` target.
+    pub fn new(spec: &SceneSpec, width: u32, height: u32, samples: u32) -> Result<Headless> {
+        let loaded = Loaded::new(spec.clone())?;
+        let gpu = Gpu::headless()?;
+        eprintln!("lodlab: adapter {}", gpu.describe());
+        let target = Offscreen::new(&gpu, width, height, samples);
+        let world = World::new(
+            &gpu,
+            loaded,
+            crate::render::targets::OFFSCREEN_FORMAT,
+            samples,
+        )?;
+        Ok(Headless { gpu, target, world })
+    }
+
+    /// Takes the level-of-detail choices of `lod` and waits for the levels they need.
+    pub fn show(&mut self, lod: &ShotLod) -> Result<()> {
+        let world = &mut self.world;
+        world.lod.method = lod.method;
+        world.lod.compare = lod.compare;
+        world.lod.policy = lod.policy;
+        world.renderer.debug = lod.debug;
+        world.apply_foliage(&lod.foliage);
+        if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
+            anyhow::bail!(
+                "--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)"
+            );
+        }
+        world.ensure_levels(&self.gpu)
+    }
+}
+
 pub fn run(options: &ShotOptions) -> Result<ShotReport> {
     check_writable(&options.out)?;
-    let loaded = Loaded::new(options.spec.clone())?;
-    let gpu = Gpu::headless()?;
-    eprintln!("lodlab: adapter {}", gpu.describe());
-    let target = Offscreen::new(&gpu, options.width, options.height, options.samples);
-    let mut world = World::new(
-        &gpu,
-        loaded,
-        crate::render::targets::OFFSCREEN_FORMAT,
-        options.samples,
-    )?;
-    if let Some(c) = options.camera {
-        world.camera = c;
-    }
+    let Headless {
+        gpu,
+        target,
+        mut world,
+    } = {
+        let mut h = Headless::new(
+            &options.spec,
+            options.width,
+            options.height,
+            options.samples,
+        )?;
+        if let Some(c) = options.camera {
+            h.world.camera = c;
+        }
+        h.show(&options.lod)?;
+        h
+    };
     let lod = &options.lod;
-    world.lod.method = lod.method;
-    world.lod.compare = lod.compare;
-    world.lod.policy = lod.policy;
-    world.renderer.debug = lod.debug;
-    world.apply_foliage(&lod.foliage);
-    if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
-        anyhow::bail!("--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)");
-    }
-    world.ensure_levels(&gpu)?;
     world.settle(options.height, options.time, lod.settle_seconds);
     let aspect = options.width as f32 / options.height as f32;
     let stats: FrameStats = world.upload(&gpu, aspect, options.time);
@@ -192,11 +228,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         method: lod.method.name().into(),
         compare: lod.compare.map(|m| m.name().into()),
         transition: lod.policy.transition.name().into(),
-        drive: match lod.policy.drive {
-            crate::scene::Drive::Time => "time",
-            crate::scene::Drive::Zone => "zone",
-        }
-        .into(),
+        drive: lod.policy.drive.name().into(),
         tolerance_px: lod.policy.tolerance_px,
         debug_view: lod.debug.name().into(),
         foliage: lod.foliage.policy.name().into(),

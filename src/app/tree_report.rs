@@ -9,7 +9,7 @@
 //! counts) and the spectral levels rebuilt with each description type and as plain SCA
 //! (`description_types`).
 
-use super::report::{plot_error, register_font, write_atomic};
+use super::report::{plot_error, register_font, write_atomic, write_plot};
 use super::tree_levels::{
     ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, colour_error,
     colour_error_over, tree_chain,
@@ -276,8 +276,7 @@ fn motion_plot(
             .map_err(plot_error)?;
             root.present().map_err(plot_error)?;
             drop(root);
-            let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
-            return super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8());
+            return write_plot(path, w, h, buf);
         };
         let root = root
             .titled(
@@ -369,8 +368,7 @@ fn motion_plot(
         }
         root.present().map_err(plot_error)?;
     }
-    let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
-    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+    write_plot(path, w, h, buf)
 }
 
 /// Colour error (top) and billboard count (bottom, log scale) against ε.
@@ -497,8 +495,7 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
         series(&mut chart, &skeleton_counts, orange, Marker::Triangle, None)?;
         root.present().map_err(plot_error)?;
     }
-    let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
-    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+    write_plot(path, w, h, buf)
 }
 
 /// How a series marks its points: the chain with circles, the thesis's set-up with triangles.
@@ -610,6 +607,5 @@ fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Pat
         }
         root.present().map_err(plot_error)?;
     }
-    let rgb = image::RgbImage::from_raw(w, h, buf).context("sheet size")?;
-    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+    write_plot(path, w, h, buf)
 }

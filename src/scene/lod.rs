@@ -103,6 +103,15 @@ pub enum Drive {
     Zone,
 }
 
+impl Drive {
+    pub fn name(self) -> &'static str {
+        match self {
+            Drive::Time => "time",
+            Drive::Zone => "zone",
+        }
+    }
+}
+
 /// The user's choices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LodPolicy {

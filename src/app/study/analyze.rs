@@ -4,8 +4,8 @@
 
 use super::session::{TEST, read_answers};
 use super::{Condition, read_manifest};
-use crate::app::report::{plot_error, register_font, write_atomic};
-use anyhow::{Context, Result};
+use crate::app::report::{plot_error, register_font, write_atomic, write_plot};
+use anyhow::Result;
 use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -267,9 +267,7 @@ pub fn chart(a: &Analysis, path: &Path) -> Result<()> {
             .map_err(plot_error)?;
         root.present().map_err(plot_error)?;
     }
-    let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
-    let rgba = image::DynamicImage::ImageRgb8(rgb).to_rgba8();
-    crate::app::shot::write_png(path, &rgba)
+    write_plot(path, w, h, buf)
 }
 
 /// Analyses a study folder and writes `analysis.md`, `analysis.json` and `preferences.png` into

@@ -7,10 +7,9 @@
 use super::session::Session;
 use crate::app::video::ClipReader;
 use crate::app::viewer::display_available;
-use crate::render::Gpu;
-use anyhow::{Context, Result, anyhow};
+use crate::app::window::{Acquired, WindowGpu};
+use anyhow::{Context, Result};
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, KeyEvent, WindowEvent};
@@ -60,7 +59,7 @@ pub fn run(mut session: Session, o: RunOptions) -> Result<ExitCode> {
     };
     let mut app = App {
         options: o,
-        window: None,
+        screen: None,
         stage,
         error: None,
         session: &mut session,
@@ -74,7 +73,7 @@ pub fn run(mut session: Session, o: RunOptions) -> Result<ExitCode> {
 
 struct App<'a> {
     options: RunOptions,
-    window: Option<StudyWindow>,
+    screen: Option<StudyWindow>,
     stage: Stage,
     error: Option<anyhow::Error>,
     session: &'a mut Session,
@@ -82,9 +81,9 @@ struct App<'a> {
 
 impl ApplicationHandler for App<'_> {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.window.is_none() {
+        if self.screen.is_none() {
             match StudyWindow::new(event_loop, &self.options) {
-                Ok(w) => self.window = Some(w),
+                Ok(w) => self.screen = Some(w),
                 Err(e) => {
                     self.error = Some(e);
                     event_loop.exit();
@@ -105,8 +104,8 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn about_to_wait(&mut self, _: &ActiveEventLoop) {
-        if let Some(w) = &self.window {
-            w.window.request_redraw();
+        if let Some(w) = &self.screen {
+            w.win.window.request_redraw();
         }
     }
 }
@@ -114,13 +113,13 @@ impl ApplicationHandler for App<'_> {
 impl App<'_> {
     /// One window event; `Ok(false)` closes the window.
     fn handle(&mut self, event: &WindowEvent) -> Result<bool> {
-        let Some(w) = &mut self.window else {
+        let Some(w) = &mut self.screen else {
             return Ok(true);
         };
-        let _ = w.egui.on_window_event(&w.window, event);
+        let _ = w.egui.on_window_event(&w.win.window, event);
         match event {
             WindowEvent::CloseRequested => return Ok(false),
-            WindowEvent::Resized(size) => w.resize(size.width, size.height),
+            WindowEvent::Resized(size) => w.win.resize(size.width, size.height),
             WindowEvent::KeyboardInput {
                 event:
                     KeyEvent {
@@ -134,7 +133,7 @@ impl App<'_> {
             WindowEvent::RedrawRequested => {
                 self.advance()?;
                 let text = self.caption();
-                let w = self.window.as_mut().expect("checked above");
+                let w = self.screen.as_mut().expect("checked above");
                 w.draw(&text)?;
             }
             _ => {}
@@ -207,12 +206,12 @@ impl App<'_> {
                     latest = clip.next_frame()?;
                     *shown += 1;
                 }
-                if let (Some(image), Some(w)) = (latest, self.window.as_mut()) {
+                if let (Some(image), Some(w)) = (latest, self.screen.as_mut()) {
                     w.show_frame(&image);
                 }
                 if *shown >= clip.frames && due > clip.frames {
                     let which = *which;
-                    if let Some(w) = self.window.as_mut() {
+                    if let Some(w) = self.screen.as_mut() {
                         w.hide_frame();
                     }
                     self.stage = if which == 1 {
@@ -255,10 +254,7 @@ impl App<'_> {
 
 /// The window, its surface and egui, which draws everything (clips are egui textures).
 struct StudyWindow {
-    window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    gpu: Gpu,
+    win: WindowGpu,
     egui: egui_winit::State,
     renderer: egui_wgpu::Renderer,
     frame: Option<egui::TextureHandle>,
@@ -273,58 +269,15 @@ impl StudyWindow {
         if o.fullscreen {
             attributes = attributes.with_fullscreen(Some(Fullscreen::Borderless(None)));
         }
-        let window = Arc::new(
-            event_loop
-                .create_window(attributes)
-                .context("cannot open a window")?,
-        );
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-                Box::new(event_loop.owned_display_handle()),
-            ));
-        let surface = instance
-            .create_surface(window.clone())
-            .context("cannot draw into the window")?;
-        let gpu = Gpu::with_instance(instance, Some(&surface))?;
-        let size = window.inner_size();
-        let mut config = surface
-            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
-            .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
-        let caps = surface.get_capabilities(&gpu.adapter);
-        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
-            config.format = srgb;
-        }
-        config.present_mode = wgpu::PresentMode::AutoVsync;
-        surface.configure(&gpu.device, &config);
-        let egui = egui_winit::State::new(
-            egui::Context::default(),
-            egui::ViewportId::ROOT,
-            &window,
-            Some(window.scale_factor() as f32),
-            None,
-            Some(gpu.device.limits().max_texture_dimension_2d as usize),
-        );
-        let renderer = egui_wgpu::Renderer::new(
-            &gpu.device,
-            config.format,
-            egui_wgpu::RendererOptions::default(),
-        );
+        let win = WindowGpu::open(event_loop, attributes)?;
+        let (egui, renderer) = win.egui();
         Ok(StudyWindow {
-            window,
-            surface,
-            config,
-            gpu,
+            win,
             egui,
             renderer,
             frame: None,
             showing: false,
         })
-    }
-
-    fn resize(&mut self, width: u32, height: u32) {
-        self.config.width = width.max(1);
-        self.config.height = height.max(1);
-        self.surface.configure(&self.gpu.device, &self.config);
     }
 
     fn show_frame(&mut self, image: &image::RgbaImage) {
@@ -349,7 +302,7 @@ impl StudyWindow {
 
     /// One frame: the clip's picture (as large as fits, on black) or the caption (on grey).
     fn draw(&mut self, caption: &str) -> Result<()> {
-        let raw = self.egui.take_egui_input(&self.window);
+        let raw = self.egui.take_egui_input(&self.win.window);
         let frame = self.frame.clone().filter(|_| self.showing);
         let output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
             let fill = if frame.is_some() {
@@ -385,38 +338,36 @@ impl StudyWindow {
                 });
         });
         self.egui
-            .handle_platform_output(&self.window, output.platform_output);
+            .handle_platform_output(&self.win.window, output.platform_output);
         let ppp = output.pixels_per_point;
         let primitives = self.egui.egui_ctx().tessellate(output.shapes, ppp);
         for (id, deltas) in &output.textures_delta.set {
             for delta in deltas {
                 self.renderer
-                    .update_texture(&self.gpu.device, &self.gpu.queue, *id, delta);
+                    .update_texture(&self.win.gpu.device, &self.win.gpu.queue, *id, delta);
             }
         }
-        let surface_frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+        let surface_frame = match self.win.acquire()? {
+            Acquired::Frame(f) => f,
+            Acquired::Skip => return Ok(()),
+            Acquired::Reconfigure => {
+                let (w, h) = (self.win.config.width, self.win.config.height);
+                self.win.resize(w, h);
                 return Ok(());
-            }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                let (w, h) = (self.config.width, self.config.height);
-                self.resize(w, h);
-                return Ok(());
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                return Err(anyhow!("the window's surface failed validation"));
             }
         };
         let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [self.config.width, self.config.height],
+            size_in_pixels: [self.win.config.width, self.win.config.height],
             pixels_per_point: ppp,
         };
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut encoder = self
+            .win
+            .gpu
+            .device
+            .create_command_encoder(&Default::default());
         let mut buffers = self.renderer.update_buffers(
-            &self.gpu.device,
-            &self.gpu.queue,
+            &self.win.gpu.device,
+            &self.win.gpu.queue,
             &mut encoder,
             &primitives,
             &screen,
@@ -441,9 +392,9 @@ impl StudyWindow {
             self.renderer.render(&mut pass, &primitives, &screen);
         }
         buffers.push(encoder.finish());
-        self.gpu.queue.submit(buffers);
-        self.window.pre_present_notify();
-        self.gpu.queue.present(surface_frame);
+        self.win.gpu.queue.submit(buffers);
+        self.win.window.pre_present_notify();
+        self.win.gpu.queue.present(surface_frame);
         for id in &output.textures_delta.free {
             self.renderer.free_texture(id);
         }

@@ -9,17 +9,17 @@ mod panel;
 
 use super::levels::{BackgroundBake, Poll};
 use super::shot::{ShotLod, write_png};
+use super::window::{Acquired, WindowGpu};
 use super::world::{Loaded, SceneSpec, World};
 use crate::render::DebugView;
+use crate::render::FrameStats;
 use crate::render::targets::{Offscreen, RenderTargets};
-use crate::render::{FrameStats, Gpu};
 use crate::scene::{LodMethod, Transition};
 use anyhow::{Context, Result, anyhow};
 use controls::{Controls, KeyAction};
 use panel::{FrameHistory, Info, Settings};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::Instant;
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
@@ -131,16 +131,13 @@ impl ApplicationHandler for App {
     fn about_to_wait(&mut self, _: &ActiveEventLoop) {
         // Always animating: ask for the next frame straight away.
         if let Some(v) = &self.viewer {
-            v.window.request_redraw();
+            v.win.window.request_redraw();
         }
     }
 }
 
 struct Viewer {
-    window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    gpu: Gpu,
+    win: WindowGpu,
     world: World,
     targets: RenderTargets,
     egui: egui_winit::State,
@@ -176,32 +173,9 @@ impl Viewer {
         let attributes = Window::default_attributes()
             .with_title("lodlab")
             .with_inner_size(winit::dpi::PhysicalSize::new(options.width, options.height));
-        let window = Arc::new(
-            event_loop
-                .create_window(attributes)
-                .context("cannot open a window")?,
-        );
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-                Box::new(event_loop.owned_display_handle()),
-            ));
-        let surface = instance
-            .create_surface(window.clone())
-            .context("cannot draw into the window")?;
-        let gpu = Gpu::with_instance(instance, Some(&surface))?;
-        eprintln!("lodlab: adapter {}", gpu.describe());
-        let size = window.inner_size();
-        let mut config = surface
-            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
-            .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
-        let caps = surface.get_capabilities(&gpu.adapter);
-        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
-            config.format = srgb;
-        }
-        config.present_mode = wgpu::PresentMode::AutoVsync;
-        surface.configure(&gpu.device, &config);
-
-        let mut world = World::new(&gpu, loaded, config.format, options.samples)?;
+        let win = WindowGpu::open(event_loop, attributes)?;
+        let (gpu, config) = (&win.gpu, &win.config);
+        let mut world = World::new(gpu, loaded, config.format, options.samples)?;
         world.lod.method = options.lod.method;
         world.lod.compare = options.lod.compare;
         world.lod.policy = options.lod.policy;
@@ -209,7 +183,7 @@ impl Viewer {
         world.apply_foliage(&options.lod.foliage);
         if options.screenshot.is_some() {
             // A screenshot shows the levels asked for, so it waits for them.
-            world.ensure_levels(&gpu)?;
+            world.ensure_levels(gpu)?;
         }
         let targets = RenderTargets::new(
             &gpu.device,
@@ -218,20 +192,7 @@ impl Viewer {
             config.format,
             options.samples,
         );
-        let context = egui::Context::default();
-        let egui = egui_winit::State::new(
-            context,
-            egui::ViewportId::ROOT,
-            &window,
-            Some(window.scale_factor() as f32),
-            None,
-            Some(gpu.device.limits().max_texture_dimension_2d as usize),
-        );
-        let egui_renderer = egui_wgpu::Renderer::new(
-            &gpu.device,
-            config.format,
-            egui_wgpu::RendererOptions::default(),
-        );
+        let (egui, egui_renderer) = win.egui();
         let settings = Settings {
             count: world.spec.count,
             model: None,
@@ -250,10 +211,7 @@ impl Viewer {
             backend: gpu.backend_name(),
             model_names: world.bakes.iter().map(|b| b.name.clone()).collect(),
             clip_names: world.bakes.iter().map(|b| b.clip_names()).collect(),
-            window,
-            surface,
-            config,
-            gpu,
+            win,
             world,
             targets,
             egui,
@@ -281,7 +239,9 @@ impl Viewer {
                 Poll::Done(packs) => {
                     let (method, chain) = (job.method, job.chain);
                     self.bake = None;
-                    let installed = self.world.install_levels(&self.gpu, method, &chain, packs);
+                    let installed = self
+                        .world
+                        .install_levels(&self.win.gpu, method, &chain, packs);
                     if let Err(e) = installed {
                         self.bake_error = Some(format!("{method}: {e:#}"));
                     }
@@ -297,7 +257,7 @@ impl Viewer {
             && self.foliage_changed.elapsed() >= SETTLE_BEFORE_BAKE
         {
             self.bake = Some(BackgroundBake::start(
-                self.gpu.clone(),
+                self.win.gpu.clone(),
                 self.world.sources.clone(),
                 self.world.has_levels(method),
                 method,
@@ -310,7 +270,7 @@ impl Viewer {
 
     /// Handles one window event; `Ok(false)` ends the viewer.
     fn handle(&mut self, event: &WindowEvent, options: &ViewOptions) -> Result<bool> {
-        let response = self.egui.on_window_event(&self.window, event);
+        let response = self.egui.on_window_event(&self.win.window, event);
         match event {
             WindowEvent::CloseRequested => return Ok(false),
             WindowEvent::Resized(size) => self.resize(size.width, size.height),
@@ -353,14 +313,12 @@ impl Viewer {
     }
 
     fn resize(&mut self, width: u32, height: u32) {
-        self.config.width = width.max(1);
-        self.config.height = height.max(1);
-        self.surface.configure(&self.gpu.device, &self.config);
+        self.win.resize(width, height);
         self.targets = RenderTargets::new(
-            &self.gpu.device,
-            self.config.width,
-            self.config.height,
-            self.config.format,
+            &self.win.gpu.device,
+            self.win.config.width,
+            self.win.config.height,
+            self.win.config.format,
             self.targets.sample_count,
         );
     }
@@ -382,7 +340,7 @@ impl Viewer {
         self.controls.fly(&mut self.world.camera, dt);
 
         // The panel.
-        let raw = self.egui.take_egui_input(&self.window);
+        let raw = self.egui.take_egui_input(&self.win.window);
         let mut requests = panel::Requests::default();
         let mut central = egui::Rect::NOTHING;
         self.update_levels()?;
@@ -416,7 +374,7 @@ impl Viewer {
             }
         });
         self.egui
-            .handle_platform_output(&self.window, output.platform_output);
+            .handle_platform_output(&self.win.window, output.platform_output);
         let ppp = output.pixels_per_point;
         let primitives = self.egui.egui_ctx().tessellate(output.shapes, ppp);
         if requests.relayout {
@@ -433,7 +391,7 @@ impl Viewer {
         self.apply_lod_settings();
 
         // The 3D view: what the panel leaves.
-        let (w, h) = (self.config.width, self.config.height);
+        let (w, h) = (self.win.config.width, self.win.config.height);
         let x0 = ((central.min.x * ppp).round().max(0.0) as u32).min(w - 1);
         let y0 = ((central.min.y * ppp).round().max(0.0) as u32).min(h - 1);
         let x1 = ((central.max.x * ppp).round() as u32).clamp(x0 + 1, w);
@@ -441,41 +399,45 @@ impl Viewer {
         self.view = [x0, y0, x1 - x0, y1 - y0];
         self.stats = self
             .world
-            .prepare(&self.gpu, [self.view[2], self.view[3]], self.time, dt);
+            .prepare(&self.win.gpu, [self.view[2], self.view[3]], self.time, dt);
 
         // egui's texture uploads go in whether or not this frame reaches the screen; its frees
         // once the frame no longer needs the textures.
         for (id, deltas) in output.textures_delta.set.drain() {
             for delta in &deltas {
-                self.egui_renderer
-                    .update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+                self.egui_renderer.update_texture(
+                    &self.win.gpu.device,
+                    &self.win.gpu.queue,
+                    id,
+                    delta,
+                );
             }
         }
         let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
-        let frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+        let frame = match self.win.acquire()? {
+            Acquired::Frame(f) => f,
+            Acquired::Skip => {
                 self.free_egui_textures(&frees);
                 return Ok(true);
             }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+            Acquired::Reconfigure => {
                 self.free_egui_textures(&frees);
                 self.resize(w, h);
                 return Ok(true);
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                return Err(anyhow!("the window's surface failed validation"));
             }
         };
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [w, h],
             pixels_per_point: ppp,
         };
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut encoder = self
+            .win
+            .gpu
+            .device
+            .create_command_encoder(&Default::default());
         let mut buffers = self.egui_renderer.update_buffers(
-            &self.gpu.device,
-            &self.gpu.queue,
+            &self.win.gpu.device,
+            &self.win.gpu.queue,
             &mut encoder,
             &primitives,
             &screen,
@@ -487,11 +449,11 @@ impl Viewer {
         let last = options.screenshot.is_some() && self.frames + 1 >= options.frames.max(1);
         let capture = last.then(|| {
             let shot = Offscreen::with_format(
-                &self.gpu,
+                &self.win.gpu,
                 w,
                 h,
                 self.targets.sample_count,
-                self.config.format,
+                self.win.config.format,
             );
             self.encode(
                 &mut encoder,
@@ -503,16 +465,16 @@ impl Viewer {
             shot
         });
         buffers.push(encoder.finish());
-        self.gpu.queue.submit(buffers);
-        self.window.pre_present_notify();
-        self.gpu.queue.present(frame);
+        self.win.gpu.queue.submit(buffers);
+        self.win.window.pre_present_notify();
+        self.win.gpu.queue.present(frame);
         self.free_egui_textures(&frees);
         self.frames += 1;
 
         if let (Some(shot), Some(path)) = (capture, &options.screenshot) {
-            let mut bytes = shot.read_bytes(&self.gpu)?;
+            let mut bytes = shot.read_bytes(&self.win.gpu)?;
             if matches!(
-                self.config.format,
+                self.win.config.format,
                 wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
             ) {
                 for px in bytes.chunks_exact_mut(4) {

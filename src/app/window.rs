@@ -1,0 +1,102 @@
+//! What every lodlab window needs: the window with a device that can draw into it, egui on
+//! top, and the frame to draw. Shared by the viewer and the study window.
+
+use crate::render::Gpu;
+use anyhow::{Context, Result, anyhow};
+use std::sync::Arc;
+use winit::event_loop::ActiveEventLoop;
+use winit::window::{Window, WindowAttributes};
+
+/// A window and a device drawing into it through its surface (sRGB where offered, vsync).
+pub struct WindowGpu {
+    pub window: Arc<Window>,
+    pub surface: wgpu::Surface<'static>,
+    pub config: wgpu::SurfaceConfiguration,
+    pub gpu: Gpu,
+}
+
+impl WindowGpu {
+    pub fn open(event_loop: &ActiveEventLoop, attributes: WindowAttributes) -> Result<WindowGpu> {
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .context("cannot open a window")?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance
+            .create_surface(window.clone())
+            .context("cannot draw into the window")?;
+        let gpu = Gpu::with_instance(instance, Some(&surface))?;
+        eprintln!("lodlab: adapter {}", gpu.describe());
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
+            config.format = srgb;
+        }
+        config.present_mode = wgpu::PresentMode::AutoVsync;
+        surface.configure(&gpu.device, &config);
+        Ok(WindowGpu {
+            window,
+            surface,
+            config,
+            gpu,
+        })
+    }
+
+    /// Reconfigures the surface for a new size.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        self.config.width = width.max(1);
+        self.config.height = height.max(1);
+        self.surface.configure(&self.gpu.device, &self.config);
+    }
+
+    /// egui's input state for this window and its renderer for this surface.
+    pub fn egui(&self) -> (egui_winit::State, egui_wgpu::Renderer) {
+        let state = egui_winit::State::new(
+            egui::Context::default(),
+            egui::ViewportId::ROOT,
+            &self.window,
+            Some(self.window.scale_factor() as f32),
+            None,
+            Some(self.gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let renderer = egui_wgpu::Renderer::new(
+            &self.gpu.device,
+            self.config.format,
+            egui_wgpu::RendererOptions::default(),
+        );
+        (state, renderer)
+    }
+
+    /// The texture to draw this frame into, if there is one.
+    pub fn acquire(&self) -> Result<Acquired> {
+        match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(f)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => Ok(Acquired::Frame(f)),
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                Ok(Acquired::Skip)
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                Ok(Acquired::Reconfigure)
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                Err(anyhow!("the window's surface failed validation"))
+            }
+        }
+    }
+}
+
+/// What [`WindowGpu::acquire`] found.
+pub enum Acquired {
+    Frame(wgpu::SurfaceTexture),
+    /// No frame this time (hidden, or not ready): draw nothing.
+    Skip,
+    /// The surface no longer fits the window: resize, and draw next time.
+    Reconfigure,
+}
