@@ -1,8 +1,10 @@
 //! Bake-time and memory figures for the skinned LOD bake (Merry et al. Table 1), as ratios
 //! measured in one run: `cargo bench --bench lod_bake`.
 //!
-//! - every method on the paper's cylinder at about 10k and 50k vertices, and on the built-in
-//!   horse and walker, one method at a time on one thread, best of three;
+//! - every method on the paper's cylinder at about 10k and 50k vertices, on the built-in
+//!   horse and walker, on the test models with real-world properties (split-tube, armour,
+//!   patchwork) and on the armour at about 60k triangles, one method at a time, best of three;
+//!   the whole bake: simplification and cutting the levels (which measures each);
 //! - the peak resident memory of the process after the 50k-vertex AS+IS bake.
 
 use lodlab::bake::lod::{LodOptions, bake_lods};
@@ -47,18 +49,22 @@ fn main() {
         before.unwrap_or(f64::NAN)
     );
     let mut models = vec![bent_cylinder(100, 99), big];
-    for name in ["horse", "walker"] {
+    for name in ["horse", "walker", "split-tube", "armour", "patchwork"] {
         models.push(lodlab::import::load_model(name).expect("built-in asset"));
     }
-    println!("\n| model | vertices | 3D (s) | AS (s) | AS+IS (s) | AS/3D | AS+IS/3D |");
-    println!("|---|---|---|---|---|---|---|");
+    let mut detailed = lodlab::generate::armour::armour_at(2.25);
+    detailed.name = "armour ×2.25".into();
+    models.push(detailed);
+    println!("\n| model | vertices | triangles | 3D (s) | AS (s) | AS+IS (s) | AS/3D | AS+IS/3D |");
+    println!("|---|---|---|---|---|---|---|---|");
     for m in &models {
         let runs = if m.mesh.vertex_count() > 20_000 { 1 } else { 3 };
         let t: Vec<f64> = Method::ALL.iter().map(|&k| time(m, k, runs)).collect();
         println!(
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |",
             m.name,
             m.mesh.vertex_count(),
+            m.mesh.triangle_count(),
             t[0],
             t[1],
             t[2],

@@ -19,6 +19,11 @@ pub enum Kind {
     /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`,
     /// and `sapling`, the size of the thesis's tree).
     Tree,
+    /// A character with the awkward properties of assets made elsewhere, for testing the LOD
+    /// pipeline: `split-tube` (indexed, split along hard edges and a UV seam, mostly zero-area
+    /// UVs), `armour` (57 separate closed parts, no UVs), `patchwork` (a texture in a couple of
+    /// hundred small charts).
+    TestModel,
 }
 
 pub const BUILTINS: &[Builtin] = &[
@@ -46,6 +51,21 @@ pub const BUILTINS: &[Builtin] = &[
         name: "sapling",
         file_name: "sapling.glb",
         kind: Kind::Tree,
+    },
+    Builtin {
+        name: "split-tube",
+        file_name: "split-tube.glb",
+        kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "armour",
+        file_name: "armour.glb",
+        kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "patchwork",
+        file_name: "patchwork.glb",
+        kind: Kind::TestModel,
     },
 ];
 

@@ -206,9 +206,13 @@ fn parse_lod_methods(s: &str) -> Result<LodMethods, String> {
 
 #[derive(Args, Debug)]
 struct ReportArgs {
-    /// A built-in asset name (horse, walker, broadleaf, conifer, sapling) or a glTF path.
+    /// A built-in asset name (horse, walker, broadleaf, conifer, sapling, split-tube, armour,
+    /// patchwork) or a glTF path; the same as --model.
     #[arg(value_name = "MODEL")]
-    model: String,
+    model: Option<String>,
+    /// The model, as shot, bench and view take it.
+    #[arg(long = "model", value_name = "NAME|PATH", conflicts_with = "model")]
+    model_flag: Option<String>,
     /// Folder to write the report into (created if needed): report.json, error.png and
     /// timings.md; for a tree report.json, colour-error.png and levels.png.
     #[arg(long, value_name = "DIR")]
@@ -220,9 +224,13 @@ struct ReportArgs {
 
 #[derive(Args, Debug)]
 struct BakeArgs {
-    /// Models: built-in asset names (horse, walker, broadleaf, conifer, sapling) or glTF paths.
-    #[arg(required = true, value_name = "MODEL")]
+    /// Models: built-in asset names (horse, walker, broadleaf, conifer, sapling, split-tube,
+    /// armour, patchwork) or glTF paths; the same as --model.
+    #[arg(value_name = "MODEL", required_unless_present = "model_flags")]
     models: Vec<String>,
+    /// A model, as shot, bench and view take it. Repeat for several.
+    #[arg(long = "model", value_name = "NAME|PATH")]
+    model_flags: Vec<String>,
     /// Simplification methods, comma separated (trees get their billboard clouds whatever
     /// the methods).
     #[arg(long, default_value = "rest-pose,as,as+is", value_parser = parse_methods)]
@@ -670,19 +678,25 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 anyhow::bail!("--tolerance must be a positive number of pixels");
             }
             let results = lodlab::app::bake::run(&lodlab::app::bake::BakeOptions {
-                models: a.models,
+                models: a.models.into_iter().chain(a.model_flags).collect(),
                 methods: a.methods.0,
                 tolerance_px: a.tolerance,
                 budgets: a.triangles,
                 cache_dir: a.cache,
             })?;
+            for warning in lodlab::app::bake::budget_warnings(&results) {
+                eprintln!("warning: {warning}");
+            }
             print!("{}", lodlab::app::bake::table(&results));
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::Report(a)) => {
+            let Some(name) = a.model.or(a.model_flag) else {
+                anyhow::bail!("report needs a model: lodlab report --model NAME|PATH --out DIR");
+            };
             // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
             // report; a character the simplification report.
-            let model = lodlab::import::load_model(&a.model)?;
+            let model = lodlab::import::load_model(&name)?;
             if lodlab::bake::billboard::foliage(&model).is_ok() {
                 let r = lodlab::app::tree_report::run(&model, &a.out)?;
                 let last = r.levels.last().map_or(0, |l| l.billboards);
@@ -697,18 +711,27 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 return Ok(ExitCode::SUCCESS);
             }
             let report = lodlab::app::report::run(&lodlab::app::report::ReportOptions {
-                model: a.model,
+                model: name,
                 out: a.out.clone(),
                 baseline_meshopt: a.baseline.is_some(),
                 progress: true,
             })?;
             let c = &report.comparison;
             let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
+            let floors: Vec<String> = report
+                .methods
+                .iter()
+                .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
+                .collect();
             println!(
-                "{}: AS <= rest-pose on {} of the curve, AS+IS <= AS on {}; wrote {}",
+                "{}: AS <= rest-pose on {} of the curve, AS+IS <= AS on {}; coarsest levels {} \
+                 of {} triangles; errors by {}; wrote {}",
                 report.model,
                 pct(c.as_le_rest_pose),
                 pct(c.as_is_le_as),
+                floors.join(", "),
+                report.triangles,
+                report.correspondence.describe(),
                 a.out.display()
             );
             Ok(ExitCode::SUCCESS)

@@ -154,6 +154,13 @@ fn bake_prints_levels_and_uses_the_cache() {
         cache.to_str().unwrap(),
     ]);
     assert!(out.status.success());
+    // 60 is under what a level may go down to: said, with the floor.
+    let err = String::from_utf8_lossy(&out.stderr);
+    let warning = err.lines().find(|l| l.starts_with("warning:")).expect(&err);
+    assert!(
+        warning.contains("cylinder (as+is)") && warning.contains("budget 60 below its floor of"),
+        "{warning}"
+    );
     let t = String::from_utf8_lossy(&out.stdout);
     assert_eq!(
         t.lines().filter(|l| l.starts_with("as+is")).count(),
@@ -176,26 +183,14 @@ fn bake_and_report_reject_bad_input_in_one_line() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(err.contains("missing.glb"), "{err}");
     }
-    // A model without texture coordinates has no parameterisation to measure through.
+    // A model without texture coordinates bakes, flattening each neighbourhood instead.
     let mut flat = bent_cylinder(6, 6);
     flat.mesh.uvs.iter_mut().for_each(|u| *u = glam::Vec2::ZERO);
     let p = dir.path().join("no-uv.glb");
     std::fs::write(&p, to_glb(&flat)).unwrap();
     let out = lodlab(&[
-        "report",
-        p.to_str().unwrap(),
-        "--out",
-        dir.path().join("r").to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("no-uv.glb") && err.contains("texture coordinates"),
-        "{err}"
-    );
-    // ... but it bakes, flattening each neighbourhood instead.
-    let out = lodlab(&[
         "bake",
+        "--model",
         p.to_str().unwrap(),
         "--cache",
         dir.path().join("c").to_str().unwrap(),
@@ -277,4 +272,55 @@ fn report_writes_curves_plot_and_timings() {
         md.contains("| cylinder |") && md.contains("AS+IS/3D"),
         "{md}"
     );
+    // The cylinder's texture coordinates are a parameterisation: the curves measure through
+    // them. Every level the viewer bakes is there, with its silhouette at three tolerances.
+    assert_eq!(json["correspondence"], "texture");
+    assert!(md.contains("Measured by texture coordinates"), "{md}");
+    for method in ["rest-pose", "as", "as+is"] {
+        let levels = json["methods"][method]["levels"].as_array().unwrap();
+        assert!(levels.len() >= 2, "{method}");
+        for (k, l) in levels.iter().enumerate().skip(1) {
+            let px = l["silhouette_px"].as_array().unwrap();
+            assert_eq!(px.len(), 3, "{method} level {k}");
+            assert!(l["error"].as_f64().unwrap() >= l["bound"].as_f64().unwrap());
+        }
+        assert!(
+            md.contains(&format!("### {method}: {} levels", levels.len())),
+            "{md}"
+        );
+    }
+}
+
+#[test]
+fn report_measures_a_model_without_texture_coordinates_by_closest_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut flat = bent_cylinder(8, 8);
+    flat.mesh.uvs.iter_mut().for_each(|u| *u = glam::Vec2::ZERO);
+    let p = dir.path().join("no-uv.glb");
+    std::fs::write(&p, to_glb(&flat)).unwrap();
+    let out_dir = dir.path().join("r");
+    let out = lodlab(&[
+        "report",
+        "--model",
+        p.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("closest point"));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["correspondence"], "closest-point");
+    let md = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
+    assert!(
+        md.contains("Measured by closest point in the rest pose"),
+        "{md}"
+    );
+    // The simplification still separates the methods.
+    let curve = json["methods"]["as"]["curve"].as_array().unwrap();
+    assert!(curve.last().unwrap()["rms_error"].as_f64().unwrap() > 0.0);
 }

@@ -62,11 +62,11 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
     let mut instances: Vec<Instance> = Vec::new();
     world.crowd.instances_at(0.7, &mut instances);
     let view = FrameView::from_camera(&world.camera, 1.0, 0.7);
-    let levels = world.renderer.characters()[0]
-        .set(method.index())
-        .unwrap()
-        .levels
-        .len();
+    let set = world.renderer.characters()[0].set(method.index()).unwrap();
+    let levels = set.levels.len();
+    // Level pairs far enough apart to tell by eye: the first where the next level has a
+    // quarter fewer triangles, and two coarser ones.
+    let triangles: Vec<u32> = set.levels.iter().map(|l| l.triangles()).collect();
     assert!(levels >= 5, "{levels} levels");
     let mut render = |d: LodDraw| {
         world.renderer.prepare(
@@ -84,7 +84,10 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
             .render_to(&gpu, &target.targets, &target.view);
         target.read_rgba(&gpu).unwrap()
     };
-    for k in [1u8, (levels as u8) / 2, levels as u8 - 3] {
+    let first = (1..levels - 2)
+        .find(|&k| triangles[k + 1] * 4 <= triangles[k] * 3)
+        .expect("levels a quarter apart") as u8;
+    for k in [first, (levels as u8) / 2, levels as u8 - 3] {
         let fine = render(LodDraw::Level(k));
         let coarse = render(LodDraw::Level(k + 1));
         let coarser = render(LodDraw::Level(k + 2));
@@ -187,6 +190,10 @@ struct Shot {
 }
 
 fn take(name: &str, lod: ShotLod) -> Shot {
+    take_at(name, lod, 2.0)
+}
+
+fn take_at(name: &str, lod: ShotLod, time: f32) -> Shot {
     let dir = cache().join("shots");
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join(format!("{name}.png"));
@@ -195,7 +202,7 @@ fn take(name: &str, lod: ShotLod) -> Shot {
         out: out.clone(),
         width: 480,
         height: 270,
-        time: 2.0,
+        time,
         samples: 1,
         camera: None,
         timed_frames: 1,
@@ -240,10 +247,25 @@ fn shots_of_every_method_and_transition_differ_where_they_should() {
     assert!(differing(&rest.image, &as_.image, 8) > 0);
     assert!(differing(&as_.image, &as_is.image, 8) > 0);
 
+    // A moment when some characters are between levels (the crowd walks, so levels change).
     let method = LodMethod::ALL[3];
-    let morph = take("morph", with(method, Transition::Morph, Drive::Time));
-    let alpha = take("alpha", with(method, Transition::Alpha, Drive::Time));
-    let zones = take("zones", with(method, Transition::Morph, Drive::Zone));
+    let (time, morph) = [2.0f32, 2.25, 2.5, 2.75, 3.0, 3.5]
+        .into_iter()
+        .map(|t| {
+            (
+                t,
+                take_at("morph", with(method, Transition::Morph, Drive::Time), t),
+            )
+        })
+        .find(|(_, s)| s.report.in_transition > 0)
+        .expect("a moment with a transition");
+    let as_is = take_at(
+        "as+is-then",
+        with(method, Transition::Pop, Drive::Time),
+        time,
+    );
+    let alpha = take_at("alpha", with(method, Transition::Alpha, Drive::Time), time);
+    let zones = take_at("zones", with(method, Transition::Morph, Drive::Zone), time);
     let pixels = (480 * 270) as usize;
     for s in [&morph, &alpha, &zones] {
         assert!(s.report.in_transition > 0, "{}", s.report.transition);

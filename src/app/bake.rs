@@ -179,6 +179,38 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
     Ok(out)
 }
 
+/// One line per (model, method) whose triangle budgets go below what the simplification
+/// can reach: those budgets all give the coarsest level, so they name the floor.
+pub fn budget_warnings(results: &BakeResults) -> Vec<String> {
+    let mut out = Vec::new();
+    for b in &results.characters {
+        let Some(budgets) = &b.lods.options.budgets else {
+            continue;
+        };
+        let floor = crate::bake::lod::floor_triangles(&b.lods.sequence, &b.lods.options);
+        let under: Vec<String> = budgets
+            .iter()
+            .filter(|&&t| t < floor)
+            .map(|t| t.to_string())
+            .collect();
+        if !under.is_empty() {
+            out.push(format!(
+                "{} ({}): budget{} {} below its floor of {floor} triangles; {} the coarsest level",
+                b.model,
+                b.lods.method,
+                if under.len() > 1 { "s" } else { "" },
+                under.join(", "),
+                if under.len() > 1 {
+                    "they all give"
+                } else {
+                    "it gives"
+                },
+            ));
+        }
+    }
+    out
+}
+
 /// The progress bar of one (model, method) job, shared by `bake` and `report`.
 pub fn bar_style() -> ProgressStyle {
     ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")

@@ -1,13 +1,17 @@
 //! `lodlab report`: the evidence about a model's levels of detail. Error curves for every
-//! method (Merry et al. Figure 7), bake timings (Table 1), and optionally meshoptimizer as
-//! the baseline a user would otherwise reach for.
+//! method (Merry et al. Figure 7), bake timings (Table 1), each level's error and how far its
+//! silhouette strays where the renderer switches to it, and optionally meshoptimizer as the
+//! baseline a user would otherwise reach for.
+//!
+//! The curves measure through the texture where the model's texture coordinates are a
+//! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
 
 use crate::bake::animation_space::AnimationSpaceMesh;
-use crate::bake::lod::{Replay, progressive_mesh};
-use crate::bake::lod_error::{ErrorProbe, MeshError};
-use crate::bake::simplify::{Method, Sequence, SimplifyInput};
+use crate::bake::lod::{LodOptions, Replay, SkinnedLods, bake_lods};
+use crate::bake::lod_error::{Correspondence, MeshError, Probe};
+use crate::bake::simplify::{Method, Sequence, SimplifyInput, pose_samples};
 use crate::error::InputError;
-use crate::import::{load_model, source_path};
+use crate::import::load_model;
 use crate::model::Model;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
@@ -22,6 +26,11 @@ pub const CURVE_POINTS: usize = 40;
 const NEGLIGIBLE: f64 = 1e-9;
 /// Surface samples the error is averaged over.
 pub const SAMPLES: usize = 6000;
+/// Tolerances in pixels at which every level's silhouette is compared with full detail.
+pub const SILHOUETTE_TOLERANCES: [f32; 3] = [1.5, 4.0, 8.0];
+/// Poses (spread over the clips) the silhouettes are compared in, each from
+/// [`crate::bake::silhouette::VIEWS`].
+const SILHOUETTE_POSES: usize = 3;
 
 #[derive(Clone, Debug)]
 pub struct ReportOptions {
@@ -41,9 +50,26 @@ pub struct CurvePoint {
 
 #[derive(Clone, Debug, Serialize)]
 pub struct MethodReport {
+    /// Wall time of the whole bake: the simplification and cutting the levels.
     pub bake_seconds: f64,
     pub cache_hit_rate: Option<f64>,
     pub curve: Vec<CurvePoint>,
+    /// The levels the viewer uses (empty for the meshopt baseline).
+    pub levels: Vec<LevelReport>,
+}
+
+/// One level of detail as the viewer bakes it, and how its silhouette compares.
+#[derive(Clone, Debug, Serialize)]
+pub struct LevelReport {
+    pub triangles: u32,
+    pub influences: u32,
+    /// The level's error (what the renderer projects), and the memoryless bound under it, in
+    /// scene units.
+    pub error: f32,
+    pub bound: f32,
+    /// The largest silhouette distance from full detail in pixels where the renderer switches
+    /// to this level, at each of [`SILHOUETTE_TOLERANCES`].
+    pub silhouette_px: Vec<f32>,
 }
 
 /// How the methods compare at equal influence counts (the issue's acceptance figures).
@@ -67,42 +93,50 @@ pub struct Report {
     pub bones: usize,
     pub methods: BTreeMap<String, MethodReport>,
     pub comparison: Comparison,
-    /// How the error was measured.
+    /// How the error was measured: which points correspond, over how many samples and frames.
+    pub correspondence: Correspondence,
     pub samples: usize,
     pub frames: usize,
     pub units: String,
+    /// The tolerances of every level's `silhouette_px`.
+    pub silhouette_tolerances: Vec<f32>,
 }
 
-/// Runs the whole report and writes `report.json`, `error.png` and `timings.md` into `out`.
+/// Runs the whole report and writes `timings.md`, `report.json` and `error.png` into `out`,
+/// `timings.md` first, so it is there even if drawing the plot fails.
 pub fn run(opts: &ReportOptions) -> Result<Report> {
     let model = load_model(&opts.model)?;
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| InputError::new(&opts.out, format!("cannot create the folder ({e})")))?;
     let base = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
-    let probe = ErrorProbe::new(&model, &base, SAMPLES)
-        .map_err(|e| InputError::new(source_path(&opts.model), e))?;
+    let probe = Probe::for_model(&model, &base, SAMPLES);
+    let lod_opts = super::levels::runtime_options(&model);
+    let poses = pose_samples(&model, SILHOUETTE_POSES);
 
     let mut methods = BTreeMap::new();
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
     for method in Method::ALL {
         let bar = bar(opts.progress, &format!("{} {method}", model.name));
         let progress = |f: f32| bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
-        let (base, seq, seconds) = progressive_mesh(&model, method, &progress);
+        let lods = bake_lods(&model, method, &lod_opts, &progress);
         bar.set_message("measuring");
-        let curve = measure_sequence(&probe, &base, &seq);
-        bar.finish_with_message(format!("{seconds:.2} s"));
+        let curve = measure_sequence(&probe, &base, &lods.sequence);
+        bar.set_message("silhouettes");
+        let levels = level_reports(&lods, &poses);
+        bar.finish_with_message(format!("{:.2} s", lods.bake_seconds));
         methods.insert(
             method.name().to_string(),
             MethodReport {
-                bake_seconds: seconds,
+                bake_seconds: lods.bake_seconds,
                 cache_hit_rate: match method {
-                    Method::InfluenceSimplification => seq.stats.cache_hit_rate(),
+                    Method::InfluenceSimplification => lods.sequence.stats.cache_hit_rate(),
                     _ => None,
                 },
                 curve,
+                levels,
             },
         );
-        sequences.push((method, seq));
+        sequences.push((method, lods.sequence));
     }
     if opts.baseline_meshopt {
         let triangles: Vec<u32> = methods["rest-pose"]
@@ -125,20 +159,49 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         bones: model.skeleton.bone_count(),
         methods,
         comparison,
+        correspondence: probe.correspondence(),
         samples: SAMPLES,
         frames: probe.frame_count(),
         units: "scene units (metres)".into(),
+        silhouette_tolerances: SILHOUETTE_TOLERANCES.to_vec(),
     };
+    write_atomic(
+        &opts.out.join("timings.md"),
+        timings_markdown(&report, &model, &sequences, &lod_opts).as_bytes(),
+    )?;
     write_atomic(
         &opts.out.join("report.json"),
         serde_json::to_string_pretty(&report)?.as_bytes(),
     )?;
     plot(&report, &opts.out.join("error.png"))?;
-    write_atomic(
-        &opts.out.join("timings.md"),
-        timings_markdown(&report, &model, &sequences).as_bytes(),
-    )?;
     Ok(report)
+}
+
+/// Every level of `lods` with its silhouette distances at [`SILHOUETTE_TOLERANCES`] (full
+/// detail, level 0, has none).
+fn level_reports(lods: &SkinnedLods, poses: &[Vec<glam::Affine3A>]) -> Vec<LevelReport> {
+    let full = &lods.levels[0].mesh;
+    lods.levels
+        .iter()
+        .enumerate()
+        .map(|(k, l)| LevelReport {
+            triangles: l.triangles() as u32,
+            influences: l.influences() as u32,
+            error: l.error,
+            bound: l.bound,
+            silhouette_px: if k == 0 {
+                Vec::new()
+            } else {
+                SILHOUETTE_TOLERANCES
+                    .iter()
+                    .map(|&tau| {
+                        use crate::bake::silhouette::{MAX_SIDE, distance};
+                        distance(full, &l.mesh, l.error, tau, poses, MAX_SIDE).px
+                    })
+                    .collect()
+            },
+        })
+        .collect()
 }
 
 fn bar(show: bool, prefix: &str) -> ProgressBar {
@@ -153,7 +216,7 @@ fn bar(show: bool, prefix: &str) -> ProgressBar {
 
 /// The error along a sequence at [`CURVE_POINTS`] prefixes spaced evenly in log(influences).
 pub fn measure_sequence(
-    probe: &ErrorProbe,
+    probe: &Probe,
     base: &AnimationSpaceMesh,
     seq: &Sequence,
 ) -> Vec<CurvePoint> {
@@ -187,9 +250,12 @@ pub fn measure_sequence(
         .collect()
 }
 
-/// meshoptimizer's simplifier on the rest pose, to each triangle count.
+/// meshoptimizer's simplifier on the rest pose, to each triangle count, set up as gltfpack
+/// sets it up for a skinned mesh (its `simplifyMesh`): normals as attributes of weight 0.5,
+/// texture seams kept by meshoptimizer's own topology, small parts pruned, triangles kept
+/// regular.
 fn meshopt_curve(
-    probe: &ErrorProbe,
+    probe: &Probe,
     base: &AnimationSpaceMesh,
     rest_bones: &[glam::Affine3A],
     triangles: &[u32],
@@ -199,8 +265,20 @@ fn meshopt_curve(
         .iter()
         .map(|p| p.to_array())
         .collect();
+    let normals: Vec<f32> = (0..base.vertex_count())
+        .flat_map(|v| {
+            let n: glam::Vec3 = base
+                .influences_of(v)
+                .iter()
+                .map(|i| rest_bones[i.bone as usize].matrix3 * i.n)
+                .sum();
+            n.normalize_or_zero().to_array()
+        })
+        .collect();
+    let locks = vec![false; base.vertex_count()];
     let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&positions), 12, 0)
         .expect("tightly packed positions");
+    let options = meshopt::SimplifyOptions::Prune | meshopt::SimplifyOptions::Regularize;
     let mut curve = Vec::new();
     let mut seconds = 0.0;
     let full = base.triangle_count() as u32;
@@ -209,12 +287,16 @@ fn meshopt_curve(
         let indices = if target >= full {
             base.indices.clone()
         } else {
-            meshopt::simplify(
+            meshopt::simplify_with_attributes_and_locks(
                 &base.indices,
                 &adapter,
+                &normals,
+                &[0.5; 3],
+                12,
+                &locks,
                 target as usize * 3,
                 f32::MAX,
-                meshopt::SimplifyOptions::None,
+                options,
                 None,
             )
         };
@@ -242,6 +324,7 @@ fn meshopt_curve(
         bake_seconds: seconds,
         cache_hit_rate: None,
         curve,
+        levels: Vec::new(),
     }
 }
 
@@ -448,8 +531,14 @@ pub(crate) fn register_font() {
     });
 }
 
-/// Table 1 of the paper for this model.
-fn timings_markdown(report: &Report, model: &Model, sequences: &[(Method, Sequence)]) -> String {
+/// Table 1 of the paper for this model, the levels with their silhouettes, and how the
+/// methods compare.
+fn timings_markdown(
+    report: &Report,
+    model: &Model,
+    sequences: &[(Method, Sequence)],
+    lod_opts: &LodOptions,
+) -> String {
     let t = |n: &str| report.methods.get(n).map(|m| m.bake_seconds);
     let (rest, asm, asis) = (t("rest-pose"), t("as"), t("as+is"));
     let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
@@ -468,10 +557,10 @@ fn timings_markdown(report: &Report, model: &Model, sequences: &[(Method, Sequen
         model.mesh.influences.len() as f64 / model.mesh.vertex_count().max(1) as f64;
     let mut md = format!(
         "# Bake timings for {} (Table 1 of Merry et al.)\n\n\
-         Memoryless simplification, release build, one method at a time on one thread.\n\
-         3D is simplification of the rest pose; AS uses the L2,2 metric; AS+IS adds influence\n\
-         simplification. Cache miss rate: influence-simplification factorisations not found in\n\
-         the {}-entry cache.\n\n\
+         Memoryless simplification and cutting the levels (measuring each against full\n\
+         detail), release build, one method at a time. 3D is simplification of the rest pose;\n\
+         AS uses the L2,2 metric; AS+IS adds influence simplification. Cache miss rate:\n\
+         influence-simplification factorisations not found in the {}-entry cache.\n\n\
          | Model | Vertices | Bones | Influences per vertex | 3D (s) | AS (s) | AS+IS (s) | AS/3D | AS+IS/3D | Cache miss rate |\n\
          |---|---|---|---|---|---|---|---|---|---|\n\
          | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {} |\n",
@@ -495,14 +584,19 @@ fn timings_markdown(report: &Report, model: &Model, sequences: &[(Method, Sequen
             m.bake_seconds
         );
     }
+    md += &levels_markdown(report, lod_opts);
     let c = &report.comparison;
     let pct = |x: Option<f64>| x.map_or("–".into(), |x| format!("{:.0}%", x * 100.0));
     md += &format!(
         "\n## Error at equal influence counts\n\n\
+         Measured by {}, over {} surface samples and {} frames.\n\n\
          - AS ≤ rest-pose on {} of the AS curve\n\
          - AS+IS ≤ AS on {} of the AS+IS curve\n\
          - meshopt ≤ rest-pose on {} of the meshopt curve\n\
          - fewest total influences reached: {}\n",
+        report.correspondence.describe(),
+        report.samples,
+        report.frames,
         pct(c.as_le_rest_pose),
         pct(c.as_is_le_as),
         pct(c.meshopt_le_rest_pose),
@@ -512,6 +606,61 @@ fn timings_markdown(report: &Report, model: &Model, sequences: &[(Method, Sequen
             .collect::<Vec<_>>()
             .join(", ")
     );
+    md
+}
+
+/// The levels the viewer bakes, per method: triangles, error, bound, and the silhouette
+/// distance at each tolerance; the coarsest level's triangles against the source's.
+fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String {
+    let taus: Vec<String> = report
+        .silhouette_tolerances
+        .iter()
+        .map(|t| format!("silhouette at {t} px"))
+        .collect();
+    let mut md = format!(
+        "\n## Levels\n\n\
+         As the viewer bakes them (LOD 1 within {:.2} mm, each level's error doubling; a \
+         level's error is the larger of the memoryless bound and the distance measured from \
+         full detail, closest points both ways, worst of {} poses). The silhouette columns are \
+         the largest distance in pixels between the level's silhouette and full detail's where \
+         the renderer switches to the level at that tolerance, over {} poses from {} \
+         directions.\n",
+        lod_opts.base_error * 1000.0,
+        crate::bake::lod::POSE_SAMPLES,
+        SILHOUETTE_POSES,
+        crate::bake::silhouette::VIEWS.len(),
+    );
+    for (name, m) in &report.methods {
+        if m.levels.is_empty() {
+            continue;
+        }
+        let coarsest = m.levels.last().map_or(0, |l| l.triangles);
+        md += &format!(
+            "\n### {name}: {} levels, the coarsest {} triangles ({:.1}% of {})\n\n\
+             | LOD | triangles | influences | error (mm) | bound (mm) | {} |\n|---|---|---|---|---|{}\n",
+            m.levels.len(),
+            coarsest,
+            100.0 * coarsest as f64 / report.triangles.max(1) as f64,
+            report.triangles,
+            taus.join(" | "),
+            "---|".repeat(taus.len()),
+        );
+        for (k, l) in m.levels.iter().enumerate() {
+            let sil: Vec<String> = if l.silhouette_px.is_empty() {
+                vec!["–".into(); taus.len()]
+            } else {
+                l.silhouette_px.iter().map(|d| format!("{d:.2}")).collect()
+            };
+            md += &format!(
+                "| {k} | {} | {} | {:.3} | {:.3} | {} |\n",
+                l.triangles,
+                l.influences,
+                l.error * 1000.0,
+                l.bound * 1000.0,
+                sil.join(" | ")
+            );
+        }
+    }
     md
 }
 

@@ -1,8 +1,13 @@
 //! Discrete levels of detail cut from a progressive mesh, with geomorph maps between them.
 //!
 //! A [`Sequence`] is every simplification in order. Level k is the longest prefix whose error
-//! bound stays within `e_k`, with `e_k` doubling from a base tolerance (or the first prefix
-//! within a triangle budget), down to a floor of about a hundred triangles. Each level holds
+//! stays within `e_k`, with `e_k` doubling from a base tolerance (or the first prefix within a
+//! triangle budget), down to a floor of about a hundred triangles. "Error" is the true one:
+//! the memoryless bound of the steps so far, or the measured distance from full detail if that
+//! is larger ([`SurfaceProbe`]: closest points both ways, the worst of the sampled poses). The
+//! memoryless bound alone can drift from the truth over many steps, and for the rest-pose
+//! method it knows nothing of the animation; a level's error is what the renderer projects to
+//! pixels, so it must not flatter. Each level holds
 //! its render vertices with their animation-space influences *at that level* (influence
 //! simplification changes them), its triangles, and a geomorph map: for every vertex, the
 //! vertex of the next coarser level it ends up as, following the half-edge collapses in
@@ -10,11 +15,15 @@
 //! k+1 with `v = (1−t)·Σ G_i p_i(fine) + t·Σ G_j p_j(coarse)` (Merry et al. §6.4).
 
 use super::animation_space::{AnimationSpaceMesh, AsInfluence};
+use super::lod_error::SurfaceProbe;
 use super::simplify::expectation::ExpectationMatrix;
 use super::simplify::mesh::Mesh;
-use super::simplify::{Method, Sequence, SimplifyInput, StepKind, influences64, simplify};
+use super::simplify::{Method, Sequence, SimplifyInput, StepKind, pose_samples, simplify};
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
+
+/// Poses the simplifier checks every collapse in, and a level's error is measured over.
+pub const POSE_SAMPLES: usize = 16;
 
 /// How levels are cut from a sequence.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -45,8 +54,11 @@ impl LodOptions {
 pub struct LodLevel {
     /// How many steps of the sequence it applies.
     pub prefix: u32,
-    /// The error bound (largest step cost so far), in scene units.
+    /// The level's error in scene units: the larger of `bound` and the measured distance
+    /// from full detail (see the module comment). What the renderer projects to pixels.
     pub error: f32,
+    /// The memoryless bound: the largest step cost so far.
+    pub bound: f32,
     /// Vertices with their influences at this level and the triangles, in GPU-friendly order.
     pub mesh: AnimationSpaceMesh,
     /// For every vertex, which render vertex of the full-detail mesh it is.
@@ -70,13 +82,26 @@ impl LodLevel {
     }
 }
 
-/// The prefixes of `seq` that become levels, finest first (always starting with 0).
+/// The last prefix of `seq` with at least `opts.floor_triangles` triangles (or the full
+/// detail's count if that is lower).
+pub fn last_above_floor(seq: &Sequence, opts: &LodOptions) -> usize {
+    let floor = opts.floor_triangles.min(seq.base_triangle_count());
+    // Triangles never grow along the sequence: the search is binary.
+    seq.steps.partition_point(|s| s.triangles >= floor)
+}
+
+/// The fewest triangles any level of `seq` can have under `opts`: budgets below it all
+/// become the same level.
+pub fn floor_triangles(seq: &Sequence, opts: &LodOptions) -> u32 {
+    seq.triangles_after(last_above_floor(seq, opts))
+}
+
+/// The prefixes of `seq` that become levels by the memoryless bound alone, finest first
+/// (always starting with 0).
 pub fn choose_prefixes(seq: &Sequence, opts: &LodOptions) -> Vec<usize> {
     let steps = seq.steps.len();
-    let floor = opts.floor_triangles.min(seq.base_triangle_count());
-    // Triangles never grow along the sequence and the error bound never falls, so both
-    // searches are binary.
-    let last_above_floor = seq.steps.partition_point(|s| s.triangles >= floor);
+    // The error bound never falls along the sequence: the search is binary.
+    let last_above_floor = last_above_floor(seq, opts);
     let mut out = vec![0usize];
     let push = |p: usize, out: &mut Vec<usize>| {
         if p > *out.last().unwrap() {
@@ -109,6 +134,7 @@ pub fn choose_prefixes(seq: &Sequence, opts: &LodOptions) -> Vec<usize> {
 }
 
 /// Replays a sequence step by step on the full-detail mesh.
+#[derive(Clone)]
 pub struct Replay<'a> {
     base: &'a AnimationSpaceMesh,
     seq: &'a Sequence,
@@ -122,7 +148,7 @@ pub struct Replay<'a> {
 
 impl<'a> Replay<'a> {
     pub fn new(base: &'a AnimationSpaceMesh, seq: &'a Sequence) -> Replay<'a> {
-        let mesh = Mesh::new(&base.indices, &influences64(base));
+        let mesh = Mesh::new(&base.indices, seq.positions.clone());
         let n = base.vertex_count();
         Replay {
             base,
@@ -141,9 +167,21 @@ impl<'a> Replay<'a> {
                 StepKind::Collapse { wedges } => {
                     let u1 = self.mesh.pos(wedges[0][0]);
                     let u2 = self.mesh.pos(wedges[0][1]);
-                    self.mesh.collapse(u1, u2, wedges);
+                    let (_, released) = self.mesh.collapse(u1, u2, wedges);
                     for &[from, to] in wedges {
                         self.collapsed_to[from as usize] = to;
+                    }
+                    // A wedge of a position that stays (its chart's last triangles were on the
+                    // collapsed edge) goes on as another wedge of that position: the same
+                    // point, so a geomorph follows it there.
+                    for r in released {
+                        let p = self.mesh.pos(r) as usize;
+                        if self.collapsed_to[r as usize] == u32::MAX
+                            && self.mesh.alive[p]
+                            && let Some(&w) = self.mesh.wedges[p].first()
+                        {
+                            self.collapsed_to[r as usize] = w;
+                        }
                     }
                 }
                 StepKind::Influence {
@@ -151,6 +189,16 @@ impl<'a> Replay<'a> {
                 } => {
                     for &w in wedges {
                         self.influences[w as usize] = influences.clone();
+                    }
+                }
+                StepKind::Prune { wedges, anchor } => {
+                    let mut positions: Vec<u32> =
+                        wedges.iter().map(|&w| self.mesh.pos(w)).collect();
+                    positions.sort_unstable();
+                    positions.dedup();
+                    self.mesh.prune(&positions);
+                    for &w in wedges {
+                        self.collapsed_to[w as usize] = anchor.unwrap_or(u32::MAX);
                     }
                 }
             }
@@ -184,8 +232,28 @@ impl<'a> Replay<'a> {
         r
     }
 
+    /// How many steps are applied.
+    pub fn applied(&self) -> usize {
+        self.applied
+    }
+
+    /// The current mesh's distance from full detail, exact above `resolution` (see
+    /// [`SurfaceProbe::measure`]).
+    fn measure(&self, probe: &SurfaceProbe, resolution: f32) -> f32 {
+        let tris: Vec<[u32; 3]> = self.triangles().collect();
+        let follow = |r: u32| self.follow(r);
+        probe
+            .measure(
+                &tris,
+                |r| self.influences_of(r),
+                Some(&follow),
+                resolution as f64,
+            )
+            .max as f32
+    }
+
     /// The current mesh as a compact level: used vertices only, GPU order.
-    fn snapshot(&self, prefix: usize) -> LodLevel {
+    fn snapshot(&self, prefix: usize, error: f32) -> LodLevel {
         let n = self.base.vertex_count();
         let mut local = vec![u32::MAX; n];
         let mut used: Vec<u32> = Vec::new();
@@ -217,7 +285,8 @@ impl<'a> Replay<'a> {
         let (mesh, order) = compact.optimized_for_gpu_with_order();
         LodLevel {
             prefix: prefix as u32,
-            error: self.seq.error_after(prefix),
+            error,
+            bound: self.seq.error_after(prefix),
             mesh,
             source: order.iter().map(|&i| used[i]).collect(),
             geomorph: Vec::new(),
@@ -226,14 +295,34 @@ impl<'a> Replay<'a> {
 }
 
 /// Cuts the levels at `prefixes` (ascending) and links each to the next by its geomorph map.
+/// Each level's error is its memoryless bound.
 pub fn extract(base: &AnimationSpaceMesh, seq: &Sequence, prefixes: &[usize]) -> Vec<LodLevel> {
     let mut replay = Replay::new(base, seq);
-    let mut levels: Vec<LodLevel> = Vec::with_capacity(prefixes.len());
+    let mut chain = Chain::default();
     for &prefix in prefixes {
         replay.advance_to(prefix);
-        let level = replay.snapshot(prefix);
-        if let Some(prev) = levels.last_mut() {
-            let mut index = vec![u32::MAX; base.vertex_count()];
+        chain.push(&replay, seq.error_after(prefix));
+    }
+    chain.levels
+}
+
+/// Levels as they are cut, finest first, each linked to the next by its geomorph map.
+#[derive(Default)]
+struct Chain {
+    levels: Vec<LodLevel>,
+}
+
+impl Chain {
+    /// Adds the mesh `replay` has reached as the next level, with error `error`. A level whose
+    /// next one is no less exact would never be drawn (the renderer shows the coarsest level
+    /// within the tolerance): it is replaced.
+    fn push(&mut self, replay: &Replay, error: f32) {
+        let level = replay.snapshot(replay.applied(), error);
+        if self.levels.len() > 1 && self.levels.last().is_some_and(|l| l.error >= error) {
+            self.levels.pop();
+        }
+        if let Some(prev) = self.levels.last_mut() {
+            let mut index = vec![u32::MAX; replay.base.vertex_count()];
             for (i, &r) in level.source.iter().enumerate() {
                 index[r as usize] = i as u32;
             }
@@ -243,15 +332,14 @@ pub fn extract(base: &AnimationSpaceMesh, seq: &Sequence, prefixes: &[usize]) ->
                 .map(|&r| {
                     let to = replay.follow(r);
                     match index[to as usize] {
-                        u32::MAX => nearest_in_chart(base, &level, r),
+                        u32::MAX => nearest_in_chart(replay.base, &level, r),
                         i => i,
                     }
                 })
                 .collect();
         }
-        levels.push(level);
+        self.levels.push(level);
     }
-    levels
 }
 
 /// Fallback for a vertex whose collapse chain does not end in the next level (only possible
@@ -267,6 +355,137 @@ fn nearest_in_chart(base: &AnimationSpaceMesh, level: &LodLevel, r: u32) -> u32 
         .unwrap_or(0) as u32
 }
 
+/// The levels of `seq` with their true errors (see the module comment).
+///
+/// By error, level k is cut at a prefix within `e_k`. The first guess is where the memoryless
+/// bound reaches `e_k` divided by how far the last level's measured error exceeded its bound
+/// (the two grow together), measured finely; if that is over `e_k`, the cut halves back from
+/// there with quick measurements ([`CUT_PROBES`] in all), and the prefix found is measured
+/// finely for its error. If no probe is within `e_k`, the coarsest within `2 e_k` stands, so
+/// consecutive levels stay about a doubling apart; if none is within that either there is no
+/// level at `e_k`. By budget, level k is the first prefix within each budget, measured. Errors
+/// never fall from one level to the next.
+pub fn cut_levels(
+    base: &AnimationSpaceMesh,
+    seq: &Sequence,
+    opts: &LodOptions,
+    probes: &LevelProbes,
+) -> Vec<LodLevel> {
+    let floor = last_above_floor(seq, opts);
+    let mut at = Replay::new(base, seq);
+    let mut chain = Chain::default();
+    chain.push(&at, 0.0);
+    let push = |chain: &mut Chain, at: &Replay, measured: f32| {
+        let last = chain.levels.last().map_or(0.0, |l| l.error);
+        let error = seq.error_after(at.applied()).max(measured).max(last);
+        chain.push(at, error);
+    };
+    match &opts.budgets {
+        Some(_) => {
+            for &p in &choose_prefixes(seq, opts)[1..] {
+                at.advance_to(p);
+                let resolution = RESOLUTION * seq.error_after(p);
+                let measured = at.measure(&probes.label, resolution);
+                push(&mut chain, &at, measured);
+            }
+        }
+        None => {
+            let search = CutSearch { seq, floor, probes };
+            let mut ratio = 1.0f32;
+            let mut e = opts.base_error.max(f32::MIN_POSITIVE);
+            loop {
+                if let Some((found, measured)) = search.next_level(&at, e, ratio) {
+                    at = found;
+                    let bound = seq.error_after(at.applied());
+                    if bound > 0.0 {
+                        ratio = (measured / bound).max(1.0);
+                    }
+                    push(&mut chain, &at, measured);
+                }
+                if at.applied() >= floor || !e.is_finite() {
+                    break;
+                }
+                e *= 2.0;
+            }
+        }
+    }
+    chain.levels
+}
+
+/// Measurements one level's cut may take (see [`cut_levels`]).
+const CUT_PROBES: usize = 4;
+/// A level's distance from full detail is measured exactly only above this share of the error
+/// it is cut for: only the largest distances decide a cut and its error.
+const RESOLUTION: f32 = 0.25;
+
+/// The search for one level's cut (see [`cut_levels`]).
+struct CutSearch<'s, 'p> {
+    seq: &'s Sequence,
+    floor: usize,
+    probes: &'p LevelProbes<'p>,
+}
+
+impl CutSearch<'_, '_> {
+    /// The last prefix whose bound is within `e`, no further than the floor.
+    fn within(&self, e: f32) -> usize {
+        self.seq
+            .steps
+            .partition_point(|s| s.max_cost <= e)
+            .min(self.floor)
+    }
+
+    /// From `from` (the last level), the next level's prefix for error `e` and its finely
+    /// measured error; `None` if there is none.
+    fn next_level<'a>(&self, from: &Replay<'a>, e: f32, ratio: f32) -> Option<(Replay<'a>, f32)> {
+        let lo = from.applied();
+        let hi = self.within(e);
+        if hi <= lo {
+            return None;
+        }
+        let probe_at = |start: &Replay<'a>, prefix: usize, probe: &SurfaceProbe| {
+            let mut r = start.clone();
+            r.advance_to(prefix);
+            let m = r.measure(probe, RESOLUTION * e);
+            (r, m)
+        };
+        let guess = self.within(e / ratio).clamp(lo + 1, hi);
+        let (first, m) = probe_at(from, guess, &self.probes.label);
+        if m <= e {
+            return Some((first, m));
+        }
+        // Over e: the coarsest probe within 2e stands in if nothing within e turns up.
+        let mut fallback = (m <= 2.0 * e).then_some((first, Some(m)));
+        let mut good: Option<Replay<'a>> = None;
+        let mut bad = guess;
+        for _ in 1..CUT_PROBES {
+            let known = good.as_ref().map_or(lo, |g| g.applied());
+            let candidate = known + (bad - known) / 2;
+            if candidate <= known {
+                break;
+            }
+            let (r, m) = probe_at(
+                good.as_ref().unwrap_or(from),
+                candidate,
+                &self.probes.search,
+            );
+            if m <= e {
+                good = Some(r);
+            } else {
+                bad = candidate;
+                if m <= 2.0 * e && fallback.is_none() {
+                    fallback = Some((r, None));
+                }
+            }
+        }
+        let (r, measured) = match good {
+            Some(r) => (r, None),
+            None => fallback?,
+        };
+        let m = measured.unwrap_or_else(|| r.measure(&self.probes.label, RESOLUTION * e));
+        Some((r, m))
+    }
+}
+
 /// A model's levels of detail by one method, with the sequence they were cut from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SkinnedLods {
@@ -275,7 +494,8 @@ pub struct SkinnedLods {
     pub options: LodOptions,
     pub levels: Vec<LodLevel>,
     pub sequence: Sequence,
-    /// Wall time of the simplification (estimating `P` included), in seconds.
+    /// Wall time of the bake (estimating `P`, the simplification and cutting the levels), in
+    /// seconds.
     pub bake_seconds: f64,
 }
 
@@ -293,10 +513,13 @@ pub fn progressive_mesh(
         _ => ExpectationMatrix::estimate(model),
     };
     let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
+    let poses = pose_samples(model, POSE_SAMPLES);
     let input = SimplifyInput {
         mesh: &base,
         rest_bones: &rest_bones,
         expectation: &expectation,
+        poses: &poses,
+        textured: model.materials.iter().any(|m| m.texture.is_some()),
     };
     let sequence = simplify(&input, method, progress);
     let seconds = start.elapsed().as_secs_f64();
@@ -310,9 +533,11 @@ pub fn bake_lods(
     opts: &LodOptions,
     progress: &dyn Fn(f32),
 ) -> SkinnedLods {
-    let (base, sequence, bake_seconds) = progressive_mesh(model, method, progress);
-    let prefixes = choose_prefixes(&sequence, opts);
-    let levels = extract(&base, &sequence, &prefixes);
+    let start = std::time::Instant::now();
+    let (base, sequence, _) = progressive_mesh(model, method, progress);
+    let probes = LevelProbes::new(model, &base);
+    let levels = cut_levels(&base, &sequence, opts, &probes);
+    let bake_seconds = start.elapsed().as_secs_f64();
     SkinnedLods {
         model: model.name.clone(),
         method,
@@ -320,5 +545,24 @@ pub fn bake_lods(
         levels,
         sequence,
         bake_seconds,
+    }
+}
+
+/// The measurements [`cut_levels`] makes of `model`'s levels (full-detail mesh `base`): a
+/// quick one while it looks for a cut, and a finer one for the error each level is given.
+pub struct LevelProbes<'a> {
+    pub search: SurfaceProbe<'a>,
+    pub label: SurfaceProbe<'a>,
+}
+
+impl<'a> LevelProbes<'a> {
+    pub fn new(model: &Model, base: &'a AnimationSpaceMesh) -> LevelProbes<'a> {
+        LevelProbes {
+            search: SurfaceProbe::new(model, base, 250, 250, pose_samples(model, 6))
+                .with_candidates(3),
+            label: SurfaceProbe::new(model, base, 800, 800, pose_samples(model, 10))
+                .with_candidates(4)
+                .every_vertex(),
+        }
     }
 }

@@ -11,6 +11,7 @@ pub mod lod;
 pub mod lod_error;
 pub mod lod_pack;
 pub mod materials;
+pub mod silhouette;
 pub mod simplify;
 pub mod spectral;
 pub mod texels;

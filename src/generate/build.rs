@@ -24,7 +24,26 @@ pub fn assemble(
     clips: Vec<Clip>,
     coat: impl FnOnce(&[Vec3]) -> Painter,
 ) -> Model {
-    let finished = finish(&cage.subdivide().subdivide(), TEXTURE_SIZE);
+    assemble_subdivided(
+        name,
+        material,
+        rig,
+        cage.subdivide().subdivide(),
+        clips,
+        coat,
+    )
+}
+
+/// [`assemble`] for a cage already subdivided as far as it should be.
+pub fn assemble_subdivided(
+    name: &str,
+    material: &str,
+    rig: &Rig,
+    cage: Cage,
+    clips: Vec<Clip>,
+    coat: impl FnOnce(&[Vec3]) -> Painter,
+) -> Model {
+    let finished = finish(&cage, TEXTURE_SIZE);
     let painter = coat(&finished.mesh.positions);
     let texture = paint(&finished, TEXTURE_SIZE, &*painter);
     Model {

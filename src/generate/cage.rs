@@ -121,6 +121,25 @@ impl Cage {
         FaceId(self.faces.len() - 1)
     }
 
+    /// Cuts every chart into square patches of `size(part)` metres of chart space, each a
+    /// chart of its own, as automatic unwrappers (lightmap packers, game exporters) leave them:
+    /// many small charts, with corners where three or four of them meet.
+    pub fn split_charts(&mut self, size: impl Fn(u32) -> f32) {
+        let mut patches: HashMap<(u32, i32, i32), u32> = HashMap::new();
+        let mut parts = Vec::new();
+        for f in self.faces.iter_mut().filter(|f| f.alive) {
+            let part = self.chart_parts[f.chart as usize];
+            let centre = f.uv.iter().sum::<Vec2>() / 4.0;
+            let cell = (centre / size(part)).floor();
+            let key = (f.chart, cell.x as i32, cell.y as i32);
+            f.chart = *patches.entry(key).or_insert_with(|| {
+                parts.push(part);
+                (parts.len() - 1) as u32
+            });
+        }
+        self.chart_parts = parts;
+    }
+
     pub fn face_center(&self, f: FaceId) -> Vec3 {
         self.faces[f.0]
             .v

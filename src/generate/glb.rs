@@ -104,6 +104,8 @@ fn png(image: &crate::model::Rgba8Image) -> Vec<u8> {
 }
 
 /// Positions, normals, texture coordinates and joint/weight sets of the vertices `used`.
+/// A mesh whose texture coordinates are all zero has none, and is written without
+/// `TEXCOORD_0`, as a file without texture coordinates reads back.
 fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Value {
     let positions: Vec<f32> = used
         .iter()
@@ -116,8 +118,11 @@ fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Val
     let uvs: Vec<f32> = used.iter().flat_map(|&v| mesh.uvs[v].to_array()).collect();
     let pos = b.floats(&positions, 3, "VEC3", true, Some(ARRAY_BUFFER));
     let nrm = b.floats(&normals, 3, "VEC3", false, Some(ARRAY_BUFFER));
-    let tex = b.floats(&uvs, 2, "VEC2", false, Some(ARRAY_BUFFER));
-    let mut attributes = json!({"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": tex});
+    let mut attributes = json!({"POSITION": pos, "NORMAL": nrm});
+    if mesh.uvs.iter().any(|&u| u != glam::Vec2::ZERO) {
+        let tex = b.floats(&uvs, 2, "VEC2", false, Some(ARRAY_BUFFER));
+        attributes["TEXCOORD_0"] = json!(tex);
+    }
     let most = used
         .iter()
         .map(|&v| mesh.influences_of(v).len())

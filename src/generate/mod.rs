@@ -3,13 +3,16 @@
 //! and the demo trees ([`tree`]): branching skeletons, tube wood, leaf quads and a wind loop.
 //! `lodlab gen-assets` writes them to `assets/` as `.glb`; everything else reads those files.
 
+pub mod armour;
 pub mod build;
 pub mod cage;
 pub mod cylinder;
+pub mod facets;
 pub mod finish;
 pub mod glb;
 pub mod horse;
 pub mod rig;
+pub mod split_tube;
 pub mod tree;
 pub mod walker;
 
@@ -23,6 +26,9 @@ pub fn generate(name: &str) -> Option<Model> {
         "broadleaf" => Some(tree::broadleaf()),
         "conifer" => Some(tree::conifer()),
         "sapling" => Some(tree::sapling()),
+        "split-tube" => Some(split_tube::split_tube()),
+        "armour" => Some(armour::armour()),
+        "patchwork" => Some(walker::patchwork()),
         _ => None,
     }
 }

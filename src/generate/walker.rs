@@ -5,7 +5,7 @@
 //! horizontal (a rest pose that skins better than a T-pose when the arms hang).
 
 use super::build::{
-    OCTAGON, Section, assemble, body_rings, extrude_limb, extrude_rigid, limb,
+    OCTAGON, Section, assemble, assemble_subdivided, body_rings, extrude_limb, extrude_rigid, limb,
     nearest_surface_point, section,
 };
 use super::cage::{Cage, Cap};
@@ -433,12 +433,13 @@ fn clothes(r: &Rig, l: &Limbs, eyes: [Vec3; 2]) -> impl Fn(u32, Vec3, Vec3) -> V
     }
 }
 
+fn eyes(surface: &[Vec3]) -> [Vec3; 2] {
+    let eye = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.034, 1.752, 0.12));
+    [eye(1.0), eye(-1.0)]
+}
+
 pub fn walker() -> Model {
     let (r, l) = rig();
-    let eyes = |surface: &[Vec3]| {
-        let eye = |x: f32| nearest_surface_point(surface, Vec3::new(x * 0.034, 1.752, 0.12));
-        [eye(1.0), eye(-1.0)]
-    };
     assemble(
         "walker",
         "clothes",
@@ -447,4 +448,17 @@ pub fn walker() -> Model {
         clips(&r, &l),
         |surface| Box::new(clothes(&r, &l, eyes(surface))),
     )
+}
+
+/// "patchwork": a test model with the texture layout of automatically unwrapped game assets,
+/// which the demo creatures lack. The walker, subdivided once (2,928 triangles), its charts cut
+/// into patches of 12 cm (5 cm on the head), so its texture lies in a couple of hundred
+/// charts whose outlines split every position on them and whose corners join three or four.
+pub fn patchwork() -> Model {
+    let (r, l) = rig();
+    let mut cage = cage(&r, &l).subdivide();
+    cage.split_charts(|part| if part == HEAD { 0.05 } else { 0.12 });
+    assemble_subdivided("patchwork", "clothes", &r, cage, clips(&r, &l), |surface| {
+        Box::new(clothes(&r, &l, eyes(surface)))
+    })
 }

@@ -10,25 +10,48 @@
 //! Each corner is returned as a combination of positions whose coefficients sum to zero; the
 //! metric (rest-pose Euclidean, or L2,2 in animation space) turns it into a distance.
 //!
-//! The parameter space is each wedge's texture chart when the model has texture coordinates,
-//! else a local flattening of v1's fan (its geodesic polar map: distances kept, angles scaled
-//! to fill 2π, or π on a border, so a border vertex's two border neighbours lie on one line).
+//! Which parameter space makes points correspond is chosen per wedge, that is per chart that
+//! meets at v1:
+//! - **the texture chart** where it is a parameterisation: every triangle of the wedge's fan
+//!   has texture area and they agree in orientation. This is the appearance-preserving
+//!   correspondence of the paper: points with the same texture coordinate.
+//! - **a geometric correspondence** where texture coordinates are missing, degenerate (zero or
+//!   tiny area, as exporters leave untextured parts) or folded, and where the collapse would
+//!   fold the chart or change its outline. The wedge's sector of v1's fan is mapped to the
+//!   plane by its geodesic polar map (distances to v1 kept, angles scaled to fill 2π, or π for
+//!   a sector bounded by a border or seam, whose two outline neighbours then lie on one line),
+//!   and points correspond where they map to the same point: the local-plane correspondence
+//!   of Cohen, Manocha & Olano, "Simplifying polygonal models using successive mappings"
+//!   (1997), with the polar map instead of a projection so that a curved fan never folds.
+//!   Under this correspondence the texture coordinates of corresponding points can differ: a
+//!   textured model pays for that as well, the texture's slide over the surface
+//!   (`|Δuv|` times the atlas's metres per texture unit) added in quadrature to the position's
+//!   deviation, so moving a chart outline costs what it does to the picture.
+//! - **the whole fan's polar map** where charts do not survive the collapse whole: a corner
+//!   (where three or more charts meet) collapses onto a neighbour that some of its charts do
+//!   not reach, and those charts get that vertex's attributes (texture coordinate, normal)
+//!   from another chart; or a chart's whole sector dies with the collapsed edge. The fan's
+//!   geometry is then measured over all of it at once. The torn or lost charts' triangles
+//!   show the wrong part of the texture (or the wrong normal): what that costs is bounded by
+//!   the triangles' size, as if they were missing (no point of them is further than that from
+//!   surface shown right), weighted by how much the attributes differ (fully for a texture,
+//!   by `1 − cos` of the angle for a normal alone). So a model tears its charts and hard edges
+//!   only where that size is within the level's error.
+//!
+//! A collapse must also leave every triangle facing the way it faced in the rest pose and in
+//! every sampled pose: a triangle that turns over in some pose is a fold the metric, an
+//! average over poses, could overlook.
 
 use super::mesh::{EdgeKind, Kind, Mesh, can_collapse};
 use glam::{DVec2, DVec3};
 
-/// One cell corner: `Σ c·p(position)` with `Σ c = 0`, at most four terms.
-pub type Corner = [(u32, f64); 4];
-
-/// Where parameter coordinates come from.
+/// One cell corner: `Σ c·p(position)` with `Σ c = 0`, at most four terms, and how far the
+/// texture slides over the surface there, in scene units (zero where the points correspond
+/// through the texture itself, or where there is no texture).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Parameterisation {
-    /// Texture coordinates. A border or seam vertex may slide along its chart outline only
-    /// where it lies within `tolerance` of the line through its two outline neighbours, so the
-    /// charts keep their area.
-    Texture { tolerance: f64 },
-    /// A local flattening of v1's fan, for models without texture coordinates.
-    Flattening,
+pub struct Corner {
+    pub terms: [(u32, f64); 4],
+    pub texture: f64,
 }
 
 /// Why a candidate was turned down, for statistics and tests.
@@ -41,24 +64,44 @@ pub enum Rejection {
     /// v1's own fan is degenerate or inconsistently oriented in parameter space.
     BadFan,
     ParameterFold,
+    /// A triangle would turn over, in the rest pose or in a sampled pose.
     NormalFlip,
     ChangesParameterArea,
 }
 
-/// Parameter coordinates of v1's fan in the flattening, by position (v1 at the origin).
+impl Rejection {
+    /// Rejections of the texture chart alone: the geometric correspondence may still take the
+    /// collapse (at the price of the texture's slide).
+    fn texture_only(self) -> bool {
+        matches!(
+            self,
+            Rejection::BadFan | Rejection::ParameterFold | Rejection::ChangesParameterArea
+        )
+    }
+}
+
+/// Parameter coordinates of one wedge's sector of v1's fan (or of the whole fan) in its
+/// geodesic polar map, by position (v1 at the origin).
 pub struct Flattening {
     coords: Vec<(u32, DVec2)>,
 }
 
 impl Flattening {
-    /// The geodesic polar map of `u`'s fan, or `None` if the fan is not a single ordered ring
-    /// or is degenerate.
-    pub fn new(mesh: &Mesh, rest: &[DVec3], u: u32) -> Option<Flattening> {
+    /// The geodesic polar map of the triangles round position `u` that use render vertex `r`
+    /// (all of `u`'s fan for `None` or a position with one wedge), or `None` if they do not
+    /// form a single ordered fan or are degenerate.
+    pub fn new(mesh: &Mesh, rest: &[DVec3], u: u32, r: Option<u32>) -> Option<Flattening> {
         let fan = &mesh.incident[u as usize];
         let mut next: Vec<(u32, u32)> = Vec::with_capacity(fan.len());
         for &t in fan {
+            if r.is_some_and(|r| !mesh.tris[t as usize].contains(&r)) {
+                continue;
+            }
             let [_, a, b] = mesh.corners_from(t, u);
             next.push((mesh.pos(a), mesh.pos(b)));
+        }
+        if next.is_empty() {
+            return None;
         }
         // Start at a neighbour nothing points to (an open fan), else anywhere (closed).
         let start = next
@@ -119,45 +162,65 @@ impl Flattening {
     }
 }
 
-/// Everything a candidate evaluation reads.
-pub struct Context<'a> {
-    pub mesh: &'a Mesh,
-    pub uv: &'a [DVec2],
-    /// Rest-pose positions, by position.
-    pub rest: &'a [DVec3],
-    pub param: Parameterisation,
+/// The parameter space one wedge's corners are computed in.
+#[derive(Clone, Copy)]
+enum Chart<'f> {
+    Texture,
+    /// The wedge's sector of the fan.
+    Polar(&'f Flattening),
+    /// The whole fan, for the geometry alone.
+    Whole(&'f Flattening),
 }
 
-/// Scratch space reused between evaluations.
+/// Everything a candidate evaluation reads.
+pub struct Context<'a> {
+    /// Changes whenever the mesh or a position does: what the scratch space may cache v1's
+    /// neighbours and flattenings under.
+    pub stamp: u64,
+    pub mesh: &'a Mesh,
+    pub uv: &'a [DVec2],
+    /// Triangles whose texture coordinates span area (per triangle of `mesh`).
+    pub uv_valid: &'a [bool],
+    /// A border or seam vertex keeps its chart's area only if it lies within this distance (in
+    /// texture units) of the line through its two outline neighbours.
+    pub uv_tolerance: f64,
+    /// Metres of surface per texture unit where a texture can slide; 0 for none.
+    pub slide_scale: f64,
+    /// Rest-pose positions, by position.
+    pub rest: &'a [DVec3],
+    /// Rest-pose normals, by render vertex.
+    pub normals: &'a [DVec3],
+    /// Posed positions: position `u` in sampled pose `s` at `u * poses + s`.
+    pub posed: &'a [DVec3],
+    pub poses: usize,
+}
+
+/// The cache key of the whole fan's flattening among the wedges' ones.
+const WHOLE_FAN: u32 = u32::MAX;
+
+/// Scratch space reused between evaluations, and what the evaluations of one v1's candidates
+/// share: its neighbours and its wedges' flattenings.
 #[derive(Default)]
 pub struct Scratch {
     pub corners: Vec<Corner>,
-    pub link: [Vec<u32>; 2],
+    /// v1 and the stamp the cached fan data below belong to.
+    fan_of: Option<(u32, u64)>,
+    n1: Vec<u32>,
+    n2: Vec<u32>,
+    flats: Vec<(u32, Option<Flattening>)>,
     old: Vec<[u32; 3]>,
     new: Vec<[u32; 3]>,
     outline: Vec<(u32, u32)>,
-    ends_old: Vec<u32>,
-    ends_new: Vec<u32>,
+    /// Ends of the old edges from v1 and of the new ones from v2: render vertex and its
+    /// parameter point relative to v1's or v2's.
+    ends_old: Vec<(u32, DVec2)>,
+    ends_new: Vec<(u32, DVec2)>,
 }
 
 impl Context<'_> {
-    fn param(&self, flat: Option<&Flattening>, r: u32) -> Option<DVec2> {
-        match flat {
-            Some(f) => f.get(self.mesh.pos(r)),
-            None => Some(self.uv[r as usize]),
-        }
-    }
-
-    /// Checks the half-edge collapse `u1 → u2` and fills `scratch.corners` with its cell
-    /// corners. `flat` is `u1`'s flattening when the parameterisation is [`Parameterisation::
-    /// Flattening`].
-    pub fn corners(
-        &self,
-        u1: u32,
-        u2: u32,
-        flat: Option<&Flattening>,
-        scratch: &mut Scratch,
-    ) -> Result<(), Rejection> {
+    /// Checks the half-edge collapse `u1 → u2`, all but [`Self::check_orientation`], and
+    /// fills `scratch.corners` with its cell corners.
+    pub fn corners(&self, u1: u32, u2: u32, scratch: &mut Scratch) -> Result<(), Rejection> {
         let mesh = self.mesh;
         let (k1, k2) = (mesh.kind[u1 as usize], mesh.kind[u2 as usize]);
         if !can_collapse(k1, k2) {
@@ -167,30 +230,187 @@ impl Context<'_> {
         match k1 {
             Kind::Border if edge != EdgeKind::Border => return Err(Rejection::NotAlongOutline),
             Kind::Seam if edge != EdgeKind::Seam => return Err(Rejection::NotAlongOutline),
+            Kind::Corner if edge == EdgeKind::Border => return Err(Rejection::NotAlongOutline),
             _ => {}
         }
         if edge == EdgeKind::NonManifold {
             return Err(Rejection::Link);
         }
-        let map = mesh.wedge_map(u1, u2).ok_or(Rejection::Wedges)?;
-        if !mesh.link_condition(u1, u2, &mut scratch.link) {
+        let map = self.wedge_map(u1, u2).ok_or(Rejection::Wedges)?;
+        if scratch.fan_of != Some((u1, self.stamp)) {
+            mesh.neighbours(u1, &mut scratch.n1);
+            scratch.flats.clear();
+            scratch.fan_of = Some((u1, self.stamp));
+        }
+        if !mesh.link_condition(u1, u2, &scratch.n1, &mut scratch.n2) {
             return Err(Rejection::Link);
         }
         scratch.corners.clear();
-        for &[r1, r2] in &map {
-            self.wedge_corners(u1, u2, r1, r2, flat, scratch)?;
+        // A chart that dies whole: every triangle of its sector is on the collapsed edge.
+        let vanishes = |r1: u32| {
+            mesh.incident[u1 as usize]
+                .iter()
+                .filter(|&&t| mesh.tris[t as usize].contains(&r1))
+                .all(|&t| mesh.contains_position(t, u2))
+        };
+        let whole = k1 == Kind::Corner || map.iter().any(|&([r1, _], _)| vanishes(r1));
+        if whole {
+            self.with_flattening(u1, None, scratch, |ctx, flat, s| {
+                ctx.wedge_corners(u1, u2, None, u2, Chart::Whole(flat), s)
+            })?;
+        }
+        for &([r1, r2], torn) in &map {
+            if torn || vanishes(r1) {
+                let others: Vec<u32> = if torn {
+                    vec![r2]
+                } else {
+                    map.iter()
+                        .map(|&([r, _], _)| r)
+                        .filter(|&r| r != r1)
+                        .collect()
+                };
+                let corner = self.tear(u1, u2, r1, &others, torn);
+                scratch.corners.push(corner);
+                continue;
+            }
+            let uses_texture = mesh.incident[u1 as usize]
+                .iter()
+                .filter(|&&t| mesh.tris[t as usize].contains(&r1))
+                .all(|&t| self.uv_valid[t as usize]);
+            let mark = scratch.corners.len();
+            if uses_texture {
+                match self.wedge_corners(u1, u2, Some(r1), r2, Chart::Texture, scratch) {
+                    Ok(()) => continue,
+                    Err(e) if e.texture_only() => scratch.corners.truncate(mark),
+                    Err(e) => return Err(e),
+                }
+            }
+            self.with_flattening(u1, Some(r1), scratch, |ctx, flat, s| {
+                ctx.wedge_corners(u1, u2, Some(r1), r2, Chart::Polar(flat), s)
+            })?;
         }
         Ok(())
     }
 
-    /// The part of the evaluation in one wedge's chart.
+    /// Runs `f` with the flattening of `u1`'s sector of wedge `r1` (the whole fan for `None`),
+    /// cached in `scratch` for the other candidates of the same `u1`.
+    fn with_flattening(
+        &self,
+        u1: u32,
+        r1: Option<u32>,
+        scratch: &mut Scratch,
+        f: impl FnOnce(&Self, &Flattening, &mut Scratch) -> Result<(), Rejection>,
+    ) -> Result<(), Rejection> {
+        let key = r1.unwrap_or(WHOLE_FAN);
+        let i = match scratch.flats.iter().position(|(r, _)| *r == key) {
+            Some(i) => i,
+            None => {
+                let flat = Flattening::new(self.mesh, self.rest, u1, r1);
+                scratch.flats.push((key, flat));
+                scratch.flats.len() - 1
+            }
+        };
+        // Taken out while the corners are written into the same scratch space.
+        let flat = scratch.flats[i].1.take().ok_or(Rejection::BadFan)?;
+        let result = f(self, &flat, scratch);
+        scratch.flats[i].1 = Some(flat);
+        result
+    }
+
+    /// What a chart costs that the collapse tears (`torn`: its triangles get `others[0]`, a
+    /// wedge of another chart) or loses (its sector dies and the charts of `others` cover the
+    /// place): the size of the triangles concerned, weighted by how much the attributes differ
+    /// (see the module comment). The geometry is measured over the whole fan elsewhere.
+    fn tear(&self, u1: u32, u2: u32, r1: u32, others: &[u32], torn: bool) -> Corner {
+        let mesh = self.mesh;
+        let mut size: f64 = 0.0;
+        for &t in &mesh.incident[u1 as usize] {
+            let tri = mesh.tris[t as usize];
+            if !tri.contains(&r1) || mesh.contains_position(t, u2) == torn {
+                continue;
+            }
+            let [a, b, c] = tri.map(|r| {
+                let p = mesh.pos(r);
+                self.rest[if p == u1 && torn { u2 } else { p } as usize]
+            });
+            size = size
+                .max(a.distance(b))
+                .max(b.distance(c))
+                .max(c.distance(a));
+        }
+        let weight = if self.slide_scale > 0.0 {
+            1.0
+        } else {
+            let n = self.normals[r1 as usize];
+            let closest = others
+                .iter()
+                .map(|&r| self.normals[r as usize].dot(n))
+                .fold(f64::INFINITY, f64::min);
+            (1.0 - closest).clamp(0.0, 1.0)
+        };
+        Corner {
+            terms: [(u1, 0.0); 4],
+            texture: size * weight,
+        }
+    }
+
+    /// Which wedge of `u2` each wedge of `u1` becomes, and whether that tears its chart. Only
+    /// a corner tears: a chart of its that does not reach `u2` takes the wedge of `u2` whose
+    /// normal is closest to its own (the same side of a hard edge, where one is).
+    pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<Vec<([u32; 2], bool)>> {
+        if self.mesh.kind[u1 as usize] != Kind::Corner {
+            let map = self.mesh.wedge_map(u1, u2)?;
+            return Some(map.into_iter().map(|pair| (pair, false)).collect());
+        }
+        self.mesh.torn_wedge_map(u1, u2, |r1, candidates| {
+            let n = self.normals[r1 as usize];
+            candidates.iter().copied().max_by(|&a, &b| {
+                let (da, db) = (
+                    self.normals[a as usize].dot(n),
+                    self.normals[b as usize].dot(n),
+                );
+                da.total_cmp(&db).then(b.cmp(&a))
+            })
+        })
+    }
+
+    /// No triangle of v1's fan may turn over, in the rest pose or in any sampled pose. Kept
+    /// apart from [`Self::corners`] because it is the dearest check: the simplifier runs it
+    /// on the cheapest candidates only, until one passes.
+    pub fn check_orientation(&self, u1: u32, u2: u32) -> Result<(), Rejection> {
+        let mesh = self.mesh;
+        for &t in &mesh.incident[u1 as usize] {
+            let [_, a, b] = mesh.corners_from(t, u1);
+            let (a, b) = (mesh.pos(a), mesh.pos(b));
+            if a == u2 || b == u2 {
+                continue;
+            }
+            let turns = |x: &dyn Fn(u32) -> DVec3| {
+                let n_old = (x(a) - x(u1)).cross(x(b) - x(u1));
+                let n_new = (x(a) - x(u2)).cross(x(b) - x(u2));
+                n_old.dot(n_new) <= 0.0
+            };
+            if turns(&|p| self.rest[p as usize]) {
+                return Err(Rejection::NormalFlip);
+            }
+            for s in 0..self.poses {
+                if turns(&|p| self.posed[p as usize * self.poses + s]) {
+                    return Err(Rejection::NormalFlip);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The part of the evaluation in one wedge's chart (`r1`), or over the whole fan for the
+    /// geometry alone (`None`, with `r2` any render vertex of `u2`).
     fn wedge_corners(
         &self,
         u1: u32,
         u2: u32,
-        r1: u32,
+        r1: Option<u32>,
         r2: u32,
-        flat: Option<&Flattening>,
+        chart: Chart,
         s: &mut Scratch,
     ) -> Result<(), Rejection> {
         let mesh = self.mesh;
@@ -198,21 +418,32 @@ impl Context<'_> {
         s.new.clear();
         for &t in &mesh.incident[u1 as usize] {
             let tri = mesh.tris[t as usize];
-            if !tri.contains(&r1) {
+            if r1.is_some_and(|r1| !tri.contains(&r1)) {
                 continue;
             }
-            // Rotate so r1 comes first; winding kept.
-            let k = tri.iter().position(|&r| r == r1).unwrap_or(0);
+            // Rotate so v1 comes first; winding kept.
+            let k = tri.iter().position(|&r| mesh.pos(r) == u1).unwrap_or(0);
             let tri = [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]];
             s.old.push(tri);
             if mesh.pos(tri[1]) != u2 && mesh.pos(tri[2]) != u2 {
                 s.new.push([r2, tri[1], tri[2]]);
             }
         }
-        if s.new.is_empty() {
+        if s.new.is_empty() || s.old.is_empty() {
             return Err(Rejection::BadFan);
         }
-        let p = |r: u32| self.param(flat, r).ok_or(Rejection::BadFan);
+        let p = |r: u32| match chart {
+            Chart::Texture => Ok(self.uv[r as usize]),
+            Chart::Polar(f) | Chart::Whole(f) => f.get(mesh.pos(r)).ok_or(Rejection::BadFan),
+        };
+        // Under the texture's own correspondence texture coordinates never slide; the whole
+        // fan's map measures geometry alone.
+        let uv = |r: u32| match chart {
+            Chart::Polar(_) => self.uv[r as usize],
+            Chart::Texture | Chart::Whole(_) => DVec2::ZERO,
+        };
+        let slide = |d: DVec2| d.length() * self.slide_scale;
+        let r1 = s.old[0][0];
         let p1 = p(r1)?;
         let p2 = p(r2)?;
 
@@ -240,23 +471,11 @@ impl Context<'_> {
             return Err(Rejection::BadFan);
         }
 
-        // No fold-over in parameter space, no flipped normal in the rest pose.
-        for (i, tri) in s.new.iter().enumerate() {
+        // No fold-over in parameter space.
+        for tri in &s.new {
             let (a, b) = (p(tri[1])?, p(tri[2])?);
             if (a - p2).perp_dot(b - p2) * sign <= min_area {
                 return Err(Rejection::ParameterFold);
-            }
-            let old = s
-                .old
-                .iter()
-                .find(|o| o[1] == tri[1] && o[2] == tri[2])
-                .copied()
-                .unwrap_or(s.old[i]);
-            let x = |r: u32| self.rest[mesh.pos(r) as usize];
-            let n_old = (x(old[1]) - x(old[0])).cross(x(old[2]) - x(old[0]));
-            let n_new = (x(tri[1]) - x(tri[0])).cross(x(tri[2]) - x(tri[0]));
-            if n_old.dot(n_new) <= 0.0 {
-                return Err(Rejection::NormalFlip);
             }
         }
 
@@ -274,6 +493,8 @@ impl Context<'_> {
         }
         s.outline.retain(|&(_, n)| n < 2);
         match s.outline.len() {
+            // The whole fan of a corner is closed; a dying chart's outline goes with it.
+            _ if matches!(chart, Chart::Whole(_)) => {}
             0 => {}
             2 => {
                 let (Some(&(prev, _)), true) = (
@@ -283,9 +504,9 @@ impl Context<'_> {
                     return Err(Rejection::NotAlongOutline);
                 };
                 let q = p(prev)?;
-                let tolerance = match self.param {
-                    Parameterisation::Texture { tolerance } => tolerance,
-                    Parameterisation::Flattening => 1e-9 * extent2.sqrt(),
+                let tolerance = match chart {
+                    Chart::Texture => self.uv_tolerance,
+                    Chart::Polar(_) | Chart::Whole(_) => 1e-9 * extent2.sqrt(),
                 };
                 let line = p2 - q;
                 let len = line.length();
@@ -308,53 +529,74 @@ impl Context<'_> {
             }
         }
         let (tri, bary) = best.ok_or(Rejection::BadFan)?;
-        s.corners.push([
-            (u1, 1.0),
-            (mesh.pos(tri[0]), -bary[0]),
-            (mesh.pos(tri[1]), -bary[1]),
-            (mesh.pos(tri[2]), -bary[2]),
-        ]);
+        s.corners.push(Corner {
+            terms: [
+                (u1, 1.0),
+                (mesh.pos(tri[0]), -bary[0]),
+                (mesh.pos(tri[1]), -bary[1]),
+                (mesh.pos(tri[2]), -bary[2]),
+            ],
+            texture: slide(
+                uv(r1) - (uv(tri[0]) * bary[0] + uv(tri[1]) * bary[1] + uv(tri[2]) * bary[2]),
+            ),
+        });
 
         // Crossings of old edges (v1, a) with new edges (v2, b).
         s.ends_old.clear();
         s.ends_new.clear();
         for tri in &s.old {
             for &a in &tri[1..] {
-                if mesh.pos(a) != u2 && !s.ends_old.contains(&a) {
-                    s.ends_old.push(a);
+                if mesh.pos(a) != u2 && !s.ends_old.iter().any(|e| e.0 == a) {
+                    s.ends_old.push((a, p(a)? - p1));
                 }
             }
         }
         for tri in &s.new {
             for &b in &tri[1..] {
-                if !s.ends_new.contains(&b) {
-                    s.ends_new.push(b);
+                if !s.ends_new.iter().any(|e| e.0 == b) {
+                    s.ends_new.push((b, p(b)? - p2));
                 }
             }
         }
-        for &a in &s.ends_old {
-            let pa = p(a)?;
-            for &b in &s.ends_new {
+        let w = p2 - p1;
+        for &(a, da) in &s.ends_old {
+            let la = da.length_squared();
+            for &(b, db) in &s.ends_new {
                 if a == b {
                     continue;
                 }
-                let pb = p(b)?;
-                let (da, db) = (pa - p1, pb - p2);
                 let denom = da.perp_dot(db);
-                if denom.abs() <= 1e-14 * da.length() * db.length() {
+                // Parallel (within rounding): no crossing.
+                if denom * denom <= 1e-28 * la * db.length_squared() {
                     continue;
                 }
-                let w = p2 - p1;
-                let alpha = w.perp_dot(db) / denom;
-                let beta = w.perp_dot(da) / denom;
+                // Both crossing parameters strictly inside (0, 1), tested before dividing:
+                // most pairs do not cross.
                 const EDGE: f64 = 1e-9;
-                if alpha > EDGE && alpha < 1.0 - EDGE && beta > EDGE && beta < 1.0 - EDGE {
-                    s.corners.push([
-                        (u1, 1.0 - alpha),
-                        (mesh.pos(a), alpha),
-                        (u2, -(1.0 - beta)),
-                        (mesh.pos(b), -beta),
-                    ]);
+                let (na, nb) = (w.perp_dot(db), w.perp_dot(da));
+                let inside = |n: f64| {
+                    let (n, d) = if denom > 0.0 {
+                        (n, denom)
+                    } else {
+                        (-n, -denom)
+                    };
+                    n > EDGE * d && n < (1.0 - EDGE) * d
+                };
+                if inside(na) && inside(nb) {
+                    let (alpha, beta) = (na / denom, nb / denom);
+                    s.corners.push(Corner {
+                        terms: [
+                            (u1, 1.0 - alpha),
+                            (mesh.pos(a), alpha),
+                            (u2, -(1.0 - beta)),
+                            (mesh.pos(b), -beta),
+                        ],
+                        texture: slide(
+                            uv(r1) * (1.0 - alpha) + uv(a) * alpha
+                                - uv(r2) * (1.0 - beta)
+                                - uv(b) * beta,
+                        ),
+                    });
                 }
             }
         }

@@ -1,16 +1,65 @@
 //! The simplifier's view of a mesh: flat arrays, no pointer graph (after meshoptimizer's
 //! `simplifier.cpp`).
 //!
-//! A *render vertex* is what the GPU draws: a position with one texture coordinate and one
-//! material. Render vertices at the same animation-space position are the *wedges* of one
-//! *position*; a UV seam is where two wedges meet. Topology (neighbours, borders, seams,
-//! manifoldness) is worked out on positions, so a seam never looks like a hole, while the
-//! parameter-space tests work on each wedge's own chart.
+//! A *render vertex* is what the GPU draws: a position with one normal, one texture coordinate
+//! and one material. Render vertices at the same animation-space point are the *wedges* of one
+//! *position*; a *seam* is where two wedges meet, whether a texture chart, a hard edge (a
+//! normal split) or a material ends there. Topology (neighbours, borders, seams,
+//! manifoldness, connected parts) is worked out on positions, so a seam never looks like a
+//! hole, while the parameter-space tests work on each wedge's own chart.
+//!
+//! Positions come from welding ([`weld_positions`]): exporters write the copies of a split
+//! vertex independently, and after their transforms and weight normalisation the copies differ
+//! by rounding. Render vertices whose rest positions agree within [`WELD_TOLERANCE`] of the
+//! model's size and whose weights agree within [`WEIGHT_TOLERANCE`] are one position, indexed
+//! or not, as meshoptimizer's `generatePositionRemap` does for exact copies.
 //!
 //! Each position gets a [`Kind`], and [`CAN_COLLAPSE`] says which kind may collapse onto which.
 
 use super::influence::Influence64;
+use glam::DVec3;
 use std::collections::HashMap;
+
+/// Rest positions closer than this fraction of the bounding-box diagonal are one point.
+pub const WELD_TOLERANCE: f32 = 1e-5;
+/// Skin weights differing by less than this are the same skinning.
+pub const WEIGHT_TOLERANCE: f64 = 1e-3;
+
+/// For every render vertex, the position it belongs to: the lowest-numbered render vertex at
+/// the same rest position (within [`WELD_TOLERANCE`] of the bounding-box diagonal) with the
+/// same skinning (every bone's weight within [`WEIGHT_TOLERANCE`]). Copies whose weights
+/// differ more move apart when the character moves: they stay separate positions.
+pub fn weld_positions(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
+    let points: Vec<glam::Vec3> = rest.iter().map(|p| p.as_vec3()).collect();
+    let diagonal = crate::model::Bounds::of(points.iter().copied()).map_or(0.0, |b| b.diagonal());
+    let groups = crate::import::weld::position_groups(&points, diagonal * WELD_TOLERANCE);
+    let mut members: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut position = Vec::with_capacity(rest.len());
+    for (v, &g) in groups.iter().enumerate() {
+        let list = members.entry(g).or_default();
+        let rep = list
+            .iter()
+            .copied()
+            .find(|&r| same_skinning(&infl[r as usize], &infl[v]))
+            .unwrap_or(v as u32);
+        if rep == v as u32 {
+            list.push(rep);
+        }
+        position.push(rep);
+    }
+    position
+}
+
+/// Every bone's weight (the homogeneous part of its `p_i`) agrees within
+/// [`WEIGHT_TOLERANCE`]; a bone one list lacks counts as weight 0.
+fn same_skinning(a: &[Influence64], b: &[Influence64]) -> bool {
+    let weight = |list: &[Influence64], bone: u32| {
+        list.iter().find(|i| i.bone == bone).map_or(0.0, |i| i.p[3])
+    };
+    a.iter()
+        .chain(b)
+        .all(|i| (weight(a, i.bone) - weight(b, i.bone)).abs() <= WEIGHT_TOLERANCE)
+}
 
 /// What a position is, topologically. Decides which half-edge collapses may remove it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,13 +68,19 @@ pub enum Kind {
     Manifold,
     /// On an open border of the mesh: exactly two border edges, one wedge.
     Border,
-    /// On a UV (or material) seam: exactly two seam edges, two wedges, no border.
+    /// On a seam (texture chart, hard edge or material): exactly two seam edges, two wedges,
+    /// no border.
     Seam,
-    /// Anything else that is still a valid surface point: where seams or borders meet, a
-    /// bow-tie of two fans, more than two wedges. Collapsing it would tear or reshape a chart.
+    /// Where three or more charts meet, or a seam ends: one closed fan, no border, seam edges
+    /// other than the two of a plain seam.
+    /// It may slide along one of its seams, tearing the charts that do not reach the vertex it
+    /// slides onto; what that does to the texture is priced (see `collapse`), so it happens
+    /// only at coarse levels.
+    Corner,
+    /// Anything else that is still a valid surface point: where a seam meets a border, a
+    /// border vertex of several fans, a bow-tie. Collapsing it would reshape the outline.
     Complex,
-    /// Cannot be handled safely: a non-manifold edge, inconsistent winding, wedges whose
-    /// influences differ.
+    /// Cannot be handled safely: a non-manifold edge, inconsistent winding.
     Locked,
 }
 
@@ -36,17 +91,22 @@ impl Kind {
 }
 
 /// Which kind of vertex v1 may collapse onto which kind of v2 in a half-edge collapse v1 → v2
-/// (rows: v1, columns: v2, in [`Kind`] order). A manifold vertex may go anywhere: its whole fan
-/// lies in one chart. A border or seam vertex may only slide along its own border or seam onto
-/// the next vertex there (checked in the cost evaluation, with the parameter-area rule), so the
-/// mesh's outline and its charts' outlines keep their shape. Complex and locked vertices stay.
-pub const CAN_COLLAPSE: [[bool; 5]; 5] = [
-    // Manifold Border Seam   Complex Locked     v1 ↓  v2 →
-    [true, true, true, true, true],      // Manifold
-    [false, true, false, false, true],   // Border
-    [false, false, true, false, true],   // Seam
-    [false, false, false, false, false], // Complex
-    [false, false, false, false, false], // Locked
+/// (rows: v1, columns: v2, in [`Kind`] order), as meshoptimizer's `kCanCollapse`:
+/// - a manifold vertex may go anywhere: its whole fan lies in one chart;
+/// - a border or seam vertex may only slide along its own border or seam onto the next vertex
+///   there (checked in the cost evaluation), so the mesh's outline and its charts' outlines
+///   keep their place; it may end on a vertex that cannot move itself, as a seam ends at a
+///   chart corner;
+/// - a corner may slide along one of its seams onto the next vertex there;
+/// - complex and locked vertices stay.
+pub const CAN_COLLAPSE: [[bool; 6]; 6] = [
+    // Manifold Border Seam  Corner Complex Locked     v1 ↓  v2 →
+    [true, true, true, true, true, true],       // Manifold
+    [false, true, false, false, true, true],    // Border
+    [false, false, true, true, true, true],     // Seam
+    [false, false, true, true, true, true],     // Corner
+    [false, false, false, false, false, false], // Complex
+    [false, false, false, false, false, false], // Locked
 ];
 
 pub fn can_collapse(from: Kind, to: Kind) -> bool {
@@ -67,6 +127,7 @@ pub enum EdgeKind {
 }
 
 /// The mutable mesh being simplified.
+#[derive(Clone)]
 pub struct Mesh {
     /// Triangles as render vertices.
     pub tris: Vec<[u32; 3]>,
@@ -88,21 +149,12 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Builds the mesh from indexed triangles and per-render-vertex influences. Wedges are
-    /// render vertices whose influences are bit-for-bit equal, i.e. the same animation-space
-    /// point. Triangles that repeat a position or duplicate another triangle are dropped: they
-    /// cover no area and would make edges look non-manifold.
-    pub fn new(indices: &[u32], influences: &[Vec<Influence64>]) -> Mesh {
-        let n = influences.len();
-        let mut position = vec![0u32; n];
-        let mut first: HashMap<Vec<u64>, u32> = HashMap::with_capacity(n);
-        for (v, infl) in influences.iter().enumerate() {
-            let key: Vec<u64> = infl
-                .iter()
-                .flat_map(|i| std::iter::once(i.bone as u64).chain(i.p.iter().map(|x| x.to_bits())))
-                .collect();
-            position[v] = *first.entry(key).or_insert(v as u32);
-        }
+    /// Builds the mesh from indexed triangles and every render vertex's position (see
+    /// [`weld_positions`]), every position [`Kind::Locked`] until [`Self::classify_all`].
+    /// Triangles that repeat a position or duplicate another triangle are dropped: they cover
+    /// no area and would make edges look non-manifold.
+    pub fn new(indices: &[u32], position: Vec<u32>) -> Mesh {
+        let n = position.len();
         let mut wedges = vec![Vec::new(); n];
         let mut tris = Vec::with_capacity(indices.len() / 3);
         let mut seen = std::collections::HashSet::with_capacity(indices.len() / 3);
@@ -139,7 +191,7 @@ impl Mesh {
             }
         }
         let alive: Vec<bool> = (0..n).map(|u| !incident[u].is_empty()).collect();
-        let mut mesh = Mesh {
+        Mesh {
             tri_alive: vec![true; tris.len()],
             alive_triangles: tris.len(),
             tris,
@@ -150,13 +202,17 @@ impl Mesh {
             alive,
             refs,
             dropped_triangles: dropped,
-        };
-        for u in 0..n {
-            if mesh.alive[u] {
-                mesh.kind[u] = mesh.classify(u as u32);
+        }
+    }
+
+    /// Gives every position its [`Kind`]: what the simplifier needs and a replay of its steps
+    /// does not.
+    pub fn classify_all(&mut self) {
+        for u in 0..self.position.len() {
+            if self.alive[u] {
+                self.kind[u] = self.classify(u as u32);
             }
         }
-        mesh
     }
 
     pub fn pos(&self, r: u32) -> u32 {
@@ -266,7 +322,15 @@ impl Mesh {
             (1, 0, 0) => Kind::Manifold,
             (1, 2, 0) => Kind::Border,
             (2, 0, 2) => Kind::Seam,
+            (_, 0, s) if s > 0 => Kind::Corner,
             _ => Kind::Complex,
+        }
+    }
+
+    /// Classifies position `u` again: a corner's collapse can change what its neighbours are.
+    pub fn reclassify(&mut self, u: u32) {
+        if self.alive[u as usize] {
+            self.kind[u as usize] = self.classify(u);
         }
     }
 
@@ -274,33 +338,48 @@ impl Mesh {
     /// A wedge of `u1` goes to the wedge of `u2` it shares a triangle with; `None` if a wedge
     /// shares none or more than one (the collapse would tear a chart).
     pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<Vec<[u32; 2]>> {
+        self.torn_wedge_map(u1, u2, |_, _| None)
+            .map(|m| m.into_iter().map(|(pair, _)| pair).collect())
+    }
+
+    /// [`Self::wedge_map`] for a corner: a wedge of `u1` that shares no triangle with `u2`
+    /// (its chart does not reach `u2`), or shares triangles with two of its wedges, goes to
+    /// the wedge of `u2` that `torn` picks among the candidates it is given, and is marked
+    /// torn. `None` where `torn` picks none.
+    pub fn torn_wedge_map(
+        &self,
+        u1: u32,
+        u2: u32,
+        torn: impl Fn(u32, &[u32]) -> Option<u32>,
+    ) -> Option<Vec<([u32; 2], bool)>> {
         let mut map = Vec::with_capacity(2);
+        let mut shared: Vec<u32> = Vec::with_capacity(2);
         for &r1 in &self.wedges[u1 as usize] {
-            let mut target: Option<u32> = None;
+            shared.clear();
             for &t in &self.incident[u1 as usize] {
                 let tri = self.tris[t as usize];
                 if !tri.contains(&r1) {
                     continue;
                 }
-                if let Some(r2) = tri.iter().copied().find(|&r| self.pos(r) == u2) {
-                    match target {
-                        None => target = Some(r2),
-                        Some(x) if x != r2 => return None,
-                        _ => {}
-                    }
+                if let Some(r2) = tri.iter().copied().find(|&r| self.pos(r) == u2)
+                    && !shared.contains(&r2)
+                {
+                    shared.push(r2);
                 }
             }
-            map.push([r1, target?]);
+            match shared.len() {
+                1 => map.push(([r1, shared[0]], false)),
+                0 => map.push(([r1, torn(r1, &self.wedges[u2 as usize])?], true)),
+                _ => map.push(([r1, torn(r1, &shared)?], true)),
+            }
         }
         Some(map)
     }
 
     /// Hoppe's link condition for a manifold result: the positions adjacent to both ends must
     /// be exactly the apexes of the triangles on the edge. Otherwise the collapse would glue two
-    /// sheets together along an edge.
-    pub fn link_condition(&self, u1: u32, u2: u32, scratch: &mut [Vec<u32>; 2]) -> bool {
-        let [n1, n2] = scratch;
-        self.neighbours(u1, n1);
+    /// sheets together along an edge. `n1` holds the neighbours of `u1`; `n2` is scratch.
+    pub fn link_condition(&self, u1: u32, u2: u32, n1: &[u32], n2: &mut Vec<u32>) -> bool {
         self.neighbours(u2, n2);
         let mut apexes = 0;
         for &t in &self.incident[u1 as usize] {
@@ -368,5 +447,69 @@ impl Mesh {
             self.wedges[p].retain(|&w| w != r);
         }
         (died, released)
+    }
+
+    /// Removes every triangle of the positions `positions` (one connected part): returns how
+    /// many died and the render vertices that stopped being used.
+    pub fn prune(&mut self, positions: &[u32]) -> (usize, Vec<u32>) {
+        let mut died = 0;
+        let mut released = Vec::new();
+        for &u in positions {
+            for t in std::mem::take(&mut self.incident[u as usize]) {
+                if !self.tri_alive[t as usize] {
+                    continue;
+                }
+                self.tri_alive[t as usize] = false;
+                died += 1;
+                for r in self.tris[t as usize] {
+                    self.refs[r as usize] -= 1;
+                    if self.refs[r as usize] == 0 {
+                        released.push(r);
+                    }
+                    let p = self.pos(r);
+                    if p != u {
+                        self.incident[p as usize].retain(|&x| x != t);
+                    }
+                }
+            }
+            self.alive[u as usize] = false;
+        }
+        self.alive_triangles -= died;
+        released.sort_unstable();
+        released.dedup();
+        for &r in &released {
+            let p = self.pos(r) as usize;
+            self.wedges[p].retain(|&w| w != r);
+        }
+        (died, released)
+    }
+
+    /// The connected parts of the mesh, as lists of positions (joined through triangles, so
+    /// seams do not split a part).
+    pub fn components(&self) -> Vec<Vec<u32>> {
+        let tris: Vec<[u32; 3]> = self
+            .tris
+            .iter()
+            .zip(&self.tri_alive)
+            .filter(|(_, alive)| **alive)
+            .map(|(t, _)| t.map(|r| self.pos(r)))
+            .collect();
+        let piece = crate::bake::billboard::connected_pieces(
+            self.position.len(),
+            tris.iter().map(|t| &t[..]),
+        );
+        let mut index: HashMap<u32, usize> = HashMap::new();
+        let mut parts: Vec<Vec<u32>> = Vec::new();
+        for u in 0..self.position.len() as u32 {
+            if !self.alive[u as usize] || self.pos(u) != u {
+                continue;
+            }
+            let i = *index.entry(piece[u as usize]).or_insert_with(|| {
+                parts.push(Vec::new());
+                parts.len() - 1
+            });
+            parts[i].push(u);
+        }
+        parts
     }
 }

@@ -9,6 +9,15 @@
 //! - and, as the baseline the paper compares against, the same collapses ranked by Euclidean
 //!   deviation in the rest pose.
 //!
+//! Two steps the paper does not need on its own models, for the files users bring:
+//! - which parameter space makes points correspond is chosen per chart and collapse (the
+//!   texture where it is one, else a geometric map of the fan; see [`collapse`]), and no
+//!   collapse may turn a triangle over in any sampled pose;
+//! - a small separate part (a rivet, a buckle) is removed whole once its size in the metric is
+//!   the cheapest step left, instead of being crushed into shards: meshoptimizer's component
+//!   pruning (`meshopt_SimplifyPrune`), priced as the part's diameter, since that is how far
+//!   the surface moves when it goes.
+//!
 //! Layout follows meshoptimizer's `simplifier.cpp`: flat arrays ([`mesh::Mesh`]), a table of
 //! which vertex kinds may collapse onto which ([`mesh::CAN_COLLAPSE`]), and a lazily updated
 //! binary heap. The output is a [`Sequence`]: every step in order with its cost and the running
@@ -20,11 +29,13 @@ pub mod influence;
 pub mod mesh;
 
 use crate::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
-use collapse::{Context, Corner, Flattening, Parameterisation, Scratch};
+use collapse::{Context, Scratch};
 use expectation::{ExpectationMatrix, quadratic};
 use glam::{Affine3A, DVec2, DVec3, Vec3, Vec4};
 use influence::{FactorCache, Influence64};
 use mesh::{Kind, Mesh};
+use rstar::RTree;
+use rstar::primitives::GeomWithData;
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 use std::cmp::{Ordering, Reverse};
@@ -85,6 +96,12 @@ pub enum StepKind {
         removed_bone: u32,
         influences: Vec<AsInfluence>,
     },
+    /// A whole connected part removed: its render vertices still in use, and the render vertex
+    /// nearby (on another part) its geomorph shrinks it towards; `None` when nothing is left.
+    Prune {
+        wedges: Vec<u32>,
+        anchor: Option<u32>,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,6 +120,8 @@ pub struct Step {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Sequence {
     pub method: Method,
+    /// For every render vertex, the position it belongs to (see [`mesh::weld_positions`]).
+    pub positions: Vec<u32>,
     /// The triangles the sequence starts from: the input without triangles that repeat a
     /// position or duplicate another.
     pub base_triangles: Vec<[u32; 3]>,
@@ -116,7 +135,12 @@ pub struct Stats {
     pub dropped_triangles: u32,
     /// Positions that never move: complex or locked kinds.
     pub locked_positions: u32,
+    /// Some triangles have texture coordinates usable as a parameterisation (the others use
+    /// the geometric correspondence).
     pub texture_parameterisation: bool,
+    /// Connected parts at the start, and how many were removed whole.
+    pub parts: u32,
+    pub pruned_parts: u32,
     /// Influence-simplification factor cache (§6.3).
     pub cache_hits: u64,
     pub cache_misses: u64,
@@ -167,6 +191,12 @@ pub struct SimplifyInput<'a> {
     /// rest-pose metric measures in the same units as the L2,2 one.
     pub rest_bones: &'a [Affine3A],
     pub expectation: &'a ExpectationMatrix,
+    /// Bone matrices of sampled poses (scene space): no collapse may turn a triangle over in
+    /// any of them. See [`pose_samples`].
+    pub poses: &'a [Vec<Affine3A>],
+    /// The texture coordinates carry a texture, so a texture sliding over the surface costs
+    /// what it moves.
+    pub textured: bool,
 }
 
 impl SimplifyInput<'_> {
@@ -180,11 +210,41 @@ impl SimplifyInput<'_> {
     }
 }
 
+/// Poses sampled evenly over every clip of `model` (at least one, the rest pose for a model
+/// without clips), `count` in all, in scene space: what the simplifier checks orientation in
+/// and the level error is measured over.
+pub fn pose_samples(model: &crate::model::Model, count: usize) -> Vec<Vec<Affine3A>> {
+    let skel = &model.skeleton;
+    if model.clips.is_empty() {
+        return vec![crate::anim::bone_matrices(skel, None, 0.0)];
+    }
+    let per_clip = count.div_ceil(model.clips.len()).max(1);
+    model
+        .clips
+        .iter()
+        .flat_map(|clip| {
+            (0..per_clip).map(move |k| {
+                let t = clip.duration.max(0.0) * (k as f32 + 0.5) / per_clip as f32;
+                crate::anim::bone_matrices(skel, Some(clip), t)
+            })
+        })
+        .collect()
+}
+
+/// What a queue entry would do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Action {
+    Collapse,
+    Influence,
+    /// Remove connected part `vertex` whole.
+    Prune,
+}
+
 /// A queue entry. Ordered by cost, then kind and vertex so that runs are deterministic.
 #[derive(Clone, Copy, Debug)]
 struct Entry {
     cost: f64,
-    influence: bool,
+    action: Action,
     vertex: u32,
     version: u32,
 }
@@ -204,7 +264,7 @@ impl Ord for Entry {
     fn cmp(&self, other: &Self) -> Ordering {
         self.cost
             .total_cmp(&other.cost)
-            .then(self.influence.cmp(&other.influence))
+            .then(self.action.cmp(&other.action))
             .then(self.vertex.cmp(&other.vertex))
             .then(self.version.cmp(&other.version))
     }
@@ -227,7 +287,7 @@ enum Metric<'a> {
 impl Metric<'_> {
     fn deviation2(
         &mut self,
-        corner: &Corner,
+        corner: &[(u32, f64); 4],
         rest: &[DVec3],
         infl: &[Vec<Influence64>],
         version: &[u32],
@@ -319,16 +379,28 @@ fn rest_position(rest_bones: &[Affine3A], infl: &[Influence64]) -> DVec3 {
         .sum()
 }
 
+/// A position in the index the pruning looks for anchors in.
+type Located = GeomWithData<[f64; 3], u32>;
+
 /// The simplifier's state.
 struct Simplifier<'a> {
     method: Method,
     mesh: Mesh,
     uv: Vec<DVec2>,
+    /// Per triangle of `mesh`: its texture coordinates span area.
+    uv_valid: Vec<bool>,
+    uv_tolerance: f64,
+    /// Metres of surface per texture unit where a texture can slide; 0 for none.
+    slide_scale: f64,
     rest: Vec<DVec3>,
+    /// Rest-pose normals, by render vertex.
+    normals: Vec<DVec3>,
     rest_bones: &'a [Affine3A],
+    poses: &'a [Vec<Affine3A>],
+    /// Position `u` in pose `s` at `u * poses.len() + s`.
+    posed: Vec<DVec3>,
     infl: Vec<Vec<Influence64>>,
     version: Vec<u32>,
-    param: Parameterisation,
     metric: Metric<'a>,
     pm: &'a ExpectationMatrix,
     cache: FactorCache,
@@ -336,9 +408,15 @@ struct Simplifier<'a> {
     collapse_version: Vec<u32>,
     influence_version: Vec<u32>,
     target: Vec<u32>,
+    /// Connected parts (positions) and each position's part.
+    parts: Vec<Vec<u32>>,
+    part_of: Vec<u32>,
+    located: RTree<Located>,
     scratch: Scratch,
     neighbours: Vec<u32>,
     influences: u64,
+    /// Steps applied: marks what the scratch space cached as stale.
+    stamp: u64,
     stats: Stats,
 }
 
@@ -348,44 +426,59 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
     let am = input.mesh;
     let n = am.vertex_count();
     let infl = influences64(am);
-    let mesh = Mesh::new(&am.indices, &infl);
-    let uv: Vec<DVec2> = am.uvs.iter().map(|u| u.as_dvec2()).collect();
     let rest: Vec<DVec3> = infl
         .iter()
         .map(|i| rest_position(input.rest_bones, i))
         .collect();
-
-    // Texture coordinates are the parameterisation when most triangles have area in them.
-    let with_area = mesh
-        .tris
-        .iter()
-        .filter(|t| {
-            let [a, b, c] = t.map(|r| uv[r as usize]);
-            (b - a).perp_dot(c - a).abs() > 1e-14
+    let normals: Vec<DVec3> = (0..n)
+        .map(|v| {
+            am.influences_of(v)
+                .iter()
+                .map(|i| {
+                    let m = input.rest_bones[i.bone as usize].matrix3;
+                    (m * i.n).as_dvec3()
+                })
+                .sum::<DVec3>()
+                .normalize_or_zero()
         })
-        .count();
-    let param = if with_area * 2 > mesh.tris.len() {
-        let (lo, hi) = uv.iter().fold(
-            (DVec2::splat(f64::MAX), DVec2::splat(f64::MIN)),
-            |(lo, hi), &u| (lo.min(u), hi.max(u)),
-        );
-        Parameterisation::Texture {
-            tolerance: 1e-5 * (hi - lo).length().max(1e-6),
-        }
-    } else {
-        Parameterisation::Flattening
-    };
+        .collect();
+    let positions = mesh::weld_positions(&rest, &infl);
+    let mut mesh = Mesh::new(&am.indices, positions.clone());
+    mesh.classify_all();
+    let uv: Vec<DVec2> = am.uvs.iter().map(|u| u.as_dvec2()).collect();
+    let charts = TextureCharts::measure(&mesh, &uv, &rest);
+    let posed: Vec<DVec3> = (0..n)
+        .flat_map(|v| {
+            let infl = &infl[v];
+            input.poses.iter().map(move |g| rest_position(g, infl))
+        })
+        .collect();
 
     let influences: u64 = (0..n)
         .filter(|&v| mesh.refs[v] > 0)
         .map(|v| infl[mesh.pos(v as u32) as usize].len() as u64)
         .sum();
+    let parts = mesh.components();
+    let mut part_of = vec![u32::MAX; n];
+    for (i, part) in parts.iter().enumerate() {
+        for &u in part {
+            part_of[u as usize] = i as u32;
+        }
+    }
+    let located = RTree::bulk_load(
+        parts
+            .iter()
+            .flatten()
+            .map(|&u| Located::new(rest[u as usize].to_array(), u))
+            .collect(),
+    );
     let stats = Stats {
         dropped_triangles: mesh.dropped_triangles as u32,
         locked_positions: (0..n)
             .filter(|&u| mesh.alive[u] && matches!(mesh.kind[u], Kind::Complex | Kind::Locked))
             .count() as u32,
-        texture_parameterisation: matches!(param, Parameterisation::Texture { .. }),
+        texture_parameterisation: charts.valid.iter().any(|&v| v),
+        parts: parts.len() as u32,
         ..Stats::default()
     };
     let metric = match method {
@@ -400,11 +493,20 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
         method,
         mesh,
         uv,
+        uv_valid: charts.valid,
+        uv_tolerance: charts.tolerance,
+        slide_scale: if input.textured {
+            charts.metres_per_unit
+        } else {
+            0.0
+        },
         rest,
+        normals,
         rest_bones: input.rest_bones,
+        poses: input.poses,
+        posed,
         infl,
         version: vec![0; n],
-        param,
         metric,
         pm: input.expectation,
         cache: FactorCache::default(),
@@ -412,9 +514,13 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
         collapse_version: vec![0; n],
         influence_version: vec![0; n],
         target: vec![u32::MAX; n],
+        parts,
+        part_of,
+        located,
         scratch: Scratch::default(),
         neighbours: Vec::new(),
         influences,
+        stamp: 0,
         stats,
     };
     let base_influences = s.influences as u32;
@@ -423,10 +529,61 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
     s.stats.cache_misses = s.cache.misses;
     Sequence {
         method,
+        positions,
         base_triangles,
         base_influences,
         steps,
         stats: s.stats,
+    }
+}
+
+/// Where a model's texture coordinates are a parameterisation.
+struct TextureCharts {
+    /// Per triangle: its texture coordinates span area, at least a thousandth of what the
+    /// model's usual texel density gives a triangle of its size.
+    valid: Vec<bool>,
+    /// Metres of surface per texture unit: the median over triangles with texture area.
+    metres_per_unit: f64,
+    /// How far off its outline's line a chart outline vertex may lie and still slide along it.
+    tolerance: f64,
+}
+
+impl TextureCharts {
+    fn measure(mesh: &Mesh, uv: &[DVec2], rest: &[DVec3]) -> TextureCharts {
+        let areas: Vec<(f64, f64)> = mesh
+            .tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|r| uv[r as usize]);
+                let [x, y, z] = t.map(|r| rest[mesh.pos(r) as usize]);
+                (
+                    0.5 * (b - a).perp_dot(c - a).abs(),
+                    0.5 * (y - x).cross(z - x).length(),
+                )
+            })
+            .collect();
+        let mut scales: Vec<f64> = areas
+            .iter()
+            .filter(|(uv, xyz)| *uv > 0.0 && *xyz > 0.0)
+            .map(|(uv, xyz)| (xyz / uv).sqrt())
+            .collect();
+        scales.sort_by(f64::total_cmp);
+        let metres_per_unit = scales.get(scales.len() / 2).copied().unwrap_or(0.0);
+        let valid = areas
+            .iter()
+            .map(|&(uv, xyz)| {
+                metres_per_unit > 0.0 && uv * metres_per_unit * metres_per_unit >= 1e-3 * xyz
+            })
+            .collect();
+        let (lo, hi) = uv.iter().fold(
+            (DVec2::splat(f64::MAX), DVec2::splat(f64::MIN)),
+            |(lo, hi), &u| (lo.min(u), hi.max(u)),
+        );
+        TextureCharts {
+            valid,
+            metres_per_unit,
+            tolerance: 1e-5 * (hi - lo).length().max(1e-6),
+        }
     }
 }
 
@@ -439,34 +596,53 @@ impl Simplifier<'_> {
                 self.evaluate_influence(u);
             }
         }
+        for part in 0..self.parts.len() as u32 {
+            self.queue_prune(part);
+        }
         let start = self.mesh.alive_triangles.max(1) as f32;
         let mut steps = Vec::new();
         let mut max_cost = 0.0f32;
         while let Some(Reverse(e)) = self.heap.pop() {
             let u = e.vertex as usize;
-            if !self.mesh.alive[u] {
-                continue;
-            }
-            let kind = if e.influence {
-                if e.version != self.influence_version[u] {
-                    continue;
-                }
-                self.apply_influence(e.vertex)
-            } else {
-                if e.version != self.collapse_version[u] {
-                    continue;
-                }
-                // Neighbourhoods two rings away may have changed the legality since this was
-                // queued: check again before applying.
-                let target = self.target[u];
-                match self.collapse_cost(e.vertex, target) {
-                    Some(c) if (c - e.cost).abs() <= 1e-9 * c.max(e.cost) + 1e-300 => {}
-                    _ => {
-                        self.evaluate_collapse(e.vertex);
+            let kind = match e.action {
+                Action::Prune => {
+                    // The last part left is the character: it stays.
+                    if self.stats.pruned_parts + 1 >= self.stats.parts {
                         continue;
                     }
+                    // The part's size can change as its positions collapse or lose influences:
+                    // queue it again at its current cost if that moved.
+                    match self.part_diameter(e.vertex) {
+                        None => continue,
+                        Some(c) if (c - e.cost).abs() > 1e-9 * c.max(e.cost) => {
+                            self.heap.push(Reverse(Entry { cost: c, ..e }));
+                            continue;
+                        }
+                        Some(_) => self.apply_prune(e.vertex),
+                    }
                 }
-                self.apply_collapse(e.vertex, target)
+                Action::Influence => {
+                    if !self.mesh.alive[u] || e.version != self.influence_version[u] {
+                        continue;
+                    }
+                    self.apply_influence(e.vertex)
+                }
+                Action::Collapse => {
+                    if !self.mesh.alive[u] || e.version != self.collapse_version[u] {
+                        continue;
+                    }
+                    // Neighbourhoods two rings away may have changed the legality since this
+                    // was queued: check again before applying.
+                    let target = self.target[u];
+                    match self.collapse_cost(e.vertex, target) {
+                        Some(c) if (c - e.cost).abs() <= 1e-9 * c.max(e.cost) + 1e-300 => {}
+                        _ => {
+                            self.evaluate_collapse(e.vertex);
+                            continue;
+                        }
+                    }
+                    self.apply_collapse(e.vertex, target)
+                }
             };
             let cost = e.cost as f32;
             max_cost = max_cost.max(cost);
@@ -488,33 +664,53 @@ impl Simplifier<'_> {
         steps
     }
 
+    fn context(&self) -> Context<'_> {
+        Context {
+            stamp: self.stamp,
+            mesh: &self.mesh,
+            uv: &self.uv,
+            uv_valid: &self.uv_valid,
+            uv_tolerance: self.uv_tolerance,
+            slide_scale: self.slide_scale,
+            rest: &self.rest,
+            normals: &self.normals,
+            posed: &self.posed,
+            poses: self.poses.len(),
+        }
+    }
+
     /// The cost (a distance) of the half-edge collapse `u1 → u2`, or `None` if illegal.
     fn collapse_cost(&mut self, u1: u32, u2: u32) -> Option<f64> {
+        let cost = self.unoriented_cost(u1, u2)?;
+        self.context().check_orientation(u1, u2).ok()?;
+        Some(cost)
+    }
+
+    /// [`Self::collapse_cost`] without the orientation check.
+    fn unoriented_cost(&mut self, u1: u32, u2: u32) -> Option<f64> {
         if u2 == u32::MAX || !self.mesh.alive[u2 as usize] {
             return None;
         }
-        let flat = match self.param {
-            Parameterisation::Flattening => Some(Flattening::new(&self.mesh, &self.rest, u1)?),
-            Parameterisation::Texture { .. } => None,
-        };
-        self.cost_with(u1, u2, flat.as_ref())
-    }
-
-    fn cost_with(&mut self, u1: u32, u2: u32, flat: Option<&Flattening>) -> Option<f64> {
         self.stats.evaluations += 1;
         let ctx = Context {
+            stamp: self.stamp,
             mesh: &self.mesh,
             uv: &self.uv,
+            uv_valid: &self.uv_valid,
+            uv_tolerance: self.uv_tolerance,
+            slide_scale: self.slide_scale,
             rest: &self.rest,
-            param: self.param,
+            normals: &self.normals,
+            posed: &self.posed,
+            poses: self.poses.len(),
         };
-        ctx.corners(u1, u2, flat, &mut self.scratch).ok()?;
+        ctx.corners(u1, u2, &mut self.scratch).ok()?;
         let mut worst = 0.0f64;
         for corner in &self.scratch.corners {
             let d = self
                 .metric
-                .deviation2(corner, &self.rest, &self.infl, &self.version);
-            worst = worst.max(d);
+                .deviation2(&corner.terms, &self.rest, &self.infl, &self.version);
+            worst = worst.max(d + corner.texture * corner.texture);
         }
         Some(worst.sqrt())
     }
@@ -527,29 +723,23 @@ impl Simplifier<'_> {
         if !self.mesh.alive[ui] || matches!(self.mesh.kind[ui], Kind::Complex | Kind::Locked) {
             return;
         }
-        let flat = match self.param {
-            Parameterisation::Flattening => match Flattening::new(&self.mesh, &self.rest, u) {
-                Some(f) => Some(f),
-                None => return,
-            },
-            Parameterisation::Texture { .. } => None,
-        };
         let mut neighbours = std::mem::take(&mut self.neighbours);
         self.mesh.neighbours(u, &mut neighbours);
-        let mut best: Option<(f64, u32)> = None;
-        for &u2 in &neighbours {
-            if let Some(c) = self.cost_with(u, u2, flat.as_ref())
-                && best.is_none_or(|(b, _)| c < b)
-            {
-                best = Some((c, u2));
-            }
-        }
+        let mut costs: Vec<(f64, u32)> = neighbours
+            .iter()
+            .filter_map(|&u2| Some((self.unoriented_cost(u, u2)?, u2)))
+            .collect();
         self.neighbours = neighbours;
+        costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let ctx = self.context();
+        let best = costs
+            .into_iter()
+            .find(|&(_, u2)| ctx.check_orientation(u, u2).is_ok());
         if let Some((cost, u2)) = best {
             self.target[ui] = u2;
             self.heap.push(Reverse(Entry {
                 cost,
-                influence: false,
+                action: Action::Collapse,
                 vertex: u,
                 version: self.collapse_version[ui],
             }));
@@ -567,11 +757,72 @@ impl Simplifier<'_> {
         if let Some(cost) = best {
             self.heap.push(Reverse(Entry {
                 cost,
-                influence: true,
+                action: Action::Influence,
                 vertex: u,
                 version: self.influence_version[ui],
             }));
         }
+    }
+
+    /// Queues the removal of part `part` at its current diameter.
+    fn queue_prune(&mut self, part: u32) {
+        if let Some(cost) = self.part_diameter(part) {
+            self.heap.push(Reverse(Entry {
+                cost,
+                action: Action::Prune,
+                vertex: part,
+                version: 0,
+            }));
+        }
+    }
+
+    /// How far the surface moves when part `part` goes: its diameter in the metric (twice the
+    /// largest distance of its positions from their mean). `None` once nothing of it is left.
+    fn part_diameter(&self, part: u32) -> Option<f64> {
+        let alive: Vec<u32> = self.parts[part as usize]
+            .iter()
+            .copied()
+            .filter(|&u| self.mesh.alive[u as usize])
+            .collect();
+        if alive.is_empty() {
+            return None;
+        }
+        let weight = 1.0 / alive.len() as f64;
+        let radius2 = match self.metric {
+            Metric::RestPose => {
+                let centre: DVec3 =
+                    alive.iter().map(|&u| self.rest[u as usize]).sum::<DVec3>() * weight;
+                alive
+                    .iter()
+                    .map(|&u| self.rest[u as usize].distance_squared(centre))
+                    .fold(0.0, f64::max)
+            }
+            Metric::AnimationSpace { pm, .. } => {
+                let mut centre: Vec<Influence64> = Vec::new();
+                for &u in &alive {
+                    for i in &self.infl[u as usize] {
+                        let p = i.p.map(|x| x * weight);
+                        match centre.iter_mut().find(|c| c.bone == i.bone) {
+                            Some(c) => (0..4).for_each(|k| c.p[k] += p[k]),
+                            None => centre.push(Influence64 {
+                                p,
+                                n: [0.0; 3],
+                                ..*i
+                            }),
+                        }
+                    }
+                }
+                let cc = inner(pm, &centre, &centre);
+                alive
+                    .iter()
+                    .map(|&u| {
+                        let x = &self.infl[u as usize];
+                        inner(pm, x, x) - 2.0 * inner(pm, x, &centre) + cc
+                    })
+                    .fold(0.0, f64::max)
+            }
+        };
+        Some(2.0 * radius2.max(0.0).sqrt())
     }
 
     /// The cheapest influence of `u` to remove: its deviation and its index.
@@ -591,10 +842,15 @@ impl Simplifier<'_> {
     }
 
     fn apply_collapse(&mut self, u1: u32, u2: u32) -> StepKind {
-        let map = self
-            .mesh
+        self.stamp += 1;
+        let map: Vec<[u32; 2]> = self
+            .context()
             .wedge_map(u1, u2)
-            .expect("checked by collapse_cost");
+            .expect("checked by collapse_cost")
+            .into_iter()
+            .map(|(pair, _)| pair)
+            .collect();
+        let corner = self.mesh.kind[u1 as usize] == Kind::Corner;
         let mut ring = Vec::new();
         self.mesh.neighbours(u1, &mut ring);
         let (_, released) = self.mesh.collapse(u1, u2, &map);
@@ -603,6 +859,12 @@ impl Simplifier<'_> {
         }
         self.influence_version[u1 as usize] += 1;
         self.collapse_version[u1 as usize] += 1;
+        // A torn chart changes where the seams run round the vertices it reaches.
+        if corner {
+            for &x in &ring {
+                self.mesh.reclassify(x);
+            }
+        }
         // Only fans that contained u1 changed (the ring of u1, u2 included).
         for x in ring {
             self.evaluate_collapse(x);
@@ -610,7 +872,43 @@ impl Simplifier<'_> {
         StepKind::Collapse { wedges: map }
     }
 
+    /// Removes part `part` whole. Its geomorph anchor is the nearest position left on another
+    /// part, in the rest pose.
+    fn apply_prune(&mut self, part: u32) -> StepKind {
+        self.stamp += 1;
+        let positions: Vec<u32> = self.parts[part as usize]
+            .iter()
+            .copied()
+            .filter(|&u| self.mesh.alive[u as usize])
+            .collect();
+        let centre = positions
+            .iter()
+            .map(|&u| self.rest[u as usize])
+            .sum::<DVec3>()
+            / positions.len() as f64;
+        let anchor = self
+            .located
+            .nearest_neighbor_iter(centre.to_array())
+            .map(|l| l.data)
+            .find(|&u| self.mesh.alive[u as usize] && self.part_of[u as usize] != part)
+            .and_then(|u| self.mesh.wedges[u as usize].first().copied());
+        let (_, released) = self.mesh.prune(&positions);
+        for &r in &released {
+            self.influences -= self.infl[self.mesh.pos(r) as usize].len() as u64;
+        }
+        for &u in &positions {
+            self.collapse_version[u as usize] += 1;
+            self.influence_version[u as usize] += 1;
+        }
+        self.stats.pruned_parts += 1;
+        StepKind::Prune {
+            wedges: released,
+            anchor,
+        }
+    }
+
     fn apply_influence(&mut self, u: u32) -> StepKind {
+        self.stamp += 1;
         let ui = u as usize;
         let bones: Vec<u32> = self.infl[ui].iter().map(|i| i.bone).collect();
         let (_, k) = self.best_removal(u).expect("queued with a solvable factor");
@@ -623,17 +921,19 @@ impl Simplifier<'_> {
         let removed_bone = bones[k];
         self.infl[ui] = next;
         self.rest[ui] = rest_position(self.rest_bones, &self.infl[ui]);
+        let poses = self.poses.len();
+        for (s, g) in self.poses.iter().enumerate() {
+            self.posed[ui * poses + s] = rest_position(g, &self.infl[ui]);
+        }
         self.version[ui] += 1;
         let wedges = self.mesh.wedges[ui].clone();
         self.influences -= wedges.len() as u64;
-        // Figure 4: every collapse whose fan holds this vertex changes, and the vertex may
+        // Figure 4: every collapse whose fan holds this vertex changes. Their queue entries are
+        // left as they are and checked when they come out (`run` recomputes a collapse's cost
+        // before applying it and queues it again if it moved): an influence removal moves the
+        // vertex by its own small cost, so the order barely changes, and re-evaluating every
+        // fan at once would cost as much again as the collapses themselves. The vertex may
         // lose another influence.
-        let mut ring = Vec::new();
-        self.mesh.neighbours(u, &mut ring);
-        self.evaluate_collapse(u);
-        for x in ring {
-            self.evaluate_collapse(x);
-        }
         self.evaluate_influence(u);
         StepKind::Influence {
             wedges,
