@@ -1085,12 +1085,7 @@ impl<'a> SurfaceProbe<'a> {
             let mut sum = 0.0;
             let mut candidates = nearest(&simplified, *p);
             if let Some(follow) = follow {
-                candidates = with_fans(
-                    candidates,
-                    &simplified_fans,
-                    triangles,
-                    t.map(follow),
-                );
+                candidates = with_fans(candidates, &simplified_fans, triangles, t.map(follow));
             }
             let point = |f| {
                 (0..3)

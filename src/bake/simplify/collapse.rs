@@ -38,9 +38,10 @@
 //!   by `1 − cos` of the angle for a normal alone). So a model tears its charts and hard edges
 //!   only where that size is within the level's error.
 //!
-//! A collapse must also leave every triangle facing the way it faced in the rest pose and in
-//! every sampled pose: a triangle that turns over in some pose is a fold the metric, an
-//! average over poses, could overlook.
+//! A collapse must also leave every triangle facing the way it faced, and no thinner than a
+//! sliver, in the rest pose and in every sampled pose: a triangle that turns over or thins to
+//! a needle in some pose is a fold or a spike the metric, an average over poses, could
+//! overlook.
 
 use super::mesh::{EdgeKind, Kind, Mesh, can_collapse};
 use glam::{DVec2, DVec3};
@@ -66,6 +67,8 @@ pub enum Rejection {
     ParameterFold,
     /// A triangle would turn over, in the rest pose or in a sampled pose.
     NormalFlip,
+    /// A triangle would become a sliver, in the rest pose or in a sampled pose.
+    Sliver,
     ChangesParameterArea,
 }
 
@@ -374,9 +377,11 @@ impl Context<'_> {
         })
     }
 
-    /// No triangle of v1's fan may turn over, in the rest pose or in any sampled pose. Kept
-    /// apart from [`Self::corners`] because it is the dearest check: the simplifier runs it
-    /// on the cheapest candidates only, until one passes.
+    /// No triangle of v1's fan may turn over, nor become a sliver (thinner than
+    /// [`SLIVER`] and less than half as round as it was), in the rest pose or in any sampled
+    /// pose: either shows as a spike of light or a crack where the metric, an average over
+    /// poses, could overlook it. Kept apart from [`Self::corners`] because it is the dearest
+    /// check: the simplifier runs it on the cheapest candidates only, until one passes.
     pub fn check_orientation(&self, u1: u32, u2: u32) -> Result<(), Rejection> {
         let mesh = self.mesh;
         for &t in &mesh.incident[u1 as usize] {
@@ -385,18 +390,21 @@ impl Context<'_> {
             if a == u2 || b == u2 {
                 continue;
             }
-            let turns = |x: &dyn Fn(u32) -> DVec3| {
+            let check = |x: &dyn Fn(u32) -> DVec3| {
                 let n_old = (x(a) - x(u1)).cross(x(b) - x(u1));
                 let n_new = (x(a) - x(u2)).cross(x(b) - x(u2));
-                n_old.dot(n_new) <= 0.0
-            };
-            if turns(&|p| self.rest[p as usize]) {
-                return Err(Rejection::NormalFlip);
-            }
-            for s in 0..self.poses {
-                if turns(&|p| self.posed[p as usize * self.poses + s]) {
+                if n_old.dot(n_new) <= 0.0 {
                     return Err(Rejection::NormalFlip);
                 }
+                let q_new = quality(x(u2), x(a), x(b));
+                if q_new < SLIVER && q_new < 0.5 * quality(x(u1), x(a), x(b)) {
+                    return Err(Rejection::Sliver);
+                }
+                Ok(())
+            };
+            check(&|p| self.rest[p as usize])?;
+            for s in 0..self.poses {
+                check(&|p| self.posed[p as usize * self.poses + s])?;
             }
         }
         Ok(())
@@ -603,6 +611,20 @@ impl Context<'_> {
         Ok(())
     }
 }
+
+/// How round a triangle is: `4√3 · area / Σ edge²`, 1 for an equilateral one, 0 for a
+/// degenerate one.
+pub fn quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let area2 = (b - a).cross(c - a).length();
+    let edges = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
+    if edges <= 0.0 {
+        return 0.0;
+    }
+    2.0 * 3f64.sqrt() * area2 / edges
+}
+
+/// A triangle less round than this is a sliver (an aspect of about 50:1).
+pub const SLIVER: f64 = 0.02;
 
 /// Barycentric coordinates of `p` in triangle `(a, b, c)`.
 pub fn barycentric(p: DVec2, a: DVec2, b: DVec2, c: DVec2) -> [f64; 3] {
