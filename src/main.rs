@@ -35,7 +35,8 @@ enum Command {
     View(ViewArgs),
     /// Render a scene headless to a PNG and print one JSON line of figures.
     Shot(ShotArgs),
-    /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling) as .glb files.
+    /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling) and the test
+    /// models (split-tube, armour, patchwork) as .glb files.
     GenAssets(GenAssetsArgs),
     /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS; a
     /// tree's chain of billboard clouds), or fetch them from the cache, and print them as a

@@ -282,6 +282,9 @@ fn report_writes_curves_plot_and_timings() {
         for (k, l) in levels.iter().enumerate().skip(1) {
             let px = l["silhouette_px"].as_array().unwrap();
             assert_eq!(px.len(), 3, "{method} level {k}");
+            let resolution = l["silhouette_resolution_px"].as_array().unwrap();
+            assert_eq!(resolution.len(), 3, "{method} level {k}");
+            assert!(resolution.iter().all(|r| r.as_f64().unwrap() >= 1.0));
             assert!(l["error"].as_f64().unwrap() >= l["bound"].as_f64().unwrap());
         }
         assert!(
@@ -323,4 +326,65 @@ fn report_measures_a_model_without_texture_coordinates_by_closest_points() {
     // The simplification still separates the methods.
     let curve = json["methods"]["as"]["curve"].as_array().unwrap();
     assert!(curve.last().unwrap()["rms_error"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn report_survives_a_baseline_that_prunes_everything() {
+    // Every triangle its own texture chart: meshoptimizer, which sees charts as separate
+    // parts, prunes them all at low targets. The report ends its curve there instead of
+    // measuring an empty mesh, and lodlab's own methods weld the charts and go on.
+    let dir = tempfile::tempdir().unwrap();
+    let cyl = bent_cylinder(8, 8);
+    let mut confetti = cyl.clone();
+    let m = &cyl.mesh;
+    let out = &mut confetti.mesh;
+    let (mut offsets, mut influences) = (vec![0u32], Vec::new());
+    let (mut positions, mut normals, mut uvs, mut materials) = (vec![], vec![], vec![], vec![]);
+    let side = (m.triangle_count() as f32).sqrt().ceil();
+    for (t, tri) in m.indices.chunks_exact(3).enumerate() {
+        let cell = glam::Vec2::new(t as f32 % side, (t as f32 / side).floor()) / side;
+        for (k, &v) in tri.iter().enumerate() {
+            let v = v as usize;
+            positions.push(m.positions[v]);
+            normals.push(m.normals[v]);
+            materials.push(m.materials[v]);
+            let corner = [glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y][k];
+            uvs.push(cell + corner * 0.8 / side);
+            let range = m.influence_offsets[v] as usize..m.influence_offsets[v + 1] as usize;
+            influences.extend_from_slice(&m.influences[range]);
+            offsets.push(influences.len() as u32);
+        }
+    }
+    out.indices = (0..positions.len() as u32).collect();
+    (out.positions, out.normals, out.uvs, out.materials) = (positions, normals, uvs, materials);
+    (out.influence_offsets, out.influences) = (offsets, influences);
+    let p = dir.path().join("confetti.glb");
+    std::fs::write(&p, to_glb(&confetti)).unwrap();
+    let out_dir = dir.path().join("r");
+    let out = lodlab(&[
+        "report",
+        "--model",
+        p.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--baseline",
+        "meshopt",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("its curve ends there"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let meshopt = json["methods"]["meshopt"]["curve"].as_array().unwrap();
+    assert!(meshopt.iter().all(|p| p["triangles"].as_u64().unwrap() > 0));
+    let levels = json["methods"]["as"]["levels"].as_array().unwrap();
+    let coarsest = levels.last().unwrap()["triangles"].as_u64().unwrap();
+    assert!(coarsest < 240, "as keeps {coarsest} of 240 triangles");
 }

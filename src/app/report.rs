@@ -70,6 +70,11 @@ pub struct LevelReport {
     /// The largest silhouette distance from full detail in pixels where the renderer switches
     /// to this level, at each of [`SILHOUETTE_TOLERANCES`].
     pub silhouette_px: Vec<f32>,
+    /// How many of those pixels one drawn pixel spanned at each tolerance: 1 unless the
+    /// drawing had to be capped at [`crate::bake::silhouette::MAX_SIDE`] pixels, as for a
+    /// level whose error is tiny. A distance of about one drawn pixel is the measurement's
+    /// resolution, not the level's.
+    pub silhouette_resolution_px: Vec<f32>,
 }
 
 /// How the methods compare at equal influence counts (the issue's acceptance figures).
@@ -184,22 +189,24 @@ fn level_reports(lods: &SkinnedLods, poses: &[Vec<glam::Affine3A>]) -> Vec<Level
     lods.levels
         .iter()
         .enumerate()
-        .map(|(k, l)| LevelReport {
-            triangles: l.triangles() as u32,
-            influences: l.influences() as u32,
-            error: l.error,
-            bound: l.bound,
-            silhouette_px: if k == 0 {
+        .map(|(k, l)| {
+            use crate::bake::silhouette::{MAX_SIDE, distance};
+            let distances: Vec<_> = if k == 0 {
                 Vec::new()
             } else {
                 SILHOUETTE_TOLERANCES
                     .iter()
-                    .map(|&tau| {
-                        use crate::bake::silhouette::{MAX_SIDE, distance};
-                        distance(full, &l.mesh, l.error, tau, poses, MAX_SIDE).px
-                    })
+                    .map(|&tau| distance(full, &l.mesh, l.error, tau, poses, MAX_SIDE))
                     .collect()
-            },
+            };
+            LevelReport {
+                triangles: l.triangles() as u32,
+                influences: l.influences() as u32,
+                error: l.error,
+                bound: l.bound,
+                silhouette_px: distances.iter().map(|d| d.px).collect(),
+                silhouette_resolution_px: distances.iter().map(|d| d.pixel).collect(),
+            }
         })
         .collect()
 }
@@ -305,6 +312,14 @@ fn meshopt_curve(
             .chunks_exact(3)
             .map(|t| [t[0], t[1], t[2]])
             .collect();
+        if tris.is_empty() {
+            // Component pruning removed every part: nothing is left to measure, and no
+            // smaller target keeps anything either.
+            eprintln!(
+                "note: meshopt keeps no triangle at a target of {target}; its curve ends there"
+            );
+            break;
+        }
         let mut used = vec![false; base.vertex_count()];
         tris.iter().flatten().for_each(|&v| used[v as usize] = true);
         let influences = (0..base.vertex_count())
@@ -624,11 +639,14 @@ fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String {
          full detail, closest points both ways, worst of {} poses). The silhouette columns are \
          the largest distance in pixels between the level's silhouette and full detail's where \
          the renderer switches to the level at that tolerance, over {} poses from {} \
-         directions.\n",
+         directions. Where a level's error is so small that drawing it at that scale would \
+         exceed {} pixels, the drawing is capped, and the bracket says how many pixels one \
+         drawn pixel spans: the measurement's resolution there.\n",
         lod_opts.base_error * 1000.0,
         crate::bake::lod::POSE_SAMPLES,
         SILHOUETTE_POSES,
         crate::bake::silhouette::VIEWS.len(),
+        crate::bake::silhouette::MAX_SIDE,
     );
     for (name, m) in &report.methods {
         if m.levels.is_empty() {
@@ -649,7 +667,17 @@ fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String {
             let sil: Vec<String> = if l.silhouette_px.is_empty() {
                 vec!["–".into(); taus.len()]
             } else {
-                l.silhouette_px.iter().map(|d| format!("{d:.2}")).collect()
+                l.silhouette_px
+                    .iter()
+                    .zip(&l.silhouette_resolution_px)
+                    .map(|(d, pixel)| {
+                        if *pixel > 1.01 {
+                            format!("{d:.2} (1 px = {pixel:.1})")
+                        } else {
+                            format!("{d:.2}")
+                        }
+                    })
+                    .collect()
             };
             md += &format!(
                 "| {k} | {} | {} | {:.3} | {:.3} | {} |\n",

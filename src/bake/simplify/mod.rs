@@ -12,7 +12,7 @@
 //! Two steps the paper does not need on its own models, for the files users bring:
 //! - which parameter space makes points correspond is chosen per chart and collapse (the
 //!   texture where it is one, else a geometric map of the fan; see [`collapse`]), and no
-//!   collapse may turn a triangle over in any sampled pose;
+//!   collapse may turn a triangle over, or thin it into a sliver, in any sampled pose;
 //! - a small separate part (a rivet, a buckle) is removed whole once its size in the metric is
 //!   the cheapest step left, instead of being crushed into shards: meshoptimizer's component
 //!   pruning (`meshopt_SimplifyPrune`), priced as the part's diameter, since that is how far
