@@ -301,7 +301,7 @@ pub fn extract(base: &AnimationSpaceMesh, seq: &Sequence, prefixes: &[usize]) ->
     let mut chain = Chain::default();
     for &prefix in prefixes {
         replay.advance_to(prefix);
-        chain.push(&replay, seq.error_after(prefix));
+        chain.push(&replay, seq.error_after(prefix), 1.0);
     }
     chain.levels
 }
@@ -315,10 +315,17 @@ struct Chain {
 impl Chain {
     /// Adds the mesh `replay` has reached as the next level, with error `error`. A level whose
     /// next one is no less exact would never be drawn (the renderer shows the coarsest level
-    /// within the tolerance): it is replaced.
-    fn push(&mut self, replay: &Replay, error: f32) {
+    /// within the tolerance): it is replaced. So is one whose next one's error is less than
+    /// `min_growth` times its own: it would be drawn only over a sliver of distances, and a
+    /// transition towards it would run on past it.
+    fn push(&mut self, replay: &Replay, error: f32, min_growth: f32) {
         let level = replay.snapshot(replay.applied(), error);
-        if self.levels.len() > 1 && self.levels.last().is_some_and(|l| l.error >= error) {
+        if self.levels.len() > 1
+            && self
+                .levels
+                .last()
+                .is_some_and(|l| l.error * min_growth >= error)
+        {
             self.levels.pop();
         }
         if let Some(prev) = self.levels.last_mut() {
@@ -374,11 +381,19 @@ pub fn cut_levels(
     let floor = last_above_floor(seq, opts);
     let mut at = Replay::new(base, seq);
     let mut chain = Chain::default();
-    chain.push(&at, 0.0);
+    chain.push(&at, 0.0, 1.0);
+    // Levels cut by error are about a doubling apart; one within a quarter of the next is a
+    // near-duplicate. Levels cut by budget are what the user asked for: only exact duplicates
+    // go.
+    let min_growth = if opts.budgets.is_some() {
+        1.0
+    } else {
+        MIN_ERROR_GROWTH
+    };
     let push = |chain: &mut Chain, at: &Replay, measured: f32| {
         let last = chain.levels.last().map_or(0.0, |l| l.error);
         let error = seq.error_after(at.applied()).max(measured).max(last);
-        chain.push(at, error);
+        chain.push(at, error, min_growth);
     };
     match &opts.budgets {
         Some(_) => {
@@ -411,6 +426,10 @@ pub fn cut_levels(
     }
     chain.levels
 }
+
+/// Levels cut by error whose errors grow by less than this from one to the next: the finer is
+/// dropped (see [`Chain::push`]).
+const MIN_ERROR_GROWTH: f32 = 1.25;
 
 /// Measurements one level's cut may take (see [`cut_levels`]).
 const CUT_PROBES: usize = 4;

@@ -663,7 +663,7 @@ pub struct SurfaceProbe<'a> {
     /// edges.
     backward: usize,
     /// The original's triangles, by their sorted corners.
-    original_triangles: std::collections::HashSet<[u32; 3]>,
+    original_triangles: rustc_hash::FxHashSet<[u32; 3]>,
     /// Rest-pose triangles searched for a sample's closest point in each frame: a pose moves
     /// the closest point of the other surface, but not far from where it was at rest.
     candidates: usize,
@@ -916,7 +916,7 @@ impl<'a> SurfaceProbe<'a> {
         // frame: samples go where the surfaces differ, so a few hundred find the largest
         // distance even when the simplification changed a sliver of the surface.
         let unmoved = |t: &[u32; 3]| t.iter().all(|&v| !moved[slot[v as usize] as usize]);
-        let kept: std::collections::HashSet<[u32; 3]> = triangles
+        let kept: rustc_hash::FxHashSet<[u32; 3]> = triangles
             .iter()
             .filter(|t| unmoved(t) && self.original_triangles.contains(&sorted(**t)))
             .map(|t| sorted(*t))

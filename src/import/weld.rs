@@ -20,8 +20,10 @@ pub fn position_groups(positions: &[Vec3], tolerance: f32) -> Vec<u32> {
         let c = (p / tol).floor();
         (c.x as i64, c.y as i64, c.z as i64)
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<u32>> = HashMap::new();
-    let mut group_of_rep: HashMap<u32, u32> = HashMap::new();
+    // Fx hashing: the keys are plain integers, and this runs for every vertex of a model
+    // several times in a bake.
+    let mut grid: rustc_hash::FxHashMap<(i64, i64, i64), Vec<u32>> = Default::default();
+    let mut group_of_rep = vec![u32::MAX; positions.len()];
     let mut groups = Vec::with_capacity(positions.len());
     let mut next = 0u32;
     for (i, &p) in positions.iter().enumerate() {
@@ -33,7 +35,7 @@ pub fn position_groups(positions: &[Vec3], tolerance: f32) -> Vec<u32> {
                     if let Some(reps) = grid.get(&(cx + dx, cy + dy, cz + dz)) {
                         for &r in reps {
                             if positions[r as usize].distance(p) <= tol {
-                                found = Some(group_of_rep[&r]);
+                                found = Some(group_of_rep[r as usize]);
                                 break 'search;
                             }
                         }
@@ -47,7 +49,7 @@ pub fn position_groups(positions: &[Vec3], tolerance: f32) -> Vec<u32> {
                 let g = next;
                 next += 1;
                 grid.entry((cx, cy, cz)).or_default().push(i as u32);
-                group_of_rep.insert(i as u32, g);
+                group_of_rep[i] = g;
                 g
             }
         };

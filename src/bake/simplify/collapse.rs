@@ -43,7 +43,7 @@
 //! a needle in some pose is a fold or a spike the metric, an average over poses, could
 //! overlook.
 
-use super::mesh::{EdgeKind, Kind, Mesh, can_collapse};
+use super::mesh::{EdgeKind, Kind, Mesh, WedgeMap, can_collapse};
 use glam::{DVec2, DVec3};
 
 /// One cell corner: `Σ c·p(position)` with `Σ c = 0`, at most four terms, and how far the
@@ -360,10 +360,9 @@ impl Context<'_> {
     /// Which wedge of `u2` each wedge of `u1` becomes, and whether that tears its chart. Only
     /// a corner tears: a chart of its that does not reach `u2` takes the wedge of `u2` whose
     /// normal is closest to its own (the same side of a hard edge, where one is).
-    pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<Vec<([u32; 2], bool)>> {
+    pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<WedgeMap> {
         if self.mesh.kind[u1 as usize] != Kind::Corner {
-            let map = self.mesh.wedge_map(u1, u2)?;
-            return Some(map.into_iter().map(|pair| (pair, false)).collect());
+            return self.mesh.torn_wedge_map(u1, u2, |_, _| None);
         }
         self.mesh.torn_wedge_map(u1, u2, |r1, candidates| {
             let n = self.normals[r1 as usize];

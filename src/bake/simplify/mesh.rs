@@ -18,6 +18,7 @@
 
 use super::influence::Influence64;
 use glam::DVec3;
+use smallvec::SmallVec;
 use std::collections::HashMap;
 
 /// Rest positions closer than this fraction of the bounding-box diagonal are one point.
@@ -60,6 +61,10 @@ fn same_skinning(a: &[Influence64], b: &[Influence64]) -> bool {
         .chain(b)
         .all(|i| (weight(a, i.bone) - weight(b, i.bone)).abs() <= WEIGHT_TOLERANCE)
 }
+
+/// A wedge map: pairs of render vertices (of `u1`, of `u2`), each marked torn or not. On the
+/// stack for the usual one to four wedges, since one is built for every candidate priced.
+pub type WedgeMap = SmallVec<[([u32; 2], bool); 4]>;
 
 /// What a position is, topologically. Decides which half-edge collapses may remove it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -351,9 +356,9 @@ impl Mesh {
         u1: u32,
         u2: u32,
         torn: impl Fn(u32, &[u32]) -> Option<u32>,
-    ) -> Option<Vec<([u32; 2], bool)>> {
-        let mut map = Vec::with_capacity(2);
-        let mut shared: Vec<u32> = Vec::with_capacity(2);
+    ) -> Option<WedgeMap> {
+        let mut map = WedgeMap::new();
+        let mut shared: SmallVec<[u32; 4]> = SmallVec::new();
         for &r1 in &self.wedges[u1 as usize] {
             shared.clear();
             for &t in &self.incident[u1 as usize] {

@@ -36,7 +36,6 @@ use influence::{FactorCache, Influence64};
 use mesh::{Kind, Mesh};
 use rstar::RTree;
 use rstar::primitives::GeomWithData;
-use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
@@ -275,22 +274,19 @@ enum Metric<'a> {
     /// Euclidean distance between rest-pose positions.
     RestPose,
     /// `‖s‖²₂,₂ = sᵀPs`. A corner is a combination `s = Σ c_a p_a` of at most four positions,
-    /// so `sᵀPs = Σ c_a c_b (p_aᵀ P p_b)`: the inner products of neighbouring positions are
-    /// computed once and cached (stamped with each position's influence version), which keeps
-    /// the animation-space metric a small overhead on the rest-pose one.
-    AnimationSpace {
-        pm: &'a ExpectationMatrix,
-        gram: FxHashMap<(u32, u32), (u32, u32, f64)>,
-    },
+    /// whose influences share a few bones: `s` is gathered per bone (`s_j = Σ c_a p_aj`) and
+    /// `sᵀPs = Σ_jk s_jᵀ P_jk s_k` takes one 4×4 block of P per pair of those bones. That is
+    /// cheaper than the inner products of the positions pairwise, and needs no cache (a cache
+    /// of them, keyed by position pair, cost as much in memory traffic as it saved).
+    AnimationSpace { pm: &'a ExpectationMatrix },
 }
 
 impl Metric<'_> {
     fn deviation2(
-        &mut self,
+        &self,
         corner: &[(u32, f64); 4],
         rest: &[DVec3],
         infl: &[Vec<Influence64>],
-        version: &[u32],
     ) -> f64 {
         match self {
             Metric::RestPose => corner
@@ -298,32 +294,27 @@ impl Metric<'_> {
                 .map(|&(p, c)| rest[p as usize] * c)
                 .sum::<DVec3>()
                 .length_squared(),
-            Metric::AnimationSpace { pm, gram } => {
-                let mut sum = 0.0;
-                for i in 0..4 {
-                    let (a, ca) = corner[i];
-                    if ca == 0.0 {
+            Metric::AnimationSpace { pm } => {
+                let mut gathered: smallvec::SmallVec<[(u32, [f64; 4]); 8]> =
+                    smallvec::SmallVec::new();
+                for &(a, c) in corner {
+                    if c == 0.0 {
                         continue;
                     }
-                    for &(b, cb) in &corner[i..] {
-                        if cb == 0.0 {
-                            continue;
+                    for x in &infl[a as usize] {
+                        let add = x.p.map(|v| v * c);
+                        match gathered.iter_mut().find(|(bone, _)| *bone == x.bone) {
+                            Some((_, s)) => (0..4).for_each(|k| s[k] += add[k]),
+                            None => gathered.push((x.bone, add)),
                         }
-                        let key = (a.min(b), a.max(b));
-                        let stamp = (version[key.0 as usize], version[key.1 as usize]);
-                        let g = match gram.get(&key) {
-                            Some(&(va, vb, g)) if (va, vb) == stamp => g,
-                            _ => {
-                                let g = inner(pm, &infl[key.0 as usize], &infl[key.1 as usize]);
-                                gram.insert(key, (stamp.0, stamp.1, g));
-                                g
-                            }
-                        };
-                        sum += if a == b {
-                            ca * cb * g
-                        } else {
-                            2.0 * ca * cb * g
-                        };
+                    }
+                }
+                // P is symmetric: each pair of bones once, off-diagonal pairs twice.
+                let mut sum = 0.0;
+                for (i, (j, sj)) in gathered.iter().enumerate() {
+                    sum += quadratic(pm.block(*j, *j), sj, sj);
+                    for (k, sk) in &gathered[i + 1..] {
+                        sum += 2.0 * quadratic(pm.block(*j, *k), sj, sk);
                     }
                 }
                 sum.max(0.0)
@@ -400,7 +391,6 @@ struct Simplifier<'a> {
     /// Position `u` in pose `s` at `u * poses.len() + s`.
     posed: Vec<DVec3>,
     infl: Vec<Vec<Influence64>>,
-    version: Vec<u32>,
     metric: Metric<'a>,
     pm: &'a ExpectationMatrix,
     cache: FactorCache,
@@ -485,7 +475,6 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
         Method::RestPose => Metric::RestPose,
         _ => Metric::AnimationSpace {
             pm: input.expectation,
-            gram: FxHashMap::default(),
         },
     };
     let base_triangles = mesh.tris.clone();
@@ -506,7 +495,6 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
         poses: input.poses,
         posed,
         infl,
-        version: vec![0; n],
         metric,
         pm: input.expectation,
         cache: FactorCache::default(),
@@ -709,7 +697,7 @@ impl Simplifier<'_> {
         for corner in &self.scratch.corners {
             let d = self
                 .metric
-                .deviation2(&corner.terms, &self.rest, &self.infl, &self.version);
+                .deviation2(&corner.terms, &self.rest, &self.infl);
             worst = worst.max(d + corner.texture * corner.texture);
         }
         Some(worst.sqrt())
@@ -725,7 +713,7 @@ impl Simplifier<'_> {
         }
         let mut neighbours = std::mem::take(&mut self.neighbours);
         self.mesh.neighbours(u, &mut neighbours);
-        let mut costs: Vec<(f64, u32)> = neighbours
+        let mut costs: smallvec::SmallVec<[(f64, u32); 16]> = neighbours
             .iter()
             .filter_map(|&u2| Some((self.unoriented_cost(u, u2)?, u2)))
             .collect();
@@ -925,7 +913,6 @@ impl Simplifier<'_> {
         for (s, g) in self.poses.iter().enumerate() {
             self.posed[ui * poses + s] = rest_position(g, &self.infl[ui]);
         }
-        self.version[ui] += 1;
         let wedges = self.mesh.wedges[ui].clone();
         self.influences -= wedges.len() as u64;
         // Figure 4: every collapse whose fan holds this vertex changes. Their queue entries are
