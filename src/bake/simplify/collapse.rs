@@ -209,7 +209,6 @@ pub struct Scratch {
     /// v1 and the stamp the cached fan data below belong to.
     fan_of: Option<(u32, u64)>,
     n1: Vec<u32>,
-    n2: Vec<u32>,
     flats: Vec<(u32, Option<Flattening>)>,
     old: Vec<[u32; 3]>,
     new: Vec<[u32; 3]>,
@@ -245,7 +244,7 @@ impl Context<'_> {
             scratch.flats.clear();
             scratch.fan_of = Some((u1, self.stamp));
         }
-        if !mesh.link_condition(u1, u2, &scratch.n1, &mut scratch.n2) {
+        if !mesh.link_condition(u1, u2, &scratch.n1) {
             return Err(Rejection::Link);
         }
         scratch.corners.clear();

@@ -383,25 +383,37 @@ impl Mesh {
 
     /// Hoppe's link condition for a manifold result: the positions adjacent to both ends must
     /// be exactly the apexes of the triangles on the edge. Otherwise the collapse would glue two
-    /// sheets together along an edge. `n1` holds the neighbours of `u1`; `n2` is scratch.
-    pub fn link_condition(&self, u1: u32, u2: u32, n1: &[u32], n2: &mut Vec<u32>) -> bool {
-        self.neighbours(u2, n2);
-        let mut apexes = 0;
+    /// sheets together along an edge. `n1` holds the neighbours of `u1`.
+    pub fn link_condition(&self, u1: u32, u2: u32, n1: &[u32]) -> bool {
+        // The apex of every triangle on the edge.
+        let mut apexes: SmallVec<[u32; 4]> = SmallVec::new();
         for &t in &self.incident[u1 as usize] {
             if self.contains_position(t, u2) {
-                apexes += 1;
+                let apex = self.tris[t as usize]
+                    .iter()
+                    .map(|&r| self.pos(r))
+                    .find(|&x| x != u1 && x != u2);
+                apexes.push(apex.unwrap_or(u32::MAX));
             }
         }
-        let common = n1.iter().filter(|x| n2.contains(x)).count();
-        if common != apexes {
-            return false;
+        // Every common neighbour must be an apex, and there must be as many as there are
+        // triangles on the edge. Adjacency to u2 is read off x's own fan: no list of u2's
+        // neighbours is built for each candidate.
+        let mut common = 0;
+        for &x in n1 {
+            if x == u2
+                || !self.incident[x as usize]
+                    .iter()
+                    .any(|&t| self.contains_position(t, u2))
+            {
+                continue;
+            }
+            if !apexes.contains(&x) {
+                return false;
+            }
+            common += 1;
         }
-        // Every common neighbour must be an apex.
-        n1.iter().filter(|x| n2.contains(x)).all(|&x| {
-            self.incident[u1 as usize]
-                .iter()
-                .any(|&t| self.contains_position(t, u2) && self.contains_position(t, x))
-        })
+        common == apexes.len()
     }
 
     /// Applies the half-edge collapse `u1 → u2` with the given wedge map. Returns how many
