@@ -388,21 +388,16 @@ impl Context<'_> {
             if a == u2 || b == u2 {
                 continue;
             }
-            let check = |x: &dyn Fn(u32) -> DVec3| {
-                let n_old = (x(a) - x(u1)).cross(x(b) - x(u1));
-                let n_new = (x(a) - x(u2)).cross(x(b) - x(u2));
-                if n_old.dot(n_new) <= 0.0 {
-                    return Err(Rejection::NormalFlip);
-                }
-                let q_new = quality(x(u2), x(a), x(b));
-                if q_new < SLIVER && q_new < 0.5 * quality(x(u1), x(a), x(b)) {
-                    return Err(Rejection::Sliver);
-                }
-                Ok(())
-            };
-            check(&|p| self.rest[p as usize])?;
+            check_triangle(
+                self.rest[u1 as usize],
+                self.rest[u2 as usize],
+                self.rest[a as usize],
+                self.rest[b as usize],
+            )?;
+            let at = |p: u32| &self.posed[p as usize * self.poses..(p as usize + 1) * self.poses];
+            let (p1, p2, pa, pb) = (at(u1), at(u2), at(a), at(b));
             for s in 0..self.poses {
-                check(&|p| self.posed[p as usize * self.poses + s])?;
+                check_triangle(p1[s], p2[s], pa[s], pb[s])?;
             }
         }
         Ok(())
@@ -608,6 +603,21 @@ impl Context<'_> {
         }
         Ok(())
     }
+}
+
+/// Triangle `(x1, a, b)` becoming `(x2, a, b)`: it must not turn over, nor become a sliver
+/// (thinner than [`SLIVER`] and less than half as round as it was).
+fn check_triangle(x1: DVec3, x2: DVec3, a: DVec3, b: DVec3) -> Result<(), Rejection> {
+    let n_old = (a - x1).cross(b - x1);
+    let n_new = (a - x2).cross(b - x2);
+    if n_old.dot(n_new) <= 0.0 {
+        return Err(Rejection::NormalFlip);
+    }
+    let q_new = quality(x2, a, b);
+    if q_new < SLIVER && q_new < 0.5 * quality(x1, a, b) {
+        return Err(Rejection::Sliver);
+    }
+    Ok(())
 }
 
 /// How round a triangle is: `4√3 · area / Σ edge²`, 1 for an equilateral one, 0 for a
