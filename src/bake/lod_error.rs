@@ -539,28 +539,14 @@ impl Surface {
     /// `count` points drawn area-weighted from a fixed seed (on the triangles `mask` picks, if
     /// given): triangle and weights.
     fn samples(&self, count: usize, seed: u64, mask: Option<&[bool]>) -> Vec<([u32; 3], [f64; 3])> {
-        let mut cumulative = Vec::with_capacity(self.corners.len());
-        let mut total = 0.0;
-        for t in 0..self.corners.len() {
-            if mask.is_none_or(|m| m[t]) {
-                total += self.cumulative[t] - if t > 0 { self.cumulative[t - 1] } else { 0.0 };
-            }
-            cumulative.push(total);
-        }
-        if total <= 0.0 {
-            return Vec::new();
-        }
-        let mut rng = fastrand::Rng::with_seed(seed);
-        (0..count)
-            .map(|_| {
-                let x = rng.f64() * total;
-                let t = cumulative
-                    .partition_point(|&c| c <= x)
-                    .min(cumulative.len() - 1);
-                let (r1, r2) = (rng.f64().sqrt(), rng.f64());
-                (self.triangles[t], [1.0 - r1, r1 * (1.0 - r2), r1 * r2])
-            })
-            .collect()
+        let areas = (0..self.corners.len()).map(|t| {
+            let area = self.cumulative[t] - if t > 0 { self.cumulative[t - 1] } else { 0.0 };
+            if mask.is_none_or(|m| m[t]) { area } else { 0.0 }
+        });
+        draw_weighted(areas, count, seed, |t, rng| {
+            let (r1, r2) = (rng.f64().sqrt(), rng.f64());
+            (self.triangles[t], [1.0 - r1, r1 * (1.0 - r2), r1 * r2])
+        })
     }
 
     /// `count` points on the triangles' edges (of the triangles `mask` picks, if given), drawn
@@ -572,35 +558,55 @@ impl Surface {
         seed: u64,
         mask: Option<&[bool]>,
     ) -> Vec<([u32; 3], [f64; 3])> {
-        let mut cumulative = Vec::with_capacity(self.corners.len() * 3);
-        let mut total = 0.0;
-        for (t, c) in self.corners.iter().enumerate() {
-            for k in 0..3 {
-                if mask.is_none_or(|m| m[t]) {
-                    total += c[k].distance(c[(k + 1) % 3]);
+        let lengths = self.corners.iter().enumerate().flat_map(|(t, c)| {
+            let picked = mask.is_none_or(|m| m[t]);
+            (0..3).map(move |k| {
+                if picked {
+                    c[k].distance(c[(k + 1) % 3])
+                } else {
+                    0.0
                 }
-                cumulative.push(total);
-            }
-        }
-        if total <= 0.0 {
-            return Vec::new();
-        }
-        let mut rng = fastrand::Rng::with_seed(seed);
-        (0..count)
-            .map(|_| {
-                let x = rng.f64() * total;
-                let e = cumulative
-                    .partition_point(|&c| c <= x)
-                    .min(cumulative.len() - 1);
-                let (t, k) = (e / 3, e % 3);
-                let along = rng.f64();
-                let mut w = [0.0; 3];
-                w[k] = 1.0 - along;
-                w[(k + 1) % 3] = along;
-                (self.triangles[t], w)
             })
-            .collect()
+        });
+        draw_weighted(lengths, count, seed, |e, rng| {
+            let (t, k) = (e / 3, e % 3);
+            let along = rng.f64();
+            let mut w = [0.0; 3];
+            w[k] = 1.0 - along;
+            w[(k + 1) % 3] = along;
+            (self.triangles[t], w)
+        })
     }
+}
+
+/// `count` draws of an index with probability proportional to `weights`, each turned into a
+/// sample by `sample` (which may draw more from the generator); none if the weights are all 0.
+fn draw_weighted<T>(
+    weights: impl Iterator<Item = f64>,
+    count: usize,
+    seed: u64,
+    mut sample: impl FnMut(usize, &mut fastrand::Rng) -> T,
+) -> Vec<T> {
+    let mut total = 0.0;
+    let cumulative: Vec<f64> = weights
+        .map(|w| {
+            total += w;
+            total
+        })
+        .collect();
+    if total <= 0.0 {
+        return Vec::new();
+    }
+    let mut rng = fastrand::Rng::with_seed(seed);
+    (0..count)
+        .map(|_| {
+            let x = rng.f64() * total;
+            let i = cumulative
+                .partition_point(|&c| c <= x)
+                .min(cumulative.len() - 1);
+            sample(i, &mut rng)
+        })
+        .collect()
 }
 
 /// Differences in animation space, one per sample → RMS over samples and frames, and the

@@ -425,18 +425,8 @@ impl Mesh {
         for t in fan {
             let tri = self.tris[t as usize];
             if tri.iter().any(|&r| self.pos(r) == u2) {
-                self.tri_alive[t as usize] = false;
+                self.kill_triangle(t, u1, &mut released);
                 died += 1;
-                for r in tri {
-                    self.refs[r as usize] -= 1;
-                    if self.refs[r as usize] == 0 {
-                        released.push(r);
-                    }
-                    let p = self.pos(r);
-                    if p != u1 {
-                        self.incident[p as usize].retain(|&x| x != t);
-                    }
-                }
             } else {
                 let tri = &mut self.tris[t as usize];
                 for r in tri.iter_mut() {
@@ -466,6 +456,23 @@ impl Mesh {
         (died, released)
     }
 
+    /// Marks triangle `t` dead: its render vertices lose a reference (those left with none go
+    /// to `released`), and it leaves the fans of its positions other than `owner`, whose fan
+    /// the caller has taken.
+    fn kill_triangle(&mut self, t: u32, owner: u32, released: &mut Vec<u32>) {
+        self.tri_alive[t as usize] = false;
+        for r in self.tris[t as usize] {
+            self.refs[r as usize] -= 1;
+            if self.refs[r as usize] == 0 {
+                released.push(r);
+            }
+            let p = self.pos(r);
+            if p != owner {
+                self.incident[p as usize].retain(|&x| x != t);
+            }
+        }
+    }
+
     /// Removes every triangle of the positions `positions` (one connected part): returns how
     /// many died and the render vertices that stopped being used.
     pub fn prune(&mut self, positions: &[u32]) -> (usize, Vec<u32>) {
@@ -476,18 +483,8 @@ impl Mesh {
                 if !self.tri_alive[t as usize] {
                     continue;
                 }
-                self.tri_alive[t as usize] = false;
+                self.kill_triangle(t, u, &mut released);
                 died += 1;
-                for r in self.tris[t as usize] {
-                    self.refs[r as usize] -= 1;
-                    if self.refs[r as usize] == 0 {
-                        released.push(r);
-                    }
-                    let p = self.pos(r);
-                    if p != u {
-                        self.incident[p as usize].retain(|&x| x != t);
-                    }
-                }
             }
             self.alive[u as usize] = false;
         }

@@ -680,19 +680,13 @@ impl Simplifier<'_> {
             return None;
         }
         self.stats.evaluations += 1;
-        let ctx = Context {
-            stamp: self.stamp,
-            mesh: &self.mesh,
-            uv: &self.uv,
-            uv_valid: &self.uv_valid,
-            uv_tolerance: self.uv_tolerance,
-            slide_scale: self.slide_scale,
-            rest: &self.rest,
-            normals: &self.normals,
-            posed: &self.posed,
-            poses: self.poses.len(),
-        };
-        ctx.corners(u1, u2, &mut self.scratch).ok()?;
+        // Taken out while the context borrows the rest of the simplifier.
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let legal = self.context().corners(u1, u2, &mut scratch).is_ok();
+        self.scratch = scratch;
+        if !legal {
+            return None;
+        }
         let mut worst = 0.0f64;
         for corner in &self.scratch.corners {
             let d = self
