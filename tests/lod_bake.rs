@@ -4,7 +4,8 @@
 use glam::{Affine3A, Quat, Vec2, Vec3, Vec4};
 use lodlab::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
 use lodlab::bake::lod::{
-    LodLevel, LodOptions, bake_lods, choose_prefixes, extract, progressive_mesh,
+    LevelProbes, LodLevel, LodOptions, bake_lods, choose_prefixes, cut_levels, extract,
+    progressive_mesh,
 };
 use lodlab::bake::lod_error::ErrorProbe;
 use lodlab::bake::simplify::expectation::ExpectationMatrix;
@@ -111,6 +112,28 @@ fn cylinder_levels_are_valid_for_every_method() {
         let seq = &lods.sequence;
         assert!(seq.steps.windows(2).all(|w| w[1].max_cost >= w[0].max_cost));
         assert!(seq.steps.iter().all(|s| s.max_cost >= s.cost));
+    }
+}
+
+/// `bake_lods` cuts levels on a second thread while the simplifier still runs; the levels
+/// must be those cut from the finished sequence, by error and by budget.
+#[test]
+fn levels_cut_while_simplifying_match_those_cut_afterwards() {
+    let model = bent_cylinder(24, 16);
+    let mut budgets = options(1.0, 10);
+    budgets.budgets = Some(vec![300, 120, 40]);
+    for (method, opts) in [
+        (Method::RestPose, options(1e-3, 20)),
+        (Method::InfluenceSimplification, options(1e-3, 20)),
+        (Method::AnimationSpace, budgets),
+    ] {
+        let lods = bake_lods(&model, method, &opts, &|_| {});
+        let (base, seq, _) = progressive_mesh(&model, method, &|_| {});
+        assert_eq!(lods.sequence.steps, seq.steps, "{method}");
+        let probes = LevelProbes::new(&model, &base);
+        let after = cut_levels(&base, &seq, &opts, &probes);
+        assert!(after.len() >= 3, "{method}: {} levels", after.len());
+        assert_eq!(lods.levels, after, "{method}");
     }
 }
 
@@ -268,7 +291,7 @@ fn animation_space_beats_the_rest_pose_on_a_bending_joint() {
             .find(|&p| seq.influences_after(p) <= target)
             .unwrap();
         let mut replay = lodlab::bake::lod::Replay::new(&base, &seq);
-        replay.advance_to(prefix);
+        replay.advance_to(&seq, prefix);
         let tris: Vec<[u32; 3]> = replay.triangles().collect();
         probe.measure(&tris, |r| replay.influences_of(r)).rms
     };

@@ -244,7 +244,7 @@ pub fn measure_sequence(
     prefixes
         .into_iter()
         .map(|p| {
-            replay.advance_to(p);
+            replay.advance_to(seq, p);
             let tris: Vec<[u32; 3]> = replay.triangles().collect();
             let MeshError { rms, max } = probe.measure(&tris, |r| replay.influences_of(r));
             CurvePoint {

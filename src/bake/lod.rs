@@ -18,9 +18,13 @@ use super::animation_space::{AnimationSpaceMesh, AsInfluence};
 use super::lod_error::SurfaceProbe;
 use super::simplify::expectation::ExpectationMatrix;
 use super::simplify::mesh::Mesh;
-use super::simplify::{Method, Sequence, SimplifyInput, StepKind, pose_samples, simplify};
+use super::simplify::{
+    Feed, Method, Sequence, SimplifyInput, Step, StepKind, pose_samples, simplify_feeding,
+};
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
+use std::sync::mpsc::{self, Receiver};
 
 /// Poses the simplifier checks every collapse in, and a level's error is measured over.
 pub const POSE_SAMPLES: usize = 16;
@@ -137,7 +141,6 @@ pub fn choose_prefixes(seq: &Sequence, opts: &LodOptions) -> Vec<usize> {
 #[derive(Clone)]
 pub struct Replay<'a> {
     base: &'a AnimationSpaceMesh,
-    seq: &'a Sequence,
     mesh: Mesh,
     /// Influences of every render vertex as of the steps applied.
     influences: Vec<Vec<AsInfluence>>,
@@ -147,12 +150,13 @@ pub struct Replay<'a> {
 }
 
 impl<'a> Replay<'a> {
-    pub fn new(base: &'a AnimationSpaceMesh, seq: &'a Sequence) -> Replay<'a> {
+    /// The full-detail mesh `base` that `seq` (whose steps may still be coming, see
+    /// [`GrowingSequence`]) starts from.
+    pub fn new(base: &'a AnimationSpaceMesh, seq: &Sequence) -> Replay<'a> {
         let mesh = Mesh::new(&base.indices, seq.positions.clone());
         let n = base.vertex_count();
         Replay {
             base,
-            seq,
             mesh,
             influences: (0..n).map(|v| base.influences_of(v).to_vec()).collect(),
             collapsed_to: vec![u32::MAX; n],
@@ -160,10 +164,10 @@ impl<'a> Replay<'a> {
         }
     }
 
-    /// Applies steps until `prefix` of them are applied (never goes back).
-    pub fn advance_to(&mut self, prefix: usize) {
-        while self.applied < prefix.min(self.seq.steps.len()) {
-            match &self.seq.steps[self.applied].kind {
+    /// Applies steps of `seq` until `prefix` of them are applied (never goes back).
+    pub fn advance_to(&mut self, seq: &Sequence, prefix: usize) {
+        while self.applied < prefix.min(seq.steps.len()) {
+            match &seq.steps[self.applied].kind {
                 StepKind::Collapse { wedges } => {
                     let u1 = self.mesh.pos(wedges[0][0]);
                     let u2 = self.mesh.pos(wedges[0][1]);
@@ -253,7 +257,7 @@ impl<'a> Replay<'a> {
     }
 
     /// The current mesh as a compact level: used vertices only, GPU order.
-    fn snapshot(&self, prefix: usize, error: f32) -> LodLevel {
+    fn snapshot(&self, prefix: usize, error: f32, bound: f32) -> LodLevel {
         let n = self.base.vertex_count();
         let mut local = vec![u32::MAX; n];
         let mut used: Vec<u32> = Vec::new();
@@ -286,7 +290,7 @@ impl<'a> Replay<'a> {
         LodLevel {
             prefix: prefix as u32,
             error,
-            bound: self.seq.error_after(prefix),
+            bound,
             mesh,
             source: order.iter().map(|&i| used[i]).collect(),
             geomorph: Vec::new(),
@@ -300,8 +304,8 @@ pub fn extract(base: &AnimationSpaceMesh, seq: &Sequence, prefixes: &[usize]) ->
     let mut replay = Replay::new(base, seq);
     let mut chain = Chain::default();
     for &prefix in prefixes {
-        replay.advance_to(prefix);
-        chain.push(&replay, seq.error_after(prefix), 1.0);
+        replay.advance_to(seq, prefix);
+        chain.push(&replay, seq, seq.error_after(prefix), 1.0);
     }
     chain.levels
 }
@@ -318,8 +322,9 @@ impl Chain {
     /// within the tolerance): it is replaced. So is one whose next one's error is less than
     /// `min_growth` times its own: it would be drawn only over a sliver of distances, and a
     /// transition towards it would run on past it.
-    fn push(&mut self, replay: &Replay, error: f32, min_growth: f32) {
-        let level = replay.snapshot(replay.applied(), error);
+    fn push(&mut self, replay: &Replay, seq: &Sequence, error: f32, min_growth: f32) {
+        let prefix = replay.applied();
+        let level = replay.snapshot(prefix, error, seq.error_after(prefix));
         if self.levels.len() > 1
             && self
                 .levels
@@ -378,10 +383,20 @@ pub fn cut_levels(
     opts: &LodOptions,
     probes: &LevelProbes,
 ) -> Vec<LodLevel> {
-    let floor = last_above_floor(seq, opts);
-    let mut at = Replay::new(base, seq);
+    cut_growing_levels(base, &mut GrowingSequence::complete(seq), opts, probes)
+}
+
+/// [`cut_levels`] of a sequence whose steps may still be coming: each question waits for the
+/// steps that decide it, so the levels come out the same as from the whole sequence.
+pub fn cut_growing_levels(
+    base: &AnimationSpaceMesh,
+    seq: &mut GrowingSequence,
+    opts: &LodOptions,
+    probes: &LevelProbes,
+) -> Vec<LodLevel> {
+    let mut at = Replay::new(base, seq.known());
     let mut chain = Chain::default();
-    chain.push(&at, 0.0, 1.0);
+    chain.push(&at, seq.known(), 0.0, 1.0);
     // Levels cut by error are about a doubling apart; one within a quarter of the next is a
     // near-duplicate. Levels cut by budget are what the user asked for: only exact duplicates
     // go.
@@ -390,34 +405,36 @@ pub fn cut_levels(
     } else {
         MIN_ERROR_GROWTH
     };
-    let push = |chain: &mut Chain, at: &Replay, measured: f32| {
+    let push = |chain: &mut Chain, seq: &Sequence, at: &Replay, measured: f32| {
         let last = chain.levels.last().map_or(0.0, |l| l.error);
         let error = seq.error_after(at.applied()).max(measured).max(last);
-        chain.push(at, error, min_growth);
+        chain.push(at, seq, error, min_growth);
     };
     match &opts.budgets {
         Some(_) => {
+            let seq = seq.whole();
             for &p in &choose_prefixes(seq, opts)[1..] {
-                at.advance_to(p);
+                at.advance_to(seq, p);
                 let resolution = RESOLUTION * seq.error_after(p);
                 let measured = at.measure(&probes.label, resolution);
-                push(&mut chain, &at, measured);
+                push(&mut chain, seq, &at, measured);
             }
         }
         None => {
-            let search = CutSearch { seq, floor, probes };
+            let floor = opts.floor_triangles.min(seq.known().base_triangle_count());
             let mut ratio = 1.0f32;
             let mut e = opts.base_error.max(f32::MIN_POSITIVE);
             loop {
-                if let Some((found, measured)) = search.next_level(&at, e, ratio) {
+                let search = CutSearch { floor, probes };
+                if let Some((found, measured)) = search.next_level(seq, &at, e, ratio) {
                     at = found;
-                    let bound = seq.error_after(at.applied());
+                    let bound = seq.known().error_after(at.applied());
                     if bound > 0.0 {
                         ratio = (measured / bound).max(1.0);
                     }
-                    push(&mut chain, &at, measured);
+                    push(&mut chain, seq.known(), &at, measured);
                 }
-                if at.applied() >= floor || !e.is_finite() {
+                if seq.at_floor(at.applied(), floor) || !e.is_finite() {
                     break;
                 }
                 e *= 2.0;
@@ -425,6 +442,76 @@ pub fn cut_levels(
         }
     }
     chain.levels
+}
+
+/// A sequence as the simplifier hands it over, steps in batches down a channel (see
+/// [`bake_lods`]), or whole. What [`cut_growing_levels`] asks of it waits for the steps that
+/// decide the answer, so levels are cut while the simplifier runs on, and the cut's
+/// measurements and the simplification share the machine's cores.
+pub struct GrowingSequence<'s> {
+    seq: Cow<'s, Sequence>,
+    feed: Option<Receiver<Vec<Step>>>,
+}
+
+impl<'s> GrowingSequence<'s> {
+    /// A sequence with all its steps.
+    pub fn complete(seq: &'s Sequence) -> GrowingSequence<'s> {
+        GrowingSequence {
+            seq: Cow::Borrowed(seq),
+            feed: None,
+        }
+    }
+
+    /// `start` (everything but the steps), the steps to come from `feed` until it closes.
+    pub fn fed(start: Sequence, feed: Receiver<Vec<Step>>) -> GrowingSequence<'static> {
+        GrowingSequence {
+            seq: Cow::Owned(start),
+            feed: Some(feed),
+        }
+    }
+
+    /// The steps received so far.
+    pub fn known(&self) -> &Sequence {
+        &self.seq
+    }
+
+    /// Receives steps until `enough` holds of those known, or there are no more.
+    fn wait(&mut self, enough: impl Fn(&[Step]) -> bool) {
+        while let Some(feed) = &self.feed {
+            if enough(&self.seq.steps) {
+                return;
+            }
+            match feed.recv() {
+                Ok(steps) => self.seq.to_mut().steps.extend(steps),
+                Err(_) => self.feed = None,
+            }
+        }
+    }
+
+    /// The whole sequence, once the last step has come.
+    fn whole(&mut self) -> &Sequence {
+        self.wait(|_| false);
+        &self.seq
+    }
+
+    /// How many steps keep the bound within `e`, no more than keep `floor` triangles. Bounds
+    /// never fall along the sequence: the first step over `e` settles it.
+    fn within(&mut self, e: f32, floor: u32) -> usize {
+        self.wait(|steps| steps.last().is_some_and(|s| s.max_cost > e));
+        let steps = &self.seq.steps;
+        let p = steps.partition_point(|s| s.max_cost <= e);
+        steps[..p].partition_point(|s| s.triangles >= floor)
+    }
+
+    /// Whether `prefix` steps reach the floor of `floor` triangles: the next step (if any)
+    /// leaves fewer. Triangles never grow along the sequence.
+    fn at_floor(&mut self, prefix: usize, floor: u32) -> bool {
+        self.wait(|steps| steps.len() > prefix);
+        self.seq
+            .steps
+            .get(prefix)
+            .is_none_or(|s| s.triangles < floor)
+    }
 }
 
 /// Levels cut by error whose errors grow by less than this from one to the next: the finer is
@@ -438,36 +525,36 @@ const CUT_PROBES: usize = 4;
 const RESOLUTION: f32 = 0.25;
 
 /// The search for one level's cut (see [`cut_levels`]).
-struct CutSearch<'s, 'p> {
-    seq: &'s Sequence,
-    floor: usize,
+struct CutSearch<'p> {
+    /// No level has fewer triangles than this (unless the full detail has).
+    floor: u32,
     probes: &'p LevelProbes<'p>,
 }
 
-impl CutSearch<'_, '_> {
-    /// The last prefix whose bound is within `e`, no further than the floor.
-    fn within(&self, e: f32) -> usize {
-        self.seq
-            .steps
-            .partition_point(|s| s.max_cost <= e)
-            .min(self.floor)
-    }
-
+impl CutSearch<'_> {
     /// From `from` (the last level), the next level's prefix for error `e` and its finely
     /// measured error; `None` if there is none.
-    fn next_level<'a>(&self, from: &Replay<'a>, e: f32, ratio: f32) -> Option<(Replay<'a>, f32)> {
+    fn next_level<'a>(
+        &self,
+        seq: &mut GrowingSequence,
+        from: &Replay<'a>,
+        e: f32,
+        ratio: f32,
+    ) -> Option<(Replay<'a>, f32)> {
         let lo = from.applied();
-        let hi = self.within(e);
+        let hi = seq.within(e, self.floor);
         if hi <= lo {
             return None;
         }
+        // Within e's steps, so already known.
+        let guess = seq.within(e / ratio, self.floor).clamp(lo + 1, hi);
+        let seq = seq.known();
         let probe_at = |start: &Replay<'a>, prefix: usize, probe: &SurfaceProbe| {
             let mut r = start.clone();
-            r.advance_to(prefix);
+            r.advance_to(seq, prefix);
             let m = r.measure(probe, RESOLUTION * e);
             (r, m)
         };
-        let guess = self.within(e / ratio).clamp(lo + 1, hi);
         let (first, m) = probe_at(from, guess, &self.probes.label);
         if m <= e {
             return Some((first, m));
@@ -525,8 +612,27 @@ pub fn progressive_mesh(
     method: Method,
     progress: &dyn Fn(f32),
 ) -> (AnimationSpaceMesh, Sequence, f64) {
-    let base = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
+    let base = full_detail(model);
     let start = std::time::Instant::now();
+    let sequence = simplify_model(model, &base, method, progress, &mut |_| {});
+    let seconds = start.elapsed().as_secs_f64();
+    (base, sequence, seconds)
+}
+
+/// `model`'s mesh in animation space, in GPU order: what every level is cut from.
+fn full_detail(model: &Model) -> AnimationSpaceMesh {
+    AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu()
+}
+
+/// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to `feed`
+/// as it is built.
+fn simplify_model(
+    model: &Model,
+    base: &AnimationSpaceMesh,
+    method: Method,
+    progress: &dyn Fn(f32),
+    feed: &mut dyn FnMut(Feed),
+) -> Sequence {
     let expectation = match method {
         Method::RestPose => ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>()),
         _ => ExpectationMatrix::estimate(model),
@@ -534,18 +640,18 @@ pub fn progressive_mesh(
     let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
     let poses = pose_samples(model, POSE_SAMPLES);
     let input = SimplifyInput {
-        mesh: &base,
+        mesh: base,
         rest_bones: &rest_bones,
         expectation: &expectation,
         poses: &poses,
         textured: model.materials.iter().any(|m| m.texture.is_some()),
     };
-    let sequence = simplify(&input, method, progress);
-    let seconds = start.elapsed().as_secs_f64();
-    (base, sequence, seconds)
+    simplify_feeding(&input, method, progress, feed)
 }
 
-/// Builds the progressive mesh of `model` by `method` and cuts its levels.
+/// Builds the progressive mesh of `model` by `method` and cuts its levels. The levels are cut
+/// on a second thread as the steps come (see [`GrowingSequence`]): the same levels as cutting
+/// the finished sequence, sooner where there are cores to spare.
 pub fn bake_lods(
     model: &Model,
     method: Method,
@@ -553,9 +659,36 @@ pub fn bake_lods(
     progress: &dyn Fn(f32),
 ) -> SkinnedLods {
     let start = std::time::Instant::now();
-    let (base, sequence, _) = progressive_mesh(model, method, progress);
-    let probes = LevelProbes::new(model, &base);
-    let levels = cut_levels(&base, &sequence, opts, &probes);
+    let base = full_detail(model);
+    let (sequence, levels) = std::thread::scope(|scope| {
+        // Made inside the scope, so that a panicking simplifier drops them and the cutter,
+        // seeing the channel close, ends before the scope joins it.
+        let (start_tx, start_rx) = mpsc::channel::<Sequence>();
+        let (steps_tx, steps_rx) = mpsc::channel::<Vec<Step>>();
+        let base = &base;
+        let cutter = scope.spawn(move || {
+            let probes = LevelProbes::new(model, base);
+            // No start: the simplifier stopped before its first step (it panicked).
+            let first = start_rx.recv().ok()?;
+            let mut seq = GrowingSequence::fed(first, steps_rx);
+            Some(cut_growing_levels(base, &mut seq, opts, &probes))
+        });
+        // A closed channel means the cutter panicked: joining it below says so.
+        let sequence = simplify_model(model, base, method, progress, &mut |feed| match feed {
+            Feed::Start(first) => {
+                let _ = start_tx.send(first.clone());
+            }
+            Feed::Steps(steps) => {
+                let _ = steps_tx.send(steps.to_vec());
+            }
+        });
+        drop(steps_tx);
+        let levels = match cutter.join() {
+            Ok(levels) => levels.expect("the simplifier hands over its start"),
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        (sequence, levels)
+    });
     let bake_seconds = start.elapsed().as_secs_f64();
     SkinnedLods {
         model: model.name.clone(),

@@ -198,6 +198,14 @@ pub struct Context<'a> {
     pub poses: usize,
 }
 
+/// A triangle of v1's fan before or after the collapse, rotated so that v1 (or v2) comes
+/// first, with its vertices' points in the chart's parameter space.
+#[derive(Clone, Copy)]
+struct FanTriangle {
+    r: [u32; 3],
+    p: [DVec2; 3],
+}
+
 /// The cache key of the whole fan's flattening among the wedges' ones.
 const WHOLE_FAN: u32 = u32::MAX;
 
@@ -210,9 +218,11 @@ pub struct Scratch {
     fan_of: Option<(u32, u64)>,
     n1: Vec<u32>,
     flats: Vec<(u32, Option<Flattening>)>,
-    old: Vec<[u32; 3]>,
-    new: Vec<[u32; 3]>,
-    outline: Vec<(u32, u32)>,
+    old: Vec<FanTriangle>,
+    new: Vec<FanTriangle>,
+    /// Outline candidates: render vertex, how many fan triangles reach it by an edge from
+    /// v1 (1, or 2 for more), and its parameter point.
+    outline: Vec<(u32, u32, DVec2)>,
     /// Ends of the old edges from v1 and of the new ones from v2: render vertex and its
     /// parameter point relative to v1's or v2's.
     ends_old: Vec<(u32, DVec2)>,
@@ -415,8 +425,15 @@ impl Context<'_> {
         s: &mut Scratch,
     ) -> Result<(), Rejection> {
         let mesh = self.mesh;
+        let p = |r: u32| match chart {
+            Chart::Texture => Ok(self.uv[r as usize]),
+            Chart::Polar(f) | Chart::Whole(f) => f.get(mesh.pos(r)).ok_or(Rejection::BadFan),
+        };
+        // The fan before and after, each triangle with its parameter points looked up once:
+        // everything below works on these.
         s.old.clear();
         s.new.clear();
+        let p2 = p(r2)?;
         for &t in &mesh.incident[u1 as usize] {
             let tri = mesh.tris[t as usize];
             if r1.is_some_and(|r1| !tri.contains(&r1)) {
@@ -424,19 +441,19 @@ impl Context<'_> {
             }
             // Rotate so v1 comes first; winding kept.
             let k = tri.iter().position(|&r| mesh.pos(r) == u1).unwrap_or(0);
-            let tri = [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]];
-            s.old.push(tri);
-            if mesh.pos(tri[1]) != u2 && mesh.pos(tri[2]) != u2 {
-                s.new.push([r2, tri[1], tri[2]]);
+            let r = [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]];
+            let pts = [p(r[0])?, p(r[1])?, p(r[2])?];
+            s.old.push(FanTriangle { r, p: pts });
+            if mesh.pos(r[1]) != u2 && mesh.pos(r[2]) != u2 {
+                s.new.push(FanTriangle {
+                    r: [r2, r[1], r[2]],
+                    p: [p2, pts[1], pts[2]],
+                });
             }
         }
         if s.new.is_empty() || s.old.is_empty() {
             return Err(Rejection::BadFan);
         }
-        let p = |r: u32| match chart {
-            Chart::Texture => Ok(self.uv[r as usize]),
-            Chart::Polar(f) | Chart::Whole(f) => f.get(mesh.pos(r)).ok_or(Rejection::BadFan),
-        };
         // Under the texture's own correspondence texture coordinates never slide; the whole
         // fan's map measures geometry alone.
         let uv = |r: u32| match chart {
@@ -444,15 +461,14 @@ impl Context<'_> {
             Chart::Texture | Chart::Whole(_) => DVec2::ZERO,
         };
         let slide = |d: DVec2| d.length() * self.slide_scale;
-        let r1 = s.old[0][0];
-        let p1 = p(r1)?;
-        let p2 = p(r2)?;
+        let r1 = s.old[0].r[0];
+        let p1 = s.old[0].p[0];
 
         // Orientation of the chart around r1, and a scale for the tolerances.
         let mut extent2: f64 = 0.0;
         let mut sign = 0.0;
         for tri in &s.old {
-            let (a, b) = (p(tri[1])?, p(tri[2])?);
+            let [_, a, b] = tri.p;
             extent2 = extent2
                 .max((a - p1).length_squared())
                 .max((b - p1).length_squared());
@@ -466,7 +482,7 @@ impl Context<'_> {
         }
         let min_area = 1e-10 * extent2;
         if s.old.iter().any(|tri| {
-            let (a, b) = (p(tri[1]).unwrap_or(p1), p(tri[2]).unwrap_or(p1));
+            let [_, a, b] = tri.p;
             ((a - p1).perp_dot(b - p1) * sign) <= min_area
         }) {
             return Err(Rejection::BadFan);
@@ -474,7 +490,7 @@ impl Context<'_> {
 
         // No fold-over in parameter space.
         for tri in &s.new {
-            let (a, b) = (p(tri[1])?, p(tri[2])?);
+            let [_, a, b] = tri.p;
             if (a - p2).perp_dot(b - p2) * sign <= min_area {
                 return Err(Rejection::ParameterFold);
             }
@@ -485,26 +501,26 @@ impl Context<'_> {
         // outline neighbour to r2.
         s.outline.clear();
         for tri in &s.old {
-            for (a, dir) in [(tri[1], 0u32), (tri[2], 1u32)] {
-                match s.outline.iter().position(|&(x, _)| x == a) {
+            for j in 1..3 {
+                let a = tri.r[j];
+                match s.outline.iter().position(|o| o.0 == a) {
                     Some(i) => s.outline[i].1 = 2,
-                    None => s.outline.push((a, dir)),
+                    None => s.outline.push((a, 1, tri.p[j])),
                 }
             }
         }
-        s.outline.retain(|&(_, n)| n < 2);
+        s.outline.retain(|o| o.1 < 2);
         match s.outline.len() {
             // The whole fan of a corner is closed; a dying chart's outline goes with it.
             _ if matches!(chart, Chart::Whole(_)) => {}
             0 => {}
             2 => {
-                let (Some(&(prev, _)), true) = (
-                    s.outline.iter().find(|&&(a, _)| mesh.pos(a) != u2),
-                    s.outline.iter().any(|&(a, _)| mesh.pos(a) == u2),
+                let (Some(&(_, _, q)), true) = (
+                    s.outline.iter().find(|o| mesh.pos(o.0) != u2),
+                    s.outline.iter().any(|o| mesh.pos(o.0) == u2),
                 ) else {
                     return Err(Rejection::NotAlongOutline);
                 };
-                let q = p(prev)?;
                 let tolerance = match chart {
                     Chart::Texture => self.uv_tolerance,
                     Chart::Polar(_) | Chart::Whole(_) => 1e-9 * extent2.sqrt(),
@@ -523,10 +539,10 @@ impl Context<'_> {
         // Corner 1: v1's parameter point, inside (or on the edge of) one new triangle.
         let mut best: Option<([u32; 3], [f64; 3])> = None;
         for tri in &s.new {
-            let bary = barycentric(p1, p(tri[0])?, p(tri[1])?, p(tri[2])?);
+            let bary = barycentric(p1, tri.p[0], tri.p[1], tri.p[2]);
             let worst = bary[0].min(bary[1]).min(bary[2]);
             if best.is_none_or(|(_, b)| worst > b[0].min(b[1]).min(b[2])) {
-                best = Some((*tri, bary));
+                best = Some((tri.r, bary));
             }
         }
         let (tri, bary) = best.ok_or(Rejection::BadFan)?;
@@ -546,16 +562,18 @@ impl Context<'_> {
         s.ends_old.clear();
         s.ends_new.clear();
         for tri in &s.old {
-            for &a in &tri[1..] {
+            for j in 1..3 {
+                let a = tri.r[j];
                 if mesh.pos(a) != u2 && !s.ends_old.iter().any(|e| e.0 == a) {
-                    s.ends_old.push((a, p(a)? - p1));
+                    s.ends_old.push((a, tri.p[j] - p1));
                 }
             }
         }
         for tri in &s.new {
-            for &b in &tri[1..] {
+            for j in 1..3 {
+                let b = tri.r[j];
                 if !s.ends_new.iter().any(|e| e.0 == b) {
-                    s.ends_new.push((b, p(b)? - p2));
+                    s.ends_new.push((b, tri.p[j] - p2));
                 }
             }
         }
@@ -613,8 +631,11 @@ fn check_triangle(x1: DVec3, x2: DVec3, a: DVec3, b: DVec3) -> Result<(), Reject
     if n_old.dot(n_new) <= 0.0 {
         return Err(Rejection::NormalFlip);
     }
-    let q_new = quality(x2, a, b);
-    if q_new < SLIVER && q_new < 0.5 * quality(x1, a, b) {
+    // quality(x2, a, b) < SLIVER without a square root, from the normal already at hand:
+    // 2√3·|n| < SLIVER·Σ edge², squared. The old triangle's quality is needed only then.
+    let edges = (a - x2).length_squared() + (b - a).length_squared() + (x2 - b).length_squared();
+    let thin = 12.0 * n_new.length_squared() < (SLIVER * edges) * (SLIVER * edges);
+    if thin && quality(x2, a, b) < 0.5 * quality(x1, a, b) {
         return Err(Rejection::Sliver);
     }
     Ok(())

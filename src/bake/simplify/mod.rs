@@ -413,6 +413,28 @@ struct Simplifier<'a> {
 /// Builds the whole progressive mesh of `input` by `method`. `progress` is told the fraction
 /// of triangles removed so far, now and then.
 pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -> Sequence {
+    simplify_feeding(input, method, progress, &mut |_| {})
+}
+
+/// What [`simplify_feeding`] hands over as it runs.
+pub enum Feed<'a> {
+    /// The sequence before its first step: everything but the steps and the statistics.
+    Start(&'a Sequence),
+    /// The next steps, in order, a batch at a time.
+    Steps(&'a [Step]),
+}
+
+/// Steps handed over at a time by [`simplify_feeding`].
+const FEED_BATCH: usize = 64;
+
+/// [`simplify`], handing the sequence to `feed` as it is built, so that a caller can work on
+/// its first steps while the rest are found.
+pub fn simplify_feeding(
+    input: &SimplifyInput,
+    method: Method,
+    progress: &dyn Fn(f32),
+    feed: &mut dyn FnMut(Feed),
+) -> Sequence {
     let am = input.mesh;
     let n = am.vertex_count();
     let infl = influences64(am);
@@ -511,18 +533,20 @@ pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -
         stamp: 0,
         stats,
     };
-    let base_influences = s.influences as u32;
-    let steps = s.run(progress);
-    s.stats.cache_hits = s.cache.hits;
-    s.stats.cache_misses = s.cache.misses;
-    Sequence {
+    let mut sequence = Sequence {
         method,
         positions,
         base_triangles,
-        base_influences,
-        steps,
-        stats: s.stats,
-    }
+        base_influences: s.influences as u32,
+        steps: Vec::new(),
+        stats: Stats::default(),
+    };
+    feed(Feed::Start(&sequence));
+    sequence.steps = s.run(progress, feed);
+    s.stats.cache_hits = s.cache.hits;
+    s.stats.cache_misses = s.cache.misses;
+    sequence.stats = s.stats;
+    sequence
 }
 
 /// Where a model's texture coordinates are a parameterisation.
@@ -576,7 +600,7 @@ impl TextureCharts {
 }
 
 impl Simplifier<'_> {
-    fn run(&mut self, progress: &dyn Fn(f32)) -> Vec<Step> {
+    fn run(&mut self, progress: &dyn Fn(f32), feed: &mut dyn FnMut(Feed)) -> Vec<Step> {
         let n = self.mesh.position.len() as u32;
         for u in 0..n {
             if self.mesh.alive[u as usize] && self.mesh.pos(u) == u {
@@ -641,6 +665,9 @@ impl Simplifier<'_> {
                 triangles: self.mesh.alive_triangles as u32,
                 influences: self.influences as u32,
             });
+            if steps.len() % FEED_BATCH == 0 {
+                feed(Feed::Steps(&steps[steps.len() - FEED_BATCH..]));
+            }
             if steps.len() % 512 == 0 {
                 progress(1.0 - self.mesh.alive_triangles as f32 / start);
             }
@@ -648,6 +675,7 @@ impl Simplifier<'_> {
                 break;
             }
         }
+        feed(Feed::Steps(&steps[steps.len() / FEED_BATCH * FEED_BATCH..]));
         progress(1.0);
         steps
     }
