@@ -990,7 +990,7 @@ impl<'a> SurfaceProbe<'a> {
                 // vertex's distance from the simplified surface.
                 Some(follow) => {
                     let mut bound: Vec<(f64, u32)> = gone
-                        .iter()
+                        .par_iter()
                         .map(|&v| {
                             let to = follow(v);
                             let far = match slot.get(to as usize) {
