@@ -8,10 +8,10 @@
 //!   towards the next level) or an alpha blend (p = ¼), against the same frame popping.
 
 use anyhow::Result;
-use lodlab::app::shot::time_renderer;
-use lodlab::app::world::{Loaded, SceneSpec, World};
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{FrameView, Gpu, Region, Side};
+use lodlab::runtime::headless::time_renderer;
+use lodlab::runtime::world::{Loaded, SceneSpec, World};
 use lodlab::scene::{LodDraw, LodMethod, Transition};
 
 const WIDTH: u32 = 1280;

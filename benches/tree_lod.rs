@@ -4,12 +4,13 @@
 //! the ratios net of the frame without trees (sky, ground: the same at every level).
 
 use anyhow::{Result, anyhow};
-use lodlab::app::shot::time_renderer;
-use lodlab::app::tree_levels::{ChainOptions, CloudLevel, tree_chain};
-use lodlab::app::world::{Loaded, World};
+use lodlab::bake::billboard::chain::{ChainOptions, CloudLevel, tree_chain};
 use lodlab::bake::billboard::foliage;
 use lodlab::render::Gpu;
+use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+use lodlab::runtime::headless::time_renderer;
+use lodlab::runtime::world::{Loaded, World};
 
 const TREES: usize = 100;
 const WIDTH: u32 = 1280;
@@ -22,7 +23,13 @@ fn main() -> Result<()> {
         let tree = lodlab::import::load_model(name)?;
         let f = foliage(&tree).map_err(|e| anyhow!(e))?;
         let start = std::time::Instant::now();
-        let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default(), &|_| {})?;
+        let chain = tree_chain(
+            &AtlasRasterizer::new(&gpu),
+            &tree,
+            &f,
+            &ChainOptions::default(),
+            &|_| {},
+        )?;
         println!(
             "\n{name}: chain of {} levels built in {:.2} s; {TREES} trees, {WIDTH}x{HEIGHT}",
             chain.len(),

@@ -159,6 +159,30 @@ pub fn skinning_over_loop(model: &crate::model::Model, samples: usize) -> Vec<Ve
         .collect()
 }
 
+/// Classic linear blend skinning, `v = Σ w_i (G_i Ĝ_i⁻¹) v̂` (Merry et al., equation 1): the skinning matrices
+/// are formed first, the way a conventional renderer does it. Used to check animation space.
+pub fn linear_blend_skinning(
+    mesh: &crate::model::SkinnedMesh,
+    skeleton: &Skeleton,
+    g: &[Affine3A],
+) -> Vec<glam::Vec3> {
+    let skinning: Vec<glam::Mat4> = g
+        .iter()
+        .zip(&skeleton.inverse_bind)
+        .map(|(g, inv)| glam::Mat4::from(*g) * *inv)
+        .collect();
+    (0..mesh.vertex_count())
+        .map(|v| {
+            let rest = mesh.positions[v].extend(1.0);
+            mesh.influences_of(v)
+                .iter()
+                .map(|inf| inf.weight * (skinning[inf.bone as usize] * rest))
+                .sum::<Vec4>()
+                .truncate()
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

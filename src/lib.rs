@@ -18,4 +18,5 @@ pub mod generate;
 pub mod import;
 pub mod model;
 pub mod render;
+pub mod runtime;
 pub mod scene;

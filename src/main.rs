@@ -2,11 +2,14 @@
 
 use clap::{Args, Parser, Subcommand};
 use lodlab::app::report::write_atomic;
-use lodlab::app::shot::{self, ShotLod, ShotOptions};
-use lodlab::app::tree_levels::{ChainOptions, FoliagePolicy, FoliageView, MIN_EPSILON_GROWTH};
-use lodlab::app::world::SceneSpec;
+use lodlab::app::shot::{self, ShotOptions};
+use lodlab::bake::billboard::chain::{ChainOptions, MIN_EPSILON_GROWTH};
 use lodlab::bake::spectral::description::DescriptionType;
 use lodlab::render::DebugView;
+use lodlab::runtime::headless::ShotLod;
+use lodlab::runtime::world::SceneSpec;
+use lodlab::scene::SceneKind;
+use lodlab::scene::foliage::{FoliagePolicy, FoliageView};
 use lodlab::scene::{Camera, Drive, LodMethod, LodPolicy, Transition};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -282,8 +285,8 @@ struct SceneArgs {
     /// Scene to show: mixed (the crowd walking in a clearing of the forest), crowd
     /// (characters), forest (trees) or study (copies of one model) [default: mixed; study for
     /// record].
-    #[arg(long)]
-    scene: Option<String>,
+    #[arg(long, value_enum)]
+    scene: Option<SceneKind>,
     /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling) or a glTF path.
     /// Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
@@ -293,7 +296,7 @@ struct SceneArgs {
     #[arg(long)]
     count: Option<usize>,
     /// Trees round the mixed scene's clearing.
-    #[arg(long, default_value_t = lodlab::app::world::DEFAULT_MIXED_TREES)]
+    #[arg(long, default_value_t = lodlab::scene::kind::DEFAULT_MIXED_TREES)]
     trees: usize,
     /// Play this clip on every model that has it (default: a mix).
     #[arg(long)]
@@ -308,16 +311,14 @@ struct SceneArgs {
 
 impl SceneArgs {
     fn spec(&self) -> SceneSpec {
-        self.spec_or("mixed")
+        self.spec_or(SceneKind::Mixed)
     }
 
     /// The scene asked for, `default` where none is.
-    fn spec_or(&self, default: &str) -> SceneSpec {
-        let scene = self.scene.clone().unwrap_or_else(|| default.to_string());
+    fn spec_or(&self, default: SceneKind) -> SceneSpec {
+        let scene = self.scene.unwrap_or(default);
         SceneSpec {
-            count: self
-                .count
-                .unwrap_or_else(|| lodlab::app::world::default_count(&scene)),
+            count: self.count.unwrap_or_else(|| scene.default_count()),
             scene,
             models: self.models.clone(),
             trees: self.trees,
@@ -767,7 +768,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Some(Command::Record(a)) => {
             let report = lodlab::app::record::run(&lodlab::app::record::RecordOptions {
-                spec: a.scene.spec_or("study"),
+                spec: a.scene.spec_or(SceneKind::Study),
                 lod: ShotLod {
                     method: a.method,
                     policy: a.policy.policy(),

@@ -1,7 +1,8 @@
 //! Animation space (Merry et al. §2.1.2) equals classic linear blend skinning, to 1e-5 of the
 //! model's size, on every model lodlab ships or is tested with, at several times of every clip.
 
-use lodlab::bake::animation_space::{AnimationSpaceMesh, linear_blend_skinning};
+use lodlab::anim::linear_blend_skinning;
+use lodlab::bake::animation_space::AnimationSpaceMesh;
 use lodlab::model::{Bounds, Model};
 
 fn models() -> Vec<Model> {

@@ -9,6 +9,7 @@ use lodlab::bake::billboard::{
 };
 use lodlab::import::load_model;
 use lodlab::model::Model;
+use lodlab::render::atlas::AtlasRasterizer;
 
 fn cloud(m: &Model, epsilon_of_height: f32, seed: u64) -> SkeletonCloud {
     let f = foliage(m).unwrap();
@@ -215,7 +216,8 @@ fn foliage_that_the_method_does_not_expect() {
 /// managed 7%).
 #[test]
 fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
-    use lodlab::app::tree_levels::{CloudKind, CloudLevel, cloud_level, colour_error};
+    use lodlab::bake::billboard::chain::{CloudKind, CloudLevel, cloud_level};
+    use lodlab::runtime::colour_error::colour_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     for name in ["broadleaf", "conifer"] {
         let tree = load_model(name).unwrap();
@@ -232,7 +234,7 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             ..Default::default()
         };
         let level = cloud_level(
-            &gpu,
+            &AtlasRasterizer::new(&gpu),
             &tree,
             &f,
             &params,
@@ -253,7 +255,7 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             ..Default::default()
         };
         let level = cloud_level(
-            &gpu,
+            &AtlasRasterizer::new(&gpu),
             &tree,
             &f,
             &coarse,
@@ -275,11 +277,18 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
 /// counts, ending at ten billboards or fewer, each level's atlas within the texture limit.
 #[test]
 fn the_chain_falls_to_a_handful_of_billboards() {
-    use lodlab::app::tree_levels::{ChainOptions, tree_chain};
+    use lodlab::bake::billboard::chain::{ChainOptions, tree_chain};
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("broadleaf").unwrap();
     let f = foliage(&tree).unwrap();
-    let chain = tree_chain(&gpu, &tree, &f, &ChainOptions::default(), &|_| {}).unwrap();
+    let chain = tree_chain(
+        &AtlasRasterizer::new(&gpu),
+        &tree,
+        &f,
+        &ChainOptions::default(),
+        &|_| {},
+    )
+    .unwrap();
     assert!(chain.len() >= 5, "{} levels", chain.len());
     assert_eq!(chain[0].epsilon, 0.0);
     assert_eq!(chain[0].cloud.model, tree);
@@ -370,7 +379,7 @@ fn simplified_wood_keeps_its_vertices() {
 /// one line and rebuilt, never trusted.
 #[test]
 fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
-    use lodlab::app::tree_levels::{ChainOptions, load_or_build_chain};
+    use lodlab::bake::billboard::chain::{ChainOptions, load_or_build_chain};
     use lodlab::bake::cache::{LodCache, Origin, source_hash};
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let dir = tempfile::tempdir().unwrap();
@@ -378,7 +387,17 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     let tree = load_model("sapling").unwrap();
     let hash = source_hash(&lodlab::import::source_path("sapling")).unwrap();
     let opts = ChainOptions::default();
-    let load = || load_or_build_chain(&gpu, &cache, &tree, &hash, &opts, &|_| {}).unwrap();
+    let load = || {
+        load_or_build_chain(
+            &AtlasRasterizer::new(&gpu),
+            &cache,
+            &tree,
+            &hash,
+            &opts,
+            &|_| {},
+        )
+        .unwrap()
+    };
     let (built, origin) = load();
     assert_eq!(origin, Origin::Baked { warning: None });
     let (cached, origin) = load();

@@ -5,10 +5,10 @@ mod common;
 
 use glam::{Affine3A, Quat, Vec3};
 use lodlab::app::shot::{ShotOptions, run as shot};
-use lodlab::app::world::{Loaded, SceneSpec, World};
 use lodlab::render::Gpu;
 use lodlab::render::capture::capture_skinned;
 use lodlab::render::targets::OFFSCREEN_FORMAT;
+use lodlab::runtime::world::{Loaded, SceneSpec, World};
 use lodlab::scene::Camera;
 
 fn spec(models: &[&str], count: usize, clip: Option<&str>) -> SceneSpec {

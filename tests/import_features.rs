@@ -5,7 +5,8 @@ mod common;
 
 use common::{edit_glb, six_influence_model, tiny_model};
 use glam::{Quat, Vec3, Vec4};
-use lodlab::bake::animation_space::{AnimationSpaceMesh, linear_blend_skinning};
+use lodlab::anim::linear_blend_skinning;
+use lodlab::bake::animation_space::AnimationSpaceMesh;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::gltf::load;
 use lodlab::model::{Channel, ChannelTarget, Interpolation};

@@ -137,6 +137,34 @@ fn levels_cut_while_simplifying_match_those_cut_afterwards() {
     }
 }
 
+/// Bakes inside a parallel loop with more bakes than workers, as `lodlab bake` runs them: each
+/// bake's level cut needs the pool while its simplifier waits for it, so a waiting worker must
+/// keep working or every worker ends up waiting. Run on a thread, so that a deadlock fails the
+/// test instead of hanging it.
+#[test]
+fn bakes_in_a_parallel_loop_finish() {
+    use rayon::prelude::*;
+    let (done_tx, done_rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let model = bent_cylinder(12, 10);
+        let jobs = 3 * rayon::current_num_threads().max(2);
+        let levels: Vec<usize> = (0..jobs)
+            .into_par_iter()
+            .map(|i| {
+                let method = Method::ALL[i % 3];
+                bake_lods(&model, method, &options(2e-3, 20), &|_| {})
+                    .levels
+                    .len()
+            })
+            .collect();
+        let _ = done_tx.send(levels);
+    });
+    let levels = done_rx
+        .recv_timeout(std::time::Duration::from_secs(300))
+        .expect("bakes in a parallel loop deadlocked");
+    assert!(levels.iter().all(|&n| n >= 2), "{levels:?}");
+}
+
 #[test]
 fn levels_by_triangle_budget() {
     let model = bent_cylinder(16, 12);

@@ -6,11 +6,11 @@
 //! surface must stay closed; errors must be true and growing; and the coarsest level must reach
 //! a tenth of the source's triangles, or 300.
 
-use lodlab::app::levels::runtime_options;
 use lodlab::bake::lod::{LodLevel, bake_lods};
 use lodlab::bake::silhouette::distance;
 use lodlab::bake::simplify::{Method, SimplifyInput, pose_samples};
 use lodlab::import::load_model;
+use lodlab::runtime::levels::runtime_options;
 use std::collections::HashMap;
 
 /// The tolerance the silhouettes are checked at, in pixels.

@@ -1,10 +1,11 @@
 //! Levels of detail on the GPU (lavapipe in CI): transition endpoints on pixels, batching, and
 //! headless shots of every method, transition, debug view and comparison.
 
-use lodlab::app::shot::{ShotLod, ShotOptions, ShotReport, run as shot};
-use lodlab::app::world::{Loaded, SceneSpec, World};
+use lodlab::app::shot::{ShotOptions, ShotReport, run as shot};
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{DebugView, FrameView, Gpu, Region, Side};
+use lodlab::runtime::headless::ShotLod;
+use lodlab::runtime::world::{Loaded, SceneSpec, World};
 use lodlab::scene::{Drive, Instance, LodDraw, LodMethod, LodPolicy, Transition};
 use std::collections::HashSet;
 use std::path::PathBuf;

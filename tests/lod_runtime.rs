@@ -1,12 +1,12 @@
 //! Levels of detail at run time, on the CPU: no pop during a morph, and how levels are packed.
 
 use glam::{Affine3A, Vec3, Vec4};
-use lodlab::app::levels::runtime_options;
 use lodlab::bake::CharacterBake;
 use lodlab::bake::lod::bake_lods;
 use lodlab::bake::lod_pack::LodPack;
 use lodlab::bake::simplify::Method;
 use lodlab::import::load_model;
+use lodlab::runtime::levels::runtime_options;
 use lodlab::scene::{Camera, Instance, LodDraw, LodModel, LodPolicy, LodTracker, ScreenProjection};
 
 /// No pop (Merry et al. §6.4, Houle & Poulin §5): while the tracker morphs an instance from
@@ -138,8 +138,8 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
 /// billboard-cloud chain per tree, and a second bake of the same method comes from the cache.
 #[test]
 fn background_bakes_finish_and_fill_the_cache() {
-    use lodlab::app::levels::{BackgroundBake, LevelSource, Levels, Poll};
     use lodlab::bake::cache::{LodCache, source_hash};
+    use lodlab::runtime::levels::{BackgroundBake, LevelSource, Levels, Poll};
     let dir = tempfile::tempdir().unwrap();
     let sources: Vec<LevelSource> = ["walker", "sapling"]
         .iter()

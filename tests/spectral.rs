@@ -2,16 +2,17 @@
 //! offsets and wind strength against their CPU reference, and billboards that stay rigid.
 
 use glam::{Affine3A, Quat, Vec3, Vec4};
-use lodlab::app::tree_levels::{CloudKind, CloudLevel, cloud_level};
-use lodlab::app::world::{Loaded, World};
 use lodlab::bake::CharacterBake;
+use lodlab::bake::billboard::chain::{CloudKind, CloudLevel, cloud_level};
 use lodlab::bake::billboard::cloud::CloudParams;
 use lodlab::bake::billboard::{foliage, tree_height};
 use lodlab::bake::spectral::cloud::SpectralParams;
 use lodlab::bake::spectral::texture::NO_ROW;
 use lodlab::render::Gpu;
+use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::capture::capture_skinned_in_wind;
 use lodlab::render::targets::OFFSCREEN_FORMAT;
+use lodlab::runtime::world::{Loaded, World};
 
 /// The sapling's foliage as a spectral cloud of 6 motion clusters at ε = 0.08 h.
 fn spectral_level(gpu: &Gpu) -> CloudLevel {
@@ -26,7 +27,16 @@ fn spectral_level(gpu: &Gpu) -> CloudLevel {
         clusters: 6,
         ..Default::default()
     });
-    cloud_level(gpu, &tree, &f, &params, &kind, 64.0 / h, &tree).unwrap()
+    cloud_level(
+        &AtlasRasterizer::new(gpu),
+        &tree,
+        &f,
+        &params,
+        &kind,
+        64.0 / h,
+        &tree,
+    )
+    .unwrap()
 }
 
 /// GPU = CPU for the spectral offset: every vertex the vertex shader skins, billboards moved by

@@ -263,13 +263,13 @@ fn trees_stand_on_the_ground_and_are_metric() {
 #[test]
 fn a_forest_shot_shows_trees_with_cut_out_leaves() {
     use lodlab::app::shot::{ShotOptions, run};
-    use lodlab::app::world::SceneSpec;
+    use lodlab::runtime::world::SceneSpec;
     let dir = tempfile::tempdir().unwrap();
     for samples in [1, 4] {
         let out = dir.path().join(format!("forest{samples}.png"));
         let report = run(&ShotOptions {
             spec: SceneSpec {
-                scene: "forest".into(),
+                scene: lodlab::scene::SceneKind::Forest,
                 count: 4,
                 cache_dir: Some(dir.path().to_path_buf()),
                 ..Default::default()
@@ -315,15 +315,16 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
 /// picture that stays close to the full trees.
 #[test]
 fn forest_trees_use_their_cloud_levels() {
-    use lodlab::app::shot::{ShotLod, ShotOptions, run};
-    use lodlab::app::world::SceneSpec;
+    use lodlab::app::shot::{ShotOptions, run};
+    use lodlab::runtime::headless::ShotLod;
+    use lodlab::runtime::world::SceneSpec;
     use lodlab::scene::{LodMethod, LodPolicy, Transition};
     let dir = tempfile::tempdir().unwrap();
     let shoot = |method: LodMethod| {
         let out = dir.path().join(format!("{}.png", method.index()));
         let report = run(&ShotOptions {
             spec: SceneSpec {
-                scene: "forest".into(),
+                scene: lodlab::scene::SceneKind::Forest,
                 count: 16,
                 cache_dir: Some(dir.path().to_path_buf()),
                 ..Default::default()
@@ -378,15 +379,15 @@ fn forest_trees_use_their_cloud_levels() {
 /// one instance: counted once, with one shadow.
 #[test]
 fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
-    use lodlab::app::world::{Loaded, SceneSpec, World};
     use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
     use lodlab::render::{FrameView, Gpu, Region, Side};
+    use lodlab::runtime::world::{Loaded, SceneSpec, World};
     use lodlab::scene::{Instance, LodDraw};
     let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     for samples in [1, 4] {
         // Two different trees stand in for the two levels: the dissolve does not care.
         let spec = SceneSpec {
-            scene: "forest".into(),
+            scene: lodlab::scene::SceneKind::Forest,
             models: vec!["broadleaf".into(), "conifer".into()],
             count: 1,
             ..Default::default()
@@ -645,15 +646,15 @@ fn bake_builds_and_caches_a_tree_chain() {
 /// draw over billboards only, and the level tint colours the trees.
 #[test]
 fn the_foliage_policy_decides_what_trees_become() {
-    use lodlab::app::tree_levels::{FoliagePolicy, FoliageView};
-    use lodlab::app::world::{Loaded, SceneSpec, World};
     use lodlab::render::Gpu;
     use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+    use lodlab::runtime::world::{Loaded, SceneSpec, World};
+    use lodlab::scene::foliage::{FoliagePolicy, FoliageView};
     use lodlab::scene::{LodMethod, LodPolicy, Transition};
     let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let dir = tempfile::tempdir().unwrap();
     let spec = SceneSpec {
-        scene: "forest".into(),
+        scene: lodlab::scene::SceneKind::Forest,
         models: vec!["sapling".into()],
         count: 12,
         cache_dir: Some(dir.path().to_path_buf()),

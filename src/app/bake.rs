@@ -2,13 +2,13 @@
 //! methods at once, in parallel, and print them as a table. A tree gets its chain of
 //! billboard-cloud levels instead (the same for every method), as the viewer uses it.
 
-use crate::app::levels::is_tree;
+use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin, source_hash};
-use crate::bake::lod::{LodOptions, SkinnedLods};
+use crate::bake::lod::{SkinnedLods, lod_options};
 use crate::bake::simplify::Method;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
-use crate::model::{Bounds, Model};
+use crate::render::atlas::AtlasRasterizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -40,7 +40,7 @@ pub struct TreeBaked {
     pub source_triangles: usize,
     pub bones: usize,
     pub height: f32,
-    pub levels: Vec<crate::app::tree_levels::TreeLevel>,
+    pub levels: Vec<crate::bake::billboard::chain::TreeLevel>,
     pub from_cache: bool,
     pub seconds: f64,
 }
@@ -49,26 +49,6 @@ pub struct TreeBaked {
 pub struct BakeResults {
     pub characters: Vec<Baked>,
     pub trees: Vec<TreeBaked>,
-}
-
-/// The model's rest-pose height in scene units.
-pub fn model_height(model: &Model) -> f32 {
-    let root = model.skeleton.root_transform;
-    Bounds::of(
-        model
-            .mesh
-            .positions
-            .iter()
-            .map(|p| root.transform_point3(*p)),
-    )
-    .map_or(1.0, |b| b.size().y.max(1e-3))
-}
-
-/// The level options for a model from the command's options.
-pub fn lod_options(model: &Model, tolerance_px: f32, budgets: Option<&[u32]>) -> LodOptions {
-    let mut o = LodOptions::from_pixels(tolerance_px, model_height(model));
-    o.budgets = budgets.map(<[u32]>::to_vec);
-    o
 }
 
 /// Loads every model (failing on the first bad one before any work), then bakes every
@@ -125,9 +105,14 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             let Some(method) = method else {
                 let start = std::time::Instant::now();
                 let gpu = gpu.as_ref().expect("a GPU when there are trees");
-                let opts = crate::app::tree_levels::ChainOptions::default();
-                let (levels, origin) = crate::app::tree_levels::load_or_build_chain(
-                    gpu, &cache, model, hash, &opts, &progress,
+                let opts = crate::bake::billboard::chain::ChainOptions::default();
+                let (levels, origin) = crate::bake::billboard::chain::load_or_build_chain(
+                    &AtlasRasterizer::new(gpu),
+                    &cache,
+                    model,
+                    hash,
+                    &opts,
+                    &progress,
                 )
                 .map_err(|e| anyhow::anyhow!("{}: {e:#}", model.name))?;
                 warn(&origin);
@@ -246,7 +231,7 @@ pub fn table(results: &BakeResults) -> String {
                 "{:<5} {:>9.3} {:<32} {:>10} {:>9} {:>10} {:>8}\n",
                 k,
                 l.epsilon / t.height,
-                crate::app::tree_levels::CloudKind::name(l.kind.as_ref()),
+                crate::bake::billboard::chain::CloudKind::name(l.kind.as_ref()),
                 l.cloud.billboards,
                 l.cloud.model.mesh.triangle_count(),
                 l.cloud.texture_bytes / 1024,

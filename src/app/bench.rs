@@ -18,12 +18,13 @@
 //! - The time of a frame is the GPU time of its render pass from timestamp queries where the
 //!   adapter has them, otherwise the wall time from submit to completion.
 
-use super::shot::{Headless, ShotLod, check_writable, histogram};
-use super::tree_levels::FoliageView;
-use super::world::{SceneSpec, World};
+use super::shot::{check_writable, histogram};
 use crate::render::targets::Offscreen;
 use crate::render::timer::PassTimer;
 use crate::render::{CharacterShader, FrameStats, Gpu};
+use crate::runtime::headless::{Headless, ShotLod};
+use crate::runtime::world::{SceneSpec, World};
+use crate::scene::foliage::FoliageView;
 use crate::scene::lod::MAX_LEVELS;
 use crate::scene::{CameraPath, LodMethod, LodPolicy};
 use anyhow::{Context, Result, bail};
@@ -287,7 +288,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         backend: gpu.backend_name(),
         size: [o.width, o.height],
         msaa: o.samples,
-        scene: o.spec.scene.clone(),
+        scene: o.spec.scene.to_string(),
         instances: bench.world.crowd.agents.len(),
         timing: if bench.timer.is_some() {
             "gpu timestamps"

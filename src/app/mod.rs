@@ -3,14 +3,11 @@
 pub mod bake;
 pub mod bench;
 pub mod gen_assets;
-pub mod levels;
 pub mod record;
 pub mod report;
 pub mod shot;
 pub mod study;
-pub mod tree_levels;
 pub mod tree_report;
 pub mod video;
 pub mod viewer;
 pub mod window;
-pub mod world;

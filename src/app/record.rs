@@ -5,9 +5,10 @@
 //! it. Before the first frame, selection runs over the second before it at 60 Hz, so the clip
 //! opens with the levels and transitions a viewer would be in the middle of.
 
-use super::shot::{Headless, ShotLod, check_writable, write_png};
+use super::shot::{check_writable, write_png};
 use super::video::Mp4Video;
-use super::world::SceneSpec;
+use crate::runtime::headless::{Headless, ShotLod};
+use crate::runtime::world::SceneSpec;
 use crate::scene::CameraPath;
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
@@ -153,7 +154,7 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
     video.finish()?;
     Ok(RecordReport {
         out: o.out.display().to_string(),
-        scene: o.spec.scene.clone(),
+        scene: o.spec.scene.to_string(),
         models: world.bakes.iter().map(|b| b.name.clone()).collect(),
         count: world.crowd.agents.len(),
         method: lod.method.name().into(),

@@ -115,7 +115,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         .map_err(|e| InputError::new(&opts.out, format!("cannot create the folder ({e})")))?;
     let base = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
     let probe = Probe::for_model(&model, &base, SAMPLES);
-    let lod_opts = super::levels::runtime_options(&model);
+    let lod_opts = crate::runtime::levels::runtime_options(&model);
     let poses = pose_samples(&model, SILHOUETTE_POSES);
 
     let mut methods = BTreeMap::new();

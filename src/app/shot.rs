@@ -1,14 +1,13 @@
 //! `lodlab shot`: render a scene headless and deterministically to a PNG.
 
-use super::tree_levels::FoliageView;
-use super::world::{Loaded, SceneSpec, World};
 use crate::render::targets::Offscreen;
-use crate::render::{CharacterShader, DebugView, FrameStats, Gpu};
-use crate::scene::{Camera, LodMethod, LodPolicy};
+use crate::render::{CharacterShader, FrameStats, Gpu};
+use crate::runtime::headless::{Headless, ShotLod, time_renderer};
+use crate::runtime::world::{SceneSpec, World};
+use crate::scene::Camera;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 #[derive(Clone, Debug)]
 pub struct ShotOptions {
@@ -25,34 +24,6 @@ pub struct ShotOptions {
     /// Also time the same triangles drawn by the trivial unskinned shader.
     pub calibrate: bool,
     pub lod: ShotLod,
-}
-
-/// Levels of detail in a shot.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShotLod {
-    pub method: LodMethod,
-    /// Compare mode: `method` on the left half, this on the right.
-    pub compare: Option<LodMethod>,
-    pub policy: LodPolicy,
-    pub debug: DebugView,
-    /// What trees become, and how they look.
-    pub foliage: FoliageView,
-    /// Selection runs over this many seconds before the shot's time at 60 Hz, so that the
-    /// frame shows the transitions a viewer would be in the middle of.
-    pub settle_seconds: f32,
-}
-
-impl Default for ShotLod {
-    fn default() -> Self {
-        ShotLod {
-            method: LodMethod::None,
-            compare: None,
-            policy: LodPolicy::default(),
-            debug: DebugView::Shaded,
-            foliage: FoliageView::default(),
-            settle_seconds: 1.0,
-        }
-    }
 }
 
 /// The JSON line `shot` prints.
@@ -93,80 +64,9 @@ pub struct ShotReport {
     pub skinning_ratio: Option<f64>,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        0.0
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Renders `frames` times and returns the median frame time in milliseconds.
 fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> Result<f64> {
     time_renderer(gpu, &world.renderer, target, frames)
-}
-
-/// Renders what `renderer` has prepared `frames` times, waiting for the GPU each time, and
-/// returns the median frame time in milliseconds.
-pub fn time_renderer(
-    gpu: &Gpu,
-    renderer: &crate::render::SceneRenderer,
-    target: &Offscreen,
-    frames: usize,
-) -> Result<f64> {
-    let mut times = Vec::with_capacity(frames);
-    for _ in 0..frames.max(1) {
-        let start = Instant::now();
-        renderer.render_to(gpu, &target.targets, &target.view);
-        gpu.wait()?;
-        times.push(start.elapsed().as_secs_f64() * 1e3);
-    }
-    Ok(median(times))
-}
-
-/// A scene rendered without a window: a device, a target of the given size and the world.
-pub struct Headless {
-    pub gpu: Gpu,
-    pub target: Offscreen,
-    pub world: World,
-}
-
-impl Headless {
-    /// Loads the models of `spec` (bad input fails here, before any GPU work), opens a device
-    /// and builds the world into a `width`×`height` target.
-    pub fn new(spec: &SceneSpec, width: u32, height: u32, samples: u32) -> Result<Headless> {
-        let loaded = Loaded::new(spec.clone())?;
-        let gpu = Gpu::headless()?;
-        eprintln!("lodlab: adapter {}", gpu.describe());
-        let target = Offscreen::new(&gpu, width, height, samples);
-        let world = World::new(
-            &gpu,
-            loaded,
-            crate::render::targets::OFFSCREEN_FORMAT,
-            samples,
-        )?;
-        Ok(Headless { gpu, target, world })
-    }
-
-    /// Takes the level-of-detail choices of `lod` and waits for the levels they need.
-    pub fn show(&mut self, lod: &ShotLod) -> Result<()> {
-        let world = &mut self.world;
-        world.lod.method = lod.method;
-        world.lod.compare = lod.compare;
-        world.lod.policy = lod.policy;
-        world.renderer.debug = lod.debug;
-        world.apply_foliage(&lod.foliage);
-        if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
-            anyhow::bail!(
-                "--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)"
-            );
-        }
-        world.ensure_levels(&self.gpu)
-    }
 }
 
 pub fn run(options: &ShotOptions) -> Result<ShotReport> {
@@ -214,7 +114,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
     write_png(&options.out, &image)?;
     Ok(ShotReport {
         out: options.out.display().to_string(),
-        scene: options.spec.scene.clone(),
+        scene: options.spec.scene.to_string(),
         adapter: gpu.info.name.clone(),
         backend: gpu.backend_name(),
         size: [options.width, options.height],

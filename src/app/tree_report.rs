@@ -10,9 +10,8 @@
 //! (`description_types`).
 
 use super::report::{plot_error, register_font, write_atomic, write_plot};
-use super::tree_levels::{
-    ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, colour_error,
-    colour_error_over, tree_chain,
+use crate::bake::billboard::chain::{
+    ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, tree_chain,
 };
 use crate::bake::billboard::cloud::CloudParams;
 use crate::bake::billboard::{Grouping, foliage, tree_height};
@@ -20,6 +19,7 @@ use crate::bake::spectral::cloud::SpectralParams;
 use crate::bake::spectral::description::DescriptionType;
 use crate::model::Model;
 use crate::render::Gpu;
+use crate::runtime::colour_error::{colour_error, colour_error_over};
 use anyhow::{Context, Result, anyhow};
 use plotters::prelude::*;
 use serde::Serialize;
@@ -99,10 +99,11 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let f = foliage(tree).map_err(|e| anyhow!("{}: {e}", tree.name))?;
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     let gpu = Gpu::headless()?;
+    let raster = crate::render::atlas::AtlasRasterizer::new(&gpu);
     let h = tree_height(tree);
     let start = std::time::Instant::now();
     let opts = ChainOptions::default();
-    let chain = tree_chain(&gpu, tree, &f, &opts, &|_| {})?;
+    let chain = tree_chain(&raster, tree, &f, &opts, &|_| {})?;
     let chain_seconds = start.elapsed().as_secs_f64();
     let measure = |k: usize, l: &TreeLevel, what: &str| -> Result<LevelReport> {
         let error = colour_error(&gpu, tree, &l.cloud, METRIC_SIZE)?;
@@ -139,7 +140,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         style: ChainStyle::Skeleton,
         ..opts
     };
-    let skeleton_chain = tree_chain(&gpu, tree, &f, &skeleton_opts, &|_| {})?;
+    let skeleton_chain = tree_chain(&raster, tree, &f, &skeleton_opts, &|_| {})?;
     let mut skeleton_levels = Vec::new();
     let mut skeleton_shown = Vec::new();
     for (k, l) in skeleton_chain.iter().enumerate() {
@@ -173,7 +174,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
                 shared_bone,
                 ..sp
             });
-            let cloud = cloud_level(&gpu, tree, &f, &params, &kind, density, tree)?;
+            let cloud = cloud_level(&raster, tree, &f, &params, &kind, density, tree)?;
             description_types.push(DescriptionReport {
                 level: k,
                 description: description.name().into(),
@@ -197,7 +198,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         let density =
             (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
         let whole = CloudKind::Skeleton(Grouping::Subtree { forks: 0 });
-        let cloud = cloud_level(&gpu, &still, &f, &params, &whole, density, &still)?;
+        let cloud = cloud_level(&raster, &still, &f, &params, &whole, density, &still)?;
         let error = colour_error_over(&gpu, &still, &cloud, METRIC_SIZE, 1)?;
         eprintln!(
             "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",
@@ -223,8 +224,8 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             "binary coverage masks at {}x{}, {} views round the tree at ground level, {} times over the loop; share of the full tree's covered pixels that differ",
             METRIC_SIZE[0],
             METRIC_SIZE[1],
-            super::tree_levels::METRIC_VIEWS,
-            super::tree_levels::METRIC_FRAMES
+            crate::runtime::colour_error::METRIC_VIEWS,
+            crate::runtime::colour_error::METRIC_FRAMES
         ),
         static_clouds,
         skeleton_levels,
@@ -558,8 +559,8 @@ fn series(
 
 /// Every level from the same view, side by side, labelled.
 fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Path) -> Result<()> {
-    use crate::app::world::{Loaded, World};
     use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+    use crate::runtime::world::{Loaded, World};
     let (tw, th) = (300u32, 400u32);
     let columns = chain.len().min(6) as u32;
     let rows = (chain.len() as u32).div_ceil(columns);

@@ -155,29 +155,10 @@ pub fn transform_homogeneous(g: &Affine3A, p: Vec4) -> Vec3 {
     g.matrix3 * p.truncate() + Vec3::from(g.translation) * p.w
 }
 
-/// Classic linear blend skinning, `v = Σ w_i (G_i Ĝ_i⁻¹) v̂` (equation 1): the skinning matrices
-/// are formed first, the way a conventional renderer does it. Used to check animation space.
-pub fn linear_blend_skinning(mesh: &SkinnedMesh, skeleton: &Skeleton, g: &[Affine3A]) -> Vec<Vec3> {
-    let skinning: Vec<glam::Mat4> = g
-        .iter()
-        .zip(&skeleton.inverse_bind)
-        .map(|(g, inv)| glam::Mat4::from(*g) * *inv)
-        .collect();
-    (0..mesh.vertex_count())
-        .map(|v| {
-            let rest = mesh.positions[v].extend(1.0);
-            mesh.influences_of(v)
-                .iter()
-                .map(|inf| inf.weight * (skinning[inf.bone as usize] * rest))
-                .sum::<Vec4>()
-                .truncate()
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::anim::linear_blend_skinning;
     use crate::model::{Influence, Node, Trs};
     use glam::{Mat4, Quat};
 

@@ -1,7 +1,7 @@
 //! The on-disk cache of level-of-detail bakes, so the viewer starts fast.
 //!
 //! One file per (model, method, parameters): progressive-mesh levels ([`SkinnedLods`]), or a
-//! tree's chain of billboard-cloud levels (see `crate::app::tree_levels`). Its name carries a key: a hash of the source
+//! tree's chain of billboard-cloud levels (see `crate::bake::billboard::chain`). Its name carries a key: a hash of the source
 //! file's bytes (and of the external buffers a `.gltf` names), the bake parameters and
 //! [`FORMAT_VERSION`]. A changed model or parameter therefore looks for another file. Inside,
 //! a header repeats the version and the key and holds a hash of the payload, so a file from

@@ -53,6 +53,26 @@ impl LodOptions {
     }
 }
 
+/// The model's rest-pose height in scene units.
+pub fn model_height(model: &Model) -> f32 {
+    let root = model.skeleton.root_transform;
+    crate::model::Bounds::of(
+        model
+            .mesh
+            .positions
+            .iter()
+            .map(|p| root.transform_point3(*p)),
+    )
+    .map_or(1.0, |b| b.size().y.max(1e-3))
+}
+
+/// The level options for a model from the command's options.
+pub fn lod_options(model: &Model, tolerance_px: f32, budgets: Option<&[u32]>) -> LodOptions {
+    let mut o = LodOptions::from_pixels(tolerance_px, model_height(model));
+    o.budgets = budgets.map(<[u32]>::to_vec);
+    o
+}
+
 /// One level of detail.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LodLevel {
@@ -683,6 +703,16 @@ pub fn bake_lods(
             }
         });
         drop(steps_tx);
+        // A bake among others in a parallel loop runs on a pool worker: blocked here, it could
+        // leave the cutter's measurements, which need the pool, with no worker to run them
+        // (every worker waiting for its own cutter). So it keeps working while it waits.
+        if rayon::current_thread_index().is_some() {
+            while !cutter.is_finished() {
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                }
+            }
+        }
         let levels = match cutter.join() {
             Ok(levels) => levels.expect("the simplifier hands over its start"),
             Err(panic) => std::panic::resume_unwind(panic),

@@ -576,7 +576,7 @@ fn bark_texture() -> Rgba8Image {
 }
 
 fn srgb(c: Vec3, a: f32) -> [u8; 4] {
-    use crate::bake::materials::linear_to_srgb;
+    use crate::model::linear_to_srgb;
     [
         linear_to_srgb(c.x),
         linear_to_srgb(c.y),

@@ -293,7 +293,7 @@ fn build(
     }
 
     // Scene units: metres, standing on the ground, centred.
-    let rest = crate::bake::animation_space::linear_blend_skinning(
+    let rest = crate::anim::linear_blend_skinning(
         &mesh,
         &skeleton,
         &crate::anim::bone_matrices(&skeleton, None, 0.0),

@@ -28,7 +28,7 @@ pub struct CrowdConfig {
 impl Default for CrowdConfig {
     fn default() -> Self {
         CrowdConfig {
-            count: 300,
+            count: super::kind::DEFAULT_CHARACTERS,
             seed: 1,
             clips: Vec::new(),
         }

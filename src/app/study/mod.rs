@@ -18,8 +18,8 @@ pub mod window;
 
 use super::record::{self, RecordOptions, RecordReport};
 use super::report::write_atomic;
-use super::shot::ShotLod;
-use super::world::SceneSpec;
+use crate::runtime::headless::ShotLod;
+use crate::runtime::world::SceneSpec;
 use crate::scene::{LodMethod, LodPolicy, Transition};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -317,7 +317,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
         eprintln!("clip {}/{total}: {}", k + 1, clip.file);
         let report = record::run(&RecordOptions {
             spec: SceneSpec {
-                scene: "study".into(),
+                scene: crate::scene::SceneKind::Study,
                 models: vec![clip.model.clone()],
                 count: plan.count,
                 cache_dir: o.cache_dir.clone(),

@@ -7,13 +7,14 @@
 mod controls;
 mod panel;
 
-use super::levels::{BackgroundBake, Poll};
-use super::shot::{ShotLod, write_png};
+use super::shot::write_png;
 use super::window::{Acquired, WindowGpu};
-use super::world::{Loaded, SceneSpec, World};
 use crate::render::DebugView;
 use crate::render::FrameStats;
 use crate::render::targets::{Offscreen, RenderTargets};
+use crate::runtime::headless::ShotLod;
+use crate::runtime::levels::{BackgroundBake, Poll};
+use crate::runtime::world::{Loaded, SceneSpec, World};
 use crate::scene::{LodMethod, Transition};
 use anyhow::{Context, Result, anyhow};
 use controls::{Controls, KeyAction};

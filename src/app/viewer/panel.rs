@@ -1,10 +1,12 @@
 //! The egui side panel: statistics, levels of detail, comparison, debug views, and the crowd's
 //! controls.
 
-use crate::app::tree_levels::{FoliagePolicy, FoliageView, MIN_EPSILON_GROWTH};
-use crate::app::world::LevelSummary;
+use crate::bake::billboard::chain::MIN_EPSILON_GROWTH;
+
 use crate::bake::spectral::description::DescriptionType;
 use crate::render::{DebugView, FrameStats};
+use crate::runtime::world::LevelSummary;
+use crate::scene::foliage::{FoliagePolicy, FoliageView};
 use crate::scene::{Drive, LodMethod, LodPolicy, Transition};
 use std::collections::VecDeque;
 

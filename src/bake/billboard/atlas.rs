@@ -7,7 +7,7 @@
 //! and blurred. Here every billboard gets `texels_per_unit` texels per scene unit, a gutter
 //! round it, and its leaves drawn unlit with their own texture's alpha as the cut-out.
 
-use super::cloud::{Billboard, Leaf};
+use super::cloud::Billboard;
 use glam::{Vec2, Vec3};
 
 /// Texels of gutter round every billboard's rectangle in the atlas.
@@ -173,7 +173,7 @@ pub fn atlas_triangles(
 
 /// Divides alpha out of sRGB colour that was blended over transparent black (in linear light).
 pub fn unpremultiply(pixels: &mut [u8]) {
-    use crate::bake::materials::{linear_to_srgb, srgb_to_linear};
+    use crate::model::{linear_to_srgb, srgb_to_linear};
     for p in pixels.chunks_exact_mut(4) {
         let a = p[3] as f32 / 255.0;
         if a > 0.0 && a < 1.0 {
@@ -228,15 +228,25 @@ pub fn dilate(pixels: &mut [u8], width: u32, height: u32, rings: u32) {
     }
 }
 
-/// The area of a leaf projected onto a billboard: what its texture shows of it.
-pub fn projected_area(leaf: &Leaf, b: &Billboard) -> f32 {
-    leaf.area * leaf.normal.dot(b.plane.normal).abs()
+/// What draws an atlas: the one GPU-made part of a billboard cloud, behind a narrow seam so
+/// that the bake stays plain CPU code (`render::atlas` implements it; a test may rasterise on
+/// the CPU).
+pub trait RasterizeAtlas {
+    /// `vertices` (triangles in atlas pixels, see [`atlas_triangles`]) textured by layer 0 of
+    /// `leaf`, mipmapped, into a `layout`-sized image, straight (not premultiplied) alpha,
+    /// transparent where no leaf is.
+    fn rasterize(
+        &self,
+        layout: &AtlasLayout,
+        vertices: &[AtlasVertex],
+        leaf: &crate::bake::materials::MaterialLayers,
+    ) -> anyhow::Result<crate::model::Rgba8Image>;
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::billboard::cloud::{CloudParams, stochastic_cloud};
+    use crate::bake::billboard::cloud::{CloudParams, Leaf, stochastic_cloud};
 
     #[test]
     fn packed_rectangles_do_not_overlap_and_fit() {

@@ -8,6 +8,7 @@
 //!   moves rigidly with its branch, exactly as its leaves did.
 
 pub mod atlas;
+pub mod chain;
 pub mod cloud;
 pub mod rect;
 pub mod siblings;
@@ -29,6 +30,12 @@ pub struct Foliage {
     /// Leaves whose vertices were bound to more than one bone, rebound to the bone that holds
     /// most of their weight (the thesis's pre-processing, §8.3).
     pub rebound: usize,
+}
+
+/// Is this model a tree: has it foliage cut out with alpha? Trees get billboard-cloud chains;
+/// everything else is a character.
+pub fn is_tree(model: &Model) -> bool {
+    model.materials.iter().any(is_cut_out)
 }
 
 /// Does this material cut its shape out with alpha (foliage)?

@@ -3,14 +3,16 @@
 //! (the panel shows the progress). Characters get progressive-mesh levels by a method; trees
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
-use super::tree_levels::ChainOptions;
 use crate::bake::CharacterBake;
+use crate::bake::billboard::chain::{ChainOptions, load_or_build_chain};
+use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::lod::SkinnedLods;
 use crate::bake::lod_pack::LodPack;
 use crate::bake::simplify::Method;
 use crate::model::Model;
 use crate::render::Gpu;
+use crate::render::atlas::AtlasRasterizer;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -27,7 +29,7 @@ pub struct LevelSource {
 /// The level options the front ends bake with: the defaults of `lodlab bake`, so that a
 /// `lodlab bake MODEL` beforehand fills the same cache entries.
 pub fn runtime_options(model: &Model) -> crate::bake::lod::LodOptions {
-    super::bake::lod_options(model, DEFAULT_BAKE_TOLERANCE_PX, None)
+    crate::bake::lod::lod_options(model, DEFAULT_BAKE_TOLERANCE_PX, None)
 }
 
 /// `lodlab bake --tolerance` default: the error bound of LOD 1 in pixels.
@@ -40,7 +42,7 @@ pub enum Levels {
     /// A tree's billboard-cloud chain (level 0 the tree itself), with levels 1… baked for
     /// the GPU (on the baking thread: their atlases' mipmaps take a while).
     Tree {
-        chain: Vec<super::tree_levels::TreeLevel>,
+        chain: Vec<crate::bake::billboard::chain::TreeLevel>,
         bakes: Vec<CharacterBake>,
     },
 }
@@ -48,14 +50,6 @@ pub enum Levels {
 /// What baking one model by a method gave: its levels, or `None` for a model skipped (it had
 /// what it needs).
 pub type Baked = Option<Result<Levels, String>>;
-
-/// Is this model a tree (foliage cut out with alpha)?
-pub fn is_tree(model: &Model) -> bool {
-    model
-        .materials
-        .iter()
-        .any(crate::bake::billboard::is_cut_out)
-}
 
 /// The levels of every model, in model order, from the cache or baked now: characters' by
 /// `method`, trees' chains cut by `chain`; models whose `skip` is set are left out.
@@ -107,8 +101,14 @@ fn tree_levels(
     opts: &ChainOptions,
     progress: &dyn Fn(f32),
 ) -> anyhow::Result<(Levels, Origin)> {
-    let (chain, origin) =
-        super::tree_levels::load_or_build_chain(gpu, cache, &s.model, &s.hash, opts, progress)?;
+    let (chain, origin) = load_or_build_chain(
+        &AtlasRasterizer::new(gpu),
+        cache,
+        &s.model,
+        &s.hash,
+        opts,
+        progress,
+    )?;
     let bakes = chain[1..]
         .par_iter()
         .map(|l| CharacterBake::with_motion(&l.cloud.model, l.cloud.motion.as_ref()))

@@ -2,8 +2,8 @@
 //! camera. Shared by the viewer, `shot` and the tests, so they all show the same thing.
 
 use super::levels::{Baked, LevelSource, Levels, bake_all};
-use super::tree_levels::{ChainOptions, CloudKind, FoliagePolicy, FoliageView, TreeLevel};
 use crate::bake::CharacterBake;
+use crate::bake::billboard::chain::{ChainOptions, CloudKind, TreeLevel};
 use crate::bake::cache::{LodCache, source_hash};
 use crate::bake::lod_pack::LodPack;
 use crate::bake::simplify::Method;
@@ -11,41 +11,20 @@ use crate::error::InputError;
 use crate::import::{load_model, source_path};
 use crate::model::Model;
 use crate::render::{FrameStats, FrameView, Gpu, Region, SceneRenderer, Side};
+use crate::scene::foliage::{FoliagePolicy, FoliageView};
+use crate::scene::kind::DEFAULT_MIXED_TREES;
 use crate::scene::{
     Camera, Crowd, CrowdConfig, CrowdModel, Instance, LodDraw, LodMethod, LodModel, LodPolicy,
-    LodTracker, ScreenProjection,
+    LodTracker, SceneKind, ScreenProjection,
 };
 use anyhow::{Result, bail};
 use glam::Vec3;
 use std::path::PathBuf;
 
-/// Scenes lodlab knows: the crowd walking round a clearing in the forest, the crowd alone,
-/// the forest alone, and the user-study scene (Merry et al. §6.2: copies of one model, by
-/// default 100 horses).
-pub const SCENES: &[&str] = &["mixed", "crowd", "forest", "study"];
-
-/// Trees round the mixed scene's clearing unless told.
-pub const DEFAULT_MIXED_TREES: usize = 500;
-
-/// Models of the default crowd.
-pub const DEFAULT_MODELS: &[&str] = &["horse", "walker"];
-
-/// Trees of the default forest.
-pub const DEFAULT_TREES: &[&str] = &["broadleaf", "conifer"];
-
-/// How many instances a scene shows unless told.
-pub fn default_count(scene: &str) -> usize {
-    match scene {
-        "forest" => 500,
-        "study" => 100,
-        _ => 300,
-    }
-}
-
 /// What to show.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneSpec {
-    pub scene: String,
+    pub scene: SceneKind,
     /// Built-in asset names or glTF paths; empty means the scene's default.
     pub models: Vec<String>,
     pub count: usize,
@@ -61,9 +40,9 @@ pub struct SceneSpec {
 impl Default for SceneSpec {
     fn default() -> Self {
         SceneSpec {
-            scene: "crowd".into(),
+            scene: SceneKind::Crowd,
             models: Vec::new(),
-            count: 300,
+            count: SceneKind::Crowd.default_count(),
             trees: DEFAULT_MIXED_TREES,
             clip: None,
             seed: 1,
@@ -80,26 +59,14 @@ pub fn load_characters(spec: &SceneSpec) -> Result<Vec<CharacterBake>> {
 /// Loads the models a spec names, in order: their full-detail bakes, and what baking their
 /// levels of detail later needs.
 fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
-    if !SCENES.contains(&spec.scene.as_str()) {
-        bail!(
-            "unknown scene '{}' (scenes: {})",
-            spec.scene,
-            SCENES.join(", ")
-        );
-    }
-    if spec.scene == "study" && spec.models.len() > 1 {
+    if spec.scene == SceneKind::Study && spec.models.len() > 1 {
         bail!(
             "the study scene shows copies of one model, not {} (--model once)",
             spec.models.len()
         );
     }
     let names: Vec<String> = if spec.models.is_empty() {
-        let defaults: Vec<&str> = match spec.scene.as_str() {
-            "forest" => DEFAULT_TREES.to_vec(),
-            "mixed" => [DEFAULT_MODELS, DEFAULT_TREES].concat(),
-            "study" => DEFAULT_MODELS[..1].to_vec(),
-            _ => DEFAULT_MODELS.to_vec(),
-        };
+        let defaults = spec.scene.default_models();
         defaults.iter().map(|s| s.to_string()).collect()
     } else {
         spec.models.clone()
@@ -123,7 +90,7 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
         Some(m) if m < bakes.len() => vec![m],
         _ => (0..bakes.len()).collect(),
     };
-    if spec.scene == "mixed" && only.is_none() {
+    if spec.scene == SceneKind::Mixed && only.is_none() {
         return mixed_crowd(spec, bakes);
     }
     let crowd_models: Vec<CrowdModel> = chosen
@@ -149,7 +116,7 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
             })
         })
         .collect();
-    let mut crowd = if spec.scene == "forest" {
+    let mut crowd = if spec.scene == SceneKind::Forest {
         crate::scene::forest::layout(&crowd_models, spec.count, spec.seed)
     } else {
         Crowd::layout(
@@ -173,10 +140,10 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
 fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
     let (trees, characters): (Vec<usize>, Vec<usize>) =
         (0..bakes.len()).partition(|&m| bakes[m].alpha_tested);
-    let part = |scene: &str, models: &[usize], count: usize| {
+    let part = |scene: SceneKind, models: &[usize], count: usize| {
         let mut sub = layout_crowd(
             &SceneSpec {
-                scene: scene.into(),
+                scene,
                 count,
                 ..spec.clone()
             },
@@ -188,7 +155,7 @@ fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
         }
         sub
     };
-    let mut crowd = part("crowd", &characters, spec.count);
+    let mut crowd = part(SceneKind::Crowd, &characters, spec.count);
     if !trees.is_empty() && spec.trees > 0 {
         let models: Vec<CrowdModel> = trees
             .iter()
@@ -416,7 +383,7 @@ impl Loaded {
             .map_err(|e| anyhow::anyhow!("{}: {e}", model.name))?;
         Ok(Loaded {
             spec: SceneSpec {
-                scene: "forest".into(),
+                scene: SceneKind::Forest,
                 count,
                 ..Default::default()
             },

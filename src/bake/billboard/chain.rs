@@ -1,12 +1,14 @@
-//! A tree's foliage as a billboard cloud, end to end: the cloud (CPU), its atlas (rendered on
-//! the GPU, then dilated), and the tree model that draws it.
+//! A tree's chain of levels of detail (thesis Ch. 7 and §6.5: Bennett-Therkildsen, Carlsen &
+//! Schmid, "Animated billboard clouds", Aalborg University, 2007): the full tree, then its
+//! foliage as billboard clouds of growing ε, end to end: the cloud, its atlas (drawn through
+//! [`RasterizeAtlas`], then dilated), and the tree model that draws it; and the chain cached.
 
+use super::atlas::{RasterizeAtlas, atlas_triangles, dilate, layout};
+use super::cloud::CloudParams;
+use super::siblings::merge_siblings;
+use super::wood::{WoodChain, only_foliage};
+use super::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::anim::skinning_over_loop;
-use crate::bake::billboard::atlas::{atlas_triangles, dilate, layout};
-use crate::bake::billboard::cloud::CloudParams;
-use crate::bake::billboard::siblings::merge_siblings;
-use crate::bake::billboard::wood::{WoodChain, only_foliage};
-use crate::bake::billboard::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::materials::MaterialLayers;
 use crate::bake::spectral::cloud::{SpectralParams, spectral_cloud};
@@ -14,8 +16,6 @@ use crate::bake::spectral::description::DescriptionType;
 use crate::bake::spectral::metrics::{AnimationError, animation_error, traced_leaves};
 use crate::bake::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
 use crate::model::Model;
-use crate::render::Gpu;
-use crate::render::atlas::render_atlas;
 use anyhow::{Result, anyhow};
 use serde::{Deserialize, Serialize};
 
@@ -76,7 +76,7 @@ pub struct CloudLevel {
 /// `texels_per_unit` texels per scene unit in the atlas. The wood is that of `wood` (the tree
 /// itself, or the tree with its wood simplified).
 pub fn cloud_level(
-    gpu: &Gpu,
+    raster: &dyn RasterizeAtlas,
     tree: &Model,
     foliage: &Foliage,
     params: &CloudParams,
@@ -125,7 +125,7 @@ pub fn cloud_level(
         .find(|m| is_cut_out(m))
         .ok_or_else(|| anyhow!("{}: no foliage material", tree.name))?;
     let leaf = MaterialLayers::bake(std::slice::from_ref(leaf_material));
-    let mut atlas = render_atlas(gpu, &atlas_layout, &triangles, &leaf)?;
+    let mut atlas = raster.rasterize(&atlas_layout, &triangles, &leaf)?;
     dilate(&mut atlas.pixels, atlas.width, atlas.height, DILATE_RINGS);
     let texture_bytes = atlas.pixels.len();
     let animation = animation_error(
@@ -162,81 +162,6 @@ pub fn cloud_level(
     })
 }
 
-/// Views and frames of the colour metric (thesis §5.1.3): five views evenly round the tree at
-/// ground level, at five times over the loop.
-pub const METRIC_VIEWS: usize = 5;
-pub const METRIC_FRAMES: usize = 5;
-
-/// The colour error of `lod` against `original` (thesis §5.1.3): binary masks of where the
-/// foliage (the original's leaves, the level's billboards; wood left out) covers the image, at
-/// `size`, from [`METRIC_VIEWS`] views round it at ground level and [`METRIC_FRAMES`] times of
-/// its loop; the share of the original's foliage pixels that the two masks disagree on, over
-/// all of them. 0 for identical trees.
-pub fn colour_error(gpu: &Gpu, original: &Model, lod: &CloudLevel, size: [u32; 2]) -> Result<f32> {
-    colour_error_over(gpu, original, lod, size, METRIC_FRAMES)
-}
-
-/// [`colour_error`] at `frames` times of the loop (1: the thesis's static colour metric).
-pub fn colour_error_over(
-    gpu: &Gpu,
-    original: &Model,
-    lod: &CloudLevel,
-    size: [u32; 2],
-    frames: usize,
-) -> Result<f32> {
-    use crate::app::world::{Loaded, World};
-    use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-    let world_of = |m: &Model, motion: Option<&SpectralMotion>| -> Result<World> {
-        let mut w = World::new(gpu, Loaded::forest_of(m, motion, 1)?, OFFSCREEN_FORMAT, 1)?;
-        w.renderer.shadows = false;
-        Ok(w)
-    };
-    let mut a = world_of(&only_foliage(original), None)?;
-    let (lod_foliage, lod_motion) = foliage_of(lod);
-    let mut b = world_of(&lod_foliage, lod_motion.as_ref())?;
-    let target = Offscreen::new(gpu, size[0], size[1], 1);
-    let bounds = a.bakes[0].bounds;
-    let height = bounds.size().y.max(1e-3);
-    let duration = original.clips.first().map_or(1.0, |c| c.duration);
-    let (mut wrong, mut covered) = (0u64, 0u64);
-    let shoot = |w: &mut World, camera: crate::scene::Camera, t: f32, empty: bool| {
-        w.camera = camera;
-        if empty {
-            w.relayout(None, 0, None);
-        }
-        w.prepare(gpu, size, t, 0.0);
-        w.renderer.render_to(gpu, &target.targets, &target.view);
-        let img = target.read_rgba(gpu);
-        if empty {
-            w.relayout(None, 1, None);
-        }
-        img
-    };
-    for view in 0..METRIC_VIEWS {
-        let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
-        // At ground level, far enough for the whole tree to fit with a margin.
-        let camera = crate::scene::Camera::new(
-            glam::Vec3::new(bounds.center().x, height * 0.5, bounds.center().z),
-            yaw,
-            0.0,
-            height * 1.25,
-        );
-        let background = shoot(&mut a, camera, 0.0, true)?;
-        for frame in 0..frames.max(1) {
-            let t = duration * frame as f32 / frames.max(1) as f32;
-            let ia = shoot(&mut a, camera, t, false)?;
-            let ib = shoot(&mut b, camera, t, false)?;
-            for ((p, q), bg) in ia.pixels().zip(ib.pixels()).zip(background.pixels()) {
-                let on = |x: &image::Rgba<u8>| (0..3).any(|c| x[c].abs_diff(bg[c]) > 10);
-                let (ma, mb) = (on(p), on(q));
-                covered += ma as u64;
-                wrong += (ma != mb) as u64;
-            }
-        }
-    }
-    Ok(wrong as f32 / covered.max(1) as f32)
-}
-
 /// Which clouds a tree's chain is made of (the viewer's level policy, less "full").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ChainStyle {
@@ -264,104 +189,6 @@ impl ChainStyle {
             ChainStyle::Automatic => "automatic",
         }
     }
-}
-
-/// What trees become under a simplified method: the foliage panel's level policy.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum FoliagePolicy {
-    /// Trees keep every leaf (level 0) at every distance.
-    Full,
-    /// The skeleton-cloud chain ([`ChainStyle::Skeleton`]).
-    Skeleton,
-    /// The spectral-cloud chain ([`ChainStyle::Spectral`]).
-    Spectral,
-    /// Skeleton clouds near, spectral clouds far ([`ChainStyle::Automatic`]).
-    #[default]
-    Automatic,
-}
-
-impl FoliagePolicy {
-    pub const ALL: [FoliagePolicy; 4] = [
-        FoliagePolicy::Automatic,
-        FoliagePolicy::Skeleton,
-        FoliagePolicy::Spectral,
-        FoliagePolicy::Full,
-    ];
-
-    /// The chain the trees switch along; None: they stay full.
-    pub fn chain_style(self) -> Option<ChainStyle> {
-        match self {
-            FoliagePolicy::Full => None,
-            FoliagePolicy::Skeleton => Some(ChainStyle::Skeleton),
-            FoliagePolicy::Spectral => Some(ChainStyle::Spectral),
-            FoliagePolicy::Automatic => Some(ChainStyle::Automatic),
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            FoliagePolicy::Full => "full",
-            FoliagePolicy::Skeleton => "skeleton clouds",
-            FoliagePolicy::Spectral => "spectral clouds",
-            FoliagePolicy::Automatic => "automatic",
-        }
-    }
-
-    /// From its name or the first word of it (`full`, `skeleton`, `spectral`, `automatic`).
-    pub fn parse(s: &str) -> Option<FoliagePolicy> {
-        let s = s.trim().to_ascii_lowercase();
-        FoliagePolicy::ALL
-            .into_iter()
-            .find(|p| p.name() == s || p.name().split(' ').next() == Some(s.as_str()))
-    }
-}
-
-/// How trees are shown: the foliage panel's choices, and the same on the command line.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FoliageView {
-    pub policy: FoliagePolicy,
-    /// How the trees' chains are cut; its style follows the policy.
-    pub chain: ChainOptions,
-    /// Scales every tree's own wind strength (0: still air).
-    pub wind: f32,
-    /// Draw the billboards' outlines over them.
-    pub outlines: bool,
-    /// Colour trees by level (the characters keep their colours).
-    pub tint: bool,
-}
-
-impl Default for FoliageView {
-    fn default() -> Self {
-        FoliageView {
-            policy: FoliagePolicy::default(),
-            chain: ChainOptions::default(),
-            wind: 1.0,
-            outlines: false,
-            tint: false,
-        }
-    }
-}
-
-/// A level's foliage alone (wood left out), with its motion. `only_foliage` keeps the
-/// billboards' corners in order, and they were the model's last vertices, so their rows keep
-/// their order too.
-fn foliage_of(level: &CloudLevel) -> (Model, Option<SpectralMotion>) {
-    let model = only_foliage(&level.model);
-    let motion = level.motion.as_ref().map(|m| SpectralMotion {
-        spectra: m.spectra.clone(),
-        vertex_rows: m
-            .vertex_rows
-            .iter()
-            .copied()
-            .filter(|&r| r != NO_ROW)
-            .collect(),
-    });
-    debug_assert!(
-        motion
-            .as_ref()
-            .is_none_or(|m| m.vertex_rows.len() == model.mesh.vertex_count())
-    );
-    (model, motion)
 }
 
 /// How a tree's chain of levels is cut.
@@ -444,7 +271,7 @@ pub const MIN_EPSILON_GROWTH: f32 = 1.25;
 ///
 /// `progress` hears the fraction done (estimated: about eight levels to a chain).
 pub fn tree_chain(
-    gpu: &Gpu,
+    raster: &dyn RasterizeAtlas,
     tree: &Model,
     foliage: &Foliage,
     opts: &ChainOptions,
@@ -480,7 +307,7 @@ pub fn tree_chain(
         // About two texels per screen pixel where this level comes in.
         let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
         let base = wood.tree_at(tree, eps);
-        let cloud = cloud_level(gpu, tree, foliage, &params, &kind, density, &base)?;
+        let cloud = cloud_level(raster, tree, foliage, &params, &kind, density, &base)?;
         let count = cloud.billboards;
         // A level that hardly improves on the last: group coarser at the same ε instead.
         if count as f32 > 0.8 * previous as f32 {
@@ -529,6 +356,28 @@ fn full_tree(tree: &Model) -> TreeLevel {
 }
 
 impl CloudLevel {
+    /// A level's foliage alone (wood left out), with its motion. `only_foliage` keeps the
+    /// billboards' corners in order, and they were the model's last vertices, so their rows keep
+    /// their order too.
+    pub fn foliage(&self) -> (Model, Option<SpectralMotion>) {
+        let model = only_foliage(&self.model);
+        let motion = self.motion.as_ref().map(|m| SpectralMotion {
+            spectra: m.spectra.clone(),
+            vertex_rows: m
+                .vertex_rows
+                .iter()
+                .copied()
+                .filter(|&r| r != NO_ROW)
+                .collect(),
+        });
+        debug_assert!(
+            motion
+                .as_ref()
+                .is_none_or(|m| m.vertex_rows.len() == model.mesh.vertex_count())
+        );
+        (model, motion)
+    }
+
     /// The tree itself, leaves and all, as a level.
     pub fn full(tree: &Model) -> CloudLevel {
         CloudLevel {
@@ -548,21 +397,22 @@ impl CloudLevel {
 const CHAIN_VERSION: u32 = 4;
 
 /// The cache key of a tree's chain: its source's hash, the chain options and the versions.
-pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> [u8; 32] {
+pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> Result<[u8; 32]> {
     let mut h = blake3::Hasher::new();
     h.update(b"lodlab tree chain");
     h.update(&crate::bake::cache::FORMAT_VERSION.to_le_bytes());
     h.update(&CHAIN_VERSION.to_le_bytes());
     h.update(source);
-    h.update(&postcard::to_stdvec(opts).unwrap_or_default());
-    *h.finalize().as_bytes()
+    // Options that failed to encode must not share a key with others: no fallback.
+    h.update(&postcard::to_stdvec(opts).map_err(|e| anyhow!("encoding chain options: {e}"))?);
+    Ok(*h.finalize().as_bytes())
 }
 
 /// The chain of `tree` (whose source file hashes to `source`) from `cache` if a good one is
 /// there, else built now and stored. The file holds levels 1… (level 0 is the tree). A tree
 /// with no source (all-zero hash: built in memory) is built and not cached.
 pub fn load_or_build_chain(
-    gpu: &Gpu,
+    raster: &dyn RasterizeAtlas,
     cache: &LodCache,
     tree: &Model,
     source: &[u8; 32],
@@ -571,14 +421,14 @@ pub fn load_or_build_chain(
 ) -> Result<(Vec<TreeLevel>, Origin)> {
     let build = || -> Result<Vec<TreeLevel>> {
         let foliage = crate::bake::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
-        let mut chain = tree_chain(gpu, tree, &foliage, opts, progress)?;
+        let mut chain = tree_chain(raster, tree, &foliage, opts, progress)?;
         chain.remove(0);
         Ok(chain)
     };
     let (coarse, origin) = if source == &[0; 32] {
         (build()?, Origin::Baked { warning: None })
     } else {
-        let key = chain_key(source, opts);
+        let key = chain_key(source, opts)?;
         cache.load_or_build(&cache.file(&tree.name, "clouds", &key), &key, build)?
     };
     let mut levels = vec![full_tree(tree)];

@@ -1,0 +1,110 @@
+//! The headless harness: a scene drawn without a window into an offscreen target, with the
+//! level-of-detail choices a front end makes, and frame timing. `shot`, `bench`, `record`, the
+//! study and the tests all drive worlds through it.
+
+use super::world::{Loaded, SceneSpec, World};
+use crate::render::targets::Offscreen;
+use crate::render::{DebugView, Gpu, SceneRenderer};
+use crate::scene::foliage::FoliageView;
+use crate::scene::{LodMethod, LodPolicy};
+use anyhow::Result;
+use std::time::Instant;
+
+/// The level-of-detail choices of a headless frame (a shot's, a benchmark's, a clip's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShotLod {
+    pub method: LodMethod,
+    /// Compare mode: `method` on the left half, this on the right.
+    pub compare: Option<LodMethod>,
+    pub policy: LodPolicy,
+    pub debug: DebugView,
+    /// What trees become, and how they look.
+    pub foliage: FoliageView,
+    /// Selection runs over this many seconds before the shot's time at 60 Hz, so that the
+    /// frame shows the transitions a viewer would be in the middle of.
+    pub settle_seconds: f32,
+}
+
+impl Default for ShotLod {
+    fn default() -> Self {
+        ShotLod {
+            method: LodMethod::None,
+            compare: None,
+            policy: LodPolicy::default(),
+            debug: DebugView::Shaded,
+            foliage: FoliageView::default(),
+            settle_seconds: 1.0,
+        }
+    }
+}
+
+/// A scene rendered without a window: a device, a target of the given size and the world.
+pub struct Headless {
+    pub gpu: Gpu,
+    pub target: Offscreen,
+    pub world: World,
+}
+
+impl Headless {
+    /// Loads the models of `spec` (bad input fails here, before any GPU work), opens a device
+    /// and builds the world into a `width`×`height` target.
+    pub fn new(spec: &SceneSpec, width: u32, height: u32, samples: u32) -> Result<Headless> {
+        let loaded = Loaded::new(spec.clone())?;
+        let gpu = Gpu::headless()?;
+        eprintln!("lodlab: adapter {}", gpu.describe());
+        let target = Offscreen::new(&gpu, width, height, samples);
+        let world = World::new(
+            &gpu,
+            loaded,
+            crate::render::targets::OFFSCREEN_FORMAT,
+            samples,
+        )?;
+        Ok(Headless { gpu, target, world })
+    }
+
+    /// Takes the level-of-detail choices of `lod` and waits for the levels they need.
+    pub fn show(&mut self, lod: &ShotLod) -> Result<()> {
+        let world = &mut self.world;
+        world.lod.method = lod.method;
+        world.lod.compare = lod.compare;
+        world.lod.policy = lod.policy;
+        world.renderer.debug = lod.debug;
+        world.apply_foliage(&lod.foliage);
+        if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
+            anyhow::bail!(
+                "--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)"
+            );
+        }
+        world.ensure_levels(&self.gpu)
+    }
+}
+
+/// Renders what `renderer` has prepared `frames` times, waiting for the GPU each time, and
+/// returns the median frame time in milliseconds.
+pub fn time_renderer(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    target: &Offscreen,
+    frames: usize,
+) -> Result<f64> {
+    let mut times = Vec::with_capacity(frames);
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        renderer.render_to(gpu, &target.targets, &target.view);
+        gpu.wait()?;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(median(times))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}

@@ -1,0 +1,80 @@
+//! How trees are shown: the foliage panel's level policy and view settings, the same on the
+//! command line.
+
+use crate::bake::billboard::chain::{ChainOptions, ChainStyle};
+
+/// What trees become under a simplified method: the foliage panel's level policy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FoliagePolicy {
+    /// Trees keep every leaf (level 0) at every distance.
+    Full,
+    /// The skeleton-cloud chain ([`ChainStyle::Skeleton`]).
+    Skeleton,
+    /// The spectral-cloud chain ([`ChainStyle::Spectral`]).
+    Spectral,
+    /// Skeleton clouds near, spectral clouds far ([`ChainStyle::Automatic`]).
+    #[default]
+    Automatic,
+}
+
+impl FoliagePolicy {
+    pub const ALL: [FoliagePolicy; 4] = [
+        FoliagePolicy::Automatic,
+        FoliagePolicy::Skeleton,
+        FoliagePolicy::Spectral,
+        FoliagePolicy::Full,
+    ];
+
+    /// The chain the trees switch along; None: they stay full.
+    pub fn chain_style(self) -> Option<ChainStyle> {
+        match self {
+            FoliagePolicy::Full => None,
+            FoliagePolicy::Skeleton => Some(ChainStyle::Skeleton),
+            FoliagePolicy::Spectral => Some(ChainStyle::Spectral),
+            FoliagePolicy::Automatic => Some(ChainStyle::Automatic),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FoliagePolicy::Full => "full",
+            FoliagePolicy::Skeleton => "skeleton clouds",
+            FoliagePolicy::Spectral => "spectral clouds",
+            FoliagePolicy::Automatic => "automatic",
+        }
+    }
+
+    /// From its name or the first word of it (`full`, `skeleton`, `spectral`, `automatic`).
+    pub fn parse(s: &str) -> Option<FoliagePolicy> {
+        let s = s.trim().to_ascii_lowercase();
+        FoliagePolicy::ALL
+            .into_iter()
+            .find(|p| p.name() == s || p.name().split(' ').next() == Some(s.as_str()))
+    }
+}
+
+/// How trees are shown: the foliage panel's choices, and the same on the command line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FoliageView {
+    pub policy: FoliagePolicy,
+    /// How the trees' chains are cut; its style follows the policy.
+    pub chain: ChainOptions,
+    /// Scales every tree's own wind strength (0: still air).
+    pub wind: f32,
+    /// Draw the billboards' outlines over them.
+    pub outlines: bool,
+    /// Colour trees by level (the characters keep their colours).
+    pub tint: bool,
+}
+
+impl Default for FoliageView {
+    fn default() -> Self {
+        FoliageView {
+            policy: FoliagePolicy::default(),
+            chain: ChainOptions::default(),
+            wind: 1.0,
+            outlines: false,
+            tint: false,
+        }
+    }
+}
