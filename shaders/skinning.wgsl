@@ -6,10 +6,12 @@
 // src/bake/anim_texture.rs and src/bake/vertex_texture.rs; `AnimationTexture::sample_with` is the
 // CPU mirror of `clip_frames` below, and `CharacterBake::evaluate` of `skin_vertex`.
 //
-// Wind strength s (per instance, 1 for characters) scales the motion about the rest pose, frame
-// 0 of the animation texture: G = Ĝ + s (G(t) − Ĝ). Billboards of a spectral cloud (Aalborg
-// thesis §6.2.1 and §6.4) add their spectral offset Δ(τ), scaled by s, in their bone's space:
-// v = G (p + w Δ(τ)); the offset is the same for all four corners, so the billboard stays rigid.
+// Wind strength s (per instance, 1 for characters) scales the motion about the rest pose, frame 0
+// of the animation texture: G = Ĝ + s (G(t) − Ĝ). Billboards of a spectral cloud
+// (Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
+// Simplification" (2007) §6.2.1 and §6.4) add their spectral offset Δ(τ), scaled by s, in their
+// bone's space: v = G (p + w Δ(τ)); the offset is the same for all four corners, so the billboard
+// stays rigid.
 
 @group(1) @binding(0) var anim_tex: texture_2d<f32>;
 @group(1) @binding(1) var vertex_tex: texture_2d<f32>;

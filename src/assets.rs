@@ -16,8 +16,9 @@ pub struct Builtin {
 pub enum Kind {
     /// A subdivided, closed, skinned character (`horse`, `walker`).
     Creature,
-    /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`,
-    /// and `sapling`, the size of the thesis's tree).
+    /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`, and
+    /// `sapling`, the size of the Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated
+    /// Billboard Clouds for Foliage Simplification" (2007),'s tree).
     Tree,
     /// A character with the awkward properties of assets made elsewhere, for testing the LOD
     /// pipeline: `split-tube` (indexed, split along hard edges and a UV seam, mostly zero-area

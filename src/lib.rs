@@ -12,6 +12,7 @@
 pub mod anim;
 pub mod app;
 pub mod assets;
+pub mod atomic;
 pub mod bake;
 pub mod error;
 pub mod generate;

@@ -1,8 +1,8 @@
 //! The `lodlab` command line.
 
 use clap::{Args, Parser, Subcommand};
-use lodlab::app::report::write_atomic;
 use lodlab::app::shot::{self, ShotOptions};
+use lodlab::atomic::write as write_atomic;
 use lodlab::bake::billboard::chain::{ChainOptions, MIN_EPSILON_GROWTH};
 use lodlab::bake::spectral::description::DescriptionType;
 use lodlab::render::DebugView;
@@ -407,8 +407,9 @@ struct FoliageArgs {
     /// Frequency lines kept per axis by spectral clouds (K, 1 to 16).
     #[arg(long, default_value_t = lodlab::bake::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
     bins: u16,
-    /// Plain SCA: spectral billboards hang from the root with all their leaves' motion in
-    /// their spectra, instead of following the leaves' shared bone (thesis §6.4).
+    /// Plain SCA: spectral billboards hang from the root with all their leaves' motion in their
+    /// spectra, instead of following the leaves' shared bone (Bennett-Therkildsen, Carlsen &
+    /// Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007) §6.4).
     #[arg(long)]
     plain_sca: bool,
     /// Wind strength: scales every tree's sway (0: still air; 1: as baked).

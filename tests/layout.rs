@@ -8,8 +8,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Layers in data-flow order; a module may use modules of its own rank or lower.
-const RANKS: [(&str, u32); 11] = [
+const RANKS: [(&str, u32); 12] = [
     ("model", 0),
+    ("atomic", 0),
     ("error", 0),
     ("anim", 1),
     ("generate", 2),

@@ -18,7 +18,8 @@
 //! - The time of a frame is the GPU time of its render pass from timestamp queries where the
 //!   adapter has them, otherwise the wall time from submit to completion.
 
-use super::shot::{check_writable, histogram};
+use super::shot::histogram;
+use crate::atomic::check_target;
 use crate::render::targets::Offscreen;
 use crate::render::timer::PassTimer;
 use crate::render::{CharacterShader, FrameStats, Gpu};
@@ -409,7 +410,7 @@ pub fn markdown(r: &BenchReport) -> String {
 /// Checks that the output files can be written, before any measuring.
 pub fn check_outputs(paths: &[&Option<PathBuf>]) -> Result<()> {
     for p in paths.iter().filter_map(|p| p.as_ref()) {
-        check_writable(p)?;
+        check_target(p)?;
     }
     Ok(())
 }

@@ -37,11 +37,7 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
         let model = generate(b.name).ok_or_else(|| anyhow!("no generator for {}", b.name))?;
         let bytes = to_glb(&model);
         let path = dir.join(b.file_name);
-        // Write beside, then rename: an interrupted run never leaves half a file.
-        let tmp = crate::app::shot::temp_path(&path);
-        std::fs::write(&tmp, &bytes).with_context(|| format!("{}: cannot write", tmp.display()))?;
-        std::fs::rename(&tmp, &path)
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        crate::atomic::write(&path, &bytes)?;
         written.push(Written {
             name: b.name.to_string(),
             path: path.display().to_string(),

@@ -5,8 +5,8 @@
 //! it. Before the first frame, selection runs over the second before it at 60 Hz, so the clip
 //! opens with the levels and transitions a viewer would be in the middle of.
 
-use super::shot::{check_writable, write_png};
 use super::video::Mp4Video;
+use crate::atomic::{check_target, write_png};
 use crate::runtime::headless::{Headless, ShotLod};
 use crate::runtime::world::SceneSpec;
 use crate::scene::CameraPath;
@@ -85,7 +85,7 @@ fn prepare_frames_dir(dir: &Path) -> Result<()> {
 }
 
 pub fn run(o: &RecordOptions) -> Result<RecordReport> {
-    check_writable(&o.out)?;
+    check_target(&o.out)?;
     if !(o.seconds.is_finite() && o.seconds > 0.0) {
         bail!("--seconds must be positive");
     }

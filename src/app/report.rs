@@ -170,11 +170,11 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         units: "scene units (metres)".into(),
         silhouette_tolerances: SILHOUETTE_TOLERANCES.to_vec(),
     };
-    write_atomic(
+    crate::atomic::write(
         &opts.out.join("timings.md"),
         timings_markdown(&report, &model, &sequences, &lod_opts).as_bytes(),
     )?;
-    write_atomic(
+    crate::atomic::write(
         &opts.out.join("report.json"),
         serde_json::to_string_pretty(&report)?.as_bytes(),
     )?;
@@ -526,7 +526,7 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
 /// Writes a plot drawn into an RGB buffer `w`×`h` as a PNG.
 pub(crate) fn write_plot(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
     let rgb = image::RgbImage::from_raw(w, h, buf).context("plot buffer size")?;
-    super::shot::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
+    crate::atomic::write_png(path, &image::DynamicImage::ImageRgb8(rgb).to_rgba8())
 }
 
 pub(crate) fn plot_error<E: std::fmt::Display>(e: E) -> anyhow::Error {
@@ -690,11 +690,4 @@ fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String {
         }
     }
     md
-}
-
-/// Writes a file through a temporary name, so a reader never sees half of it.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = super::shot::temp_path(path);
-    std::fs::write(&tmp, bytes).with_context(|| format!("{}: cannot write", path.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))
 }

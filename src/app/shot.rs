@@ -5,9 +5,9 @@ use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::runtime::headless::{Headless, ShotLod, time_renderer};
 use crate::runtime::world::{SceneSpec, World};
 use crate::scene::Camera;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
 pub struct ShotOptions {
@@ -70,7 +70,7 @@ fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> R
 }
 
 pub fn run(options: &ShotOptions) -> Result<ShotReport> {
-    check_writable(&options.out)?;
+    crate::atomic::check_target(&options.out)?;
     let Headless {
         gpu,
         target,
@@ -111,7 +111,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         None
     };
 
-    write_png(&options.out, &image)?;
+    crate::atomic::write_png(&options.out, &image)?;
     Ok(ShotReport {
         out: options.out.display().to_string(),
         scene: options.spec.scene.to_string(),
@@ -155,44 +155,4 @@ fn draw_divider(image: &mut image::RgbaImage) {
             image.put_pixel(x, y, image::Rgba([235, 235, 235, 255]));
         }
     }
-}
-
-/// Fails early, before any rendering, if `path` cannot be written: its folder is missing or it
-/// is a folder itself.
-pub fn check_writable(path: &Path) -> Result<()> {
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !parent.is_dir() {
-        anyhow::bail!(
-            "{}: cannot write: folder {} does not exist",
-            path.display(),
-            parent.display()
-        );
-    }
-    if path.is_dir() {
-        anyhow::bail!("{}: cannot write: is a folder", path.display());
-    }
-    Ok(())
-}
-
-/// Writes a PNG via a temporary file and a rename, so an interrupted write never leaves half a
-/// file under the final name.
-pub fn write_png(path: &Path, image: &image::RgbaImage) -> Result<()> {
-    let tmp = temp_path(path);
-    image
-        .save_with_format(&tmp, image::ImageFormat::Png)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
-    Ok(())
-}
-
-/// `DIR/.NAME.tmp` beside `path`.
-pub fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    path.with_file_name(format!(".{name}.tmp"))
 }

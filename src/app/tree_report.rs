@@ -1,7 +1,8 @@
-//! `lodlab report TREE`: a tree's chain of billboard-cloud levels measured as in the Aalborg
-//! thesis (§5.1.3, §5.1.4, §8.4): per level ε, billboards, area, texture memory, colour error,
-//! animation errors and bake time (`report.json`), colour error and billboard count against ε
-//! (`colour-error.png`), every level side by side from one view (`levels.png`), and a few
+//! `lodlab report TREE`: a tree's chain of billboard-cloud levels measured as in the
+//! Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
+//! Simplification" (2007), (§5.1.3 §5.1.4 §8.4): per level ε, billboards, area, texture memory,
+//! colour error, animation errors and bake time (`report.json`), colour error and billboard count
+//! against ε (`colour-error.png`), every level side by side from one view (`levels.png`), and a few
 //! leaves' trajectories against their billboards' (`motion.png`).
 //!
 //! Besides the chain (skeleton clouds, then spectral ones), the report measures the
@@ -9,7 +10,8 @@
 //! counts) and the spectral levels rebuilt with each description type and as plain SCA
 //! (`description_types`).
 
-use super::report::{plot_error, register_font, write_atomic, write_plot};
+use super::report::{plot_error, register_font, write_plot};
+use crate::atomic::write as write_atomic;
 use crate::bake::billboard::chain::{
     ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, tree_chain,
 };

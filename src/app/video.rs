@@ -5,6 +5,7 @@
 //! The file is written under a temporary name beside the final one and renamed when complete,
 //! so an interrupted recording never leaves half a file under the final name.
 
+use crate::atomic::AtomicFile;
 use anyhow::{Context, Result, anyhow, bail};
 use openh264::OpenH264API;
 use openh264::encoder::{
@@ -36,9 +37,10 @@ pub struct Mp4Video {
     /// Opened at the first frame, whose SPS and PPS the track's sample entry needs.
     mp4: Option<mp4::Mp4Writer<BufWriter<File>>>,
     frames: u32,
-    tmp: PathBuf,
+    /// Written beside `out` and moved there by [`Mp4Video::finish`]; an unfinished video (an
+    /// error, a panic, Ctrl-C) leaves nothing behind.
+    file: Option<AtomicFile>,
     out: PathBuf,
-    finished: bool,
 }
 
 impl Mp4Video {
@@ -71,9 +73,8 @@ impl Mp4Video {
             fps,
             mp4: None,
             frames: 0,
-            tmp: super::shot::temp_path(out),
+            file: Some(AtomicFile::create(out)?),
             out: out.to_path_buf(),
-            finished: false,
         })
     }
 
@@ -132,7 +133,11 @@ impl Mp4Video {
     }
 
     fn open(&self, sps: Vec<u8>, pps: Vec<u8>) -> Result<mp4::Mp4Writer<BufWriter<File>>> {
-        let file = File::create(&self.tmp)
+        let file = self
+            .file
+            .as_ref()
+            .expect("present until finished")
+            .handle()
             .with_context(|| format!("{}: cannot write", self.out.display()))?;
         let brand = |s: &str| s.parse::<mp4::FourCC>().expect("four letters");
         let mut mp4 = mp4::Mp4Writer::write_start(
@@ -175,20 +180,7 @@ impl Mp4Video {
         std::io::Write::flush(&mut file)
             .with_context(|| format!("{}: cannot write", self.out.display()))?;
         drop(file);
-        std::fs::rename(&self.tmp, &self.out)
-            .with_context(|| format!("{}: cannot write", self.out.display()))?;
-        self.finished = true;
-        Ok(())
-    }
-}
-
-impl Drop for Mp4Video {
-    /// An unfinished video (an error, a panic) leaves nothing behind.
-    fn drop(&mut self) {
-        if !self.finished {
-            self.mp4 = None;
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+        self.file.take().expect("present until finished").commit()
     }
 }
 
@@ -235,7 +227,8 @@ mod tests {
         assert_eq!((info.width, info.height), (64, 48));
         assert!((info.fps - 10.0).abs() < 1e-6);
         assert_eq!(info.decoded, 23);
-        assert!(!super::super::shot::temp_path(&out).exists());
+        let left = std::fs::read_dir(out.parent().unwrap()).unwrap().count();
+        assert_eq!(left, 1, "the clip alone, no temporary file");
     }
 
     #[test]

@@ -111,15 +111,17 @@ impl LodCache {
         }
     }
 
-    /// Writes a bake atomically: a temporary file in the same folder, renamed into place.
+    /// Writes a bake atomically (see [`crate::atomic`]).
     pub fn store<T: Serialize>(
         &self,
         path: &Path,
         key: &[u8; 32],
         value: &T,
-    ) -> std::io::Result<()> {
-        std::fs::create_dir_all(&self.dir)?;
-        let payload = postcard::to_stdvec(value).map_err(std::io::Error::other)?;
+    ) -> anyhow::Result<()> {
+        std::fs::create_dir_all(&self.dir)
+            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", self.dir.display()))?;
+        let payload = postcard::to_stdvec(value)
+            .map_err(|e| anyhow::anyhow!("{}: cannot encode: {e}", path.display()))?;
         let payload = lz4_flex::compress_prepend_size(&payload);
         let mut bytes = Vec::with_capacity(HEADER + payload.len());
         bytes.extend_from_slice(MAGIC);
@@ -128,11 +130,7 @@ impl LodCache {
         bytes.extend_from_slice(blake3::hash(&payload).as_bytes());
         bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
         bytes.extend_from_slice(&payload);
-        let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-        std::fs::write(&tmp, &bytes)?;
-        std::fs::rename(&tmp, path).inspect_err(|_| {
-            let _ = std::fs::remove_file(&tmp);
-        })
+        crate::atomic::write(path, &bytes)
     }
 }
 
@@ -144,7 +142,15 @@ pub fn key(source: &[u8; 32], method: Method, options: &LodOptions) -> [u8; 32] 
     h.update(&(MIN_SAMPLES as u64).to_le_bytes());
     h.update(source);
     h.update(method.name().as_bytes());
-    h.update(&postcard::to_stdvec(options).unwrap_or_default());
+    // Every field, so that no two option sets share a key.
+    h.update(&options.base_error.to_bits().to_le_bytes());
+    h.update(&options.floor_triangles.to_le_bytes());
+    let budgets = options.budgets.as_deref();
+    h.update(&[budgets.is_some() as u8]);
+    h.update(&(budgets.map_or(0, <[u32]>::len) as u64).to_le_bytes());
+    for t in budgets.unwrap_or_default() {
+        h.update(&t.to_le_bytes());
+    }
     *h.finalize().as_bytes()
 }
 

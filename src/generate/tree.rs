@@ -1,4 +1,5 @@
-//! The demo trees: cyclically animated skeletal tree models (CASTM, Aalborg thesis §1.4).
+//! The demo trees: cyclically animated skeletal tree models (CASTM, Bennett-Therkildsen, Carlsen &
+//! Schmid, "Animated Billboard Clouds for Foliage Simplification", Aalborg University, 2007 §1.4).
 //!
 //! - **Skeleton:** one bone per branch segment, the trunk a chain of bones from the ground and
 //!   every branch a chain hanging from the segment of its parent it grows from, four
@@ -7,7 +8,7 @@
 //!   base to tip. Rings near a joint blend the two bones meeting there ([`Chain::weights`]), and
 //!   the base ring of a branch blends with the segment it grows from, so nothing cracks.
 //! - **Foliage:** loose alpha-textured quads, every one bound to exactly one bone with weight 1
-//!   (the thesis's foliage rule, §1.3): the segment of the branch it hangs from.
+//!   (the thesis's foliage rule §1.3): the segment of the branch it hangs from.
 //! - **Wind:** one looping clip. Every bone bends about two axes across it with a few sinusoids
 //!   of whole cycles per loop (so the loop is seamless); frequency rises with branch depth and
 //!   amplitude falls with branch thickness, as the thesis observes of real trees (§1.5), and the

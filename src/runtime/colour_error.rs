@@ -1,5 +1,6 @@
-//! The colour error of a tree's level against the full tree (thesis §5.1.3), measured by
-//! drawing both in worlds of their own.
+//! The colour error of a tree's level against the full tree (Bennett-Therkildsen, Carlsen &
+//! Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007) §5.1.3), measured
+//! by drawing both in worlds of their own.
 
 use super::world::{Loaded, World};
 use crate::bake::billboard::chain::CloudLevel;

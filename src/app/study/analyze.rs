@@ -4,7 +4,8 @@
 
 use super::session::{TEST, read_answers};
 use super::{Condition, read_manifest};
-use crate::app::report::{plot_error, register_font, write_atomic, write_plot};
+use crate::app::report::{plot_error, register_font, write_plot};
+use crate::atomic::write as write_atomic;
 use anyhow::Result;
 use plotters::prelude::*;
 use serde::Serialize;

@@ -17,7 +17,7 @@ pub mod session;
 pub mod window;
 
 use super::record::{self, RecordOptions, RecordReport};
-use super::report::write_atomic;
+use crate::atomic::write as write_atomic;
 use crate::runtime::headless::ShotLod;
 use crate::runtime::world::SceneSpec;
 use crate::scene::{LodMethod, LodPolicy, Transition};

@@ -7,8 +7,8 @@
 mod controls;
 mod panel;
 
-use super::shot::write_png;
 use super::window::{Acquired, WindowGpu};
+use crate::atomic::write_png;
 use crate::render::DebugView;
 use crate::render::FrameStats;
 use crate::render::targets::{Offscreen, RenderTargets};
@@ -68,7 +68,7 @@ pub fn run(options: ViewOptions) -> Result<ExitCode> {
         return Ok(ExitCode::from(2));
     }
     if let Some(path) = &options.screenshot {
-        super::shot::check_writable(path)?;
+        crate::atomic::check_target(path)?;
     }
     let loaded = Loaded::new(options.spec.clone())?;
     let event_loop = match EventLoop::new() {

@@ -3,8 +3,9 @@
 //! rectangle, as triangles in atlas pixels for the GPU to rasterise), and the clean-up after
 //! the render (colour dilated into transparent texels, so filtering never pulls in black).
 //!
-//! The thesis recommended an atlas but did not build one (§3.5); its textures came out dark
-//! and blurred. Here every billboard gets `texels_per_unit` texels per scene unit, a gutter
+//! The Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
+//! Simplification" (2007), recommended an atlas but did not build one (§3.5); its textures came out
+//! dark and blurred. Here every billboard gets `texels_per_unit` texels per scene unit, a gutter
 //! round it, and its leaves drawn unlit with their own texture's alpha as the cut-out.
 
 use super::cloud::Billboard;

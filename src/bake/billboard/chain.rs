@@ -171,7 +171,7 @@ pub enum ChainStyle {
     /// Spectral clouds from level 1 on.
     Spectral,
     /// Skeleton clouds while grouping by bones pays, then spectral clouds at a distance (the
-    /// thesis's proposal, §6.5 and Ch. 9: skeleton clouds near, spectral far).
+    /// thesis's proposal §6.5 and Ch. 9: skeleton clouds near, spectral far).
     Automatic,
 }
 
@@ -209,7 +209,7 @@ pub struct ChainOptions {
     pub description: DescriptionType,
     pub bins: usize,
     /// Spectral clouds: billboards follow their leaves' shared bone (§6.4), or hang from the
-    /// root with all the motion in their spectra (plain SCA, §6.2).
+    /// root with all the motion in their spectra (plain SCA §6.2).
     pub shared_bone: bool,
     /// Spectral clouds from level 1 start with this many motion clusters (halved level by
     /// level).
@@ -257,9 +257,9 @@ const GROUPINGS: [Grouping; 5] = [
 /// Levels must coarsen: ε grows by at least this factor from one to the next.
 pub const MIN_EPSILON_GROWTH: f32 = 1.25;
 
-/// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε growing
-/// by `epsilon_growth` (doubling by default) from `first_epsilon`, each with the wood simplified to the same error bound
-/// ([`WoodChain`]), until a level has at most `last_billboards` billboards.
+/// The level-of-detail chain of a tree: L0 the full tree, then billboard clouds for ε growing by
+/// `epsilon_growth` (doubling by default) from `first_epsilon`, each with the wood simplified to
+/// the same error bound ([`WoodChain`]), until a level has at most `last_billboards` billboards.
 ///
 /// Skeleton clouds are built per bone, sibling bones that move alike within ε sharing one
 /// ([`Grouping::Siblings`]), while that pays. Where doubling ε would not cut the count by a

@@ -1,4 +1,5 @@
-//! The stochastic billboard cloud (Lacewell et al. 2006, as the Aalborg thesis uses it in §3.3,
+//! The stochastic billboard cloud (Lacewell et al. 2006, as Bennett-Therkildsen, Carlsen & Schmid,
+//! "Animated Billboard Clouds for Foliage Simplification", Aalborg University, 2007 use it in §3.3,
 //! with the fixes its brief lists).
 //!
 //! A greedy, error-bounded clustering of leaves by coplanarity. Each round tries `S` random

@@ -1,4 +1,6 @@
-//! Animated billboard clouds for foliage (Aalborg thesis, Ch. 2, 3 and 7): pure CPU.
+//! Animated billboard clouds for foliage (the thesis of Bennett-Therkildsen, Carlsen & Schmid,
+//! "Animated Billboard Clouds for Foliage Simplification", Aalborg University, 2007: Ch. 2, 3 and
+//! 7): pure CPU.
 //!
 //! - [`foliage`] finds a tree's leaves: the connected pieces of the triangles whose material
 //!   cuts its shape out with alpha, each bound to one bone.
@@ -28,7 +30,7 @@ pub struct Foliage {
     /// For every leaf, its triangles (indices into the model's triangle list).
     pub triangles: Vec<Vec<u32>>,
     /// Leaves whose vertices were bound to more than one bone, rebound to the bone that holds
-    /// most of their weight (the thesis's pre-processing, §8.3).
+    /// most of their weight (the thesis's pre-processing §8.3).
     pub rebound: usize,
 }
 
@@ -175,7 +177,7 @@ pub enum Grouping {
     /// One cloud per branch subtree hanging below `forks` forks of the skeleton (0: one cloud
     /// for the whole crown). Coarser groups give fewer billboards; a billboard then moves with
     /// the deepest bone its leaves share, and the finer sway below it is lost (the thesis's
-    /// joint collapses, §7.1, taken a whole subtree at a time).
+    /// joint collapses §7.1, taken a whole subtree at a time).
     Subtree { forks: u32 },
 }
 

@@ -1,6 +1,7 @@
-//! The least-area rectangle round a set of points in a plane, by rotating calipers on their
-//! convex hull (Aalborg thesis §3.5, after Pirzadeh; Freeman & Shapira: the least-area
-//! enclosing rectangle has a side on a hull edge).
+//! The least-area rectangle round a set of points in a plane, by rotating calipers on their convex
+//! hull (Bennett-Therkildsen, Carlsen & Schmid, "Animated Billboard Clouds for Foliage
+//! Simplification", Aalborg University, 2007 §3.5, after Pirzadeh; Freeman & Shapira: the
+//! least-area enclosing rectangle has a side on a hull edge).
 
 use glam::Vec2;
 

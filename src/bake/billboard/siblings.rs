@@ -1,5 +1,7 @@
-//! Common joint rotation (Aalborg thesis §7.1, "CJR"): sibling bones whose leaves move alike
-//! share one cloud, bound to one of them, so a skeleton billboard cloud needs fewer billboards.
+//! Common joint rotation (Bennett-Therkildsen, Carlsen & Schmid, "Animated Billboard Clouds for
+//! Foliage Simplification", Aalborg University, 2007 §7.1, "CJR"): sibling bones whose leaves move
+//! alike share one cloud, bound to one of them, so a skeleton billboard cloud needs fewer
+//! billboards.
 //!
 //! The thesis merges, while there are more than a target number of sets, the pair of sibling
 //! sets whose average animations deviate least, and moves each set's foliage onto one rotation;

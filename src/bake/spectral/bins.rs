@@ -1,4 +1,5 @@
-//! Frequency bins (thesis §6.3.3): a billboard keeps K lines per axis instead of N/2 bins.
+//! Frequency bins (Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for
+//! Foliage Simplification" (2007) §6.3.3): a billboard keeps K lines per axis instead of N/2 bins.
 //!
 //! Averaging spectra bin by bin smears neighbouring frequencies (sin 4t and sin 5t share no
 //! bin; their per-bin mean beats and looks like neither). The thesis groups frequencies into K

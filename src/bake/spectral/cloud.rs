@@ -1,5 +1,6 @@
-//! Spectral billboard clouds: the thesis's Spectral Clustering Algorithm (§6.2) with the
-//! shared-bone improvement (§6.4), which the thesis designed and never built.
+//! Spectral billboard clouds: the Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated
+//! Billboard Clouds for Foliage Simplification" (2007),'s Spectral Clustering Algorithm (§6.2) with
+//! the shared-bone improvement (§6.4), which the thesis designed and never built.
 //!
 //! 1. Leaves are gathered into animation zones (App. C.2), and every zone's centroid trajectory
 //!    over the loop is described by the chosen description type.

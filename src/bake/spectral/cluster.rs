@@ -1,4 +1,5 @@
-//! Spectral clustering (thesis §6.2 and App. C.1): leaves grouped by how they move, k-means
+//! Spectral clustering (Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds
+//! for Foliage Simplification" (2007) §6.2 and App. C.1): leaves grouped by how they move, k-means
 //! with a description type's `deviation` as the distance and its `average` as the centroid.
 //!
 //! Initialisation follows App. C.1: one cluster per foliage-bearing bone, then the pair of

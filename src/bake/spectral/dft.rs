@@ -1,4 +1,5 @@
-//! The DFT of one coordinate of a cyclic trajectory (thesis §4.5), normalised so that the
+//! The DFT of one coordinate of a cyclic trajectory (Bennett-Therkildsen, Carlsen & Schmid's thesis
+//! "Animated Billboard Clouds for Foliage Simplification" (2007) §4.5), normalised so that the
 //! spectrum reads as amplitudes and phases of cosines: for N samples `x_n = x(n/N)` of one loop,
 //!
 //! x(τ) = Σ_{k=0}^{N/2} A_k · cos(2π k τ + φ_k),

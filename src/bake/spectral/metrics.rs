@@ -1,4 +1,5 @@
-//! Animation error of a billboard cloud (thesis §5.1.2 and §5.1.4, defined there and never
+//! Animation error of a billboard cloud (Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated
+//! Billboard Clouds for Foliage Simplification" (2007) §5.1.2 and §5.1.4, defined there and never
 //! computed): how far the billboards' motion strays from the leaves'.
 //!
 //! Every leaf is represented by its centroid, and on its billboard by the centroid's

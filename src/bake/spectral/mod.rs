@@ -1,5 +1,6 @@
-//! Spectral descriptions of foliage motion (Aalborg thesis Ch. 4, §6.1 and §6.3; the thesis
-//! designed them and never built them). Pure CPU.
+//! Spectral descriptions of foliage motion (Bennett-Therkildsen, Carlsen & Schmid, "Animated
+//! Billboard Clouds for Foliage Simplification", Aalborg University, 2007: Ch. 4 §6.1 and §6.3; the
+//! thesis designed them and never built them). Pure CPU.
 //!
 //! - [`leaf_trajectories`] samples every leaf's centroid over one loop of the wind.
 //! - [`dft`] turns each coordinate of a trajectory into a spectrum of whole-cycle cosines.

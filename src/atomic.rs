@@ -1,0 +1,249 @@
+//! Atomic file output for every writer (PNG, MP4, JSON, CSV, glb, the bake cache).
+//!
+//! The bytes go to a uniquely named temporary file in the target's folder, so that the final
+//! rename stays on one file system; they are synced to disk and replace the target in one
+//! rename. A reader never sees half a file, and two runs writing the same output never trip
+//! over one temporary name. A run stopped by Ctrl-C or SIGTERM removes its temporary files on
+//! the way out. A target that is not a plain file (a FIFO, a socket, a device, a symbolic link
+//! or a folder) is refused: renaming over it would replace something the user made.
+
+use anyhow::{Context, Result, anyhow, bail};
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, Once};
+
+/// Temporary files being written now: what an interrupted run removes.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The folder `path` goes into (`.` for a bare file name).
+fn folder(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Fails, before any work is done, if `path` cannot take a file: its folder is missing, or it
+/// exists as something other than a plain file.
+pub fn check_target(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) => {
+            let kind = meta.file_type();
+            if kind.is_symlink() {
+                bail!("{}: cannot write: is a symbolic link", path.display());
+            }
+            if kind.is_dir() {
+                bail!("{}: cannot write: is a folder", path.display());
+            }
+            if !kind.is_file() {
+                bail!(
+                    "{}: cannot write: not a plain file (a FIFO, socket or device)",
+                    path.display()
+                );
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => bail!("{}: cannot write: {e}", path.display()),
+    }
+    let parent = folder(path);
+    if !parent.is_dir() {
+        bail!(
+            "{}: cannot write: folder {} does not exist",
+            path.display(),
+            parent.display()
+        );
+    }
+    Ok(())
+}
+
+/// On Ctrl-C or SIGTERM, removes the temporary files being written and exits with 130.
+fn remove_pending_on_interrupt() {
+    static INSTALL: Once = Once::new();
+    INSTALL.call_once(|| {
+        // Another handler already installed (a host program's) keeps its say.
+        let _ = ctrlc::set_handler(|| {
+            if let Ok(pending) = PENDING.lock() {
+                for p in pending.iter() {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+            std::process::exit(130);
+        });
+    });
+}
+
+/// A file being written: a temporary file beside the target that [`AtomicFile::commit`]
+/// moves into place. Dropped uncommitted (an error, a panic), it leaves nothing behind.
+pub struct AtomicFile {
+    temp: Option<tempfile::NamedTempFile>,
+    target: PathBuf,
+}
+
+impl AtomicFile {
+    pub fn create(target: &Path) -> Result<AtomicFile> {
+        check_target(target)?;
+        remove_pending_on_interrupt();
+        let name = target
+            .file_name()
+            .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+        let temp = tempfile::Builder::new()
+            .prefix(&format!(".{name}."))
+            .suffix(".tmp")
+            .tempfile_in(folder(target))
+            .with_context(|| format!("{}: cannot write", target.display()))?;
+        PENDING
+            .lock()
+            .map_err(|_| anyhow!("{}: cannot write: a writer panicked", target.display()))?
+            .push(temp.path().to_path_buf());
+        Ok(AtomicFile {
+            temp: Some(temp),
+            target: target.to_path_buf(),
+        })
+    }
+
+    /// The file to write to.
+    pub fn file(&mut self) -> &mut File {
+        self.temp
+            .as_mut()
+            .expect("present until committed")
+            .as_file_mut()
+    }
+
+    /// A second handle on the file, for writers that must own theirs.
+    pub fn handle(&self) -> std::io::Result<File> {
+        self.temp
+            .as_ref()
+            .expect("present until committed")
+            .as_file()
+            .try_clone()
+    }
+
+    /// The temporary file's path, for writers that take a path.
+    pub fn temp_path(&self) -> &Path {
+        self.temp.as_ref().expect("present until committed").path()
+    }
+
+    /// Syncs the file and renames it over the target.
+    pub fn commit(mut self) -> Result<()> {
+        let temp = self.temp.take().expect("present until committed");
+        let target = self.target.clone();
+        let fail = |e: &dyn std::fmt::Display| anyhow!("{}: cannot write: {e}", target.display());
+        temp.as_file().sync_all().map_err(|e| fail(&e))?;
+        // Readable as a file made by `File::create` would be (the temporary one is private).
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(temp.path(), std::fs::Permissions::from_mode(0o644));
+        }
+        // What is there may have changed while the file was written.
+        check_target(&target)?;
+        let path = temp.path().to_path_buf();
+        let result = temp.persist(&target).map(drop).map_err(|e| fail(&e.error));
+        forget_pending(&path);
+        result
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if let Some(temp) = self.temp.take() {
+            let path = temp.path().to_path_buf();
+            drop(temp);
+            forget_pending(&path);
+        }
+    }
+}
+
+fn forget_pending(path: &Path) {
+    if let Ok(mut pending) = PENDING.lock() {
+        pending.retain(|p| p != path);
+    }
+}
+
+/// Writes `bytes` to `path` atomically.
+pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut file = AtomicFile::create(path)?;
+    file.file()
+        .write_all(bytes)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    file.commit()
+}
+
+/// Writes `image` to `path` as a PNG, atomically.
+pub fn write_png(path: &Path, image: &image::RgbaImage) -> Result<()> {
+    let mut bytes = Vec::new();
+    image
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .with_context(|| format!("{}: cannot encode the PNG", path.display()))?;
+    write(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_replace_the_target_and_leave_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a.json");
+        write(&out, b"one").unwrap();
+        write(&out, b"two").unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), b"two");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1, "only the target is left");
+        assert!(PENDING.lock().unwrap().is_empty());
+    }
+
+    #[test]
+    fn an_uncommitted_file_leaves_nothing_and_keeps_the_old_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("b.png");
+        write(&out, b"old").unwrap();
+        {
+            let mut f = AtomicFile::create(&out).unwrap();
+            f.file().write_all(b"half").unwrap();
+            assert!(f.temp_path().exists());
+        }
+        assert_eq!(std::fs::read(&out).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn two_writers_of_one_target_do_not_collide() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("c.csv");
+        let mut a = AtomicFile::create(&out).unwrap();
+        let mut b = AtomicFile::create(&out).unwrap();
+        assert_ne!(a.temp_path(), b.temp_path());
+        a.file().write_all(b"a").unwrap();
+        b.file().write_all(b"b").unwrap();
+        a.commit().unwrap();
+        b.commit().unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), b"b");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn special_files_and_links_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("real.txt");
+        std::fs::write(&target, b"mine").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        let e = write(&link, b"x").unwrap_err().to_string();
+        assert!(e.contains("symbolic link") && e.contains("link.txt"), "{e}");
+        assert_eq!(std::fs::read(&target).unwrap(), b"mine");
+        let e = write(Path::new("/dev/null"), b"x").unwrap_err().to_string();
+        assert!(e.contains("not a plain file"), "{e}");
+        let e = write(dir.path(), b"x").unwrap_err().to_string();
+        assert!(e.contains("is a folder"), "{e}");
+        let e = write(&dir.path().join("no/such/x.png"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("does not exist"), "{e}");
+    }
+}
