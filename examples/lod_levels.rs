@@ -3,7 +3,7 @@
 //!
 //! A quick way to look at what `lodlab bake` produced before the viewer draws levels.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use lodlab::bake::CharacterBake;
 use lodlab::bake::lod::bake_lods;
@@ -20,7 +20,7 @@ fn main() -> Result<()> {
     let [model, method, out] = args.as_slice() else {
         anyhow::bail!("usage: lod_levels MODEL METHOD OUT.png");
     };
-    let method = Method::parse(method).context("method: rest-pose, as or as+is")?;
+    let method: Method = lodlab::choice::parse(method, "a method").map_err(anyhow::Error::msg)?;
     let model = lodlab::import::load_model(model)?;
     let lods = bake_lods(&model, method, &lod_options(&model, 0.5, None), &|_| {});
     let gpu = Gpu::headless()?;

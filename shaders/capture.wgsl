@@ -10,7 +10,7 @@ struct VsOut {
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
     let s = skin_vertex(vi, instance_frames(inst));
-    let size = vec2<f32>(frame.time.zw);
+    let size = vec2<f32>(frame.views.zw);
     let px = vec2<f32>(f32(vi % u32(size.x)), f32(vi / u32(size.x))) + 0.5;
     var out: VsOut;
     out.clip = vec4<f32>(px.x / size.x * 2.0 - 1.0, 1.0 - px.y / size.y * 2.0, 0.5, 1.0);

@@ -98,16 +98,13 @@ fn fs_outline(in: VsOut) -> @location(0) vec4<f32> {
 
 // Debug colours: one per level of detail (level coordinates between two levels blend).
 fn level_color(level: f32) -> vec3<f32> {
-    var palette = array<vec3<f32>, 12>(
-        vec3<f32>(0.20, 0.75, 0.30), vec3<f32>(0.60, 0.85, 0.20), vec3<f32>(0.95, 0.85, 0.15),
-        vec3<f32>(0.98, 0.62, 0.12), vec3<f32>(0.92, 0.38, 0.12), vec3<f32>(0.85, 0.15, 0.15),
-        vec3<f32>(0.85, 0.20, 0.55), vec3<f32>(0.70, 0.25, 0.85), vec3<f32>(0.42, 0.32, 0.92),
-        vec3<f32>(0.18, 0.45, 0.95), vec3<f32>(0.15, 0.75, 0.90), vec3<f32>(0.55, 0.55, 0.55),
-    );
-    let l = clamp(level, 0.0, 11.0);
+    // `level_palette` is generated from `render::shaders::LEVEL_COLORS`, which the viewer's
+    // panel shows too.
+    let last = f32(LEVEL_COUNT - 1u);
+    let l = clamp(level, 0.0, last);
     let a = u32(floor(l));
-    let b = min(a + 1u, 11u);
-    return mix(palette[a], palette[b], l - f32(a));
+    let b = min(a + 1u, LEVEL_COUNT - 1u);
+    return mix(level_palette(a), level_palette(b), l - f32(a));
 }
 
 // Blue (cold) through green and yellow to red (hot) over 0..1.
@@ -219,10 +216,10 @@ fn fs_foliage_coverage(in: FoliageOut, @builtin(front_facing) front: bool) -> @l
     return vec4<f32>(foliage_color(in, texel.rgb, front), a);
 }
 
-// The debug view of foliage: the foliage tint (frame.time.z, the level tint or 0) where it is
-// on, else the view of everything (frame.time.y).
+// The debug view of foliage: the foliage tint (frame.views.y, the level tint or 0) where it is
+// on, else the view of everything (frame.views.x).
 fn foliage_view() -> u32 {
-    return max(u32(frame.time.y), u32(frame.time.z));
+    return max(frame.views.x, frame.views.y);
 }
 
 // The colour debug view `view` (see `DebugView` in src/render/renderer.rs) paints a surface
@@ -241,8 +238,7 @@ fn debug_color(lod: vec4<f32>, influences: f32, view: u32) -> vec4<f32> {
 
 // The character's colour: material (or a debug view's colour), sun and sky light, rim, fog.
 fn lit(in: VsOut, albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    // frame.time.y: the debug view.
-    let d = debug_color(in.lod, in.influences, u32(frame.time.y));
+    let d = debug_color(in.lod, in.influences, frame.views.x);
     let base = select(albedo * in.tint.rgb, d.rgb, d.a > 0.5);
     var c = shade(base, n);
     // A touch of rim light separates figures from the ground at a distance.

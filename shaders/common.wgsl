@@ -17,6 +17,9 @@ struct Frame {
     fog: vec4<f32>,
     // x: scene time in seconds.
     time: vec4<f32>,
+    // x: the debug view of everything (`DebugView::shader_mode`); y: that of foliage (the level
+    // tint where trees are tinted, else 0); zw: the capture pass's target size in pixels.
+    views: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;

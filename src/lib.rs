@@ -14,6 +14,7 @@ pub mod app;
 pub mod assets;
 pub mod atomic;
 pub mod bake;
+pub mod choice;
 pub mod error;
 pub mod generate;
 pub mod import;

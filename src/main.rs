@@ -119,12 +119,12 @@ struct RecordArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Level-of-detail method: none, rest-pose, as, as+is.
-    #[arg(long, default_value = "as+is", value_parser = parse_method)]
+    #[arg(long, default_value = "as+is", value_enum)]
     method: LodMethod,
     #[command(flatten)]
     policy: PolicyArgs,
     /// Debug view: shaded, lod, transition, wireframe, influences (lod tints by level).
-    #[arg(long, default_value = "shaded", value_parser = parse_debug_view)]
+    #[arg(long, default_value = "shaded", value_enum)]
     debug_view: DebugView,
     #[command(flatten)]
     foliage: FoliageArgs,
@@ -156,8 +156,13 @@ struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Methods to measure, comma separated, in this order.
-    #[arg(long, default_value = "none,rest-pose,as,as+is", value_parser = parse_lod_methods)]
-    methods: LodMethods,
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "none,rest-pose,as,as+is"
+    )]
+    methods: Vec<LodMethod>,
     #[command(flatten)]
     policy: PolicyArgs,
     #[command(flatten)]
@@ -191,23 +196,6 @@ struct BenchArgs {
     markdown: Option<PathBuf>,
 }
 
-#[derive(Clone, Debug)]
-struct LodMethods(Vec<LodMethod>);
-
-fn parse_lod_methods(s: &str) -> Result<LodMethods, String> {
-    let mut out = Vec::new();
-    for part in s.split(',').filter(|p| !p.trim().is_empty()) {
-        let m = parse_method(part.trim())?;
-        if !out.contains(&m) {
-            out.push(m);
-        }
-    }
-    if out.is_empty() {
-        return Err("no method given".into());
-    }
-    Ok(LodMethods(out))
-}
-
 #[derive(Args, Debug)]
 struct ReportArgs {
     /// A built-in asset name (horse, walker, broadleaf, conifer, sapling, split-tube, armour,
@@ -237,8 +225,13 @@ struct BakeArgs {
     model_flags: Vec<String>,
     /// Simplification methods, comma separated (trees get their billboard clouds whatever
     /// the methods).
-    #[arg(long, default_value = "rest-pose,as,as+is", value_parser = parse_methods)]
-    methods: Methods,
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "rest-pose,as,as+is"
+    )]
+    methods: Vec<lodlab::bake::simplify::Method>,
     /// Error bound of LOD 1 in pixels, for the model filling 1000 pixels of screen height;
     /// each further level doubles it.
     #[arg(long, default_value_t = 0.5)]
@@ -249,24 +242,6 @@ struct BakeArgs {
     /// Cache folder (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
-}
-
-#[derive(Clone, Debug)]
-struct Methods(Vec<lodlab::bake::simplify::Method>);
-
-fn parse_methods(s: &str) -> Result<Methods, String> {
-    let mut out = Vec::new();
-    for part in s.split(',').filter(|p| !p.trim().is_empty()) {
-        let m = lodlab::bake::simplify::Method::parse(part)
-            .ok_or_else(|| format!("'{part}' is not a method (rest-pose, as, as+is)"))?;
-        if !out.contains(&m) {
-            out.push(m);
-        }
-    }
-    if out.is_empty() {
-        return Err("no method given".into());
-    }
-    Ok(Methods(out))
 }
 
 #[derive(Args, Debug)]
@@ -334,12 +309,12 @@ impl SceneArgs {
 struct LodArgs {
     /// Level-of-detail method: none, rest-pose, as, as+is [default: as+is in the viewer, none
     /// for shot, the full-detail baseline].
-    #[arg(long, value_parser = parse_method)]
+    #[arg(long, value_enum)]
     method: Option<LodMethod>,
     #[command(flatten)]
     policy: PolicyArgs,
     /// Debug view: shaded, lod, transition, wireframe, influences.
-    #[arg(long, default_value = "shaded", value_parser = parse_debug_view)]
+    #[arg(long, default_value = "shaded", value_enum)]
     debug_view: DebugView,
     /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
     #[arg(long, value_name = "A,B", value_parser = parse_compare)]
@@ -352,11 +327,11 @@ struct LodArgs {
 #[derive(Args, Debug, Clone)]
 struct PolicyArgs {
     /// Transition between levels: pop, alpha, morph.
-    #[arg(long, default_value = "morph", value_parser = parse_transition)]
+    #[arg(long, default_value = "morph", value_enum)]
     transition: Transition,
     /// What drives alpha and morph: time (over --duration) or zone (morph zones over distance).
-    #[arg(long, default_value = "time", value_parser = ["time", "zone"])]
-    drive: String,
+    #[arg(long, value_enum, default_value = "time")]
+    drive: Drive,
     /// Seconds a time-driven transition takes.
     #[arg(long, default_value_t = 0.5, value_parser = parse_non_negative)]
     duration: f32,
@@ -377,11 +352,7 @@ impl PolicyArgs {
             tolerance_px: self.tolerance,
             hysteresis: self.hysteresis,
             transition: self.transition,
-            drive: if self.drive == "zone" {
-                Drive::Zone
-            } else {
-                Drive::Time
-            },
+            drive: self.drive,
             duration: self.duration,
             zone_width: self.zone_width,
         }
@@ -393,7 +364,7 @@ impl PolicyArgs {
 struct FoliageArgs {
     /// Trees' level policy: automatic (skeleton clouds near, spectral clouds far), skeleton,
     /// spectral, or full (every leaf at every distance).
-    #[arg(long, default_value = "automatic", value_parser = parse_foliage)]
+    #[arg(long, default_value = "automatic", value_enum)]
     foliage: FoliagePolicy,
     /// ε of a tree's first cloud level, as a fraction of its height.
     #[arg(long, default_value_t = ChainOptions::default().first_epsilon, value_parser = parse_first_epsilon)]
@@ -402,7 +373,7 @@ struct FoliageArgs {
     #[arg(long, default_value_t = ChainOptions::default().epsilon_growth, value_parser = parse_epsilon_growth)]
     epsilon_growth: f32,
     /// Spectral description type of spectral clouds: naive, dominating-axis, axis-phase.
-    #[arg(long, default_value = "axis-phase", value_parser = parse_description)]
+    #[arg(long, default_value = "axis-phase", value_enum)]
     description: DescriptionType,
     /// Frequency lines kept per axis by spectral clouds (K, 1 to 16).
     #[arg(long, default_value_t = lodlab::bake::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
@@ -440,18 +411,6 @@ impl FoliageArgs {
             tint: self.foliage_tint,
         }
     }
-}
-
-fn parse_foliage(s: &str) -> Result<FoliagePolicy, String> {
-    FoliagePolicy::parse(s).ok_or_else(|| {
-        format!("'{s}' is not a foliage policy (automatic, skeleton, spectral, full)")
-    })
-}
-
-fn parse_description(s: &str) -> Result<DescriptionType, String> {
-    DescriptionType::parse(s).ok_or_else(|| {
-        format!("'{s}' is not a description type (naive, dominating-axis, axis-phase)")
-    })
 }
 
 fn parse_in(s: &str, what: &str, range: std::ops::RangeInclusive<f32>) -> Result<f32, String> {
@@ -498,25 +457,14 @@ impl LodArgs {
     }
 }
 
-fn parse_method(s: &str) -> Result<LodMethod, String> {
-    LodMethod::parse(s).ok_or_else(|| format!("'{s}' is not a method (none, rest-pose, as, as+is)"))
-}
-
-fn parse_transition(s: &str) -> Result<Transition, String> {
-    Transition::parse(s).ok_or_else(|| format!("'{s}' is not a transition (pop, alpha, morph)"))
-}
-
-fn parse_debug_view(s: &str) -> Result<DebugView, String> {
-    DebugView::parse(s).ok_or_else(|| {
-        format!("'{s}' is not a debug view (shaded, lod, transition, wireframe, influences)")
-    })
-}
-
 fn parse_compare(s: &str) -> Result<(LodMethod, LodMethod), String> {
     let (a, b) = s
         .split_once(',')
         .ok_or_else(|| format!("'{s}' is not A,B (two methods)"))?;
-    Ok((parse_method(a)?, parse_method(b)?))
+    Ok((
+        lodlab::choice::parse(a, "a method")?,
+        lodlab::choice::parse(b, "a method")?,
+    ))
 }
 
 fn parse_number(s: &str) -> Result<f32, String> {
@@ -682,7 +630,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             let results = lodlab::app::bake::run(&lodlab::app::bake::BakeOptions {
                 models: a.models.into_iter().chain(a.model_flags).collect(),
-                methods: a.methods.0,
+                methods: dedup(a.methods),
                 tolerance_px: a.tolerance,
                 budgets: a.triangles,
                 cache_dir: a.cache,
@@ -744,7 +692,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             bench::check_outputs(&[&a.json, &a.markdown])?;
             let report = bench::run(&bench::BenchOptions {
                 spec: a.scene.spec(),
-                methods: a.methods.0,
+                methods: dedup(a.methods),
                 policy: a.policy.policy(),
                 foliage: a.foliage.view(),
                 width: a.size.0,
@@ -874,11 +822,16 @@ fn view(a: ViewArgs) -> anyhow::Result<ExitCode> {
         samples: a.msaa,
         screenshot: a.screenshot,
         frames: a.frames,
-        lod: a.lod.shot_lod(LodMethod::ALL[3]),
+        lod: a.lod.shot_lod(LodMethod::AS_IS),
     })
 }
 
 fn main() -> ExitCode {
+    // Diagnostics (`RUST_LOG=debug`: the bake and the cache's decisions) go to stderr beside
+    // the user-facing lines, which stay plain `eprintln!`s.
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
+        .format_timestamp(None)
+        .init();
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,
@@ -888,4 +841,15 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// A list of choices in the order given, each once.
+fn dedup<T: PartialEq>(list: Vec<T>) -> Vec<T> {
+    let mut out = Vec::with_capacity(list.len());
+    for x in list {
+        if !out.contains(&x) {
+            out.push(x);
+        }
+    }
+    out
 }

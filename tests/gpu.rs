@@ -154,6 +154,53 @@ fn shots_are_deterministic() {
     assert!(a == b, "same arguments, same picture");
 }
 
+/// `lodlab shot` writes the same PNG file, byte for byte, for the same arguments: a crowd with
+/// its levels of detail and transitions, and the forest.
+#[test]
+fn shot_files_are_the_same_bytes_for_the_same_arguments() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let scenes: [&[&str]; 2] = [
+        &[
+            "--scene",
+            "crowd",
+            "--count",
+            "8",
+            "--method",
+            "as+is",
+            "--tolerance",
+            "6",
+        ],
+        &["--scene", "forest", "--count", "3", "--method", "none"],
+    ];
+    for (k, args) in scenes.into_iter().enumerate() {
+        let shoot = |name: &str| {
+            let out = dir.path().join(name);
+            let status = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+                .arg("shot")
+                .args(args)
+                .args([
+                    "--size", "96x64", "--time", "1.5", "--frames", "1", "--cache",
+                ])
+                .arg(&cache)
+                .arg("--out")
+                .arg(&out)
+                .output()
+                .unwrap();
+            assert!(
+                status.status.success(),
+                "{args:?}: {}",
+                String::from_utf8_lossy(&status.stderr)
+            );
+            std::fs::read(&out).unwrap()
+        };
+        let a = shoot(&format!("{k}a.png"));
+        let b = shoot(&format!("{k}b.png"));
+        assert!(a.len() > 100, "{args:?}: a PNG");
+        assert!(a == b, "{args:?}: two runs wrote different files");
+    }
+}
+
 /// `WGPU_ADAPTER_NAME` picks the adapter by a piece of its name; a name that matches nothing is
 /// an error that lists what there is.
 #[test]

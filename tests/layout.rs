@@ -8,9 +8,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Layers in data-flow order; a module may use modules of its own rank or lower.
-const RANKS: [(&str, u32); 12] = [
+const RANKS: [(&str, u32); 14] = [
     ("model", 0),
     ("atomic", 0),
+    ("choice", 0),
+    // The macro `choice` exports at the crate root.
+    ("named_choice", 0),
     ("error", 0),
     ("anim", 1),
     ("generate", 2),

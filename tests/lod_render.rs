@@ -55,7 +55,7 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
         samples,
     )
     .unwrap();
-    let method = LodMethod::ALL[3];
+    let method = LodMethod::AS_IS;
     world.lod.method = method;
     world.ensure_levels(&gpu).unwrap();
     let (w, h) = (240u32, 240u32);
@@ -146,7 +146,7 @@ fn a_thousand_instances_take_a_handful_of_draws() {
         1,
     )
     .unwrap();
-    world.lod.method = LodMethod::ALL[3];
+    world.lod.method = LodMethod::AS_IS;
     world.ensure_levels(&gpu).unwrap();
     // From high above, with the whole crowd in view (nothing culled).
     world.camera =
@@ -232,7 +232,11 @@ fn shots_of_every_method_and_transition_differ_where_they_should() {
     let pop = |m| {
         take(
             m,
-            with(LodMethod::parse(m).unwrap(), Transition::Pop, Drive::Time),
+            with(
+                lodlab::choice::parse::<LodMethod>(m, "a method").unwrap(),
+                Transition::Pop,
+                Drive::Time,
+            ),
         )
     };
     let none = pop("none");
@@ -249,7 +253,7 @@ fn shots_of_every_method_and_transition_differ_where_they_should() {
     assert!(differing(&as_.image, &as_is.image, 8) > 0);
 
     // A moment when some characters are between levels (the crowd walks, so levels change).
-    let method = LodMethod::ALL[3];
+    let method = LodMethod::AS_IS;
     let (time, morph) = [2.0f32, 2.25, 2.5, 2.75, 3.0, 3.5]
         .into_iter()
         .map(|t| {
@@ -285,12 +289,12 @@ fn compare_shows_two_methods_from_one_camera_and_time() {
     );
     let coarse = take(
         "cmp-as-is",
-        with(LodMethod::ALL[3], Transition::Pop, Drive::Time),
+        with(LodMethod::AS_IS, Transition::Pop, Drive::Time),
     );
     let both = take(
         "cmp-both",
         ShotLod {
-            compare: Some(LodMethod::ALL[3]),
+            compare: Some(LodMethod::AS_IS),
             ..with(LodMethod::None, Transition::Pop, Drive::Time)
         },
     );
@@ -315,7 +319,7 @@ fn compare_shows_two_methods_from_one_camera_and_time() {
 
 #[test]
 fn debug_views_colour_what_they_say() {
-    let method = LodMethod::ALL[3];
+    let method = LodMethod::AS_IS;
     let shaded = take("shaded", with(method, Transition::Morph, Drive::Time));
     for view in [
         DebugView::LodTint,

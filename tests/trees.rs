@@ -350,7 +350,7 @@ fn forest_trees_use_their_cloud_levels() {
         (report, image::open(&out).unwrap().to_rgba8())
     };
     let (full, a) = shoot(LodMethod::None);
-    let (lod, b) = shoot(LodMethod::ALL[3]);
+    let (lod, b) = shoot(LodMethod::AS_IS);
     assert_eq!(full.levels.len(), 1);
     assert!(
         lod.levels.iter().filter(|&&n| n > 0).count() >= 2,
@@ -662,7 +662,7 @@ fn the_foliage_policy_decides_what_trees_become() {
     };
     let mut world = World::new(&gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();
     world.renderer.shadows = false;
-    world.lod.method = LodMethod::ALL[3];
+    world.lod.method = LodMethod::AS_IS;
     world.lod.policy = LodPolicy {
         transition: Transition::Pop,
         tolerance_px: 4.0,

@@ -216,13 +216,23 @@ impl LodCache {
     ) -> Result<(T, Origin), E> {
         let mut warning = None;
         match self.load(path, key) {
-            Lookup::Hit(value) => return Ok((*value, Origin::Cache)),
-            Lookup::Miss => {}
+            Lookup::Hit(value) => {
+                log::debug!("{}: cache hit", path.display());
+                return Ok((*value, Origin::Cache));
+            }
+            Lookup::Miss => log::debug!("{}: not in the cache; baking", path.display()),
             Lookup::Unusable(why) => {
+                log::debug!("{}: unusable ({why}); baking", path.display());
                 warning = Some(format!("{}: {why}; rebuilding it", path.display()));
             }
         }
+        let start = std::time::Instant::now();
         let value = build()?;
+        log::debug!(
+            "{}: built in {:.2} s; storing it",
+            path.display(),
+            start.elapsed().as_secs_f64()
+        );
         if let Err(e) = self.store(path, key, &value) {
             let w = format!("{}: cannot write the cache ({e})", path.display());
             warning = Some(match warning {

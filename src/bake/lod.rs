@@ -720,6 +720,13 @@ pub fn bake_lods(
         (sequence, levels)
     });
     let bake_seconds = start.elapsed().as_secs_f64();
+    log::debug!(
+        "{} by {method}: {} steps, {} levels ({} triangles at the coarsest), {bake_seconds:.2} s",
+        model.name,
+        sequence.steps.len(),
+        levels.len(),
+        levels.last().map_or(0, LodLevel::triangles)
+    );
     SkinnedLods {
         model: model.name.clone(),
         method,

@@ -54,11 +54,7 @@ pub fn capture_skinned_in_wind(
         eye: Vec3::ZERO,
         time,
     };
-    let uniforms = FrameUniforms::new(
-        &view,
-        &renderer.lighting,
-        [0.0, WIDTH as f32, height as f32],
-    );
+    let uniforms = FrameUniforms::new(&view, &renderer.lighting, [0, 0, WIDTH, height]);
     let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("capture frame"),
         contents: bytemuck::bytes_of(&uniforms),

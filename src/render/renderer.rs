@@ -82,22 +82,18 @@ impl DebugView {
         }
     }
 
-    pub fn parse(s: &str) -> Option<DebugView> {
-        Self::ALL
-            .into_iter()
-            .find(|v| v.name().eq_ignore_ascii_case(s.trim()))
-    }
-
     /// The mode `fs_main` in `shaders/character.wgsl` switches on.
-    fn shader_mode(self) -> f32 {
+    fn shader_mode(self) -> u32 {
         match self {
-            DebugView::Shaded => 0.0,
-            DebugView::LodTint | DebugView::Wireframe => 1.0,
-            DebugView::TransitionTint => 2.0,
-            DebugView::Influences => 3.0,
+            DebugView::Shaded => 0,
+            DebugView::LodTint | DebugView::Wireframe => 1,
+            DebugView::TransitionTint => 2,
+            DebugView::Influences => 3,
         }
     }
 }
+
+crate::named_choice!(DebugView);
 
 /// Which part of the view a side covers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -641,8 +637,9 @@ impl SceneRenderer {
             &self.lighting,
             [
                 self.debug.shader_mode(),
-                DebugView::LodTint.shader_mode() * self.foliage_tint as u8 as f32,
-                0.0,
+                DebugView::LodTint.shader_mode() * self.foliage_tint as u32,
+                0,
+                0,
             ],
         );
         gpu.queue

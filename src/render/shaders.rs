@@ -12,6 +12,40 @@ const ENVIRONMENT: &str = include_str!("../../shaders/environment.wgsl");
 const SHADOW: &str = include_str!("../../shaders/shadow.wgsl");
 const ATLAS: &str = include_str!("../../shaders/atlas.wgsl");
 
+/// Colours of the levels of detail, finest first, as the `lod` debug view paints them and the
+/// viewer's panel shows them: the one copy, which WGSL gets as `level_palette`.
+pub const LEVEL_COLORS: [[f32; 3]; 12] = [
+    [0.20, 0.75, 0.30],
+    [0.60, 0.85, 0.20],
+    [0.95, 0.85, 0.15],
+    [0.98, 0.62, 0.12],
+    [0.92, 0.38, 0.12],
+    [0.85, 0.15, 0.15],
+    [0.85, 0.20, 0.55],
+    [0.70, 0.25, 0.85],
+    [0.42, 0.32, 0.92],
+    [0.18, 0.45, 0.95],
+    [0.15, 0.75, 0.90],
+    [0.55, 0.55, 0.55],
+];
+
+/// [`LEVEL_COLORS`] as WGSL: `LEVEL_COUNT` and `level_palette(i)`.
+fn level_palette_wgsl() -> String {
+    let colours: Vec<String> = LEVEL_COLORS
+        .iter()
+        .map(|[r, g, b]| format!("vec3<f32>({r:?}, {g:?}, {b:?})"))
+        .collect();
+    format!(
+        "const LEVEL_COUNT: u32 = {n}u;\n\
+         fn level_palette(i: u32) -> vec3<f32> {{\n\
+         \x20   var p = array<vec3<f32>, {n}>({list});\n\
+         \x20   return p[min(i, LEVEL_COUNT - 1u)];\n\
+         }}\n",
+        n = LEVEL_COLORS.len(),
+        list = colours.join(", ")
+    )
+}
+
 /// A composed shader module: a name for labels and errors, and its full source.
 pub struct ShaderSource {
     pub name: &'static str,
@@ -20,7 +54,11 @@ pub struct ShaderSource {
 
 impl ShaderSource {
     pub fn source(&self) -> String {
-        self.parts.concat()
+        let mut source = self.parts.concat();
+        if self.parts.contains(&CHARACTER) {
+            source.push_str(&level_palette_wgsl());
+        }
+        source
     }
 
     pub fn create(&self, device: &wgpu::Device) -> wgpu::ShaderModule {

@@ -16,6 +16,9 @@ pub struct FrameUniforms {
     pub ground_bounce: [f32; 4],
     pub fog: [f32; 4],
     pub time: [f32; 4],
+    /// Debug view of everything, of foliage, and the capture target's size: see `views` in
+    /// `Frame`.
+    pub views: [u32; 4],
 }
 
 /// Light and atmosphere of the scene.
@@ -70,7 +73,9 @@ impl FrameView {
 }
 
 impl FrameUniforms {
-    pub fn new(view: &FrameView, light: &Lighting, extra: [f32; 3]) -> Self {
+    /// `views`: the debug view of everything and of foliage (as `DebugView::shader_mode`), and
+    /// the capture pass's target size (0 elsewhere).
+    pub fn new(view: &FrameView, light: &Lighting, views: [u32; 4]) -> Self {
         let vp = view.proj * view.view;
         let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
         FrameUniforms {
@@ -83,7 +88,8 @@ impl FrameUniforms {
             sky_horizon: v4(light.sky_horizon, 0.0),
             ground_bounce: v4(light.ground_bounce, 0.0),
             fog: [light.fog_density, light.fog_start, 0.0, 0.0],
-            time: [view.time, extra[0], extra[1], extra[2]],
+            time: [view.time, 0.0, 0.0, 0.0],
+            views,
         }
     }
 }

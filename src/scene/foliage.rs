@@ -43,13 +43,24 @@ impl FoliagePolicy {
             FoliagePolicy::Automatic => "automatic",
         }
     }
+}
 
-    /// From its name or the first word of it (`full`, `skeleton`, `spectral`, `automatic`).
-    pub fn parse(s: &str) -> Option<FoliagePolicy> {
-        let s = s.trim().to_ascii_lowercase();
-        FoliagePolicy::ALL
-            .into_iter()
-            .find(|p| p.name() == s || p.name().split(' ').next() == Some(s.as_str()))
+/// On the command line a policy is the first word of its name (`full`, `skeleton`,
+/// `spectral`, `automatic`); the whole name is an alias.
+impl clap::ValueEnum for FoliagePolicy {
+    fn value_variants<'a>() -> &'a [Self] {
+        &FoliagePolicy::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let name = self.name();
+        let word = name.split(' ').next().unwrap_or(name);
+        let value = clap::builder::PossibleValue::new(word);
+        Some(if word == name {
+            value
+        } else {
+            value.alias(name)
+        })
     }
 }
 

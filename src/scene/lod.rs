@@ -50,11 +50,8 @@ impl LodMethod {
         }
     }
 
-    pub fn parse(s: &str) -> Option<LodMethod> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(s.trim()))
-    }
+    /// The finest simplified method: AS with influence simplification.
+    pub const AS_IS: LodMethod = LodMethod::Simplified(Method::InfluenceSimplification);
 
     /// Position in [`LodMethod::ALL`]: a slot index for per-method tables.
     pub fn index(self) -> usize {
@@ -86,13 +83,11 @@ impl Transition {
             Transition::Morph => "morph",
         }
     }
-
-    pub fn parse(s: &str) -> Option<Transition> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(s.trim()))
-    }
 }
+
+crate::named_choice!(LodMethod);
+crate::named_choice!(Transition);
+crate::named_choice!(Drive);
 
 /// What drives an alpha or morph transition.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -104,6 +99,8 @@ pub enum Drive {
 }
 
 impl Drive {
+    pub const ALL: [Drive; 2] = [Drive::Time, Drive::Zone];
+
     pub fn name(self) -> &'static str {
         match self {
             Drive::Time => "time",

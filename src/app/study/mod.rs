@@ -147,20 +147,22 @@ impl Plan {
         }
         for [a, b] in &self.pairs {
             for m in [a, b] {
-                if LodMethod::parse(m).is_none() {
+                if crate::choice::parse::<LodMethod>(m, "a method").is_err() {
                     return Err(format!(
                         "'{m}' is not a method (none, rest-pose, as, as+is)"
                     ));
                 }
             }
-            if LodMethod::parse(a) == LodMethod::parse(b) {
+            if crate::choice::parse::<LodMethod>(a, "a method").ok()
+                == crate::choice::parse::<LodMethod>(b, "a method").ok()
+            {
                 return Err(format!("pair {a} vs {b} compares a method with itself"));
             }
         }
         if let Some(t) = self.tolerances.iter().find(|t| !(0.25..=16.0).contains(*t)) {
             return Err(format!("tolerance {t} must be between 0.25 and 16 pixels"));
         }
-        if Transition::parse(&self.transition).is_none() {
+        if crate::choice::parse::<Transition>(&self.transition, "a transition").is_err() {
             return Err(format!(
                 "'{}' is not a transition (pop, alpha, morph)",
                 self.transition
@@ -301,7 +303,8 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     std::fs::create_dir_all(o.out.join(CLIPS))
         .with_context(|| format!("{}: cannot create", o.out.display()))?;
     let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
-    let transition = Transition::parse(&plan.transition).expect("checked");
+    let transition =
+        crate::choice::parse::<Transition>(&plan.transition, "a transition").expect("checked");
     let mut clips = plan.clips();
     let total = clips.len();
     for (k, clip) in clips.iter_mut().enumerate() {
@@ -324,7 +327,8 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
                 ..Default::default()
             },
             lod: ShotLod {
-                method: LodMethod::parse(&clip.method).expect("checked"),
+                method: crate::choice::parse::<LodMethod>(&clip.method, "a method")
+                    .expect("checked"),
                 policy: LodPolicy {
                     tolerance_px: clip.tolerance_px,
                     transition,

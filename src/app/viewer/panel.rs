@@ -264,24 +264,8 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     req
 }
 
-/// Colours of the levels, as the `lod` debug view paints them (`level_color` in
-/// `shaders/character.wgsl`).
-const LEVEL_COLORS: [[f32; 3]; 12] = [
-    [0.20, 0.75, 0.30],
-    [0.60, 0.85, 0.20],
-    [0.95, 0.85, 0.15],
-    [0.98, 0.62, 0.12],
-    [0.92, 0.38, 0.12],
-    [0.85, 0.15, 0.15],
-    [0.85, 0.20, 0.55],
-    [0.70, 0.25, 0.85],
-    [0.42, 0.32, 0.92],
-    [0.18, 0.45, 0.95],
-    [0.15, 0.75, 0.90],
-    [0.55, 0.55, 0.55],
-];
-
 fn level_color(k: usize) -> egui::Color32 {
+    use crate::render::shaders::LEVEL_COLORS;
     let [r, g, b] = LEVEL_COLORS[k.min(LEVEL_COLORS.len() - 1)];
     egui::Color32::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
 }
@@ -436,7 +420,7 @@ fn compare(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
 pub fn toggle_compare(s: &Settings) -> Option<LodMethod> {
     match s.compare {
         Some(_) => None,
-        None if s.method == LodMethod::None => Some(LodMethod::ALL[3]),
+        None if s.method == LodMethod::None => Some(LodMethod::AS_IS),
         None => Some(LodMethod::None),
     }
 }

@@ -68,13 +68,9 @@ impl Method {
             Method::InfluenceSimplification => "as+is",
         }
     }
-
-    pub fn parse(s: &str) -> Option<Method> {
-        Method::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(s.trim()))
-    }
 }
+
+crate::named_choice!(Method);
 
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -32,6 +32,8 @@ pub enum DescriptionType {
     AxisPhase,
 }
 
+crate::named_choice!(DescriptionType);
+
 impl DescriptionType {
     pub const ALL: [DescriptionType; 3] = [
         DescriptionType::Naive,
@@ -45,10 +47,6 @@ impl DescriptionType {
             DescriptionType::DominatingAxis => "dominating-axis",
             DescriptionType::AxisPhase => "axis-phase",
         }
-    }
-
-    pub fn parse(s: &str) -> Option<DescriptionType> {
-        Self::ALL.into_iter().find(|t| t.name() == s)
     }
 
     /// The description of a trajectory sampled `dft.samples()` times over one loop.
