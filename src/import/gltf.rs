@@ -51,18 +51,6 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
     build(&name, &doc, &buffers, &images).map_err(fail)
 }
 
-/// Loads a skinned model from the bytes of a self-contained `.glb` or `.gltf` (no external
-/// files), reporting problems against `label`.
-pub fn load_slice(label: &str, bytes: &[u8]) -> Result<Model, InputError> {
-    let fail = |p: String| InputError::new(label, p);
-    let (doc, buffers, images) = gltf::import_slice(bytes).map_err(|e| fail(gltf_problem(&e)))?;
-    let name = Path::new(label)
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| label.to_string());
-    build(&name, &doc, &buffers, &images).map_err(fail)
-}
-
 /// The first external buffer or image a `.gltf` names that is not there to read.
 fn missing_reference(path: &Path) -> Option<String> {
     let doc = gltf::Gltf::open(path).ok()?;

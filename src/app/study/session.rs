@@ -84,8 +84,8 @@ pub fn plan_session(m: &Manifest, id: &str) -> Vec<Trial> {
     trials
 }
 
-/// One line of `answers.csv`.
-#[derive(Clone, Debug, PartialEq)]
+/// One line of `answers.csv`, its fields in this order under [`HEADER`]'s names.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Answer {
     pub participant: String,
     pub trial: usize,
@@ -101,76 +101,28 @@ pub struct Answer {
     /// The method of the clip chosen.
     pub preferred: String,
     /// Seconds since the Unix epoch.
+    #[serde(rename = "unix_time")]
     pub time: u64,
 }
 
 pub const HEADER: &str = "participant,trial,block,model,method_a,method_b,tolerance_px,first,second,choice,preferred,unix_time";
 
-/// A field without the separator or a line break.
-fn field(s: &str) -> String {
-    s.replace([',', '\n', '\r'], ";")
-}
-
-impl Answer {
-    fn line(&self) -> String {
-        format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            field(&self.participant),
-            self.trial,
-            field(&self.block),
-            field(&self.model),
-            field(&self.method_a),
-            field(&self.method_b),
-            self.tolerance_px,
-            field(&self.first),
-            field(&self.second),
-            self.choice,
-            field(&self.preferred),
-            self.time
-        )
-    }
-
-    fn parse(line: &str) -> Option<Answer> {
-        let f: Vec<&str> = line.split(',').collect();
-        if f.len() != 12 {
-            return None;
-        }
-        let choice: u8 = f[9].parse().ok().filter(|c| *c == 1 || *c == 2)?;
-        Some(Answer {
-            participant: f[0].into(),
-            trial: f[1].parse().ok()?,
-            block: f[2].into(),
-            model: f[3].into(),
-            method_a: f[4].into(),
-            method_b: f[5].into(),
-            tolerance_px: f[6].parse().ok()?,
-            first: f[7].into(),
-            second: f[8].into(),
-            choice,
-            preferred: f[10].into(),
-            time: f[11].parse().ok()?,
-        })
-    }
-}
-
 /// Every complete answer in `DIR/answers.csv` (none when there is no file yet), and how many
 /// lines could not be read (a line cut short by a crash mid-write, say).
 pub fn read_answers(dir: &Path) -> Result<(Vec<Answer>, usize)> {
     let path = dir.join(ANSWERS);
-    let text = match std::fs::read_to_string(&path) {
-        Ok(t) => t,
+    let file = match std::fs::File::open(&path) {
+        Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0)),
         Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
     };
+    let mut reader = csv::ReaderBuilder::new().flexible(true).from_reader(file);
     let mut answers = Vec::new();
     let mut bad = 0;
-    for line in text
-        .lines()
-        .filter(|l| !l.trim().is_empty() && *l != HEADER)
-    {
-        match Answer::parse(line) {
-            Some(a) => answers.push(a),
-            None => bad += 1,
+    for record in reader.deserialize::<Answer>() {
+        match record {
+            Ok(a) if a.choice == 1 || a.choice == 2 => answers.push(a),
+            Ok(_) | Err(_) => bad += 1,
         }
     }
     Ok((answers, bad))
@@ -185,13 +137,18 @@ pub fn append_answer(dir: &Path, answer: &Answer) -> Result<()> {
         .append(true)
         .open(&path)
         .with_context(|| format!("{}: cannot write", path.display()))?;
-    let mut text = String::new();
-    if file.metadata().map(|m| m.len() == 0).unwrap_or(true) {
-        text.push_str(HEADER);
-        text.push('\n');
-    }
-    text.push_str(&answer.line());
-    file.write_all(text.as_bytes())
+    // The line is encoded whole first, so that it reaches the file in one write.
+    let first = file.metadata().map(|m| m.len() == 0).unwrap_or(true);
+    let mut writer = csv::WriterBuilder::new()
+        .has_headers(first)
+        .from_writer(Vec::new());
+    writer
+        .serialize(answer)
+        .with_context(|| format!("{}: cannot encode the answer", path.display()))?;
+    let text = writer
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: cannot encode the answer: {e}", path.display()))?;
+    file.write_all(&text)
         .and_then(|_| file.flush())
         .and_then(|_| file.sync_data())
         .with_context(|| format!("{}: cannot write", path.display()))?;
@@ -331,4 +288,52 @@ fn play_paced(path: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn answer(participant: &str, choice: u8) -> Answer {
+        Answer {
+            participant: participant.into(),
+            trial: 3,
+            block: "test".into(),
+            model: "horse".into(),
+            method_a: "rest-pose".into(),
+            method_b: "as+is".into(),
+            tolerance_px: 1.5,
+            first: "a".into(),
+            second: "b".into(),
+            choice,
+            preferred: "as+is".into(),
+            time: 1_700_000_000,
+        }
+    }
+
+    #[test]
+    fn answers_round_trip_through_the_file_quoted_where_needed() {
+        let dir = tempfile::tempdir().unwrap();
+        let odd = answer("Smith, J. \"JS\"", 2);
+        append_answer(dir.path(), &answer("P01", 1)).unwrap();
+        append_answer(dir.path(), &odd).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(ANSWERS)).unwrap();
+        assert_eq!(text.lines().next(), Some(HEADER), "one header, first");
+        assert_eq!(text.lines().filter(|l| *l == HEADER).count(), 1);
+        let (answers, bad) = read_answers(dir.path()).unwrap();
+        assert_eq!(bad, 0);
+        assert_eq!(answers, vec![answer("P01", 1), odd]);
+    }
+
+    #[test]
+    fn a_line_cut_short_is_counted_not_read() {
+        let dir = tempfile::tempdir().unwrap();
+        append_answer(dir.path(), &answer("P01", 1)).unwrap();
+        let path = dir.path().join(ANSWERS);
+        let mut text = std::fs::read_to_string(&path).unwrap();
+        text.push_str("P02,4,test,horse,rest-pose");
+        std::fs::write(&path, text).unwrap();
+        let (answers, bad) = read_answers(dir.path()).unwrap();
+        assert_eq!((answers.len(), bad), (1, 1));
+    }
 }
