@@ -197,7 +197,10 @@ mod tests {
         assert_eq!(names.len(), 1, "only the target is left");
         // Other tests write at the same time: none of this one's files is still pending.
         let pending = PENDING.lock().unwrap();
-        assert!(pending.iter().all(|p| !p.starts_with(dir.path())), "{pending:?}");
+        assert!(
+            pending.iter().all(|p| !p.starts_with(dir.path())),
+            "{pending:?}"
+        );
     }
 
     #[test]
