@@ -125,9 +125,17 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         let progress = |f: f32| bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
         let lods = bake_lods(&model, method, &lod_opts, &progress);
         bar.set_message("measuring");
+        let clock = std::time::Instant::now();
         let curve = measure_sequence(&probe, &base, &lods.sequence);
+        let measured = clock.elapsed().as_secs_f64();
         bar.set_message("silhouettes");
         let levels = level_reports(&lods, &poses);
+        log::debug!(
+            "{} by {method}: bake {:.2} s, error curve {measured:.2} s, silhouettes {:.2} s",
+            model.name,
+            lods.bake_seconds,
+            clock.elapsed().as_secs_f64() - measured
+        );
         bar.finish_with_message(format!("{:.2} s", lods.bake_seconds));
         methods.insert(
             method.name().to_string(),

@@ -102,40 +102,11 @@ fn rasterise(
     let (w, h) = size;
     let mut covered = vec![false; (w * h) as usize];
     for t in mesh.indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| screen[i as usize]);
-        let area = (b - a).perp_dot(c - a);
-        if area == 0.0 || !area.is_finite() {
-            continue;
-        }
-        // Conservative: every pixel the triangle touches, so that a part thinner than a pixel
-        // (a ring seen edge-on, a sliver) still shows, in both masks alike.
-        let lo = a.min(b).min(c);
-        let hi = a.max(b).max(c);
-        let x0 = lo.x.floor().max(0.0) as u32;
-        let y0 = lo.y.floor().max(0.0) as u32;
-        let x1 = (hi.x.floor() as i64).min(w as i64 - 1);
-        let y1 = (hi.y.floor() as i64).min(h as i64 - 1);
-        if x1 < x0 as i64 || y1 < y0 as i64 {
-            continue;
-        }
-        // Both windings count: a silhouette has no back faces. An edge function reaches a
-        // pixel's square when it is above minus half its extent along the edge's normal.
-        let sign = area.signum();
-        let edges = [(a, b), (b, c), (c, a)].map(|(p, q)| {
-            let d = q - p;
-            (p, d, 0.5 * (d.x.abs() + d.y.abs()))
-        });
-        for y in y0..=y1 as u32 {
-            for x in x0..=x1 as u32 {
-                let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                if edges
-                    .iter()
-                    .all(|&(o, d, slack)| d.perp_dot(p - o) * sign >= -slack)
-                {
-                    covered[(y * w + x) as usize] = true;
-                }
-            }
-        }
+        cover_triangle(
+            &mut covered,
+            w,
+            [t[0], t[1], t[2]].map(|i| screen[i as usize]),
+        );
     }
     Mask {
         width: w,
@@ -144,41 +115,145 @@ fn rasterise(
     }
 }
 
-/// Squared Euclidean distance from every pixel to the nearest covered pixel of `mask`
-/// (infinite everywhere if nothing is covered).
-fn distance2(mask: &Mask) -> Vec<f32> {
-    let (w, h) = (mask.width as usize, mask.height as usize);
-    let mut d: Vec<f32> = mask
-        .covered
-        .iter()
-        .map(|&c| if c { 0.0 } else { f32::INFINITY })
-        .collect();
-    let mut line = Vec::new();
-    let mut out = Vec::new();
-    for x in 0..w {
-        line.clear();
-        line.extend((0..h).map(|y| d[y * w + x]));
-        transform_1d(&line, &mut out);
-        for y in 0..h {
-            d[y * w + x] = out[y];
+/// Marks every pixel of the `w`-wide mask `covered` that triangle `[a, b, c]` (in pixels)
+/// touches: conservative, so that a part thinner than a pixel (a ring seen edge-on, a sliver)
+/// still shows, in both masks alike.
+fn cover_triangle(covered: &mut [bool], w: u32, [a, b, c]: [Vec2; 3]) {
+    let h = covered.len() as u32 / w.max(1);
+    let area = (b - a).perp_dot(c - a);
+    if area == 0.0 || !area.is_finite() {
+        return;
+    }
+    let lo = a.min(b).min(c);
+    let hi = a.max(b).max(c);
+    let x0 = lo.x.floor().max(0.0) as u32;
+    let y0 = lo.y.floor().max(0.0) as u32;
+    let x1 = (hi.x.floor() as i64).min(w as i64 - 1);
+    let y1 = (hi.y.floor() as i64).min(h as i64 - 1);
+    if x1 < x0 as i64 || y1 < y0 as i64 {
+        return;
+    }
+    // Both windings count: a silhouette has no back faces. An edge function reaches a
+    // pixel's square when it is above minus half its extent along the edge's normal.
+    let sign = area.signum();
+    let edges = [(a, b), (b, c), (c, a)].map(|(p, q)| {
+        let d = q - p;
+        (p, d, 0.5 * (d.x.abs() + d.y.abs()))
+    });
+    for y in y0..=y1 as u32 {
+        // The pixels of a row inside all three edges are one run: each edge, linear along
+        // the row, bounds the pixel centres it lets in from one side. In f64, so that the
+        // run is the test's up to rounding far below a pixel.
+        let py = y as f64 + 0.5;
+        let (mut lo, mut hi) = (x0 as f64 + 0.5, x1 as f64 + 0.5);
+        for &(o, d, slack) in &edges {
+            let (o, d) = (o.as_dvec2(), d.as_dvec2());
+            // (d.x (py − o.y) − d.y (px − o.x)) · sign + slack ≥ 0, for px.
+            let slope = -d.y * sign as f64;
+            let at0 = (d.x * (py - o.y) + d.y * o.x) * sign as f64 + slack as f64;
+            if slope > 0.0 {
+                lo = lo.max(-at0 / slope);
+            } else if slope < 0.0 {
+                hi = hi.min(-at0 / slope);
+            } else if at0 < 0.0 {
+                hi = f64::NEG_INFINITY;
+            }
+        }
+        // Pixel x's centre is x + 0.5.
+        let xa = (lo - 0.5).ceil().max(x0 as f64);
+        let xb = (hi - 0.5).floor().min(x1 as f64);
+        if xa <= xb {
+            let row = (y * w) as usize;
+            covered[row + xa as usize..=row + xb as usize].fill(true);
         }
     }
-    for y in 0..h {
-        line.clear();
-        line.extend_from_slice(&d[y * w..(y + 1) * w]);
-        transform_1d(&line, &mut out);
-        d[y * w..(y + 1) * w].copy_from_slice(&out);
+}
+
+/// Along every row, the squared distance to the nearest covered pixel of `mask` in that row
+/// (infinite in a row with none): the first of the transform's two separable passes, which for
+/// a binary image is two linear scans.
+fn row_distances2(mask: &Mask) -> Vec<f32> {
+    let w = mask.width as usize;
+    let mut g = vec![f32::INFINITY; mask.covered.len()];
+    for (row, out) in mask.covered.chunks_exact(w).zip(g.chunks_exact_mut(w)) {
+        let mut last: Option<usize> = None;
+        for (x, &c) in row.iter().enumerate() {
+            if c {
+                last = Some(x);
+            }
+            if let Some(l) = last {
+                out[x] = ((x - l) * (x - l)) as f32;
+            }
+        }
+        let mut next: Option<usize> = None;
+        for x in (0..w).rev() {
+            if row[x] {
+                next = Some(x);
+            }
+            if let Some(n) = next {
+                out[x] = out[x].min(((n - x) * (n - x)) as f32);
+            }
+        }
     }
+    g
+}
+
+/// Scratch space of the 1D transform.
+#[derive(Default)]
+struct Envelope {
+    v: Vec<usize>,
+    z: Vec<f32>,
+    out: Vec<f32>,
+}
+
+/// The second pass down columns `columns` of the row pass `g` (`w` wide): for each column in
+/// turn, its exact squared Euclidean distances (top to bottom) handed to `visit`. Columns are
+/// gathered sixteen at a time, so that reading them down the rows stays in cache.
+fn column_distances2(g: &[f32], w: usize, columns: &[usize], mut visit: impl FnMut(usize, &[f32])) {
+    const BLOCK: usize = 16;
+    let h = g.len() / w.max(1);
+    let mut lines = vec![0f32; BLOCK * h];
+    let mut env = Envelope::default();
+    for block in columns.chunks(BLOCK) {
+        for y in 0..h {
+            let row = &g[y * w..(y + 1) * w];
+            for (k, &x) in block.iter().enumerate() {
+                lines[k * h + y] = row[x];
+            }
+        }
+        for (k, &x) in block.iter().enumerate() {
+            transform_1d(&lines[k * h..(k + 1) * h], &mut env);
+            visit(x, &env.out);
+        }
+    }
+}
+
+/// Squared Euclidean distance from every pixel to the nearest covered pixel of `mask`
+/// (infinite everywhere if nothing is covered), row-major.
+#[cfg(test)]
+fn distance2(mask: &Mask) -> Vec<f32> {
+    let w = mask.width as usize;
+    let g = row_distances2(mask);
+    let mut d = vec![0f32; g.len()];
+    let all: Vec<usize> = (0..w).collect();
+    column_distances2(&g, w, &all, |x, column| {
+        for (y, &v) in column.iter().enumerate() {
+            d[y * w + x] = v;
+        }
+    });
     d
 }
 
-/// The 1D squared distance transform of `f` (lower envelope of parabolas).
-fn transform_1d(f: &[f32], out: &mut Vec<f32>) {
+/// The 1D squared distance transform of `f` (lower envelope of parabolas) into `env.out`.
+fn transform_1d(f: &[f32], env: &mut Envelope) {
     let n = f.len();
+    let Envelope { v, z, out } = env;
     out.clear();
     out.resize(n, f32::INFINITY);
-    let mut v = vec![0usize; n];
-    let mut z = vec![0f32; n + 1];
+    v.clear();
+    v.resize(n, 0);
+    z.clear();
+    z.resize(n + 1, 0.0);
     let mut k = 0usize;
     let first = match f.iter().position(|x| x.is_finite()) {
         Some(i) => i,
@@ -217,19 +292,37 @@ fn transform_1d(f: &[f32], out: &mut Vec<f32>) {
     }
 }
 
+/// The largest squared distance from a covered pixel of `from` to the nearest covered pixel
+/// of `to` (masks of one size). Only pixels `from` covers and `to` does not can be any
+/// distance away, and they lie along the silhouettes' differences: the column pass runs only
+/// down the columns that hold them.
+fn one_way2(from: &Mask, to: &Mask) -> f32 {
+    let w = from.width as usize;
+    let apart = |i: usize| from.covered[i] && !to.covered[i];
+    let mut wanted = vec![false; w];
+    for i in (0..from.covered.len()).filter(|&i| apart(i)) {
+        wanted[i % w] = true;
+    }
+    let columns: Vec<usize> = (0..w).filter(|&x| wanted[x]).collect();
+    if columns.is_empty() {
+        return 0.0;
+    }
+    let g = row_distances2(to);
+    let mut worst = 0.0f32;
+    column_distances2(&g, w, &columns, |x, column| {
+        for (y, &d) in column.iter().enumerate() {
+            if apart(y * w + x) {
+                worst = worst.max(d);
+            }
+        }
+    });
+    worst
+}
+
 /// The symmetric Hausdorff distance between two masks of one size, in pixels: the furthest a
 /// covered pixel of either lies from the nearest covered pixel of the other.
 pub fn hausdorff(a: &Mask, b: &Mask) -> f32 {
-    let one_way = |from: &Mask, to: &Mask| {
-        let d = distance2(to);
-        from.covered
-            .iter()
-            .zip(&d)
-            .filter(|(c, _)| **c)
-            .map(|(_, &d)| d)
-            .fold(0.0f32, f32::max)
-    };
-    one_way(a, b).max(one_way(b, a)).sqrt()
+    one_way2(a, b).max(one_way2(b, a)).sqrt()
 }
 
 /// The masks of full detail and of a level, posed by `g`, seen from `view` at `scale` pixels
@@ -342,6 +435,73 @@ mod tests {
                     .map(|&(a, b)| ((x as i32 - a).pow(2) + (y as i32 - b).pow(2)) as f32)
                     .fold(f32::INFINITY, f32::min);
                 assert_eq!(d[(y * 7 + x) as usize], want, "at {x},{y}");
+            }
+        }
+    }
+
+    #[test]
+    fn hausdorff_matches_brute_force_on_random_masks() {
+        let mut rng = fastrand::Rng::with_seed(3);
+        for _ in 0..40 {
+            let (w, h) = (rng.u32(1..40), rng.u32(1..30));
+            let random = |rng: &mut fastrand::Rng, share: f32| {
+                let on: Vec<(u32, u32)> = (0..h)
+                    .flat_map(|y| (0..w).map(move |x| (x, y)))
+                    .filter(|_| rng.f32() < share)
+                    .collect();
+                mask(w, h, &on)
+            };
+            let a = random(&mut rng, 0.3);
+            let b = random(&mut rng, 0.05);
+            let pixels = |m: &Mask| -> Vec<(i64, i64)> {
+                (0..m.covered.len())
+                    .filter(|&i| m.covered[i])
+                    .map(|i| ((i as u32 % w) as i64, (i as u32 / w) as i64))
+                    .collect()
+            };
+            let one_way = |from: &Mask, to: &Mask| {
+                let to = pixels(to);
+                pixels(from)
+                    .iter()
+                    .map(|&(x, y)| {
+                        to.iter()
+                            .map(|&(u, v)| ((x - u).pow(2) + (y - v).pow(2)) as f32)
+                            .fold(f32::INFINITY, f32::min)
+                    })
+                    .fold(0.0f32, f32::max)
+            };
+            let want = one_way(&a, &b).max(one_way(&b, &a)).sqrt();
+            assert_eq!(hausdorff(&a, &b), want, "{w}x{h}");
+        }
+    }
+
+    #[test]
+    fn rows_of_a_triangle_are_the_pixels_its_edges_reach() {
+        // Per pixel: inside all three edges, each pushed out by half the pixel's extent along
+        // its normal.
+        let mut rng = fastrand::Rng::with_seed(11);
+        let (w, h) = (48u32, 40u32);
+        for _ in 0..300 {
+            let mut p = || Vec2::new(rng.f32() * 60.0 - 6.0, rng.f32() * 50.0 - 5.0);
+            let tri = [p(), p(), p()];
+            let mut covered = vec![false; (w * h) as usize];
+            cover_triangle(&mut covered, w, tri);
+            let [a, b, c] = tri.map(|v| v.as_dvec2());
+            let sign = (b - a).perp_dot(c - a).signum();
+            let (lo, hi) = (a.min(b).min(c).floor(), a.max(b).max(c).floor());
+            for y in 0..h {
+                for x in 0..w {
+                    let q = glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    let inside = (x as f64) >= lo.x
+                        && (x as f64) <= hi.x
+                        && (y as f64) >= lo.y
+                        && (y as f64) <= hi.y
+                        && [(a, b), (b, c), (c, a)].iter().all(|&(o, e)| {
+                            let d = e - o;
+                            d.perp_dot(q - o) * sign >= -0.5 * (d.x.abs() + d.y.abs())
+                        });
+                    assert_eq!(covered[(y * w + x) as usize], inside, "{tri:?} at {x},{y}");
+                }
             }
         }
     }
