@@ -4,64 +4,84 @@
 //! can be checked against their generator.
 
 use crate::model::{ChannelTarget, Interpolation, Model, SkinnedMesh};
-use serde_json::{Value, json};
+use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
+use gltf::json::validation::{Checked::Valid, USize64};
+use gltf::json::{self as gj, Index};
 use std::borrow::Cow;
+use std::collections::BTreeMap;
 
-const FLOAT: u32 = 5126;
-const UNSIGNED_SHORT: u32 = 5123;
-const UNSIGNED_INT: u32 = 5125;
-const ARRAY_BUFFER: u32 = 34962;
-const ELEMENT_ARRAY_BUFFER: u32 = 34963;
-
+/// The binary chunk and the buffer views and accessors into it, built up in the order the
+/// model is written.
 #[derive(Default)]
 struct Builder {
     bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+    views: Vec<gj::buffer::View>,
+    accessors: Vec<gj::Accessor>,
 }
 
 impl Builder {
-    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+    fn view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<gj::buffer::Target>,
+    ) -> Index<gj::buffer::View> {
+        // Every view starts on a 4-byte boundary, as accessors of 4-byte components need.
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
-        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
-        if let Some(t) = target {
-            v["target"] = json!(t);
-        }
+        let view = gj::buffer::View {
+            buffer: Index::new(0),
+            byte_length: bytes.len().into(),
+            byte_offset: Some(self.bin.len().into()),
+            byte_stride: None,
+            name: None,
+            target: target.map(Valid),
+            extensions: None,
+            extras: None,
+        };
         self.bin.extend_from_slice(bytes);
-        self.views.push(v);
-        self.views.len() - 1
+        Index::push(&mut self.views, view)
     }
 
     fn accessor(
         &mut self,
         bytes: &[u8],
-        target: Option<u32>,
-        component: u32,
+        target: Option<gj::buffer::Target>,
+        component: ComponentType,
         count: usize,
-        kind: &str,
+        kind: Type,
         min_max: Option<(Vec<f32>, Vec<f32>)>,
-    ) -> usize {
+    ) -> Index<gj::Accessor> {
         let view = self.view(bytes, target);
-        let mut a =
-            json!({"bufferView": view, "componentType": component, "count": count, "type": kind});
-        if let Some((lo, hi)) = min_max {
-            a["min"] = json!(lo);
-            a["max"] = json!(hi);
-        }
-        self.accessors.push(a);
-        self.accessors.len() - 1
+        let (min, max) = match min_max {
+            Some((lo, hi)) => (Some(lo.into()), Some(hi.into())),
+            None => (None, None),
+        };
+        let accessor = gj::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Valid(GenericComponentType(component)),
+            extensions: None,
+            extras: None,
+            type_: Valid(kind),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        };
+        Index::push(&mut self.accessors, accessor)
     }
 
     fn floats(
         &mut self,
         data: &[f32],
-        width: usize,
-        kind: &str,
+        kind: Type,
         bounds: bool,
-        target: Option<u32>,
-    ) -> usize {
+        target: Option<gj::buffer::Target>,
+    ) -> Index<gj::Accessor> {
+        let width = kind.multiplicity();
         let count = data.len() / width;
         let min_max = bounds.then(|| {
             let mut lo = vec![f32::MAX; width];
@@ -77,12 +97,17 @@ impl Builder {
         self.accessor(
             bytemuck::cast_slice(data),
             target,
-            FLOAT,
+            ComponentType::F32,
             count,
             kind,
             min_max,
         )
     }
+}
+
+/// The `extras` object of a glTF property, from any serialisable value.
+fn extras(value: serde_json::Value) -> gj::Extras {
+    Some(serde_json::value::to_raw_value(&value).expect("a JSON value serialises"))
 }
 
 fn png(image: &crate::model::Rgba8Image) -> Vec<u8> {
@@ -103,25 +128,33 @@ fn png(image: &crate::model::Rgba8Image) -> Vec<u8> {
     out
 }
 
+type Attributes = BTreeMap<gj::validation::Checked<gj::mesh::Semantic>, Index<gj::Accessor>>;
+
 /// Positions, normals, texture coordinates and joint/weight sets of the vertices `used`.
 /// A mesh whose texture coordinates are all zero has none, and is written without
 /// `TEXCOORD_0`, as a file without texture coordinates reads back.
-fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Value {
-    let positions: Vec<f32> = used
-        .iter()
-        .flat_map(|&v| mesh.positions[v].to_array())
-        .collect();
-    let normals: Vec<f32> = used
-        .iter()
-        .flat_map(|&v| mesh.normals[v].to_array())
-        .collect();
-    let uvs: Vec<f32> = used.iter().flat_map(|&v| mesh.uvs[v].to_array()).collect();
-    let pos = b.floats(&positions, 3, "VEC3", true, Some(ARRAY_BUFFER));
-    let nrm = b.floats(&normals, 3, "VEC3", false, Some(ARRAY_BUFFER));
-    let mut attributes = json!({"POSITION": pos, "NORMAL": nrm});
+fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Attributes {
+    use gj::buffer::Target::ArrayBuffer;
+    use gj::mesh::Semantic;
+    let gather =
+        |f: &dyn Fn(usize) -> Vec<f32>| -> Vec<f32> { used.iter().flat_map(|&v| f(v)).collect() };
+    let positions = gather(&|v| mesh.positions[v].to_array().to_vec());
+    let normals = gather(&|v| mesh.normals[v].to_array().to_vec());
+    let mut attributes = Attributes::new();
+    attributes.insert(
+        Valid(Semantic::Positions),
+        b.floats(&positions, Type::Vec3, true, Some(ArrayBuffer)),
+    );
+    attributes.insert(
+        Valid(Semantic::Normals),
+        b.floats(&normals, Type::Vec3, false, Some(ArrayBuffer)),
+    );
     if mesh.uvs.iter().any(|&u| u != glam::Vec2::ZERO) {
-        let tex = b.floats(&uvs, 2, "VEC2", false, Some(ARRAY_BUFFER));
-        attributes["TEXCOORD_0"] = json!(tex);
+        let uvs = gather(&|v| mesh.uvs[v].to_array().to_vec());
+        attributes.insert(
+            Valid(Semantic::TexCoords(0)),
+            b.floats(&uvs, Type::Vec2, false, Some(ArrayBuffer)),
+        );
     }
     let most = used
         .iter()
@@ -129,47 +162,37 @@ fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Val
         .max()
         .unwrap_or(1)
         .max(1);
+    // Four influences per set; the last set is padded with zero weights on joint 0.
     for set in 0..most.div_ceil(4) {
         let mut joints: Vec<u16> = Vec::with_capacity(used.len() * 4);
         let mut weights: Vec<f32> = Vec::with_capacity(used.len() * 4);
         for &v in used {
             let inf = mesh.influences_of(v);
             for k in 4 * set..4 * set + 4 {
-                match inf.get(k) {
-                    Some(i) => {
-                        joints.push(i.bone as u16);
-                        weights.push(i.weight);
-                    }
-                    None => {
-                        joints.push(0);
-                        weights.push(0.0);
-                    }
-                }
+                let (joint, weight) = inf.get(k).map_or((0, 0.0), |i| (i.bone as u16, i.weight));
+                joints.push(joint);
+                weights.push(weight);
             }
         }
         let j = b.accessor(
             bytemuck::cast_slice(&joints),
-            Some(ARRAY_BUFFER),
-            UNSIGNED_SHORT,
+            Some(ArrayBuffer),
+            ComponentType::U16,
             used.len(),
-            "VEC4",
+            Type::Vec4,
             None,
         );
-        let w = b.floats(&weights, 4, "VEC4", false, Some(ARRAY_BUFFER));
-        attributes[format!("JOINTS_{set}")] = json!(j);
-        attributes[format!("WEIGHTS_{set}")] = json!(w);
+        let w = b.floats(&weights, Type::Vec4, false, Some(ArrayBuffer));
+        attributes.insert(Valid(Semantic::Joints(set as u32)), j);
+        attributes.insert(Valid(Semantic::Weights(set as u32)), w);
     }
     attributes
 }
 
-/// Encodes `model` as a `.glb` file.
-pub fn to_glb(model: &Model) -> Vec<u8> {
-    let mut b = Builder::default();
+/// One primitive per material, each with the vertices it uses (in order), so that an importer
+/// merging primitives in order gets the mesh back as it was.
+fn primitives(b: &mut Builder, model: &Model) -> Vec<gj::mesh::Primitive> {
     let mesh = &model.mesh;
-    let skel = &model.skeleton;
-
-    // One primitive per material, each with the vertices it uses (in order), so that an
-    // importer merging primitives in order gets the mesh back as it was.
     let mut primitives = Vec::new();
     for material in 0..model.materials.len().max(1) {
         let used: Vec<usize> = (0..mesh.vertex_count())
@@ -188,143 +211,234 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
             .filter(|t| local[t[0] as usize] != u32::MAX)
             .flat_map(|t| t.iter().map(|&i| local[i as usize]))
             .collect();
-        let attributes = vertex_attributes(&mut b, mesh, &used);
+        let attributes = vertex_attributes(b, mesh, &used);
         let indices = b.accessor(
             bytemuck::cast_slice(&indices),
-            Some(ELEMENT_ARRAY_BUFFER),
-            UNSIGNED_INT,
+            Some(gj::buffer::Target::ElementArrayBuffer),
+            ComponentType::U32,
             indices.len(),
-            "SCALAR",
+            Type::Scalar,
             None,
         );
-        primitives
-            .push(json!({"attributes": attributes, "indices": indices, "material": material}));
+        primitives.push(gj::mesh::Primitive {
+            attributes,
+            extensions: None,
+            extras: None,
+            indices: Some(indices),
+            material: Some(Index::new(material as u32)),
+            mode: Valid(gj::mesh::Mode::Triangles),
+            targets: None,
+        });
     }
+    primitives
+}
 
-    // Materials and textures.
-    let mut images = Vec::new();
-    let mut textures = Vec::new();
-    let mut materials = Vec::new();
+/// Materials, with each base colour texture embedded as a PNG in the binary chunk.
+fn materials(b: &mut Builder, model: &Model, root: &mut gj::Root) {
     for m in &model.materials {
-        let mut pbr =
-            json!({"baseColorFactor": m.base_color, "metallicFactor": 0.0, "roughnessFactor": 0.9});
+        let mut pbr = gj::material::PbrMetallicRoughness {
+            base_color_factor: gj::material::PbrBaseColorFactor(m.base_color),
+            metallic_factor: gj::material::StrengthFactor(0.0),
+            roughness_factor: gj::material::StrengthFactor(0.9),
+            ..Default::default()
+        };
         if let Some(t) = &m.texture {
+            if root.samplers.is_empty() {
+                // Linear filtering with trilinear mipmaps, repeat wrapping.
+                root.push(gj::texture::Sampler {
+                    mag_filter: Some(Valid(gj::texture::MagFilter::Linear)),
+                    min_filter: Some(Valid(gj::texture::MinFilter::LinearMipmapLinear)),
+                    ..Default::default()
+                });
+            }
             let view = b.view(&png(t), None);
-            images.push(json!({"bufferView": view, "mimeType": "image/png"}));
-            textures.push(json!({"source": images.len() - 1, "sampler": 0}));
-            pbr["baseColorTexture"] = json!({"index": textures.len() - 1});
+            let image = root.push(gj::Image {
+                buffer_view: Some(view),
+                mime_type: Some(gj::image::MimeType("image/png".into())),
+                name: None,
+                uri: None,
+                extensions: None,
+                extras: None,
+            });
+            let texture = root.push(gj::Texture {
+                name: None,
+                sampler: Some(Index::new(0)),
+                source: image,
+                extensions: None,
+                extras: None,
+            });
+            pbr.base_color_texture = Some(gj::texture::Info {
+                index: texture,
+                tex_coord: 0,
+                extensions: None,
+                extras: None,
+            });
         }
-        materials.push(json!({"name": m.name, "pbrMetallicRoughness": pbr}));
+        root.push(gj::Material {
+            name: Some(m.name.clone()),
+            pbr_metallic_roughness: pbr,
+            ..Default::default()
+        });
     }
+}
 
-    // Skeleton nodes, then the mesh node.
-    let mut nodes: Vec<Value> = skel
+/// The skeleton's nodes (rest transforms and children), the mesh's node, the skin and the
+/// scene whose roots are the skeleton's roots and the mesh node.
+fn skeleton(b: &mut Builder, model: &Model, root: &mut gj::Root) {
+    let skel = &model.skeleton;
+    let mut nodes: Vec<gj::Node> = skel
         .nodes
         .iter()
-        .map(|n| {
-            let mut v = json!({"name": n.name});
-            if n.rest.translation != glam::Vec3::ZERO {
-                v["translation"] = json!(n.rest.translation.to_array());
-            }
-            if n.rest.rotation != glam::Quat::IDENTITY {
-                v["rotation"] = json!(n.rest.rotation.to_array());
-            }
-            if n.rest.scale != glam::Vec3::ONE {
-                v["scale"] = json!(n.rest.scale.to_array());
-            }
-            v
+        .map(|n| gj::Node {
+            name: Some(n.name.clone()),
+            translation: (n.rest.translation != glam::Vec3::ZERO)
+                .then(|| n.rest.translation.to_array()),
+            rotation: (n.rest.rotation != glam::Quat::IDENTITY)
+                .then(|| gj::scene::UnitQuaternion(n.rest.rotation.to_array())),
+            scale: (n.rest.scale != glam::Vec3::ONE).then(|| n.rest.scale.to_array()),
+            ..Default::default()
         })
         .collect();
     for (i, n) in skel.nodes.iter().enumerate() {
         if let Some(p) = n.parent {
-            let children = nodes[p as usize]
-                .as_object_mut()
-                .expect("object")
-                .entry("children")
-                .or_insert_with(|| json!([]));
-            children.as_array_mut().expect("array").push(json!(i));
+            nodes[p as usize]
+                .children
+                .get_or_insert_with(Vec::new)
+                .push(Index::new(i as u32));
         }
     }
-    let mesh_node = nodes.len();
-    nodes.push(json!({"name": model.name, "mesh": 0, "skin": 0}));
-    let mut roots: Vec<usize> = (0..skel.nodes.len())
+    let mesh_node = Index::push(
+        &mut nodes,
+        gj::Node {
+            name: Some(model.name.clone()),
+            mesh: Some(Index::new(0)),
+            skin: Some(Index::new(0)),
+            ..Default::default()
+        },
+    );
+    let mut roots: Vec<Index<gj::Node>> = (0..skel.nodes.len())
         .filter(|&i| skel.nodes[i].parent.is_none())
+        .map(|i| Index::new(i as u32))
         .collect();
     roots.push(mesh_node);
+    root.nodes = nodes;
 
     let ibm: Vec<f32> = skel
         .inverse_bind
         .iter()
         .flat_map(|m| m.to_cols_array())
         .collect();
-    let ibm = b.floats(&ibm, 16, "MAT4", false, None);
-    let skin = json!({"joints": skel.joints, "inverseBindMatrices": ibm, "skeleton": roots[0]});
+    let ibm = b.floats(&ibm, Type::Mat4, false, None);
+    root.push(gj::Skin {
+        extensions: None,
+        extras: None,
+        inverse_bind_matrices: Some(ibm),
+        joints: skel.joints.iter().map(|&j| Index::new(j)).collect(),
+        name: None,
+        skeleton: Some(roots[0]),
+    });
+    root.scene = Some(root.push(gj::Scene {
+        extensions: None,
+        extras: None,
+        name: None,
+        nodes: roots,
+    }));
+}
 
-    // Clips.
+/// Every clip, with its ground speed in the animation's `extras`.
+fn animations(b: &mut Builder, model: &Model) -> Vec<gj::Animation> {
+    use gj::animation::{Channel, Property, Sampler, Target};
     let mut animations = Vec::new();
     for clip in &model.clips {
         let mut channels = Vec::new();
         let mut samplers = Vec::new();
         for ch in &clip.channels {
-            let input = b.floats(&ch.times, 1, "SCALAR", true, None);
-            let (kind, width) = match ch.target {
-                ChannelTarget::Rotation => ("VEC4", 4),
-                _ => ("VEC3", 3),
+            let input = b.floats(&ch.times, Type::Scalar, true, None);
+            let (kind, path) = match ch.target {
+                ChannelTarget::Translation => (Type::Vec3, Property::Translation),
+                ChannelTarget::Rotation => (Type::Vec4, Property::Rotation),
+                ChannelTarget::Scale => (Type::Vec3, Property::Scale),
             };
+            let width = kind.multiplicity();
             let values: Vec<f32> = ch
                 .values
                 .iter()
                 .flat_map(|v| v.to_array()[..width].to_vec())
                 .collect();
-            let output = b.floats(&values, width, kind, false, None);
+            let output = b.floats(&values, kind, false, None);
             let interpolation = match ch.interpolation {
-                Interpolation::Step => "STEP",
-                Interpolation::Linear => "LINEAR",
-                Interpolation::CubicSpline => "CUBICSPLINE",
+                Interpolation::Step => gj::animation::Interpolation::Step,
+                Interpolation::Linear => gj::animation::Interpolation::Linear,
+                Interpolation::CubicSpline => gj::animation::Interpolation::CubicSpline,
             };
-            samplers
-                .push(json!({"input": input, "output": output, "interpolation": interpolation}));
-            let path = match ch.target {
-                ChannelTarget::Translation => "translation",
-                ChannelTarget::Rotation => "rotation",
-                ChannelTarget::Scale => "scale",
-            };
-            channels.push(
-                json!({"sampler": samplers.len() - 1, "target": {"node": ch.node, "path": path}}),
+            let sampler = Index::push(
+                &mut samplers,
+                Sampler {
+                    extensions: None,
+                    extras: None,
+                    input,
+                    interpolation: Valid(interpolation),
+                    output,
+                },
             );
+            channels.push(Channel {
+                sampler,
+                target: Target {
+                    extensions: None,
+                    extras: None,
+                    node: Index::new(ch.node),
+                    path: Valid(path),
+                },
+                extensions: None,
+                extras: None,
+            });
         }
-        animations.push(json!({
-            "name": clip.name,
-            "channels": channels,
-            "samplers": samplers,
-            "extras": {"ground_speed": clip.ground_speed},
-        }));
+        animations.push(gj::Animation {
+            extensions: None,
+            extras: extras(serde_json::json!({ "ground_speed": clip.ground_speed })),
+            channels,
+            name: Some(clip.name.clone()),
+            samplers,
+        });
     }
+    animations
+}
 
-    let mut doc = json!({
-        "asset": {"version": "2.0", "generator": "lodlab gen-assets"},
-        "scene": 0,
-        "scenes": [{"nodes": roots}],
-        "nodes": nodes,
-        "meshes": [{"name": model.name, "primitives": primitives}],
-        "materials": materials,
-        "skins": [skin],
-        "animations": animations,
+/// Encodes `model` as a `.glb` file.
+pub fn to_glb(model: &Model) -> Vec<u8> {
+    let mut b = Builder::default();
+    let mut root = gj::Root {
+        asset: gj::Asset {
+            generator: Some("lodlab gen-assets".into()),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let primitives = primitives(&mut b, model);
+    root.push(gj::Mesh {
+        extensions: None,
+        extras: None,
+        name: Some(model.name.clone()),
+        primitives,
+        weights: None,
     });
-    if !images.is_empty() {
-        doc["images"] = json!(images);
-        doc["textures"] = json!(textures);
-        // Linear filtering with trilinear mipmaps, repeat wrapping.
-        doc["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987}]);
-    }
+    materials(&mut b, model, &mut root);
+    skeleton(&mut b, model, &mut root);
+    root.animations = animations(&mut b, model);
     while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
-    doc["accessors"] = json!(b.accessors);
-    doc["bufferViews"] = json!(b.views);
-    doc["buffers"] = json!([{"byteLength": b.bin.len()}]);
+    root.accessors = b.accessors;
+    root.buffer_views = b.views;
+    root.push(gj::Buffer {
+        byte_length: b.bin.len().into(),
+        name: None,
+        uri: None,
+        extensions: None,
+        extras: None,
+    });
 
-    let mut json_bytes = serde_json::to_vec(&doc).expect("serialising JSON into memory");
+    let mut json_bytes = gj::serialize::to_vec(&root).expect("serialising JSON into memory");
     while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
