@@ -29,3 +29,25 @@ pub fn parse<T: clap::ValueEnum>(s: &str, what: &str) -> Result<T, String> {
         format!("'{s}' is not {what} ({})", names.join(", "))
     })
 }
+
+/// `impl serde::Serialize` and `serde::Deserialize` for an enum with `ALL` and `name()`: a
+/// choice is written as its name and read back through [`parse`], so a study plan, a manifest
+/// or a report names a method the way the command line does, and a wrong name is refused with
+/// the list of right ones.
+#[macro_export]
+macro_rules! named_serde {
+    ($t:ty, $what:expr) => {
+        impl serde::Serialize for $t {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.serialize_str(self.name())
+            }
+        }
+
+        impl<'de> serde::Deserialize<'de> for $t {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let name = <String as serde::Deserialize>::deserialize(d)?;
+                $crate::choice::parse(&name, $what).map_err(serde::de::Error::custom)
+            }
+        }
+    };
+}

@@ -8,12 +8,13 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Layers in data-flow order; a module may use modules of its own rank or lower.
-const RANKS: [(&str, u32); 14] = [
+const RANKS: [(&str, u32); 15] = [
     ("model", 0),
     ("atomic", 0),
     ("choice", 0),
-    // The macro `choice` exports at the crate root.
+    // The macros `choice` exports at the crate root.
     ("named_choice", 0),
+    ("named_serde", 0),
     ("error", 0),
     ("anim", 1),
     ("generate", 2),

@@ -39,7 +39,7 @@ fn prefer_b(trials: &[Trial], pairs: &[(&str, &str)]) -> String {
         .iter()
         .map(|t| {
             let b = pairs[t.condition].1;
-            if t.first == b { "1" } else { "2" }
+            if t.first.name() == b { "1" } else { "2" }
         })
         .collect::<Vec<_>>()
         .join(",")
@@ -102,11 +102,14 @@ fn a_study_is_made_run_and_analyzed() {
         for t in &trials[3..] {
             let (a, b) = pairs[t.condition];
             assert!(
-                (t.first == a && t.second == b) || (t.first == b && t.second == a),
+                (t.first.name() == a && t.second.name() == b)
+                    || (t.first.name() == b && t.second.name() == a),
                 "{t:?}"
             );
-            assert!(t.first_clip.contains(&t.first.replace('+', "-")));
-            *orders.entry((t.condition, t.first.clone())).or_default() += 1;
+            assert!(t.first_clip.contains(&t.first.name().replace('+', "-")));
+            *orders
+                .entry((t.condition, t.first.to_string()))
+                .or_default() += 1;
         }
         assert_eq!(orders.len(), 6, "each condition in both orders");
         assert!(orders.values().all(|&n| n == 1));
@@ -114,11 +117,7 @@ fn a_study_is_made_run_and_analyzed() {
             assert_eq!(t.trial, k + 1);
         }
     }
-    let order = |s: &[Trial]| {
-        s.iter()
-            .map(|t| (t.condition, t.first.clone()))
-            .collect::<Vec<_>>()
-    };
+    let order = |s: &[Trial]| s.iter().map(|t| (t.condition, t.first)).collect::<Vec<_>>();
     assert_ne!(order(&sessions[0]), order(&sessions[1]));
     // Making it again from the same plan keeps everything; another plan is refused.
     ok(&lodlab(&[

@@ -24,11 +24,13 @@ use crate::render::targets::Offscreen;
 use crate::render::timer::PassTimer;
 use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::runtime::headless::{Headless, ShotLod};
-use crate::runtime::world::{SceneSpec, World};
+use crate::runtime::spec::SceneSpec;
+use crate::runtime::world::World;
+use crate::scene::camera_path::PathKind;
 use crate::scene::foliage::FoliageView;
 use crate::scene::lod::MAX_LEVELS;
 use crate::scene::{CameraPath, LodMethod, LodPolicy};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -59,8 +61,8 @@ pub struct BenchOptions {
     pub warmup: f32,
     /// Frames per method, instead of as many as fit `seconds`.
     pub frames: Option<usize>,
-    /// The camera path (see [`crate::scene::camera_path::PATHS`]) and its length in seconds.
-    pub path: String,
+    /// The camera path and its length in seconds.
+    pub path: PathKind,
     pub path_seconds: f32,
     pub progress: bool,
 }
@@ -79,7 +81,7 @@ pub struct BenchReport {
     /// "gpu timestamps" or "wall clock".
     pub timing: String,
     pub frames_per_method: usize,
-    pub path: String,
+    pub path: PathKind,
     pub path_seconds: f32,
     pub transition: String,
     pub drive: String,
@@ -202,8 +204,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     }
     let Headless { gpu, target, world } = scene;
     let home = world.camera;
-    let path = CameraPath::named(&o.path, &home, o.path_seconds)
-        .with_context(|| format!("'{}' is not a camera path", o.path))?;
+    let path = CameraPath::new(o.path, &home, o.path_seconds);
     let timer = PassTimer::new(&gpu);
     let mut bench = Bench {
         gpu,
@@ -298,7 +299,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         }
         .into(),
         frames_per_method: n,
-        path: o.path.clone(),
+        path: o.path,
         path_seconds: path.duration(),
         transition: o.policy.transition.name().into(),
         drive: o.policy.drive.name().into(),

@@ -2,6 +2,7 @@
 
 pub mod bake;
 pub mod bench;
+pub mod cli;
 pub mod gen_assets;
 pub mod record;
 pub mod report;

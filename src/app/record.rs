@@ -7,9 +7,11 @@
 
 use super::video::Mp4Video;
 use crate::atomic::{check_target, write_png};
+use crate::render::DebugView;
 use crate::runtime::headless::{Headless, ShotLod};
-use crate::runtime::world::SceneSpec;
-use crate::scene::CameraPath;
+use crate::runtime::spec::SceneSpec;
+use crate::scene::camera_path::PathKind;
+use crate::scene::{CameraPath, Drive, LodMethod, SceneKind, Transition};
 use anyhow::{Context, Result, bail};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -27,8 +29,8 @@ pub struct RecordOptions {
     pub samples: u32,
     pub fps: u32,
     pub seconds: f32,
-    /// The camera path (see [`crate::scene::camera_path::PATHS`]), over the whole clip.
-    pub path: String,
+    /// The camera path, over the whole clip.
+    pub path: PathKind,
     pub out: PathBuf,
     /// Also write every frame as a PNG here.
     pub frames_dir: Option<PathBuf>,
@@ -39,15 +41,15 @@ pub struct RecordOptions {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct RecordReport {
     pub out: String,
-    pub scene: String,
+    pub scene: SceneKind,
     pub models: Vec<String>,
     pub count: usize,
-    pub method: String,
-    pub transition: String,
-    pub drive: String,
+    pub method: LodMethod,
+    pub transition: Transition,
+    pub drive: Drive,
     pub tolerance_px: f32,
-    pub debug_view: String,
-    pub path: String,
+    pub debug_view: DebugView,
+    pub path: PathKind,
     pub size: [u32; 2],
     pub fps: u32,
     pub seconds: f32,
@@ -110,8 +112,7 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
         mut world,
     } = scene;
     let home = world.camera;
-    let path = CameraPath::named(&o.path, &home, o.seconds)
-        .with_context(|| format!("'{}' is not a camera path", o.path))?;
+    let path = CameraPath::new(o.path, &home, o.seconds);
     let aspect = o.width as f32 / o.height as f32;
 
     // The second before the clip at 60 Hz, then frame after frame at the clip's rate.
@@ -154,15 +155,15 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
     video.finish()?;
     Ok(RecordReport {
         out: o.out.display().to_string(),
-        scene: o.spec.scene.to_string(),
+        scene: o.spec.scene,
         models: world.bakes.iter().map(|b| b.name.clone()).collect(),
         count: world.crowd.agents.len(),
-        method: lod.method.name().into(),
-        transition: lod.policy.transition.name().into(),
-        drive: lod.policy.drive.name().into(),
+        method: lod.method,
+        transition: lod.policy.transition,
+        drive: lod.policy.drive,
         tolerance_px: lod.policy.tolerance_px,
-        debug_view: lod.debug.name().into(),
-        path: o.path.clone(),
+        debug_view: lod.debug,
+        path: o.path,
         size: [o.width, o.height],
         fps: o.fps,
         seconds: o.seconds,

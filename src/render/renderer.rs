@@ -28,9 +28,8 @@
 
 use super::character::{self, GpuCharacter};
 use super::gpu::Gpu;
-use super::shaders;
-use super::targets::DEPTH_FORMAT;
-use super::uniforms::{FrameUniforms, FrameView, GpuInstance, Lighting, static_vertex_layout};
+use super::pipelines::Pipelines;
+use super::uniforms::{FrameUniforms, FrameView, GpuInstance, Lighting};
 use crate::bake::CharacterBake;
 use crate::bake::lod_pack::LodPack;
 use crate::scene::lod::MAX_LEVELS;
@@ -94,6 +93,7 @@ impl DebugView {
 }
 
 crate::named_choice!(DebugView);
+crate::named_serde!(DebugView, "a debug view");
 
 /// Which part of the view a side covers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -220,20 +220,7 @@ pub struct SceneRenderer {
     sampler: wgpu::Sampler,
     characters: Vec<GpuCharacter>,
     pub debug: DebugView,
-    skinned: wgpu::RenderPipeline,
-    morph: wgpu::RenderPipeline,
-    fade_depth: wgpu::RenderPipeline,
-    fade_color: wgpu::RenderPipeline,
-    /// Line-mode versions of `skinned` and `morph`, where the adapter can draw lines.
-    wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
-    /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
-    foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
-    /// Billboard outlines: lines over the billboards, tested against depth.
-    outline: wgpu::RenderPipeline,
-    plain: wgpu::RenderPipeline,
-    sky: wgpu::RenderPipeline,
-    ground: wgpu::RenderPipeline,
-    shadow: wgpu::RenderPipeline,
+    pipelines: Pipelines,
     instance_buffer: wgpu::Buffer,
     keyed: Vec<(u64, GpuInstance)>,
     staging: Vec<GpuInstance>,
@@ -255,112 +242,6 @@ pub(crate) fn frame_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupL
             },
             count: None,
         }],
-    })
-}
-
-/// Depth state: test and write, test only, or equal only (the colour pass of a faded level).
-#[derive(Clone, Copy)]
-enum Depth {
-    Write,
-    TestOnly,
-    Equal,
-}
-
-struct PipelineSpec<'a> {
-    label: &'a str,
-    module: &'a wgpu::ShaderModule,
-    vs: &'a str,
-    fs: &'a str,
-    buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
-    depth: Depth,
-    blend: Option<wgpu::BlendState>,
-    cull: Option<wgpu::Face>,
-    /// Colour writes off: a depth-only pass.
-    depth_only: bool,
-    polygon_mode: wgpu::PolygonMode,
-    /// Alpha to coverage (only where there is multisampling).
-    alpha_to_coverage: bool,
-    /// Depth bias: pulls a surface lying on another towards the eye.
-    bias: wgpu::DepthBiasState,
-    topology: wgpu::PrimitiveTopology,
-}
-
-impl<'a> PipelineSpec<'a> {
-    fn new(label: &'a str, module: &'a wgpu::ShaderModule, vs: &'a str, fs: &'a str) -> Self {
-        PipelineSpec {
-            label,
-            module,
-            vs,
-            fs,
-            buffers: &[],
-            depth: Depth::Write,
-            blend: None,
-            cull: None,
-            depth_only: false,
-            polygon_mode: wgpu::PolygonMode::Fill,
-            alpha_to_coverage: false,
-            bias: Default::default(),
-            topology: wgpu::PrimitiveTopology::TriangleList,
-        }
-    }
-}
-
-fn pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    format: wgpu::TextureFormat,
-    samples: u32,
-    spec: PipelineSpec,
-) -> wgpu::RenderPipeline {
-    let depth_stencil = match spec.depth {
-        Depth::Write => Some((true, wgpu::CompareFunction::Less)),
-        Depth::TestOnly => Some((false, wgpu::CompareFunction::LessEqual)),
-        Depth::Equal => Some((false, wgpu::CompareFunction::Equal)),
-    }
-    .map(|(write, compare)| wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(compare),
-        stencil: Default::default(),
-        bias: spec.bias,
-    });
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(spec.label),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module: spec.module,
-            entry_point: Some(spec.vs),
-            compilation_options: Default::default(),
-            buffers: spec.buffers,
-        },
-        primitive: wgpu::PrimitiveState {
-            topology: spec.topology,
-            cull_mode: spec.cull,
-            polygon_mode: spec.polygon_mode,
-            ..Default::default()
-        },
-        depth_stencil,
-        multisample: wgpu::MultisampleState {
-            count: samples,
-            alpha_to_coverage_enabled: spec.alpha_to_coverage && samples > 1,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: spec.module,
-            entry_point: Some(spec.fs),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format,
-                blend: spec.blend,
-                write_mask: if spec.depth_only {
-                    wgpu::ColorWrites::empty()
-                } else {
-                    wgpu::ColorWrites::ALL
-                },
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
     })
 }
 
@@ -392,139 +273,12 @@ impl SceneRenderer {
             mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
-        let with_characters = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("characters"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&character_layout)],
-            immediate_size: 0,
-        });
-        let frame_only = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("environment"),
-            bind_group_layouts: &[Some(&frame_layout)],
-            immediate_size: 0,
-        });
-
-        let character_module = shaders::CHARACTER_SHADER.create(device);
-        let plain_module = shaders::PLAIN_SHADER.create(device);
-        let environment_module = shaders::ENVIRONMENT_SHADER.create(device);
-        let shadow_module = shaders::SHADOW_SHADER.create(device);
-        let (f, s) = (color_format, sample_count);
-        let instances = [Some(GpuInstance::layout())];
-        let plain_buffers = [Some(static_vertex_layout()), Some(GpuInstance::layout())];
-        let character = |label, vs| PipelineSpec {
-            buffers: &instances,
-            cull: Some(wgpu::Face::Back),
-            ..PipelineSpec::new(label, &character_module, vs, "fs_main")
-        };
-        let build = |layout, spec| pipeline(device, layout, f, s, spec);
-        let skinned = build(&with_characters, character("skinned characters", "vs_main"));
-        let morph = build(
-            &with_characters,
-            character("geomorphed characters", "vs_morph"),
-        );
-        let fade_depth = build(
-            &with_characters,
-            PipelineSpec {
-                depth_only: true,
-                ..character("faded level depth", "vs_main")
-            },
-        );
-        let fade_color = build(
-            &with_characters,
-            PipelineSpec {
-                depth: Depth::Equal,
-                blend: Some(wgpu::BlendState {
-                    color: wgpu::BlendComponent {
-                        src_factor: wgpu::BlendFactor::SrcAlpha,
-                        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                        operation: wgpu::BlendOperation::Add,
-                    },
-                    alpha: wgpu::BlendComponent::OVER,
-                }),
-                ..character("faded level colour", "vs_main")
-            },
-        );
-        // Foliage: no culling, the texture's alpha as a cut-out; with multisampling, alpha to
-        // coverage smooths the cut edges.
-        let foliage_fs = if s > 1 {
-            "fs_foliage_coverage"
-        } else {
-            "fs_foliage"
-        };
-        let foliage = |label, vs| PipelineSpec {
-            cull: None,
-            alpha_to_coverage: true,
-            ..PipelineSpec {
-                fs: foliage_fs,
-                ..character(label, vs)
-            }
-        };
-        let foliage = (
-            build(&with_characters, foliage("foliage", "vs_foliage")),
-            build(
-                &with_characters,
-                foliage("geomorphed foliage", "vs_foliage_morph"),
-            ),
-        );
-        let outline = build(
-            &with_characters,
-            PipelineSpec {
-                fs: "fs_outline",
-                depth: Depth::TestOnly,
-                // Half see-through: where thousands of fine billboards crowd, the leaves
-                // still show.
-                blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                cull: None,
-                topology: wgpu::PrimitiveTopology::LineList,
-                ..character("billboard outlines", "vs_outline")
-            },
-        );
-        let wireframe = device
-            .features()
-            .contains(wgpu::Features::POLYGON_MODE_LINE)
-            .then(|| {
-                let line = |label, vs| PipelineSpec {
-                    polygon_mode: wgpu::PolygonMode::Line,
-                    ..character(label, vs)
-                };
-                (
-                    build(&with_characters, line("wireframe characters", "vs_main")),
-                    build(&with_characters, line("wireframe geomorphs", "vs_morph")),
-                )
-            });
-        let plain = build(
-            &with_characters,
-            PipelineSpec {
-                buffers: &plain_buffers,
-                cull: Some(wgpu::Face::Back),
-                ..PipelineSpec::new("plain characters", &plain_module, "vs_main", "fs_main")
-            },
-        );
-        let sky = build(
-            &frame_only,
-            PipelineSpec {
-                depth: Depth::TestOnly,
-                ..PipelineSpec::new("sky", &environment_module, "vs_sky", "fs_sky")
-            },
-        );
-        let ground = build(
-            &frame_only,
-            PipelineSpec::new("ground", &environment_module, "vs_ground", "fs_ground"),
-        );
-        let shadow = build(
-            &with_characters,
-            PipelineSpec {
-                buffers: &instances,
-                depth: Depth::TestOnly,
-                blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                // The shadows lie on the ground: at grazing angles and a distance their depth
-                // and the ground's fight in bands without a bias towards the eye.
-                bias: wgpu::DepthBiasState {
-                    constant: -8,
-                    slope_scale: -2.0,
-                    clamp: 0.0,
-                },
-                ..PipelineSpec::new("blob shadows", &shadow_module, "vs_main", "fs_main")
-            },
+        let pipelines = Pipelines::new(
+            device,
+            &frame_layout,
+            &character_layout,
+            color_format,
+            sample_count,
         );
         let instance_buffer = Self::instance_buffer(device, 256);
         SceneRenderer {
@@ -541,17 +295,7 @@ impl SceneRenderer {
             sampler,
             characters: Vec::new(),
             debug: DebugView::Shaded,
-            skinned,
-            morph,
-            fade_depth,
-            fade_color,
-            wireframe,
-            foliage,
-            outline,
-            plain,
-            sky,
-            ground,
-            shadow,
+            pipelines,
             instance_buffer,
             keyed: Vec::new(),
             staging: Vec::new(),
@@ -626,7 +370,7 @@ impl SceneRenderer {
 
     /// Does the adapter draw wireframes?
     pub fn has_wireframe(&self) -> bool {
-        self.wireframe.is_some()
+        self.pipelines.wireframe.is_some()
     }
 
     /// Uploads the frame's uniforms and instances (one buffer write each) and plans the draws:
@@ -814,9 +558,9 @@ impl SceneRenderer {
         }
         // The environment over the whole view.
         scissor.whole(pass);
-        pass.set_pipeline(&self.ground);
+        pass.set_pipeline(&self.pipelines.ground);
         pass.draw(0..6, 0..1);
-        pass.set_pipeline(&self.sky);
+        pass.set_pipeline(&self.pipelines.sky);
         pass.draw(0..3, 0..1);
         if self.draws.is_empty() {
             return;
@@ -824,7 +568,7 @@ impl SceneRenderer {
         // Every instance has exactly one opaque draw (opaque level, morph or the incoming half
         // of a dissolve): its shadow goes with it.
         if self.shadows {
-            pass.set_pipeline(&self.shadow);
+            pass.set_pipeline(&self.pipelines.shadow);
             let casts = |k: &DrawKey| matches!(k.pass(), PASS_OPAQUE | PASS_MORPH);
             for (key, range) in self.draws.iter().filter(|(k, _)| casts(k)) {
                 scissor.side(pass, key.side());
@@ -832,14 +576,14 @@ impl SceneRenderer {
                 pass.draw(0..6, range.clone());
             }
         }
-        let wireframe = self.debug == DebugView::Wireframe && self.wireframe.is_some();
+        let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
         if self.shader == CharacterShader::Plain || wireframe {
             return;
         }
         if self.outlines {
             self.draw_outlines(pass, &mut scissor);
         }
-        for pipeline in [&self.fade_depth, &self.fade_color] {
+        for pipeline in [&self.pipelines.fade_depth, &self.pipelines.fade_color] {
             let mut set = false;
             for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
                 if !set {
@@ -865,7 +609,7 @@ impl SceneRenderer {
                 continue;
             }
             if !set {
-                pass.set_pipeline(&self.outline);
+                pass.set_pipeline(&self.pipelines.outline);
                 set = true;
             }
             scissor.side(pass, key.side());
@@ -890,7 +634,7 @@ impl SceneRenderer {
     /// alpha transitions too, as lines), or the plain calibration draw.
     fn draw_opaque(&self, pass: &mut wgpu::RenderPass<'_>, scissor: &mut Scissor) {
         if self.shader == CharacterShader::Plain {
-            pass.set_pipeline(&self.plain);
+            pass.set_pipeline(&self.pipelines.plain);
             pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
             // Every draw's own level, faded and outgoing halves included: the triangles the
             // frame statistics count.
@@ -909,6 +653,7 @@ impl SceneRenderer {
             return;
         }
         let wire = self
+            .pipelines
             .wireframe
             .as_ref()
             .filter(|_| self.debug == DebugView::Wireframe);
@@ -919,10 +664,10 @@ impl SceneRenderer {
                 (PASS_MORPH, Some((_, m)), _) => (m, 0),
                 (_, Some((l, _)), _) => (l, 1),
                 (PASS_FADE, None, _) => continue,
-                (PASS_MORPH, None, true) => (&self.foliage.1, 2),
-                (_, None, true) => (&self.foliage.0, 3),
-                (PASS_MORPH, None, false) => (&self.morph, 4),
-                _ => (&self.skinned, 5),
+                (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
+                (_, None, true) => (&self.pipelines.foliage.0, 3),
+                (PASS_MORPH, None, false) => (&self.pipelines.morph, 4),
+                _ => (&self.pipelines.skinned, 5),
             };
             if current != Some(id) {
                 current = Some(id);

@@ -3,10 +3,33 @@
 
 use super::Camera;
 use glam::Vec3;
+use serde::{Deserialize, Serialize};
 use std::f32::consts::TAU;
 
-/// The kinds of path, by the name the command line uses.
-pub const PATHS: &[&str] = &["spiral", "orbit"];
+/// The kinds of path, by the names the command line and the reports use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum PathKind {
+    /// Inwards, turning three quarters round the target (Merry et al. §6.2).
+    Spiral,
+    /// One turn, swinging from near to far and back.
+    Orbit,
+}
+
+impl PathKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            PathKind::Spiral => "spiral",
+            PathKind::Orbit => "orbit",
+        }
+    }
+}
+
+impl std::fmt::Display for PathKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CameraPath {
@@ -39,14 +62,14 @@ pub enum CameraPath {
 }
 
 impl CameraPath {
-    /// A path of kind `name` (see [`PATHS`]) round the view `home` shows (a scene's default
-    /// camera): from 1.6 times its distance in to 0.3 times, over `seconds`.
-    pub fn named(name: &str, home: &Camera, seconds: f32) -> Option<CameraPath> {
+    /// A path of `kind` round the view `home` shows (a scene's default camera): from 1.6
+    /// times its distance in to 0.3 times, over `seconds`.
+    pub fn new(kind: PathKind, home: &Camera, seconds: f32) -> CameraPath {
         let seconds = seconds.max(1e-3);
         let far = home.distance * 1.6;
         let near = home.distance * 0.3;
-        match name {
-            "spiral" => Some(CameraPath::Spiral {
+        match kind {
+            PathKind::Spiral => CameraPath::Spiral {
                 target: home.target,
                 start_yaw: home.yaw,
                 turns: 0.75,
@@ -55,8 +78,8 @@ impl CameraPath {
                 pitch_far: 32f32.to_radians(),
                 pitch_near: 8f32.to_radians(),
                 duration: seconds,
-            }),
-            "orbit" => Some(CameraPath::Orbit {
+            },
+            PathKind::Orbit => CameraPath::Orbit {
                 target: home.target,
                 start_yaw: home.yaw,
                 near,
@@ -64,8 +87,7 @@ impl CameraPath {
                 pitch_near: 10f32.to_radians(),
                 pitch_far: 25f32.to_radians(),
                 period: seconds,
-            }),
-            _ => None,
+            },
         }
     }
 
@@ -138,7 +160,7 @@ mod tests {
     #[test]
     fn the_spiral_closes_in_steadily_and_turns_round_the_target() {
         let home = home();
-        let path = CameraPath::named("spiral", &home, 8.0).unwrap();
+        let path = CameraPath::new(PathKind::Spiral, &home, 8.0);
         let at = |t: f32| path.at(t, home.fov_y);
         assert!((at(0.0).distance - 32.0).abs() < 1e-3);
         assert!((at(8.0).distance - 6.0).abs() < 1e-3);
@@ -169,15 +191,16 @@ mod tests {
     #[test]
     fn the_orbit_is_a_closed_loop_from_near_to_far() {
         let home = home();
-        let path = CameraPath::named("orbit", &home, 10.0).unwrap();
+        let path = CameraPath::new(PathKind::Orbit, &home, 10.0);
         let at = |t: f32| path.at(t, home.fov_y);
         assert!(at(0.0).eye().distance(at(10.0).eye()) < 1e-3);
         assert!(at(3.0).eye().distance(at(13.0).eye()) < 1e-3);
         assert!((at(0.0).distance - 6.0).abs() < 1e-3);
         assert!((at(5.0).distance - 32.0).abs() < 1e-3);
-        assert!(CameraPath::named("zigzag", &home, 10.0).is_none());
-        for name in PATHS {
-            assert!(CameraPath::named(name, &home, 10.0).is_some());
+        for kind in [PathKind::Spiral, PathKind::Orbit] {
+            let parsed: PathKind = crate::choice::parse(kind.name(), "a camera path").unwrap();
+            assert_eq!(parsed, kind);
         }
+        assert!(crate::choice::parse::<PathKind>("zigzag", "a camera path").is_err());
     }
 }

@@ -88,6 +88,15 @@ impl Transition {
 crate::named_choice!(LodMethod);
 crate::named_choice!(Transition);
 crate::named_choice!(Drive);
+crate::named_serde!(LodMethod, "a method");
+crate::named_serde!(Transition, "a transition");
+crate::named_serde!(Drive, "a transition drive");
+
+impl std::fmt::Display for Transition {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// What drives an alpha or morph transition.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -19,7 +19,8 @@ pub mod window;
 use super::record::{self, RecordOptions, RecordReport};
 use crate::atomic::write as write_atomic;
 use crate::runtime::headless::ShotLod;
-use crate::runtime::world::SceneSpec;
+use crate::runtime::spec::SceneSpec;
+use crate::scene::camera_path::PathKind;
 use crate::scene::{LodMethod, LodPolicy, Transition};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -32,7 +33,7 @@ pub struct Plan {
     /// Models shown, one per clip (built-in names or glTF paths).
     pub models: Vec<String>,
     /// Method pairs compared, e.g. [["rest-pose", "as"], ["as", "as+is"]].
-    pub pairs: Vec<[String; 2]>,
+    pub pairs: Vec<[LodMethod; 2]>,
     /// Pixel tolerances the methods run at.
     pub tolerances: Vec<f32>,
     pub participants: usize,
@@ -47,9 +48,9 @@ pub struct Plan {
     #[serde(default = "default_size")]
     pub size: String,
     #[serde(default = "default_transition")]
-    pub transition: String,
+    pub transition: Transition,
     #[serde(default = "default_path")]
-    pub path: String,
+    pub path: PathKind,
     /// Seeds the participants' orders.
     #[serde(default)]
     pub seed: u64,
@@ -70,11 +71,11 @@ fn default_fps() -> u32 {
 fn default_size() -> String {
     "1280x720".into()
 }
-fn default_transition() -> String {
-    "morph".into()
+fn default_transition() -> Transition {
+    Transition::Morph
 }
-fn default_path() -> String {
-    "spiral".into()
+fn default_path() -> PathKind {
+    PathKind::Spiral
 }
 fn default_training() -> bool {
     true
@@ -84,8 +85,8 @@ fn default_training() -> bool {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Condition {
     pub model: String,
-    pub method_a: String,
-    pub method_b: String,
+    pub method_a: LodMethod,
+    pub method_b: LodMethod,
     pub tolerance_px: f32,
 }
 
@@ -103,7 +104,7 @@ impl Condition {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Clip {
     pub model: String,
-    pub method: String,
+    pub method: LodMethod,
     pub tolerance_px: f32,
     /// Relative to the study folder.
     pub file: String,
@@ -145,31 +146,11 @@ impl Plan {
         if self.participants == 0 {
             return Err("a plan needs at least one participant".into());
         }
-        for [a, b] in &self.pairs {
-            for m in [a, b] {
-                if crate::choice::parse::<LodMethod>(m, "a method").is_err() {
-                    return Err(format!(
-                        "'{m}' is not a method (none, rest-pose, as, as+is)"
-                    ));
-                }
-            }
-            if crate::choice::parse::<LodMethod>(a, "a method").ok()
-                == crate::choice::parse::<LodMethod>(b, "a method").ok()
-            {
-                return Err(format!("pair {a} vs {b} compares a method with itself"));
-            }
+        if let Some([a, b]) = self.pairs.iter().find(|[a, b]| a == b) {
+            return Err(format!("pair {a} vs {b} compares a method with itself"));
         }
         if let Some(t) = self.tolerances.iter().find(|t| !(0.25..=16.0).contains(*t)) {
             return Err(format!("tolerance {t} must be between 0.25 and 16 pixels"));
-        }
-        if crate::choice::parse::<Transition>(&self.transition, "a transition").is_err() {
-            return Err(format!(
-                "'{}' is not a transition (pop, alpha, morph)",
-                self.transition
-            ));
-        }
-        if !crate::scene::camera_path::PATHS.contains(&self.path.as_str()) {
-            return Err(format!("'{}' is not a camera path", self.path));
         }
         self.size()?;
         if !(self.seconds.is_finite() && self.seconds > 0.0) || self.fps == 0 || self.count == 0 {
@@ -197,8 +178,8 @@ impl Plan {
                 for &t in &self.tolerances {
                     out.push(Condition {
                         model: model.clone(),
-                        method_a: a.clone(),
-                        method_b: b.clone(),
+                        method_a: *a,
+                        method_b: *b,
                         tolerance_px: t,
                     });
                 }
@@ -211,15 +192,15 @@ impl Plan {
     pub fn clips(&self) -> Vec<Clip> {
         let mut out: Vec<Clip> = Vec::new();
         for c in self.conditions() {
-            for m in [&c.method_a, &c.method_b] {
+            for m in [c.method_a, c.method_b] {
                 if out.iter().any(|k| {
-                    k.model == c.model && k.method == *m && k.tolerance_px == c.tolerance_px
+                    k.model == c.model && k.method == m && k.tolerance_px == c.tolerance_px
                 }) {
                     continue;
                 }
                 out.push(Clip {
                     model: c.model.clone(),
-                    method: m.clone(),
+                    method: m,
                     tolerance_px: c.tolerance_px,
                     file: clip_file(&c.model, m, c.tolerance_px),
                     record: None,
@@ -239,7 +220,7 @@ impl Plan {
 }
 
 /// `clips/horse-as-is-1.5px.mp4`: the model's file stem, the method with '+' spelled out.
-fn clip_file(model: &str, method: &str, tolerance: f32) -> String {
+fn clip_file(model: &str, method: LodMethod, tolerance: f32) -> String {
     let stem = Path::new(model)
         .file_stem()
         .map_or_else(|| model.to_string(), |s| s.to_string_lossy().into_owned());
@@ -258,7 +239,7 @@ fn clip_file(model: &str, method: &str, tolerance: f32) -> String {
     format!(
         "{CLIPS}/{}-{}-{}px.mp4",
         safe(&stem),
-        safe(method),
+        safe(method.name()),
         tolerance
     )
 }
@@ -303,8 +284,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     std::fs::create_dir_all(o.out.join(CLIPS))
         .with_context(|| format!("{}: cannot create", o.out.display()))?;
     let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
-    let transition =
-        crate::choice::parse::<Transition>(&plan.transition, "a transition").expect("checked");
+    let transition = plan.transition;
     let mut clips = plan.clips();
     let total = clips.len();
     for (k, clip) in clips.iter_mut().enumerate() {
@@ -327,8 +307,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
                 ..Default::default()
             },
             lod: ShotLod {
-                method: crate::choice::parse::<LodMethod>(&clip.method, "a method")
-                    .expect("checked"),
+                method: clip.method,
                 policy: LodPolicy {
                     tolerance_px: clip.tolerance_px,
                     transition,
@@ -341,7 +320,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
             samples: o.samples,
             fps: plan.fps,
             seconds: plan.seconds,
-            path: plan.path.clone(),
+            path: plan.path,
             out: file,
             frames_dir: None,
             progress: o.progress,

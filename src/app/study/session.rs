@@ -1,6 +1,7 @@
 //! A participant's session: the trials in their order, the answers file, and resuming.
 
 use super::{ANSWERS, Manifest, SESSIONS};
+use crate::scene::LodMethod;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -19,8 +20,8 @@ pub struct Trial {
     /// Index into the manifest's conditions.
     pub condition: usize,
     /// Methods of the first and the second clip shown.
-    pub first: String,
-    pub second: String,
+    pub first: LodMethod,
+    pub second: LodMethod,
     /// Clip files, relative to the study folder.
     pub first_clip: String,
     pub second_clip: String,
@@ -38,7 +39,7 @@ pub fn plan_session(m: &Manifest, id: &str) -> Vec<Trial> {
                 .expect("8 bytes"),
         );
     let mut rng = fastrand::Rng::with_seed(seed);
-    let clip = |model: &str, method: &str, t: f32| {
+    let clip = |model: &str, method: LodMethod, t: f32| {
         m.clips
             .iter()
             .find(|c| c.model == model && c.method == method && c.tolerance_px == t)
@@ -51,16 +52,16 @@ pub fn plan_session(m: &Manifest, id: &str) -> Vec<Trial> {
             .map(|&(k, a_first)| {
                 let c = &m.conditions[k];
                 let (first, second) = if a_first {
-                    (&c.method_a, &c.method_b)
+                    (c.method_a, c.method_b)
                 } else {
-                    (&c.method_b, &c.method_a)
+                    (c.method_b, c.method_a)
                 };
                 Trial {
                     trial: 0,
                     block: block.into(),
                     condition: k,
-                    first: first.clone(),
-                    second: second.clone(),
+                    first,
+                    second,
                     first_clip: clip(&c.model, first, c.tolerance_px),
                     second_clip: clip(&c.model, second, c.tolerance_px),
                 }
@@ -91,15 +92,15 @@ pub struct Answer {
     pub trial: usize,
     pub block: String,
     pub model: String,
-    pub method_a: String,
-    pub method_b: String,
+    pub method_a: LodMethod,
+    pub method_b: LodMethod,
     pub tolerance_px: f32,
-    pub first: String,
-    pub second: String,
+    pub first: LodMethod,
+    pub second: LodMethod,
     /// 1: the first clip shown looked better; 2: the second.
     pub choice: u8,
     /// The method of the clip chosen.
-    pub preferred: String,
+    pub preferred: LodMethod,
     /// Seconds since the Unix epoch.
     #[serde(rename = "unix_time")]
     pub time: u64,
@@ -235,17 +236,13 @@ impl Session {
             trial: t.trial,
             block: t.block.clone(),
             model: c.model.clone(),
-            method_a: c.method_a.clone(),
-            method_b: c.method_b.clone(),
+            method_a: c.method_a,
+            method_b: c.method_b,
             tolerance_px: c.tolerance_px,
-            first: t.first.clone(),
-            second: t.second.clone(),
+            first: t.first,
+            second: t.second,
             choice,
-            preferred: if choice == 1 {
-                t.first.clone()
-            } else {
-                t.second.clone()
-            },
+            preferred: if choice == 1 { t.first } else { t.second },
             time: std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_secs()),
@@ -293,6 +290,7 @@ fn play_paced(path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bake::simplify::Method;
 
     fn answer(participant: &str, choice: u8) -> Answer {
         Answer {
@@ -300,13 +298,13 @@ mod tests {
             trial: 3,
             block: "test".into(),
             model: "horse".into(),
-            method_a: "rest-pose".into(),
-            method_b: "as+is".into(),
+            method_a: LodMethod::Simplified(Method::RestPose),
+            method_b: LodMethod::AS_IS,
             tolerance_px: 1.5,
-            first: "a".into(),
-            second: "b".into(),
+            first: LodMethod::AS_IS,
+            second: LodMethod::Simplified(Method::RestPose),
             choice,
-            preferred: "as+is".into(),
+            preferred: LodMethod::AS_IS,
             time: 1_700_000_000,
         }
     }
