@@ -11,7 +11,8 @@ use anyhow::Result;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{FrameView, Gpu, Region, Side};
 use lodlab::runtime::headless::time_renderer;
-use lodlab::runtime::world::{Loaded, SceneSpec, World};
+use lodlab::runtime::spec::{Loaded, SceneSpec};
+use lodlab::runtime::world::World;
 use lodlab::scene::{LodDraw, LodMethod, Transition};
 
 const WIDTH: u32 = 1280;

@@ -10,7 +10,8 @@ use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::runtime::headless::time_renderer;
-use lodlab::runtime::world::{Loaded, World};
+use lodlab::runtime::spec::Loaded;
+use lodlab::runtime::world::World;
 
 const TREES: usize = 100;
 const WIDTH: u32 = 1280;

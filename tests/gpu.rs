@@ -8,7 +8,8 @@ use lodlab::app::shot::{ShotOptions, run as shot};
 use lodlab::render::Gpu;
 use lodlab::render::capture::capture_skinned;
 use lodlab::render::targets::OFFSCREEN_FORMAT;
-use lodlab::runtime::world::{Loaded, SceneSpec, World};
+use lodlab::runtime::spec::{Loaded, SceneSpec};
+use lodlab::runtime::world::World;
 use lodlab::scene::Camera;
 
 fn spec(models: &[&str], count: usize, clip: Option<&str>) -> SceneSpec {

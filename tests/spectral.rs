@@ -12,7 +12,8 @@ use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::capture::capture_skinned_in_wind;
 use lodlab::render::targets::OFFSCREEN_FORMAT;
-use lodlab::runtime::world::{Loaded, World};
+use lodlab::runtime::spec::Loaded;
+use lodlab::runtime::world::World;
 
 /// The sapling's foliage as a spectral cloud of 6 motion clusters at ε = 0.08 h.
 fn spectral_level(gpu: &Gpu) -> CloudLevel {

@@ -263,7 +263,7 @@ fn trees_stand_on_the_ground_and_are_metric() {
 #[test]
 fn a_forest_shot_shows_trees_with_cut_out_leaves() {
     use lodlab::app::shot::{ShotOptions, run};
-    use lodlab::runtime::world::SceneSpec;
+    use lodlab::runtime::spec::SceneSpec;
     let dir = tempfile::tempdir().unwrap();
     for samples in [1, 4] {
         let out = dir.path().join(format!("forest{samples}.png"));
@@ -317,7 +317,7 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
 fn forest_trees_use_their_cloud_levels() {
     use lodlab::app::shot::{ShotOptions, run};
     use lodlab::runtime::headless::ShotLod;
-    use lodlab::runtime::world::SceneSpec;
+    use lodlab::runtime::spec::SceneSpec;
     use lodlab::scene::{LodMethod, LodPolicy, Transition};
     let dir = tempfile::tempdir().unwrap();
     let shoot = |method: LodMethod| {
@@ -381,7 +381,8 @@ fn forest_trees_use_their_cloud_levels() {
 fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
     use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
     use lodlab::render::{FrameView, Gpu, Region, Side};
-    use lodlab::runtime::world::{Loaded, SceneSpec, World};
+    use lodlab::runtime::spec::{Loaded, SceneSpec};
+    use lodlab::runtime::world::World;
     use lodlab::scene::{Instance, LodDraw};
     let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     for samples in [1, 4] {
@@ -648,7 +649,8 @@ fn bake_builds_and_caches_a_tree_chain() {
 fn the_foliage_policy_decides_what_trees_become() {
     use lodlab::render::Gpu;
     use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-    use lodlab::runtime::world::{Loaded, SceneSpec, World};
+    use lodlab::runtime::spec::{Loaded, SceneSpec};
+    use lodlab::runtime::world::World;
     use lodlab::scene::foliage::{FoliagePolicy, FoliageView};
     use lodlab::scene::{LodMethod, LodPolicy, Transition};
     let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");

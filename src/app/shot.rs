@@ -3,7 +3,8 @@
 use crate::render::targets::Offscreen;
 use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::runtime::headless::{Headless, ShotLod, time_renderer};
-use crate::runtime::world::{SceneSpec, World};
+use crate::runtime::spec::SceneSpec;
+use crate::runtime::world::World;
 use crate::scene::Camera;
 use anyhow::Result;
 use serde::Serialize;

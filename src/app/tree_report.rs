@@ -562,7 +562,8 @@ fn series(
 /// Every level from the same view, side by side, labelled.
 fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Path) -> Result<()> {
     use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-    use crate::runtime::world::{Loaded, World};
+    use crate::runtime::spec::Loaded;
+    use crate::runtime::world::World;
     let (tw, th) = (300u32, 400u32);
     let columns = chain.len().min(6) as u32;
     let rows = (chain.len() as u32).div_ceil(columns);

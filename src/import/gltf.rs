@@ -135,8 +135,34 @@ fn build(
     if joints.is_empty() {
         return Err(format!("skin {} has no joints", skin.index()));
     }
+    let (nodes, remap) = read_hierarchy(doc, &joints)?;
+    let inverse_bind = read_inverse_bind(&skin, buffers, joints.len())?;
+    let mut skeleton = Skeleton {
+        nodes,
+        joints: joints.iter().map(|&j| remap[j]).collect(),
+        inverse_bind,
+        root_transform: Affine3A::IDENTITY,
+    };
+    let (mesh, materials) = read_skinned_meshes(doc, &skin, buffers, images, joints.len())?;
+    let mut clips = Vec::new();
+    for anim in doc.animations() {
+        if let Some(clip) = read_clip(&anim, buffer, &remap)? {
+            clips.push(clip);
+        }
+    }
+    place_in_scene(&mesh, &mut skeleton, &mut clips)?;
+    Ok(Model {
+        name: name.to_string(),
+        mesh,
+        skeleton,
+        clips,
+        materials,
+    })
+}
 
-    // Node hierarchy: the joints and all their ancestors, parents first.
+/// The skeleton's nodes: the joints and all their ancestors, parents first, with their rest
+/// transforms; and every glTF node's index among them (`u32::MAX` for the others).
+fn read_hierarchy(doc: &gltf::Document, joints: &[usize]) -> Result<(Vec<Node>, Vec<u32>), String> {
     let node_count = doc.nodes().len();
     let mut parent = vec![None; node_count];
     for n in doc.nodes() {
@@ -159,7 +185,7 @@ fn build(
         Ok(d)
     };
     let mut keep = vec![false; node_count];
-    for &j in &joints {
+    for &j in joints {
         let mut n = Some(j);
         while let Some(i) = n {
             keep[i] = true;
@@ -200,19 +226,30 @@ fn build(
         });
     }
 
+    Ok((nodes, remap))
+}
+
+/// The skin's inverse bind matrices (identities where the file has none), one per joint, each
+/// finite and invertible.
+fn read_inverse_bind(
+    skin: &gltf::Skin,
+    buffers: &[gltf::buffer::Data],
+    joints: usize,
+) -> Result<Vec<Mat4>, String> {
+    let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
     let inverse_bind: Vec<Mat4> = match skin.reader(buffer).read_inverse_bind_matrices() {
         Some(it) => it.map(|m| Mat4::from_cols_array_2d(&m)).collect(),
-        None => vec![Mat4::IDENTITY; joints.len()],
+        None => vec![Mat4::IDENTITY; joints],
     };
-    if inverse_bind.len() < joints.len() {
+    if inverse_bind.len() < joints {
         return Err(format!(
             "skin {} has {} inverse bind matrices for {} joints",
             skin.index(),
             inverse_bind.len(),
-            joints.len()
+            joints
         ));
     }
-    let inverse_bind: Vec<Mat4> = inverse_bind[..joints.len()].to_vec();
+    let inverse_bind: Vec<Mat4> = inverse_bind[..joints].to_vec();
     if let Some(i) = inverse_bind
         .iter()
         .position(|m| !m.is_finite() || m.determinant().abs() < 1e-12)
@@ -222,14 +259,19 @@ fn build(
         ));
     }
 
-    let mut skeleton = Skeleton {
-        nodes,
-        joints: joints.iter().map(|&j| remap[j]).collect(),
-        inverse_bind,
-        root_transform: Affine3A::IDENTITY,
-    };
+    Ok(inverse_bind)
+}
 
-    // Meshes bound to this skin, each once, all primitives merged.
+/// Every mesh bound to `skin`, each once, all its primitives merged into one mesh (normals
+/// computed where a primitive has none), and the materials they use.
+fn read_skinned_meshes(
+    doc: &gltf::Document,
+    skin: &gltf::Skin,
+    buffers: &[gltf::buffer::Data],
+    images: &[gltf::image::Data],
+    joints: usize,
+) -> Result<(SkinnedMesh, Vec<Material>), String> {
+    let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
     let mut material_slots: BTreeMap<Option<usize>, u16> = BTreeMap::new();
     let mut materials: Vec<Material> = Vec::new();
     let mut mesh = SkinnedMesh::default();
@@ -261,7 +303,7 @@ fn build(
                 .base_color_texture()
                 .map(|t| t.tex_coord())
                 .unwrap_or(0);
-            let raw = read_primitive(&prim, buffer, uv_set, joints.len(), &label)?;
+            let raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
             append_primitive(&mut mesh, &mut needs_normals, raw, slot);
         }
     }
@@ -272,19 +314,21 @@ fn build(
         compute_normals(&mut mesh, &needs_normals);
     }
 
-    // Clips.
-    let mut clips = Vec::new();
-    for anim in doc.animations() {
-        if let Some(clip) = read_clip(&anim, buffer, &remap)? {
-            clips.push(clip);
-        }
-    }
+    Ok((mesh, materials))
+}
 
-    // Scene units: metres, standing on the ground, centred.
+/// Scene units: metres, standing on the ground, centred. A model of implausible height (in
+/// other units) is scaled to a default height; clips' ground speeds follow the scale, and a
+/// clip whose file gives none gets a guess from its name.
+fn place_in_scene(
+    mesh: &SkinnedMesh,
+    skeleton: &mut Skeleton,
+    clips: &mut [crate::model::Clip],
+) -> Result<(), String> {
     let rest = crate::anim::linear_blend_skinning(
-        &mesh,
-        &skeleton,
-        &crate::anim::bone_matrices(&skeleton, None, 0.0),
+        mesh,
+        skeleton,
+        &crate::anim::bone_matrices(skeleton, None, 0.0),
     );
     let bounds = Bounds::of(rest.iter().copied()).ok_or("the skinned mesh has no vertices")?;
     let height = bounds.size().y.max(bounds.size().x).max(bounds.size().z);
@@ -300,7 +344,7 @@ fn build(
     skeleton.root_transform =
         Affine3A::from_translation(-anchor * scale) * Affine3A::from_scale(Vec3::splat(scale));
     let scaled_height = bounds.size().y * scale;
-    for clip in &mut clips {
+    for clip in clips.iter_mut() {
         if clip.ground_speed < 0.0 {
             clip.ground_speed = guess_ground_speed(&clip.name, scaled_height);
         } else {
@@ -308,13 +352,7 @@ fn build(
         }
     }
 
-    Ok(Model {
-        name: name.to_string(),
-        mesh,
-        skeleton,
-        clips,
-        materials,
-    })
+    Ok(())
 }
 
 /// Travel speed for clips whose file does not say: a guess from the clip's name, in body

@@ -2,7 +2,8 @@
 //! Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007) §5.1.3), measured
 //! by drawing both in worlds of their own.
 
-use super::world::{Loaded, World};
+use super::spec::Loaded;
+use super::world::World;
 use crate::bake::billboard::chain::CloudLevel;
 use crate::bake::billboard::wood::only_foliage;
 use crate::bake::spectral::texture::SpectralMotion;

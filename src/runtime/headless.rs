@@ -2,7 +2,8 @@
 //! level-of-detail choices a front end makes, and frame timing. `shot`, `bench`, `record`, the
 //! study and the tests all drive worlds through it.
 
-use super::world::{Loaded, SceneSpec, World};
+use super::spec::{Loaded, SceneSpec};
+use super::world::World;
 use crate::render::targets::Offscreen;
 use crate::render::{DebugView, Gpu, SceneRenderer};
 use crate::scene::foliage::FoliageView;

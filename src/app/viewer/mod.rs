@@ -14,7 +14,8 @@ use crate::render::FrameStats;
 use crate::render::targets::{Offscreen, RenderTargets};
 use crate::runtime::headless::ShotLod;
 use crate::runtime::levels::{BackgroundBake, Poll};
-use crate::runtime::world::{Loaded, SceneSpec, World};
+use crate::runtime::spec::{Loaded, SceneSpec};
+use crate::runtime::world::World;
 use crate::scene::{LodMethod, Transition};
 use anyhow::{Context, Result, anyhow};
 use controls::{Controls, KeyAction};
@@ -325,71 +326,13 @@ impl Viewer {
     }
 
     fn redraw(&mut self, options: &ViewOptions) -> Result<bool> {
-        let now = Instant::now();
-        let dt = self
-            .last_frame
-            .map_or(0.0, |t| (now - t).as_secs_f32())
-            .min(0.25);
-        if self.last_frame.is_some() {
-            self.history
-                .push((now - self.started).as_secs_f64(), dt * 1000.0);
-        }
-        self.last_frame = Some(now);
-        if self.settings.playing {
-            self.time += dt * self.settings.speed;
-        }
-        self.controls.fly(&mut self.world.camera, dt);
-
-        // The panel.
-        let raw = self.egui.take_egui_input(&self.win.window);
-        let mut requests = panel::Requests::default();
-        let mut central = egui::Rect::NOTHING;
-        self.update_levels()?;
-        let info = Info {
-            adapter: &self.adapter,
-            backend: &self.backend,
-            models: &self.model_names,
-            clips: &self.clip_names,
-            stats: self.stats,
-            time: self.time,
-            baking: self.bake.as_ref().map(|b| (b.method, b.fraction())),
-            bake_error: self.bake_error.as_deref(),
-            wireframe: self.world.renderer.has_wireframe(),
-            ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
-            trees: self.world.bakes.iter().any(|b| b.alpha_tested),
-            chains: self.world.shown_chains(),
-        };
-        let (settings, history) = (&mut self.settings, &self.history);
-        let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
-            egui::Panel::left("lodlab panel")
-                .resizable(false)
-                .exact_size(PANEL_WIDTH)
-                .show(ui, |ui| {
-                    egui::ScrollArea::vertical().show(ui, |ui| {
-                        requests = panel::show(ui, settings, history, &info);
-                    });
-                });
-            central = ui.available_rect_before_wrap();
-            if let Some(right) = settings.compare {
-                panel::compare_overlay(ui, central, settings.method, right);
-            }
-        });
-        self.egui
-            .handle_platform_output(&self.win.window, output.platform_output);
+        let dt = self.tick();
+        let (mut output, central) = self.run_panel()?;
         let ppp = output.pixels_per_point;
-        let primitives = self.egui.egui_ctx().tessellate(output.shapes, ppp);
-        if requests.relayout {
-            self.world.relayout(
-                self.settings.model,
-                self.settings.count,
-                self.settings.clip.clone(),
-            );
-        }
-        if requests.reset_camera {
-            self.world.reset_camera();
-        }
-        self.world.renderer.shadows = self.settings.shadows;
-        self.apply_lod_settings();
+        let primitives = self
+            .egui
+            .egui_ctx()
+            .tessellate(std::mem::take(&mut output.shapes), ppp);
 
         // The 3D view: what the panel leaves.
         let (w, h) = (self.win.config.width, self.win.config.height);
@@ -473,27 +416,109 @@ impl Viewer {
         self.frames += 1;
 
         if let (Some(shot), Some(path)) = (capture, &options.screenshot) {
-            let mut bytes = shot.read_bytes(&self.win.gpu)?;
-            if matches!(
-                self.win.config.format,
-                wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
-            ) {
-                for px in bytes.chunks_exact_mut(4) {
-                    px.swap(0, 2);
-                }
-            }
-            let image = image::RgbaImage::from_raw(w, h, bytes)
-                .ok_or_else(|| anyhow!("screenshot size mismatch"))?;
-            write_png(path, &image)?;
-            eprintln!(
-                "lodlab: wrote {} after {} frames ({:.1} fps)",
-                path.display(),
-                self.frames,
-                self.history.fps()
-            );
+            self.write_screenshot(&shot, path)?;
             return Ok(false);
         }
         Ok(true)
+    }
+
+    /// Advances the clocks by the time since the last frame (at most a quarter second), and
+    /// flies the camera: the frame's time step.
+    fn tick(&mut self) -> f32 {
+        let now = Instant::now();
+        let dt = self
+            .last_frame
+            .map_or(0.0, |t| (now - t).as_secs_f32())
+            .min(0.25);
+        if self.last_frame.is_some() {
+            self.history
+                .push((now - self.started).as_secs_f64(), dt * 1000.0);
+        }
+        self.last_frame = Some(now);
+        if self.settings.playing {
+            self.time += dt * self.settings.speed;
+        }
+        self.controls.fly(&mut self.world.camera, dt);
+        dt
+    }
+
+    /// Runs the panel for this frame and acts on what it asked for: its output to draw, and
+    /// the rectangle it leaves to the 3D view (in points).
+    fn run_panel(&mut self) -> Result<(egui::FullOutput, egui::Rect)> {
+        let raw = self.egui.take_egui_input(&self.win.window);
+        let mut requests = panel::Requests::default();
+        let mut central = egui::Rect::NOTHING;
+        self.update_levels()?;
+        let info = Info {
+            adapter: &self.adapter,
+            backend: &self.backend,
+            models: &self.model_names,
+            clips: &self.clip_names,
+            stats: self.stats,
+            time: self.time,
+            baking: self.bake.as_ref().map(|b| (b.method, b.fraction())),
+            bake_error: self.bake_error.as_deref(),
+            wireframe: self.world.renderer.has_wireframe(),
+            ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
+            trees: self.world.bakes.iter().any(|b| b.alpha_tested),
+            chains: self.world.shown_chains(),
+        };
+        let (settings, history) = (&mut self.settings, &self.history);
+        let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
+            egui::Panel::left("lodlab panel")
+                .resizable(false)
+                .exact_size(PANEL_WIDTH)
+                .show(ui, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        requests = panel::show(ui, settings, history, &info);
+                    });
+                });
+            central = ui.available_rect_before_wrap();
+            if let Some(right) = settings.compare {
+                panel::compare_overlay(ui, central, settings.method, right);
+            }
+        });
+        self.egui.handle_platform_output(
+            &self.win.window,
+            std::mem::take(&mut output.platform_output),
+        );
+        if requests.relayout {
+            self.world.relayout(
+                self.settings.model,
+                self.settings.count,
+                self.settings.clip.clone(),
+            );
+        }
+        if requests.reset_camera {
+            self.world.reset_camera();
+        }
+        self.world.renderer.shadows = self.settings.shadows;
+        self.apply_lod_settings();
+        Ok((output, central))
+    }
+
+    /// Writes the screenshot taken into `shot` (the window's size) to `path` as an RGBA PNG.
+    fn write_screenshot(&self, shot: &Offscreen, path: &std::path::Path) -> Result<()> {
+        let (w, h) = (self.win.config.width, self.win.config.height);
+        let mut bytes = shot.read_bytes(&self.win.gpu)?;
+        if matches!(
+            self.win.config.format,
+            wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+        ) {
+            for px in bytes.chunks_exact_mut(4) {
+                px.swap(0, 2);
+            }
+        }
+        let image = image::RgbaImage::from_raw(w, h, bytes)
+            .ok_or_else(|| anyhow!("screenshot size mismatch"))?;
+        write_png(path, &image)?;
+        eprintln!(
+            "lodlab: wrote {} after {} frames ({:.1} fps)",
+            path.display(),
+            self.frames,
+            self.history.fps()
+        );
+        Ok(())
     }
 
     /// Hands the panel's level-of-detail choices to the world; a change of method (or of the

@@ -414,7 +414,10 @@ impl Context<'_> {
     }
 
     /// The part of the evaluation in one wedge's chart (`r1`), or over the whole fan for the
-    /// geometry alone (`None`, with `r2` any render vertex of `u2`).
+    /// geometry alone (`None`, with `r2` any render vertex of `u2`): the checks that the
+    /// collapse keeps the chart a valid parameterisation, then the cell corners of the
+    /// deviation (Sander et al.'s memoryless APS, as Merry et al. §4 use it): v1's point and
+    /// every crossing of an old edge with a new one.
     fn wedge_corners(
         &self,
         u1: u32,
@@ -424,16 +427,59 @@ impl Context<'_> {
         chart: Chart,
         s: &mut Scratch,
     ) -> Result<(), Rejection> {
-        let mesh = self.mesh;
-        let p = |r: u32| match chart {
+        let p2 = self.fans(u1, u2, r1, r2, chart, s)?;
+        let p1 = s.old[0].p[0];
+        let (sign, extent2) = fan_orientation(&s.old, p1)?;
+        let min_area = 1e-10 * extent2;
+        // No fold-over in parameter space.
+        for tri in &s.new {
+            let [_, a, b] = tri.p;
+            if (a - p2).perp_dot(b - p2) * sign <= min_area {
+                return Err(Rejection::ParameterFold);
+            }
+        }
+        if !matches!(chart, Chart::Whole(_)) {
+            self.check_outline(u2, p1, p2, chart, extent2, s)?;
+        }
+        self.corner_of_v1(u1, p1, chart, s)?;
+        self.edge_crossings(u1, u2, r2, p1, p2, chart, s);
+        Ok(())
+    }
+
+    /// A render vertex's point in the chart's parameter space.
+    fn point(&self, chart: Chart, r: u32) -> Result<DVec2, Rejection> {
+        match chart {
             Chart::Texture => Ok(self.uv[r as usize]),
-            Chart::Polar(f) | Chart::Whole(f) => f.get(mesh.pos(r)).ok_or(Rejection::BadFan),
-        };
-        // The fan before and after, each triangle with its parameter points looked up once:
-        // everything below works on these.
+            Chart::Polar(f) | Chart::Whole(f) => f.get(self.mesh.pos(r)).ok_or(Rejection::BadFan),
+        }
+    }
+
+    /// The texture coordinate a corner's texture deviation is measured in: under the
+    /// texture's own correspondence texture coordinates never slide, and the whole fan's map
+    /// measures geometry alone.
+    fn slide_uv(&self, chart: Chart, r: u32) -> DVec2 {
+        match chart {
+            Chart::Polar(_) => self.uv[r as usize],
+            Chart::Texture | Chart::Whole(_) => DVec2::ZERO,
+        }
+    }
+
+    /// The fan of `u1` before the collapse (the triangles on `r1`, or all of them) and after,
+    /// into `s.old` and `s.new`, each triangle with its parameter points looked up once:
+    /// everything after works on these. Returns v2's point.
+    fn fans(
+        &self,
+        u1: u32,
+        u2: u32,
+        r1: Option<u32>,
+        r2: u32,
+        chart: Chart,
+        s: &mut Scratch,
+    ) -> Result<DVec2, Rejection> {
+        let mesh = self.mesh;
         s.old.clear();
         s.new.clear();
-        let p2 = p(r2)?;
+        let p2 = self.point(chart, r2)?;
         for &t in &mesh.incident[u1 as usize] {
             let tri = mesh.tris[t as usize];
             if r1.is_some_and(|r1| !tri.contains(&r1)) {
@@ -442,7 +488,11 @@ impl Context<'_> {
             // Rotate so v1 comes first; winding kept.
             let k = tri.iter().position(|&r| mesh.pos(r) == u1).unwrap_or(0);
             let r = [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]];
-            let pts = [p(r[0])?, p(r[1])?, p(r[2])?];
+            let pts = [
+                self.point(chart, r[0])?,
+                self.point(chart, r[1])?,
+                self.point(chart, r[2])?,
+            ];
             s.old.push(FanTriangle { r, p: pts });
             if mesh.pos(r[1]) != u2 && mesh.pos(r[2]) != u2 {
                 s.new.push(FanTriangle {
@@ -454,51 +504,23 @@ impl Context<'_> {
         if s.new.is_empty() || s.old.is_empty() {
             return Err(Rejection::BadFan);
         }
-        // Under the texture's own correspondence texture coordinates never slide; the whole
-        // fan's map measures geometry alone.
-        let uv = |r: u32| match chart {
-            Chart::Polar(_) => self.uv[r as usize],
-            Chart::Texture | Chart::Whole(_) => DVec2::ZERO,
-        };
-        let slide = |d: DVec2| d.length() * self.slide_scale;
-        let r1 = s.old[0].r[0];
-        let p1 = s.old[0].p[0];
+        Ok(p2)
+    }
 
-        // Orientation of the chart around r1, and a scale for the tolerances.
-        let mut extent2: f64 = 0.0;
-        let mut sign = 0.0;
-        for tri in &s.old {
-            let [_, a, b] = tri.p;
-            extent2 = extent2
-                .max((a - p1).length_squared())
-                .max((b - p1).length_squared());
-            let area = (a - p1).perp_dot(b - p1);
-            if sign == 0.0 {
-                sign = area.signum();
-            }
-            if area * sign <= 0.0 {
-                return Err(Rejection::BadFan);
-            }
-        }
-        let min_area = 1e-10 * extent2;
-        if s.old.iter().any(|tri| {
-            let [_, a, b] = tri.p;
-            ((a - p1).perp_dot(b - p1) * sign) <= min_area
-        }) {
-            return Err(Rejection::BadFan);
-        }
-
-        // No fold-over in parameter space.
-        for tri in &s.new {
-            let [_, a, b] = tri.p;
-            if (a - p2).perp_dot(b - p2) * sign <= min_area {
-                return Err(Rejection::ParameterFold);
-            }
-        }
-
-        // The chart outline through r1 (edges used by one fan triangle only): a border or seam
-        // vertex keeps the chart's area only if it lies on the straight line from its other
-        // outline neighbour to r2.
+    /// The chart outline through v1 (edges used by one fan triangle only): a border or seam
+    /// vertex keeps the chart's area only if it lies on the straight line from its other
+    /// outline neighbour to v2. (The whole fan of a corner is closed, and a dying chart's
+    /// outline goes with it.)
+    fn check_outline(
+        &self,
+        u2: u32,
+        p1: DVec2,
+        p2: DVec2,
+        chart: Chart,
+        extent2: f64,
+        s: &mut Scratch,
+    ) -> Result<(), Rejection> {
+        let mesh = self.mesh;
         s.outline.clear();
         for tri in &s.old {
             for j in 1..3 {
@@ -511,9 +533,7 @@ impl Context<'_> {
         }
         s.outline.retain(|o| o.1 < 2);
         match s.outline.len() {
-            // The whole fan of a corner is closed; a dying chart's outline goes with it.
-            _ if matches!(chart, Chart::Whole(_)) => {}
-            0 => {}
+            0 => Ok(()),
             2 => {
                 let (Some(&(_, _, q)), true) = (
                     s.outline.iter().find(|o| mesh.pos(o.0) != u2),
@@ -532,11 +552,21 @@ impl Context<'_> {
                 if off > tolerance || !(along > 0.0 && along < 1.0) {
                     return Err(Rejection::ChangesParameterArea);
                 }
+                Ok(())
             }
-            _ => return Err(Rejection::NotAlongOutline),
+            _ => Err(Rejection::NotAlongOutline),
         }
+    }
 
-        // Corner 1: v1's parameter point, inside (or on the edge of) one new triangle.
+    /// Corner 1: v1's parameter point, inside (or on the edge of) one new triangle.
+    fn corner_of_v1(
+        &self,
+        u1: u32,
+        p1: DVec2,
+        chart: Chart,
+        s: &mut Scratch,
+    ) -> Result<(), Rejection> {
+        let mesh = self.mesh;
         let mut best: Option<([u32; 3], [f64; 3])> = None;
         for tri in &s.new {
             let bary = barycentric(p1, tri.p[0], tri.p[1], tri.p[2]);
@@ -546,6 +576,8 @@ impl Context<'_> {
             }
         }
         let (tri, bary) = best.ok_or(Rejection::BadFan)?;
+        let uv = |r: u32| self.slide_uv(chart, r);
+        let r1 = s.old[0].r[0];
         s.corners.push(Corner {
             terms: [
                 (u1, 1.0),
@@ -553,12 +585,26 @@ impl Context<'_> {
                 (mesh.pos(tri[1]), -bary[1]),
                 (mesh.pos(tri[2]), -bary[2]),
             ],
-            texture: slide(
-                uv(r1) - (uv(tri[0]) * bary[0] + uv(tri[1]) * bary[1] + uv(tri[2]) * bary[2]),
-            ),
+            texture: self.slide_scale
+                * (uv(r1) - (uv(tri[0]) * bary[0] + uv(tri[1]) * bary[1] + uv(tri[2]) * bary[2]))
+                    .length(),
         });
+        Ok(())
+    }
 
-        // Crossings of old edges (v1, a) with new edges (v2, b).
+    /// The other corners: crossings of old edges (v1, a) with new edges (v2, b).
+    #[allow(clippy::too_many_arguments)]
+    fn edge_crossings(
+        &self,
+        u1: u32,
+        u2: u32,
+        r2: u32,
+        p1: DVec2,
+        p2: DVec2,
+        chart: Chart,
+        s: &mut Scratch,
+    ) {
+        let mesh = self.mesh;
         s.ends_old.clear();
         s.ends_new.clear();
         for tri in &s.old {
@@ -577,6 +623,8 @@ impl Context<'_> {
                 }
             }
         }
+        let uv = |r: u32| self.slide_uv(chart, r);
+        let r1 = s.old[0].r[0];
         let w = p2 - p1;
         for &(a, da) in &s.ends_old {
             let la = da.length_squared();
@@ -610,17 +658,45 @@ impl Context<'_> {
                             (u2, -(1.0 - beta)),
                             (mesh.pos(b), -beta),
                         ],
-                        texture: slide(
-                            uv(r1) * (1.0 - alpha) + uv(a) * alpha
+                        texture: self.slide_scale
+                            * (uv(r1) * (1.0 - alpha) + uv(a) * alpha
                                 - uv(r2) * (1.0 - beta)
-                                - uv(b) * beta,
-                        ),
+                                - uv(b) * beta)
+                                .length(),
                     });
                 }
             }
         }
-        Ok(())
     }
+}
+
+/// The orientation (sign of area) of v1's fan in parameter space, and its extent squared (a
+/// scale for tolerances). A fan that is not consistently oriented, or has a triangle of no
+/// area, is no chart to measure in.
+fn fan_orientation(old: &[FanTriangle], p1: DVec2) -> Result<(f64, f64), Rejection> {
+    let mut extent2: f64 = 0.0;
+    let mut sign = 0.0;
+    for tri in old {
+        let [_, a, b] = tri.p;
+        extent2 = extent2
+            .max((a - p1).length_squared())
+            .max((b - p1).length_squared());
+        let area = (a - p1).perp_dot(b - p1);
+        if sign == 0.0 {
+            sign = area.signum();
+        }
+        if area * sign <= 0.0 {
+            return Err(Rejection::BadFan);
+        }
+    }
+    let min_area = 1e-10 * extent2;
+    if old.iter().any(|tri| {
+        let [_, a, b] = tri.p;
+        ((a - p1).perp_dot(b - p1) * sign) <= min_area
+    }) {
+        return Err(Rejection::BadFan);
+    }
+    Ok((sign, extent2))
 }
 
 /// Triangle `(x1, a, b)` becoming `(x2, a, b)`: it must not turn over, nor become a sliver

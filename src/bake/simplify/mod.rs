@@ -27,10 +27,16 @@ pub mod collapse;
 pub mod expectation;
 pub mod influence;
 pub mod mesh;
+mod metric;
+mod sequence;
+
+pub use metric::influences64;
+use metric::{Metric, inner, rest_position};
+pub use sequence::{Sequence, Stats, Step, StepKind};
 
 use crate::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
 use collapse::{Context, Scratch};
-use expectation::{ExpectationMatrix, quadratic};
+use expectation::ExpectationMatrix;
 use glam::{Affine3A, DVec2, DVec3, Vec3, Vec4};
 use influence::{FactorCache, Influence64};
 use mesh::{Kind, Mesh};
@@ -75,107 +81,6 @@ crate::named_choice!(Method);
 impl std::fmt::Display for Method {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
-    }
-}
-
-/// What one step of the sequence did.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum StepKind {
-    /// Half-edge collapse: every wedge `[from, to]` of the removed position goes to the wedge
-    /// of the kept position in the same chart (render vertex indices).
-    Collapse { wedges: Vec<[u32; 2]> },
-    /// Influence simplification of one position: its render vertices (the wedges) all take
-    /// `influences` from now on.
-    Influence {
-        wedges: Vec<u32>,
-        removed_bone: u32,
-        influences: Vec<AsInfluence>,
-    },
-    /// A whole connected part removed: its render vertices still in use, and the render vertex
-    /// nearby (on another part) its geomorph shrinks it towards; `None` when nothing is left.
-    Prune {
-        wedges: Vec<u32>,
-        anchor: Option<u32>,
-    },
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Step {
-    pub kind: StepKind,
-    /// The memoryless deviation of this step alone, in scene units.
-    pub cost: f32,
-    /// The largest cost so far: the error bound quoted for the mesh after this step.
-    pub max_cost: f32,
-    /// Triangles and total influences (over used render vertices) after this step.
-    pub triangles: u32,
-    pub influences: u32,
-}
-
-/// A progressive mesh: the starting mesh and every simplification in order.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Sequence {
-    pub method: Method,
-    /// For every render vertex, the position it belongs to (see [`mesh::weld_positions`]).
-    pub positions: Vec<u32>,
-    /// The triangles the sequence starts from: the input without triangles that repeat a
-    /// position or duplicate another.
-    pub base_triangles: Vec<[u32; 3]>,
-    pub base_influences: u32,
-    pub steps: Vec<Step>,
-    pub stats: Stats,
-}
-
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Stats {
-    pub dropped_triangles: u32,
-    /// Positions that never move: complex or locked kinds.
-    pub locked_positions: u32,
-    /// Some triangles have texture coordinates usable as a parameterisation (the others use
-    /// the geometric correspondence).
-    pub texture_parameterisation: bool,
-    /// Connected parts at the start, and how many were removed whole.
-    pub parts: u32,
-    pub pruned_parts: u32,
-    /// Influence-simplification factor cache (§6.3).
-    pub cache_hits: u64,
-    pub cache_misses: u64,
-    /// Collapse candidates evaluated, and re-checked when popped.
-    pub evaluations: u64,
-}
-
-impl Stats {
-    pub fn cache_hit_rate(&self) -> Option<f64> {
-        let total = self.cache_hits + self.cache_misses;
-        (total > 0).then(|| self.cache_hits as f64 / total as f64)
-    }
-}
-
-impl Sequence {
-    pub fn base_triangle_count(&self) -> u32 {
-        self.base_triangles.len() as u32
-    }
-
-    /// Triangles after the first `prefix` steps.
-    pub fn triangles_after(&self, prefix: usize) -> u32 {
-        match prefix {
-            0 => self.base_triangle_count(),
-            n => self.steps[n - 1].triangles,
-        }
-    }
-
-    pub fn influences_after(&self, prefix: usize) -> u32 {
-        match prefix {
-            0 => self.base_influences,
-            n => self.steps[n - 1].influences,
-        }
-    }
-
-    /// The error bound after the first `prefix` steps.
-    pub fn error_after(&self, prefix: usize) -> f32 {
-        match prefix {
-            0 => 0.0,
-            n => self.steps[n - 1].max_cost,
-        }
     }
 }
 
@@ -263,107 +168,6 @@ impl Ord for Entry {
             .then(self.vertex.cmp(&other.vertex))
             .then(self.version.cmp(&other.version))
     }
-}
-
-/// The deviation measure at a cell corner.
-enum Metric<'a> {
-    /// Euclidean distance between rest-pose positions.
-    RestPose,
-    /// `‖s‖²₂,₂ = sᵀPs`. A corner is a combination `s = Σ c_a p_a` of at most four positions,
-    /// whose influences share a few bones: `s` is gathered per bone (`s_j = Σ c_a p_aj`) and
-    /// `sᵀPs = Σ_jk s_jᵀ P_jk s_k` takes one 4×4 block of P per pair of those bones. That is
-    /// cheaper than the inner products of the positions pairwise, and needs no cache (a cache
-    /// of them, keyed by position pair, cost as much in memory traffic as it saved).
-    AnimationSpace { pm: &'a ExpectationMatrix },
-}
-
-impl Metric<'_> {
-    fn deviation2(
-        &self,
-        corner: &[(u32, f64); 4],
-        rest: &[DVec3],
-        infl: &[Vec<Influence64>],
-    ) -> f64 {
-        match self {
-            Metric::RestPose => corner
-                .iter()
-                .map(|&(p, c)| rest[p as usize] * c)
-                .sum::<DVec3>()
-                .length_squared(),
-            Metric::AnimationSpace { pm } => {
-                let mut gathered: smallvec::SmallVec<[(u32, [f64; 4]); 8]> =
-                    smallvec::SmallVec::new();
-                for &(a, c) in corner {
-                    if c == 0.0 {
-                        continue;
-                    }
-                    for x in &infl[a as usize] {
-                        let add = x.p.map(|v| v * c);
-                        match gathered.iter_mut().find(|(bone, _)| *bone == x.bone) {
-                            Some((_, s)) => (0..4).for_each(|k| s[k] += add[k]),
-                            None => gathered.push((x.bone, add)),
-                        }
-                    }
-                }
-                // P is symmetric: each pair of bones once, off-diagonal pairs twice.
-                let mut sum = 0.0;
-                for (i, (j, sj)) in gathered.iter().enumerate() {
-                    sum += quadratic(pm.block(*j, *j), sj, sj);
-                    for (k, sk) in &gathered[i + 1..] {
-                        sum += 2.0 * quadratic(pm.block(*j, *k), sj, sk);
-                    }
-                }
-                sum.max(0.0)
-            }
-        }
-    }
-}
-
-/// Every vertex's influences in double precision, sorted by bone (the order [`Mesh::new`]
-/// groups wedges by and the factor cache keys on).
-pub fn influences64(am: &AnimationSpaceMesh) -> Vec<Vec<Influence64>> {
-    (0..am.vertex_count())
-        .map(|v| {
-            let mut list: Vec<Influence64> = am
-                .influences_of(v)
-                .iter()
-                .map(|i| Influence64 {
-                    bone: i.bone,
-                    p: i.p.to_array().map(f64::from),
-                    n: i.n.to_array().map(f64::from),
-                })
-                .collect();
-            list.sort_by_key(|i| i.bone);
-            list
-        })
-        .collect()
-}
-
-/// `aᵀ P b` for two vertices' influences.
-fn inner(pm: &ExpectationMatrix, a: &[Influence64], b: &[Influence64]) -> f64 {
-    let mut sum = 0.0;
-    for x in a {
-        for y in b {
-            sum += quadratic(pm.block(x.bone, y.bone), &x.p, &y.p);
-        }
-    }
-    sum
-}
-
-/// The rest-pose position of a vertex: `Σ Ĝ_i p_i`.
-fn rest_position(rest_bones: &[Affine3A], infl: &[Influence64]) -> DVec3 {
-    infl.iter()
-        .map(|i| {
-            let g = &rest_bones[i.bone as usize];
-            let m = g.matrix3.to_cols_array().map(|x| x as f64);
-            let t = DVec3::from(Vec3::from(g.translation));
-            DVec3::new(
-                m[0] * i.p[0] + m[3] * i.p[1] + m[6] * i.p[2],
-                m[1] * i.p[0] + m[4] * i.p[1] + m[7] * i.p[2],
-                m[2] * i.p[0] + m[5] * i.p[1] + m[8] * i.p[2],
-            ) + t * i.p[3]
-        })
-        .sum()
 }
 
 /// A position in the index the pruning looks for anchors in.

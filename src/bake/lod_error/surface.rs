@@ -1,0 +1,589 @@
+//! The geometric correspondence: every sample of one surface against the closest point of
+//! the other in the rest pose, both ways, compared in every frame (a two-sided, sampled
+//! Hausdorff distance over the animation).
+
+use super::MeshError;
+use super::geometry::{Located, Surface};
+use crate::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
+use crate::model::Model;
+use glam::{Affine3A, DVec3};
+
+/// The geometric measurement: the distance from every sample of one surface to the other
+/// surface in each frame, both ways. See the module comment.
+pub struct SurfaceProbe<'a> {
+    base: &'a AnimationSpaceMesh,
+    original: Surface,
+    /// The original's render vertices in the rest pose, and posed: vertex `v` in frame `f` at
+    /// `v * frames + f`.
+    original_rest: Vec<DVec3>,
+    original_posed: Vec<DVec3>,
+    /// A pool of samples of the original surface (triangle, weights, rest point), area-weighted
+    /// and in random order, of which those on changed triangles are measured, `forward` at
+    /// most.
+    forward_pool: Vec<SurfaceSample>,
+    forward: usize,
+    /// Samples drawn from a simplified surface's changed triangles: half by area, half along
+    /// edges.
+    backward: usize,
+    /// The original's triangles, by their sorted corners.
+    original_triangles: rustc_hash::FxHashSet<[u32; 3]>,
+    /// Rest-pose triangles searched for a sample's closest point in each frame: a pose moves
+    /// the closest point of the other surface, but not far from where it was at rest.
+    candidates: usize,
+    /// Measure every vertex the simplification removed (until none left can beat the largest
+    /// distance found), not just a spread of them.
+    every_vertex: bool,
+    /// Every render vertex's welded position, and the original triangles round each position.
+    position: Vec<u32>,
+    original_fans: Fans,
+    rest_bones: Vec<Affine3A>,
+    frames: Vec<Vec<Affine3A>>,
+}
+
+/// Original samples pooled per sample measured (see [`SurfaceProbe`]): the changed part of
+/// a fine level is a small share of the surface, and its samples come from this pool.
+const FORWARD_POOL: usize = 16;
+
+/// A simplified mesh's vertices (render vertices of the original) in the rest pose and in
+/// every frame of the probe.
+struct PosedMesh {
+    /// Each original render vertex's index in `used`, or `u32::MAX` where the mesh lacks it.
+    slot: Vec<u32>,
+    used: Vec<u32>,
+    /// Whether a used vertex's influences differ from the original's.
+    moved: Vec<bool>,
+    rest: Vec<DVec3>,
+    /// Used vertex `i` in frame `f` at `i * frames + f`.
+    posed: Vec<DVec3>,
+}
+
+/// A sample of a surface: its triangle (render vertices), weights and rest-pose point.
+type SurfaceSample = ([u32; 3], [f64; 3], DVec3);
+
+/// A triangle's corners in ascending order: the same triangle whatever corner it starts at.
+fn sorted(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
+
+/// Triangles round every position, flat: position `p`'s are `items[start[p]..start[p + 1]]`.
+struct Fans {
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Fans {
+    /// The fans of `triangles` (render vertices) by `position` of their corners.
+    fn new(triangles: &[[u32; 3]], position: &[u32], positions: usize) -> Fans {
+        let mut start = vec![0u32; positions + 1];
+        for t in triangles {
+            for &v in t {
+                start[position[v as usize] as usize + 1] += 1;
+            }
+        }
+        for i in 1..start.len() {
+            start[i] += start[i - 1];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![0u32; start[positions] as usize];
+        for (i, t) in triangles.iter().enumerate() {
+            for &v in t {
+                let p = position[v as usize] as usize;
+                items[fill[p] as usize] = i as u32;
+                fill[p] += 1;
+            }
+        }
+        Fans { start, items }
+    }
+
+    fn of(&self, position: u32) -> &[u32] {
+        let p = position as usize;
+        &self.items[self.start[p] as usize..self.start[p + 1] as usize]
+    }
+}
+
+/// A point's distance to a set of triangles in every frame.
+struct Reach<'p> {
+    frames: usize,
+    posed: &'p (dyn Fn(u32, usize) -> DVec3 + Sync),
+}
+
+impl Reach<'_> {
+    /// The smallest distance from `point(f)` to any of `candidates` in frame `f`, squared, for
+    /// every frame: added to `sum`, the largest returned. Where the first candidate is within
+    /// `enough` (squared) that distance is taken as it is: an upper bound, exact enough below
+    /// what the caller cares about.
+    fn worst(
+        &self,
+        point: impl Fn(usize) -> DVec3,
+        candidates: &[[u32; 3]],
+        enough: f64,
+        sum: &mut f64,
+    ) -> f64 {
+        let distance2 = |t: &[u32; 3], f: usize, p: DVec3| {
+            let tri = Located {
+                corners: t.map(|v| (self.posed)(v, f).to_array()),
+            };
+            tri.closest(p).0.distance_squared(p)
+        };
+        let mut worst: f64 = 0.0;
+        for f in 0..self.frames {
+            let p = point(f);
+            let Some((first, rest)) = candidates.split_first() else {
+                continue;
+            };
+            let mut best = distance2(first, f, p);
+            if best > enough {
+                for t in rest {
+                    best = best.min(distance2(t, f, p));
+                }
+            }
+            *sum += best;
+            worst = worst.max(best);
+        }
+        worst
+    }
+}
+
+impl<'a> SurfaceProbe<'a> {
+    /// `forward` samples of `base` (the full-detail mesh of `model`) and `backward` samples of
+    /// every simplified mesh measured, compared in `frames`.
+    pub fn new(
+        model: &Model,
+        base: &'a AnimationSpaceMesh,
+        forward: usize,
+        backward: usize,
+        frames: Vec<Vec<Affine3A>>,
+    ) -> SurfaceProbe<'a> {
+        let rest_bones = crate::bake::simplify::SimplifyInput::rest_bones(&model.skeleton);
+        let rest = base.rest_positions(&rest_bones);
+        let triangles: Vec<[u32; 3]> = base
+            .indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        let original = Surface::new(&triangles, |v| rest[v as usize].as_dvec3());
+        let forward_pool = original
+            .samples(forward * FORWARD_POOL, 0x10d1ab, None)
+            .into_iter()
+            .map(|(t, w)| {
+                let p = (0..3).map(|k| rest[t[k] as usize].as_dvec3() * w[k]).sum();
+                (t, w, p)
+            })
+            .collect();
+        let original_triangles = triangles.iter().map(|t| sorted(*t)).collect();
+        let original_posed = (0..base.vertex_count())
+            .flat_map(|v| {
+                let infl = base.influences_of(v);
+                frames.iter().map(move |g| pose_point(g, infl))
+            })
+            .collect();
+        let position = crate::import::weld::position_groups(
+            &rest,
+            crate::import::weld::tolerance_for(&rest) * 10.0,
+        );
+        let positions = position.iter().max().map_or(0, |&m| m as usize + 1);
+        let original_fans = Fans::new(&triangles, &position, positions);
+        SurfaceProbe {
+            base,
+            original,
+            original_rest: rest.iter().map(|p| p.as_dvec3()).collect(),
+            original_posed,
+            forward_pool,
+            forward,
+            backward,
+            original_triangles,
+            candidates: 6,
+            every_vertex: false,
+            position,
+            original_fans,
+            rest_bones,
+            frames,
+        }
+    }
+
+    pub fn frame_count(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// The same probe searching `candidates` triangles per sample and frame (6 by default).
+    pub fn with_candidates(mut self, candidates: usize) -> Self {
+        self.candidates = candidates.max(1);
+        self
+    }
+
+    /// The same probe measuring every removed vertex that could be furthest, where
+    /// [`Self::measure`] is given where vertices went: the largest distance at the original's
+    /// vertices is then exact, not sampled. Dearer; for a level's error.
+    pub fn every_vertex(mut self) -> Self {
+        self.every_vertex = true;
+        self
+    }
+
+    /// The error of a simplified mesh given as triangles of the original's render vertices,
+    /// each vertex with its (possibly simplified) influences. A mesh with no triangles left is
+    /// infinitely far.
+    ///
+    /// Besides the nearest triangles in the rest pose, a sample is compared with the other
+    /// surface's triangles round its own triangle's corners: for a point of the simplified
+    /// mesh, the original's round those (original) vertices; for a point of the original,
+    /// given `follow` (which vertex of the simplified mesh each original vertex became), the
+    /// simplified mesh's round those. Where two parts of a character touch at rest (a tail on
+    /// a rump), the nearest triangles at rest can all lie on the wrong one.
+    ///
+    /// Distances below `resolution` need not be exact: a sample that close to the first triangle
+    /// it is compared with is taken at that distance (an upper bound), which spares most of the
+    /// work when only distances near a level's error matter. 0 measures exactly.
+    pub fn measure<'b>(
+        &self,
+        triangles: &[[u32; 3]],
+        influences: impl Fn(u32) -> &'b [AsInfluence] + Sync,
+        follow: Option<&(dyn Fn(u32) -> u32 + Sync)>,
+        resolution: f64,
+    ) -> MeshError {
+        use rayon::prelude::*;
+        if triangles.is_empty() {
+            return MeshError {
+                rms: f64::INFINITY,
+                max: f64::INFINITY,
+            };
+        }
+        let enough = resolution * resolution;
+        let frames = self.frames.len();
+        let mesh = self.pose(triangles, influences);
+        let simplified = Surface::new(triangles, |v| mesh.rest[mesh.slot[v as usize] as usize]);
+        // A triangle both surfaces have, on vertices that did not move, is 0 away in every
+        // frame: samples go where the surfaces differ, so a few hundred find the largest
+        // distance even when the simplification changed a sliver of the surface.
+        let unmoved = |t: &[u32; 3]| {
+            t.iter()
+                .all(|&v| !mesh.moved[mesh.slot[v as usize] as usize])
+        };
+        let kept: rustc_hash::FxHashSet<[u32; 3]> = triangles
+            .iter()
+            .filter(|t| unmoved(t) && self.original_triangles.contains(&sorted(**t)))
+            .map(|t| sorted(*t))
+            .collect();
+        let changed: Vec<bool> = triangles
+            .iter()
+            .map(|t| !kept.contains(&sorted(*t)))
+            .collect();
+        let forward: Vec<&SurfaceSample> = self
+            .forward_pool
+            .iter()
+            .filter(|(t, _, _)| !kept.contains(&sorted(*t)))
+            .collect();
+        // The share of the original surface that changed, and of the simplified one: what the
+        // samples stand for in the RMS.
+        let forward_share = forward.len() as f64 / self.forward_pool.len().max(1) as f64;
+        let backward_share = simplified.area_share(&changed);
+        let forward = &forward[..forward.len().min(self.forward)];
+        let simplified_fans = Fans::new(triangles, &self.position, self.positions());
+        let to_simplified = Reach {
+            frames,
+            posed: &|v, f| mesh.posed[mesh.slot[v as usize] as usize * frames + f],
+        };
+        let to_original = Reach {
+            frames,
+            posed: &|v, f| self.original_posed[v as usize * frames + f],
+        };
+        // The largest distances sit at cell corners, foremost at the vertices a collapse
+        // removed (the original's) and at those an influence removal moved (the simplified
+        // mesh's): they are measured as well, for the maximum.
+        let removed = self.removed_vertices(&mesh, &simplified, &to_simplified, follow, enough);
+        let moved_samples = self.moved_vertices(&mesh, &simplified_fans, triangles);
+        let nearest = |surface: &Surface, p: DVec3| surface.nearest(p, self.candidates);
+        let half = self.backward / 2;
+        let backward: Vec<([u32; 3], [f64; 3])> = simplified
+            .samples(half, 0x5a3b1e, Some(&changed))
+            .into_iter()
+            .chain(simplified.edge_samples(self.backward - half, 0xed9e, Some(&changed)))
+            .collect();
+        let forward_sample = |(t, w, p): &&SurfaceSample| {
+            let mut sum = 0.0;
+            let mut candidates = nearest(&simplified, *p);
+            if let Some(follow) = follow {
+                candidates = self.with_fans(candidates, &simplified_fans, triangles, t.map(follow));
+            }
+            let point = |f| {
+                (0..3)
+                    .map(|k| self.original_posed[t[k] as usize * frames + f] * w[k])
+                    .sum()
+            };
+            let worst = to_simplified.worst(point, &candidates, enough, &mut sum);
+            (sum, worst, frames)
+        };
+        let backward_sample = |(t, w): &([u32; 3], [f64; 3])| {
+            let mut sum = 0.0;
+            let p = (0..3)
+                .map(|k| mesh.rest[mesh.slot[t[k] as usize] as usize] * w[k])
+                .sum();
+            let candidates = self.with_fans(
+                nearest(&self.original, p),
+                &self.original_fans,
+                &self.original.triangles,
+                *t,
+            );
+            let point = |f| (0..3).map(|k| (to_simplified.posed)(t[k], f) * w[k]).sum();
+            let worst = to_original.worst(point, &candidates, enough, &mut sum);
+            (sum, worst, frames)
+        };
+        let totals =
+            |a: (f64, f64, usize), b: (f64, f64, usize)| (a.0 + b.0, a.1.max(b.1), a.2 + b.2);
+        let (forward_sum, forward_max, forward_count) = forward
+            .par_iter()
+            .map(forward_sample)
+            .reduce(|| (0.0, 0.0, 0), totals);
+        let (backward_sum, backward_max, backward_count) = backward
+            .par_iter()
+            .map(backward_sample)
+            .reduce(|| (0.0, 0.0, 0), totals);
+        let moved_max = moved_samples
+            .par_iter()
+            .map(|s| backward_sample(s).1)
+            .reduce(|| 0.0, f64::max);
+        // Removed vertices, furthest bound first, in batches, until no bound left can beat
+        // the largest distance found: that maximum is then exact over every vertex.
+        let mut max2 = forward_max.max(backward_max).max(moved_max);
+        for batch in removed.chunks(64) {
+            if batch[0].0 <= max2 {
+                break;
+            }
+            let m = batch
+                .par_iter()
+                .map(|(_, s)| forward_sample(&s).1)
+                .reduce(|| 0.0, f64::max);
+            max2 = max2.max(m);
+        }
+        let mean = |sum: f64, count: usize| if count > 0 { sum / count as f64 } else { 0.0 };
+        let ms = 0.5
+            * (forward_share * mean(forward_sum, forward_count)
+                + backward_share * mean(backward_sum, backward_count));
+        MeshError {
+            rms: ms.sqrt(),
+            max: max2.sqrt(),
+        }
+    }
+
+    /// How many welded positions the original has.
+    fn positions(&self) -> usize {
+        self.original_fans.start.len() - 1
+    }
+
+    /// The simplified mesh's vertices, in the rest pose and posed in every frame.
+    fn pose<'b>(
+        &self,
+        triangles: &[[u32; 3]],
+        influences: impl Fn(u32) -> &'b [AsInfluence],
+    ) -> PosedMesh {
+        let frames = self.frames.len();
+        let mut slot = vec![u32::MAX; self.base.vertex_count()];
+        let mut used = Vec::new();
+        for &v in triangles.iter().flatten() {
+            if slot[v as usize] == u32::MAX {
+                slot[v as usize] = used.len() as u32;
+                used.push(v);
+            }
+        }
+        // A vertex whose influences are the original's (no influence simplification) is where
+        // the original's is: only the others are posed again.
+        let moved: Vec<bool> = used
+            .iter()
+            .map(|&v| influences(v) != self.base.influences_of(v as usize))
+            .collect();
+        let rest: Vec<DVec3> = used
+            .iter()
+            .zip(&moved)
+            .map(|(&v, &moved)| {
+                if moved {
+                    pose_point(&self.rest_bones, influences(v))
+                } else {
+                    self.original_rest[v as usize]
+                }
+            })
+            .collect();
+        let posed: Vec<DVec3> = used
+            .iter()
+            .zip(&moved)
+            .flat_map(|(&v, &moved)| {
+                let infl = influences(v);
+                let original = &self.original_posed[v as usize * frames..(v as usize + 1) * frames];
+                (0..frames).map(move |f| {
+                    if moved {
+                        pose_point(&self.frames[f], infl)
+                    } else {
+                        original[f]
+                    }
+                })
+            })
+            .collect();
+        PosedMesh {
+            slot,
+            used,
+            moved,
+            rest,
+            posed,
+        }
+    }
+
+    /// The sample at vertex `v` of triangle `t` of `tris` (the corner at `v`'s position).
+    fn at_vertex(&self, tris: &[[u32; 3]], t: u32, v: u32) -> ([u32; 3], [f64; 3]) {
+        let tri = tris[t as usize];
+        let k = (0..3)
+            .find(|&k| self.position[tri[k] as usize] == self.position[v as usize])
+            .unwrap_or(0);
+        let mut w = [0.0; 3];
+        w[k] = 1.0;
+        (tri, w)
+    }
+
+    /// `candidates` and the triangles of `of` round the positions of `corners` (by `fans`).
+    fn with_fans(
+        &self,
+        mut candidates: Vec<[u32; 3]>,
+        fans: &Fans,
+        of: &[[u32; 3]],
+        corners: [u32; 3],
+    ) -> Vec<[u32; 3]> {
+        for v in corners {
+            for &t in fans.of(self.position[v as usize]) {
+                if !candidates.contains(&of[t as usize]) {
+                    candidates.push(of[t as usize]);
+                }
+            }
+        }
+        candidates
+    }
+
+    /// The original's vertices at the positions the simplification removed, as samples. With
+    /// `follow`: every one with a bound on its distance (squared), furthest bound first
+    /// (`self.forward` of them unless every vertex is wanted); without, a spread of them,
+    /// unbounded.
+    fn removed_vertices(
+        &self,
+        mesh: &PosedMesh,
+        simplified: &Surface,
+        to_simplified: &Reach,
+        follow: Option<&(dyn Fn(u32) -> u32 + Sync)>,
+        enough: f64,
+    ) -> Vec<(f64, SurfaceSample)> {
+        use rayon::prelude::*;
+        let frames = self.frames.len();
+        let positions = self.positions();
+        let mut present = vec![false; positions];
+        for &v in &mesh.used {
+            present[self.position[v as usize] as usize] = true;
+        }
+        // One render vertex of every position the simplification removed.
+        let gone: Vec<u32> = (0..positions as u32)
+            .filter(|&p| !present[p as usize])
+            .filter_map(|p| {
+                let t = *self.original_fans.of(p).first()?;
+                self.original.triangles[t as usize]
+                    .into_iter()
+                    .find(|&v| self.position[v as usize] == p)
+            })
+            .collect();
+        let budget = self.forward.max(1);
+        let bounded: Vec<(f64, u32)> = match follow {
+            // The distance from the vertex it became (in its worst frame) bounds a removed
+            // vertex's distance from the simplified surface.
+            Some(follow) => {
+                let mut bound: Vec<(f64, u32)> = gone
+                    .par_iter()
+                    .map(|&v| {
+                        let to = follow(v);
+                        let far = match mesh.slot.get(to as usize) {
+                            Some(&i) if i != u32::MAX => (0..frames)
+                                .map(|f| {
+                                    mesh.posed[i as usize * frames + f].distance_squared(
+                                        self.original_posed[v as usize * frames + f],
+                                    )
+                                })
+                                .fold(0.0, f64::max),
+                            _ => f64::INFINITY,
+                        };
+                        // So does the distance from the nearest triangle at rest, often much
+                        // less: checked where it could matter.
+                        let far = if self.every_vertex && far > enough {
+                            let p = self.original_rest[v as usize];
+                            let near = simplified.nearest(p, 1);
+                            let point = |f: usize| self.original_posed[v as usize * frames + f];
+                            let mut unused = 0.0;
+                            far.min(to_simplified.worst(point, &near, f64::INFINITY, &mut unused))
+                        } else {
+                            far
+                        };
+                        (far, v)
+                    })
+                    .collect();
+                bound.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+                if !self.every_vertex {
+                    bound.truncate(budget);
+                }
+                bound
+            }
+            None => {
+                let stride = gone.len().div_ceil(budget).max(1);
+                gone.into_iter()
+                    .step_by(stride)
+                    .map(|v| (f64::INFINITY, v))
+                    .collect()
+            }
+        };
+        bounded
+            .into_iter()
+            .map(|(bound, v)| {
+                let t = self.original_fans.of(self.position[v as usize])[0];
+                let (tri, w) = self.at_vertex(&self.original.triangles, t, v);
+                (bound, (tri, w, self.original_rest[v as usize]))
+            })
+            .collect()
+    }
+
+    /// Samples at the simplified mesh's vertices that influence simplification moved furthest
+    /// (in their worst frame), a quarter of the backward samples at most.
+    fn moved_vertices(
+        &self,
+        mesh: &PosedMesh,
+        simplified_fans: &Fans,
+        triangles: &[[u32; 3]],
+    ) -> Vec<([u32; 3], [f64; 3])> {
+        let frames = self.frames.len();
+        let mut shifted: Vec<(f64, u32)> = mesh
+            .used
+            .iter()
+            .zip(&mesh.moved)
+            .filter(|(_, m)| **m)
+            .map(|(&v, _)| {
+                let i = mesh.slot[v as usize] as usize;
+                let shift = (0..frames)
+                    .map(|f| {
+                        mesh.posed[i * frames + f]
+                            .distance_squared(self.original_posed[v as usize * frames + f])
+                    })
+                    .fold(0.0, f64::max);
+                (shift, v)
+            })
+            .collect();
+        shifted.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        shifted
+            .iter()
+            .take(self.backward / 4)
+            .filter_map(|&(_, v)| {
+                let t = *simplified_fans.of(self.position[v as usize]).first()?;
+                Some(self.at_vertex(triangles, t, v))
+            })
+            .collect()
+    }
+}
+
+/// `Σ G_i p_i` for one vertex's influences and bone matrices `g`.
+fn pose_point(g: &[Affine3A], influences: &[AsInfluence]) -> DVec3 {
+    influences
+        .iter()
+        .map(|i| {
+            crate::bake::animation_space::transform_homogeneous(&g[i.bone as usize], i.p).as_dvec3()
+        })
+        .sum()
+}
