@@ -2,7 +2,10 @@
 //! front end.
 
 use clap::Parser;
-use lodlab::app::cli::{Cli, Command, StudyCommand, ViewArgs};
+use lodlab::app::cli::{
+    BakeArgs, BenchArgs, Cli, Command, GenAssetsArgs, RecordArgs, ReportArgs, ShotArgs,
+    StudyCommand, ViewArgs,
+};
 use lodlab::app::shot::{self, ShotOptions};
 use lodlab::atomic::write as write_atomic;
 use lodlab::runtime::headless::ShotLod;
@@ -11,149 +14,168 @@ use std::process::ExitCode;
 
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Some(Command::Shot(a)) => {
-            let report = shot::run(&ShotOptions {
-                spec: a.scene.spec(),
-                out: a.out,
-                width: a.size.0,
-                height: a.size.1,
-                time: a.time,
-                samples: a.msaa,
-                camera: a.camera,
-                timed_frames: a.frames,
-                calibrate: a.calibrate,
-                lod: a.lod.shot_lod(LodMethod::None),
-            })?;
-            println!("{}", serde_json::to_string(&report)?);
-            Ok(ExitCode::SUCCESS)
-        }
-        Some(Command::GenAssets(a)) => {
-            let dir = a.out.unwrap_or_else(lodlab::assets::assets_dir);
-            for w in lodlab::app::gen_assets::run(&dir, &a.only)? {
-                println!("{}", serde_json::to_string(&w)?);
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        Some(Command::Bake(a)) => {
-            if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
-                anyhow::bail!("--tolerance must be a positive number of pixels");
-            }
-            let results = lodlab::app::bake::run(&lodlab::app::bake::BakeOptions {
-                models: a.models.into_iter().chain(a.model_flags).collect(),
-                methods: dedup(a.methods),
-                tolerance_px: a.tolerance,
-                budgets: a.triangles,
-                cache_dir: a.cache,
-            })?;
-            for warning in lodlab::app::bake::budget_warnings(&results) {
-                eprintln!("warning: {warning}");
-            }
-            print!("{}", lodlab::app::bake::table(&results));
-            Ok(ExitCode::SUCCESS)
-        }
-        Some(Command::Report(a)) => {
-            let Some(name) = a.model.or(a.model_flag) else {
-                anyhow::bail!("report needs a model: lodlab report --model NAME|PATH --out DIR");
-            };
-            // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
-            // report; a character the simplification report.
-            let model = lodlab::import::load_model(&name)?;
-            if lodlab::bake::billboard::foliage(&model).is_ok() {
-                let r = lodlab::app::tree_report::run(&model, &a.out)?;
-                let last = r.levels.last().map_or(0, |l| l.billboards);
-                println!(
-                    "{}: {} leaves, {} levels down to {last} billboards in {:.2} s; wrote {}",
-                    r.model,
-                    r.leaves,
-                    r.levels.len(),
-                    r.chain_seconds,
-                    a.out.display()
-                );
-                return Ok(ExitCode::SUCCESS);
-            }
-            let report = lodlab::app::report::run(&lodlab::app::report::ReportOptions {
-                model: name,
-                out: a.out.clone(),
-                baseline_meshopt: a.baseline.is_some(),
-                progress: true,
-            })?;
-            let c = &report.comparison;
-            let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
-            let floors: Vec<String> = report
-                .methods
-                .iter()
-                .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
-                .collect();
-            println!(
-                "{}: AS <= rest-pose on {} of the curve, AS+IS <= AS on {}; coarsest levels {} \
-                 of {} triangles; errors by {}; wrote {}",
-                report.model,
-                pct(c.as_le_rest_pose),
-                pct(c.as_is_le_as),
-                floors.join(", "),
-                report.triangles,
-                report.correspondence.describe(),
-                a.out.display()
-            );
-            Ok(ExitCode::SUCCESS)
-        }
-        Some(Command::Bench(a)) => {
-            use lodlab::app::bench;
-            bench::check_outputs(&[&a.json, &a.markdown])?;
-            let report = bench::run(&bench::BenchOptions {
-                spec: a.scene.spec(),
-                methods: dedup(a.methods),
-                policy: a.policy.policy(),
-                foliage: a.foliage.view(),
-                width: a.size.0,
-                height: a.size.1,
-                samples: a.msaa,
-                seconds: a.seconds,
-                warmup: a.warmup,
-                frames: a.frames.map(|f| f as usize),
-                path: a.path,
-                path_seconds: a.path_seconds,
-                progress: true,
-            })?;
-            let table = bench::markdown(&report);
-            print!("{table}");
-            if let Some(p) = &a.json {
-                write_atomic(p, serde_json::to_string_pretty(&report)?.as_bytes())?;
-            }
-            if let Some(p) = &a.markdown {
-                write_atomic(p, table.as_bytes())?;
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        Some(Command::Record(a)) => {
-            let report = lodlab::app::record::run(&lodlab::app::record::RecordOptions {
-                spec: a.scene.spec_or(SceneKind::Study),
-                lod: ShotLod {
-                    method: a.method,
-                    policy: a.policy.policy(),
-                    debug: a.debug_view,
-                    foliage: a.foliage.view(),
-                    ..Default::default()
-                },
-                width: a.size.0,
-                height: a.size.1,
-                samples: a.msaa,
-                fps: a.fps,
-                seconds: a.seconds,
-                path: a.path,
-                out: a.out,
-                frames_dir: a.frames_dir,
-                progress: true,
-            })?;
-            println!("{}", serde_json::to_string(&report)?);
-            Ok(ExitCode::SUCCESS)
-        }
+        Some(Command::Shot(a)) => shot(a),
+        Some(Command::GenAssets(a)) => gen_assets(a),
+        Some(Command::Bake(a)) => bake(a),
+        Some(Command::Report(a)) => report(a),
+        Some(Command::Bench(a)) => bench(a),
+        Some(Command::Record(a)) => record(a),
         Some(Command::Study(a)) => study(a.command),
         Some(Command::View(a)) => view(a),
         None => view(cli.view),
     }
 }
 
+/// `lodlab shot`: one PNG and a JSON line of figures.
+fn shot(a: ShotArgs) -> anyhow::Result<ExitCode> {
+    let report = shot::run(&ShotOptions {
+        spec: a.scene.spec(),
+        out: a.out,
+        width: a.size.0,
+        height: a.size.1,
+        time: a.time,
+        samples: a.msaa,
+        camera: a.camera,
+        timed_frames: a.frames,
+        calibrate: a.calibrate,
+        lod: a.lod.shot_lod(LodMethod::None),
+    })?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab gen-assets`: the built-in models as .glb files.
+fn gen_assets(a: GenAssetsArgs) -> anyhow::Result<ExitCode> {
+    let dir = a.out.unwrap_or_else(lodlab::assets::assets_dir);
+    for w in lodlab::app::gen_assets::run(&dir, &a.only)? {
+        println!("{}", serde_json::to_string(&w)?);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab bake`: levels of detail baked or fetched from the cache, as a table.
+fn bake(a: BakeArgs) -> anyhow::Result<ExitCode> {
+    if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
+        anyhow::bail!("--tolerance must be a positive number of pixels");
+    }
+    let results = lodlab::app::bake::run(&lodlab::app::bake::BakeOptions {
+        models: a.models.into_iter().chain(a.model_flags).collect(),
+        methods: dedup(a.methods),
+        tolerance_px: a.tolerance,
+        budgets: a.triangles,
+        cache_dir: a.cache,
+    })?;
+    for warning in lodlab::app::bake::budget_warnings(&results) {
+        eprintln!("warning: {warning}");
+    }
+    print!("{}", lodlab::app::bake::table(&results));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab report`: a tree's billboard-cloud report or a character's error curves.
+fn report(a: ReportArgs) -> anyhow::Result<ExitCode> {
+    let Some(name) = a.model.or(a.model_flag) else {
+        anyhow::bail!("report needs a model: lodlab report --model NAME|PATH --out DIR");
+    };
+    // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
+    // report; a character the simplification report.
+    let model = lodlab::import::load_model(&name)?;
+    if lodlab::bake::billboard::foliage(&model).is_ok() {
+        let r = lodlab::app::tree_report::run(&model, &a.out)?;
+        let last = r.levels.last().map_or(0, |l| l.billboards);
+        println!(
+            "{}: {} leaves, {} levels down to {last} billboards in {:.2} s; wrote {}",
+            r.model,
+            r.leaves,
+            r.levels.len(),
+            r.chain_seconds,
+            a.out.display()
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = lodlab::app::report::run(&lodlab::app::report::ReportOptions {
+        model: name,
+        out: a.out.clone(),
+        baseline_meshopt: a.baseline.is_some(),
+        progress: true,
+    })?;
+    let c = &report.comparison;
+    let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
+    let floors: Vec<String> = report
+        .methods
+        .iter()
+        .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
+        .collect();
+    println!(
+        "{}: AS <= rest-pose on {} of the curve, AS+IS <= AS on {}; coarsest levels {} \
+         of {} triangles; errors by {}; wrote {}",
+        report.model,
+        pct(c.as_le_rest_pose),
+        pct(c.as_is_le_as),
+        floors.join(", "),
+        report.triangles,
+        report.correspondence.describe(),
+        a.out.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab bench`: frame times of the methods, as a Markdown table (and JSON).
+fn bench(a: BenchArgs) -> anyhow::Result<ExitCode> {
+    use lodlab::app::bench;
+    bench::check_outputs(&[&a.json, &a.markdown])?;
+    let report = bench::run(&bench::BenchOptions {
+        spec: a.scene.spec(),
+        methods: dedup(a.methods),
+        policy: a.policy.policy(),
+        foliage: a.foliage.view(),
+        width: a.size.0,
+        height: a.size.1,
+        samples: a.msaa,
+        seconds: a.seconds,
+        warmup: a.warmup,
+        frames: a.frames.map(|f| f as usize),
+        path: a.path,
+        path_seconds: a.path_seconds,
+        progress: true,
+    })?;
+    let table = bench::markdown(&report);
+    print!("{table}");
+    if let Some(p) = &a.json {
+        write_atomic(p, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    }
+    if let Some(p) = &a.markdown {
+        write_atomic(p, table.as_bytes())?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab record`: a study clip as MP4.
+fn record(a: RecordArgs) -> anyhow::Result<ExitCode> {
+    let report = lodlab::app::record::run(&lodlab::app::record::RecordOptions {
+        spec: a.scene.spec_or(SceneKind::Study),
+        lod: ShotLod {
+            method: a.method,
+            policy: a.policy.policy(),
+            debug: a.debug_view,
+            foliage: a.foliage.view(),
+            ..Default::default()
+        },
+        width: a.size.0,
+        height: a.size.1,
+        samples: a.msaa,
+        fps: a.fps,
+        seconds: a.seconds,
+        path: a.path,
+        out: a.out,
+        frames_dir: a.frames_dir,
+        progress: true,
+    })?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab study make|run|analyze`.
 fn study(command: StudyCommand) -> anyhow::Result<ExitCode> {
     use lodlab::app::study;
     match command {
@@ -224,6 +246,7 @@ fn study(command: StudyCommand) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// `lodlab view` (and `lodlab` alone): the viewer.
 fn view(a: ViewArgs) -> anyhow::Result<ExitCode> {
     lodlab::app::viewer::run(lodlab::app::viewer::ViewOptions {
         spec: a.scene.spec(),

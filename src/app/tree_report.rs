@@ -16,7 +16,7 @@ use crate::bake::billboard::chain::{
     ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, tree_chain,
 };
 use crate::bake::billboard::cloud::CloudParams;
-use crate::bake::billboard::{Grouping, foliage, tree_height};
+use crate::bake::billboard::{Foliage, Grouping, foliage, tree_height};
 use crate::bake::spectral::cloud::SpectralParams;
 use crate::bake::spectral::description::DescriptionType;
 use crate::model::Model;
@@ -107,35 +107,9 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let opts = ChainOptions::default();
     let chain = tree_chain(&raster, tree, &f, &opts, &|_| {})?;
     let chain_seconds = start.elapsed().as_secs_f64();
-    let measure = |k: usize, l: &TreeLevel, what: &str| -> Result<LevelReport> {
-        let error = colour_error(&gpu, tree, &l.cloud, METRIC_SIZE)?;
-        let anim = &l.cloud.animation;
-        eprintln!(
-            "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3}, animation error {:.4} h / {:.3}",
-            tree.name,
-            l.epsilon / h,
-            l.cloud.billboards,
-            error,
-            anim.rms,
-            anim.spectral
-        );
-        Ok(LevelReport {
-            epsilon: l.epsilon / h,
-            epsilon_m: l.epsilon,
-            grouping: CloudKind::name(l.kind.as_ref()),
-            billboards: l.cloud.billboards,
-            triangles: l.cloud.model.mesh.triangle_count(),
-            area: l.cloud.area,
-            texture_bytes: l.cloud.texture_bytes,
-            colour_error: error,
-            anim_rms: anim.rms,
-            anim_spectral: anim.spectral,
-            bake_seconds: l.bake_seconds,
-        })
-    };
     let mut levels = Vec::new();
     for (k, l) in chain.iter().enumerate() {
-        levels.push(measure(k, l, "")?);
+        levels.push(measure_level(&gpu, tree, k, l, "")?);
     }
     // The skeleton-only chain, where it parts from this one.
     let skeleton_opts = ChainOptions {
@@ -144,77 +118,14 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     };
     let skeleton_chain = tree_chain(&raster, tree, &f, &skeleton_opts, &|_| {})?;
     let mut skeleton_levels = Vec::new();
-    let mut skeleton_shown = Vec::new();
     for (k, l) in skeleton_chain.iter().enumerate() {
         if chain.get(k).is_some_and(|c| c.kind == l.kind) {
             continue;
         }
-        skeleton_levels.push(measure(k, l, "skeleton-only ")?);
-        skeleton_shown.push(l);
+        skeleton_levels.push(measure_level(&gpu, tree, k, l, "skeleton-only ")?);
     }
-    // The spectral levels with every description type.
-    let mut description_types = Vec::new();
-    for (k, l) in chain.iter().enumerate() {
-        let Some(CloudKind::Spectral(sp)) = l.kind else {
-            continue;
-        };
-        let params = CloudParams {
-            epsilon: l.epsilon,
-            seed: opts.seed,
-            ..Default::default()
-        };
-        let density = (2.0 * opts.tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
-        // Every description type with the shared bone, and the chain's own without it.
-        let variants = DescriptionType::ALL
-            .map(|d| (d, true))
-            .into_iter()
-            .chain([(sp.kind, false)]);
-        for (description, shared_bone) in variants {
-            let start = std::time::Instant::now();
-            let kind = CloudKind::Spectral(SpectralParams {
-                kind: description,
-                shared_bone,
-                ..sp
-            });
-            let cloud = cloud_level(&raster, tree, &f, &params, &kind, density, tree)?;
-            description_types.push(DescriptionReport {
-                level: k,
-                description: description.name().into(),
-                shared_bone,
-                epsilon: l.epsilon / h,
-                clusters: sp.clusters,
-                billboards: cloud.billboards,
-                anim_rms: cloud.animation.rms,
-                anim_spectral: cloud.animation.spectral,
-                bake_seconds: start.elapsed().as_secs_f64(),
-            });
-        }
-    }
-    let still = at_rest(tree);
-    let mut static_clouds = Vec::new();
-    for l in &chain[1..] {
-        let params = CloudParams {
-            epsilon: l.epsilon,
-            ..Default::default()
-        };
-        let density =
-            (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
-        let whole = CloudKind::Skeleton(Grouping::Subtree { forks: 0 });
-        let cloud = cloud_level(&raster, &still, &f, &params, &whole, density, &still)?;
-        let error = colour_error_over(&gpu, &still, &cloud, METRIC_SIZE, 1)?;
-        eprintln!(
-            "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",
-            tree.name,
-            l.epsilon / h,
-            cloud.billboards,
-            error
-        );
-        static_clouds.push(StaticCloudReport {
-            epsilon: l.epsilon / h,
-            billboards: cloud.billboards,
-            colour_error: error,
-        });
-    }
+    let description_types = description_types(&raster, tree, &f, &chain, &opts)?;
+    let static_clouds = static_clouds(&gpu, &raster, tree, &f, &chain)?;
     let report = TreeReport {
         model: tree.name.clone(),
         leaves: f.leaves.len(),
@@ -254,6 +165,129 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     });
     motion_plot(&report, pair, &out.join("motion.png"))?;
     Ok(report)
+}
+
+/// A level of a chain with its colour error (said on stderr as it goes).
+fn measure_level(
+    gpu: &Gpu,
+    tree: &Model,
+    k: usize,
+    l: &TreeLevel,
+    what: &str,
+) -> Result<LevelReport> {
+    let h = tree_height(tree);
+    let error = colour_error(gpu, tree, &l.cloud, METRIC_SIZE)?;
+    let anim = &l.cloud.animation;
+    eprintln!(
+        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3}, animation error {:.4} h / {:.3}",
+        tree.name,
+        l.epsilon / h,
+        l.cloud.billboards,
+        error,
+        anim.rms,
+        anim.spectral
+    );
+    Ok(LevelReport {
+        epsilon: l.epsilon / h,
+        epsilon_m: l.epsilon,
+        grouping: CloudKind::name(l.kind.as_ref()),
+        billboards: l.cloud.billboards,
+        triangles: l.cloud.model.mesh.triangle_count(),
+        area: l.cloud.area,
+        texture_bytes: l.cloud.texture_bytes,
+        colour_error: error,
+        anim_rms: anim.rms,
+        anim_spectral: anim.spectral,
+        bake_seconds: l.bake_seconds,
+    })
+}
+
+/// The chain's spectral levels baked again with every description type and the shared bone,
+/// and with the chain's own type without it (thesis Ch. 4–5): their animation errors.
+fn description_types(
+    raster: &crate::render::atlas::AtlasRasterizer,
+    tree: &Model,
+    f: &Foliage,
+    chain: &[TreeLevel],
+    opts: &ChainOptions,
+) -> Result<Vec<DescriptionReport>> {
+    let h = tree_height(tree);
+    let mut description_types = Vec::new();
+    for (k, l) in chain.iter().enumerate() {
+        let Some(CloudKind::Spectral(sp)) = l.kind else {
+            continue;
+        };
+        let params = CloudParams {
+            epsilon: l.epsilon,
+            seed: opts.seed,
+            ..Default::default()
+        };
+        let density = (2.0 * opts.tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
+        // Every description type with the shared bone, and the chain's own without it.
+        let variants = DescriptionType::ALL
+            .map(|d| (d, true))
+            .into_iter()
+            .chain([(sp.kind, false)]);
+        for (description, shared_bone) in variants {
+            let start = std::time::Instant::now();
+            let kind = CloudKind::Spectral(SpectralParams {
+                kind: description,
+                shared_bone,
+                ..sp
+            });
+            let cloud = cloud_level(raster, tree, f, &params, &kind, density, tree)?;
+            description_types.push(DescriptionReport {
+                level: k,
+                description: description.name().into(),
+                shared_bone,
+                epsilon: l.epsilon / h,
+                clusters: sp.clusters,
+                billboards: cloud.billboards,
+                anim_rms: cloud.animation.rms,
+                anim_spectral: cloud.animation.spectral,
+                bake_seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+    }
+    Ok(description_types)
+}
+
+/// The thesis's own set-up (§8.4) at every level's ε: one static cloud for the whole crown of
+/// the tree at rest, scored by the static colour metric.
+fn static_clouds(
+    gpu: &Gpu,
+    raster: &crate::render::atlas::AtlasRasterizer,
+    tree: &Model,
+    f: &Foliage,
+    chain: &[TreeLevel],
+) -> Result<Vec<StaticCloudReport>> {
+    let h = tree_height(tree);
+    let still = at_rest(tree);
+    let mut static_clouds = Vec::new();
+    for l in &chain[1..] {
+        let params = CloudParams {
+            epsilon: l.epsilon,
+            ..Default::default()
+        };
+        let density =
+            (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
+        let whole = CloudKind::Skeleton(Grouping::Subtree { forks: 0 });
+        let cloud = cloud_level(raster, &still, f, &params, &whole, density, &still)?;
+        let error = colour_error_over(gpu, &still, &cloud, METRIC_SIZE, 1)?;
+        eprintln!(
+            "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",
+            tree.name,
+            l.epsilon / h,
+            cloud.billboards,
+            error
+        );
+        static_clouds.push(StaticCloudReport {
+            epsilon: l.epsilon / h,
+            billboards: cloud.billboards,
+            colour_error: error,
+        });
+    }
+    Ok(static_clouds)
 }
 
 /// A few leaves' sway over one loop (their x and z about their mean), against where their
