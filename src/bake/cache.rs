@@ -194,7 +194,7 @@ impl LodCache {
         source: &[u8; 32],
         method: Method,
         options: &LodOptions,
-        progress: &dyn Fn(f32),
+        progress: &(dyn Fn(f32) + Sync),
     ) -> (SkinnedLods, Origin) {
         let key = key(source, method, options);
         let path = self.path(&model.name, method, &key);

@@ -630,7 +630,7 @@ pub struct SkinnedLods {
 pub fn progressive_mesh(
     model: &Model,
     method: Method,
-    progress: &dyn Fn(f32),
+    progress: &(dyn Fn(f32) + Sync),
 ) -> (AnimationSpaceMesh, Sequence, f64) {
     let base = full_detail(model);
     let start = std::time::Instant::now();
@@ -650,8 +650,8 @@ fn simplify_model(
     model: &Model,
     base: &AnimationSpaceMesh,
     method: Method,
-    progress: &dyn Fn(f32),
-    feed: &mut dyn FnMut(Feed),
+    progress: &(dyn Fn(f32) + Sync),
+    feed: &mut (dyn FnMut(Feed) + Send),
 ) -> Sequence {
     let expectation = match method {
         Method::RestPose => ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>()),
@@ -676,7 +676,7 @@ pub fn bake_lods(
     model: &Model,
     method: Method,
     opts: &LodOptions,
-    progress: &dyn Fn(f32),
+    progress: &(dyn Fn(f32) + Sync),
 ) -> SkinnedLods {
     let start = std::time::Instant::now();
     let base = full_detail(model);

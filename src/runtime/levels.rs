@@ -99,7 +99,7 @@ fn tree_levels(
     cache: &LodCache,
     s: &LevelSource,
     opts: &ChainOptions,
-    progress: &dyn Fn(f32),
+    progress: &(dyn Fn(f32) + Sync),
 ) -> anyhow::Result<(Levels, Origin)> {
     let (chain, origin) = load_or_build_chain(
         &AtlasRasterizer::new(gpu),

@@ -275,7 +275,7 @@ pub fn tree_chain(
     tree: &Model,
     foliage: &Foliage,
     opts: &ChainOptions,
-    progress: &dyn Fn(f32),
+    progress: &(dyn Fn(f32) + Sync),
 ) -> Result<Vec<TreeLevel>> {
     let h = crate::bake::billboard::tree_height(tree);
     let mut levels = vec![full_tree(tree)];
@@ -417,7 +417,7 @@ pub fn load_or_build_chain(
     tree: &Model,
     source: &[u8; 32],
     opts: &ChainOptions,
-    progress: &dyn Fn(f32),
+    progress: &(dyn Fn(f32) + Sync),
 ) -> Result<(Vec<TreeLevel>, Origin)> {
     let build = || -> Result<Vec<TreeLevel>> {
         let foliage = crate::bake::billboard::foliage(tree).map_err(anyhow::Error::msg)?;

@@ -40,11 +40,13 @@ use expectation::ExpectationMatrix;
 use glam::{Affine3A, DVec2, DVec3, Vec3, Vec4};
 use influence::{FactorCache, Influence64};
 use mesh::{Kind, Mesh};
+use rayon::prelude::*;
 use rstar::RTree;
 use rstar::primitives::GeomWithData;
 use serde::{Deserialize, Serialize};
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
+use std::sync::Mutex;
 
 /// The three ways of ranking simplifications the paper compares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
@@ -202,8 +204,10 @@ struct Simplifier<'a> {
     parts: Vec<Vec<u32>>,
     part_of: Vec<u32>,
     located: RTree<Located>,
-    scratch: Scratch,
-    neighbours: Vec<u32>,
+    /// The serial steps' scratch space.
+    workspace: Workspace,
+    /// Scratch spaces for the candidates priced in parallel, one per task at a time.
+    workspaces: Mutex<Vec<Workspace>>,
     influences: u64,
     /// Steps applied: marks what the scratch space cached as stale.
     stamp: u64,
@@ -212,7 +216,11 @@ struct Simplifier<'a> {
 
 /// Builds the whole progressive mesh of `input` by `method`. `progress` is told the fraction
 /// of triangles removed so far, now and then.
-pub fn simplify(input: &SimplifyInput, method: Method, progress: &dyn Fn(f32)) -> Sequence {
+pub fn simplify(
+    input: &SimplifyInput,
+    method: Method,
+    progress: &(dyn Fn(f32) + Sync),
+) -> Sequence {
     simplify_feeding(input, method, progress, &mut |_| {})
 }
 
@@ -232,8 +240,8 @@ const FEED_BATCH: usize = 64;
 pub fn simplify_feeding(
     input: &SimplifyInput,
     method: Method,
-    progress: &dyn Fn(f32),
-    feed: &mut dyn FnMut(Feed),
+    progress: &(dyn Fn(f32) + Sync),
+    feed: &mut (dyn FnMut(Feed) + Send),
 ) -> Sequence {
     let am = input.mesh;
     let n = am.vertex_count();
@@ -327,8 +335,8 @@ pub fn simplify_feeding(
         parts,
         part_of,
         located,
-        scratch: Scratch::default(),
-        neighbours: Vec::new(),
+        workspace: Workspace::default(),
+        workspaces: Mutex::new(Vec::new()),
         influences,
         stamp: 0,
         stats,
@@ -342,7 +350,10 @@ pub fn simplify_feeding(
         stats: Stats::default(),
     };
     feed(Feed::Start(&sequence));
-    sequence.steps = s.run(progress, feed);
+    // On a worker of rayon's pool, the candidates priced in parallel after each collapse
+    // (see `evaluate_collapses`) cost a push onto the worker's own queue, which an idle
+    // worker steals from; from any other thread, each would wake the pool and wait.
+    sequence.steps = rayon::scope(|_| s.run(progress, feed));
     s.stats.cache_hits = s.cache.hits;
     s.stats.cache_misses = s.cache.misses;
     sequence.stats = s.stats;
@@ -400,13 +411,18 @@ impl TextureCharts {
 }
 
 impl Simplifier<'_> {
-    fn run(&mut self, progress: &dyn Fn(f32), feed: &mut dyn FnMut(Feed)) -> Vec<Step> {
+    fn run(
+        &mut self,
+        progress: &(dyn Fn(f32) + Sync),
+        feed: &mut (dyn FnMut(Feed) + Send),
+    ) -> Vec<Step> {
         let n = self.mesh.position.len() as u32;
-        for u in 0..n {
-            if self.mesh.alive[u as usize] && self.mesh.pos(u) == u {
-                self.evaluate_collapse(u);
-                self.evaluate_influence(u);
-            }
+        let positions: Vec<u32> = (0..n)
+            .filter(|&u| self.mesh.alive[u as usize] && self.mesh.pos(u) == u)
+            .collect();
+        self.evaluate_collapses(&positions);
+        for &u in &positions {
+            self.evaluate_influence(u);
         }
         for part in 0..self.parts.len() as u32 {
             self.queue_prune(part);
@@ -497,26 +513,23 @@ impl Simplifier<'_> {
 
     /// The cost (a distance) of the half-edge collapse `u1 → u2`, or `None` if illegal.
     fn collapse_cost(&mut self, u1: u32, u2: u32) -> Option<f64> {
-        let cost = self.unoriented_cost(u1, u2)?;
+        self.stats.evaluations += 1;
+        let mut w = std::mem::take(&mut self.workspace);
+        let cost = self.unoriented_cost(u1, u2, &mut w.scratch);
+        self.workspace = w;
+        let cost = cost?;
         self.context().check_orientation(u1, u2).ok()?;
         Some(cost)
     }
 
     /// [`Self::collapse_cost`] without the orientation check.
-    fn unoriented_cost(&mut self, u1: u32, u2: u32) -> Option<f64> {
+    fn unoriented_cost(&self, u1: u32, u2: u32, scratch: &mut Scratch) -> Option<f64> {
         if u2 == u32::MAX || !self.mesh.alive[u2 as usize] {
             return None;
         }
-        self.stats.evaluations += 1;
-        // Taken out while the context borrows the rest of the simplifier.
-        let mut scratch = std::mem::take(&mut self.scratch);
-        let legal = self.context().corners(u1, u2, &mut scratch).is_ok();
-        self.scratch = scratch;
-        if !legal {
-            return None;
-        }
+        self.context().corners(u1, u2, scratch).ok()?;
         let mut worst = 0.0f64;
-        for corner in &self.scratch.corners {
+        for corner in &scratch.corners {
             let d = self
                 .metric
                 .deviation2(&corner.terms, &self.rest, &self.infl);
@@ -525,26 +538,61 @@ impl Simplifier<'_> {
         Some(worst.sqrt())
     }
 
-    /// Finds `u`'s cheapest legal collapse and queues it.
-    fn evaluate_collapse(&mut self, u: u32) {
+    /// `u`'s cheapest legal collapse, as its cost and target, and how many candidates were
+    /// priced. Reads the simplifier only, so the candidates of many vertices can be priced at
+    /// once.
+    fn best_collapse(&self, u: u32, w: &mut Workspace) -> (Option<(f64, u32)>, u64) {
         let ui = u as usize;
-        self.collapse_version[ui] += 1;
-        self.target[ui] = u32::MAX;
         if !self.mesh.alive[ui] || matches!(self.mesh.kind[ui], Kind::Complex | Kind::Locked) {
-            return;
+            return (None, 0);
         }
-        let mut neighbours = std::mem::take(&mut self.neighbours);
-        self.mesh.neighbours(u, &mut neighbours);
-        let mut costs: smallvec::SmallVec<[(f64, u32); 16]> = neighbours
+        self.mesh.neighbours(u, &mut w.neighbours);
+        let mut costs: smallvec::SmallVec<[(f64, u32); 16]> = w
+            .neighbours
             .iter()
-            .filter_map(|&u2| Some((self.unoriented_cost(u, u2)?, u2)))
+            .filter_map(|&u2| Some((self.unoriented_cost(u, u2, &mut w.scratch)?, u2)))
             .collect();
-        self.neighbours = neighbours;
         costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let ctx = self.context();
         let best = costs
             .into_iter()
             .find(|&(_, u2)| ctx.check_orientation(u, u2).is_ok());
+        (best, w.neighbours.len() as u64)
+    }
+
+    /// Finds `u`'s cheapest legal collapse and queues it.
+    fn evaluate_collapse(&mut self, u: u32) {
+        let mut w = std::mem::take(&mut self.workspace);
+        let (best, evaluations) = self.best_collapse(u, &mut w);
+        self.workspace = w;
+        self.stats.evaluations += evaluations;
+        self.queue_collapse(u, best);
+    }
+
+    /// [`Self::evaluate_collapse`] for each of `vertices`. Their candidates are priced in
+    /// parallel, since pricing reads the mesh only and is most of a collapse's work (a
+    /// collapse prices again the fans of its whole ring, about 40 candidates); they are queued
+    /// in order, so the sequence is the same on any number of cores.
+    fn evaluate_collapses(&mut self, vertices: &[u32]) {
+        let found: Vec<(Option<(f64, u32)>, u64)> = vertices
+            .par_iter()
+            .map_init(
+                || Pooled::take(&self.workspaces),
+                |w, &u| self.best_collapse(u, &mut w.workspace),
+            )
+            .collect();
+        for (&u, (best, evaluations)) in vertices.iter().zip(found) {
+            self.stats.evaluations += evaluations;
+            self.queue_collapse(u, best);
+        }
+    }
+
+    /// Queues `u`'s collapse `best` (found by [`Self::best_collapse`]), in place of any
+    /// queued before.
+    fn queue_collapse(&mut self, u: u32, best: Option<(f64, u32)>) {
+        let ui = u as usize;
+        self.collapse_version[ui] += 1;
+        self.target[ui] = u32::MAX;
         if let Some((cost, u2)) = best {
             self.target[ui] = u2;
             self.heap.push(Reverse(Entry {
@@ -676,9 +724,7 @@ impl Simplifier<'_> {
             }
         }
         // Only fans that contained u1 changed (the ring of u1, u2 included).
-        for x in ring {
-            self.evaluate_collapse(x);
-        }
+        self.evaluate_collapses(&ring);
         StepKind::Collapse { wedges: map }
     }
 
@@ -755,6 +801,41 @@ impl Simplifier<'_> {
                     n: Vec3::from_array(i.n.map(|x| x as f32)),
                 })
                 .collect(),
+        }
+    }
+}
+
+/// What pricing one vertex's candidates writes to: the collapse's scratch space and the
+/// vertex's neighbours.
+#[derive(Default)]
+struct Workspace {
+    scratch: Scratch,
+    neighbours: Vec<u32>,
+}
+
+/// A [`Workspace`] taken from a pool for one parallel task, and put back when it ends, so
+/// that scratch space is allocated once per thread rather than once per collapse.
+struct Pooled<'p> {
+    pool: &'p Mutex<Vec<Workspace>>,
+    workspace: Workspace,
+}
+
+impl<'p> Pooled<'p> {
+    fn take(pool: &'p Mutex<Vec<Workspace>>) -> Pooled<'p> {
+        let workspace = pool
+            .lock()
+            .map(|mut p| p.pop())
+            .ok()
+            .flatten()
+            .unwrap_or_default();
+        Pooled { pool, workspace }
+    }
+}
+
+impl Drop for Pooled<'_> {
+    fn drop(&mut self) {
+        if let Ok(mut pool) = self.pool.lock() {
+            pool.push(std::mem::take(&mut self.workspace));
         }
     }
 }
