@@ -89,7 +89,7 @@ fn render(
         width: size.0,
         height: size.1,
         time,
-        samples: 4,
+        samples: Some(4),
         camera,
         timed_frames: 1,
         calibrate: false,
@@ -243,4 +243,38 @@ fn adapter_is_chosen_by_name() {
         stderr.contains("no-such-gpu-anywhere") && stderr.contains(&adapter),
         "{stderr}"
     );
+}
+
+/// Without `--msaa`, `shot` draws with the adapter's default, 1 sample on a CPU adapter and 4
+/// on a GPU, says so on stderr with how to change it, and reports what it drew with; `--msaa`
+/// overrides it silently.
+#[test]
+fn multisampling_defaults_by_adapter() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    let run = |extra: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+            .args([
+                "shot", "--scene", "crowd", "--count", "0", "--size", "32x32", "--out",
+            ])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (report, String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (report, stderr) = run(&[]);
+    let cpu = stderr.contains("Cpu)");
+    let (expected, other) = if cpu { (1, 4) } else { (4, 1) };
+    assert_eq!(report["msaa"].as_u64(), Some(expected), "{stderr}");
+    assert!(
+        stderr.contains(&format!("multisampling {expected}×"))
+            && stderr.contains(&format!("--msaa {other}")),
+        "the default and how to change it are printed: {stderr}"
+    );
+    let (report, stderr) = run(&["--msaa", &other.to_string()]);
+    assert_eq!(report["msaa"].as_u64(), Some(other));
+    assert!(!stderr.contains("multisampling"), "{stderr}");
 }

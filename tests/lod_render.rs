@@ -205,7 +205,7 @@ fn take_at(name: &str, lod: ShotLod, time: f32) -> Shot {
         width: 480,
         height: 270,
         time,
-        samples: 1,
+        samples: Some(1),
         camera: None,
         timed_frames: 1,
         calibrate: false,

@@ -54,7 +54,8 @@ pub struct BenchOptions {
     pub foliage: FoliageView,
     pub width: u32,
     pub height: u32,
-    pub samples: u32,
+    /// Samples per pixel; `None` for the adapter's default (see [`crate::render::Gpu::samples`]).
+    pub samples: Option<u32>,
     /// Seconds of measuring, all methods and their calibration together.
     pub seconds: f32,
     /// Seconds of unmeasured frames first (pipelines, caches, clocks settle).
@@ -202,7 +203,12 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
             ..Default::default()
         })?;
     }
-    let Headless { gpu, target, world } = scene;
+    let Headless {
+        gpu,
+        target,
+        world,
+        samples: msaa,
+    } = scene;
     let home = world.camera;
     let path = CameraPath::new(o.path, &home, o.path_seconds);
     let timer = PassTimer::new(&gpu);
@@ -289,7 +295,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
             .to_string(),
         backend: gpu.backend_name(),
         size: [o.width, o.height],
-        msaa: o.samples,
+        msaa,
         scene: o.spec.scene.to_string(),
         instances: bench.world.crowd.agents.len(),
         timing: if bench.timer.is_some() {

@@ -169,9 +169,9 @@ pub struct BenchArgs {
     /// Image size.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Multisampling: 1 (off) or 4.
-    #[arg(long, default_value_t = 4, value_parser = parse_samples)]
-    pub msaa: u32,
+    /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
+    #[arg(long, value_parser = parse_samples)]
+    pub msaa: Option<u32>,
     /// Seconds of measuring, all methods together (their calibration included).
     #[arg(long, default_value_t = 30.0, value_parser = parse_non_negative)]
     pub seconds: f32,
@@ -522,9 +522,9 @@ pub struct ViewArgs {
     /// Window size.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Multisampling: 1 (off) or 4.
-    #[arg(long, default_value_t = 4, value_parser = parse_samples)]
-    pub msaa: u32,
+    /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
+    #[arg(long, value_parser = parse_samples)]
+    pub msaa: Option<u32>,
     /// Render --frames frames of the window, write the last one to this PNG and exit.
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
@@ -548,9 +548,9 @@ pub struct ShotArgs {
     /// Scene time in seconds.
     #[arg(long, default_value_t = 1.0)]
     pub time: f32,
-    /// Multisampling: 1 (off) or 4.
-    #[arg(long, default_value_t = 4, value_parser = parse_samples)]
-    pub msaa: u32,
+    /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
+    #[arg(long, value_parser = parse_samples)]
+    pub msaa: Option<u32>,
     /// Camera as YAW,PITCH,DISTANCE[,X,Y,Z] (degrees, metres; X,Y,Z the point looked at).
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<Camera>,

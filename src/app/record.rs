@@ -104,12 +104,13 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
     if let Some(dir) = &o.frames_dir {
         prepare_frames_dir(dir)?;
     }
-    let mut scene = Headless::new(&o.spec, o.width, o.height, o.samples)?;
+    let mut scene = Headless::new(&o.spec, o.width, o.height, Some(o.samples))?;
     scene.show(lod)?;
     let Headless {
         gpu,
         target,
         mut world,
+        ..
     } = scene;
     let home = world.camera;
     let path = CameraPath::new(o.path, &home, o.seconds);

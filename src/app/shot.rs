@@ -17,7 +17,8 @@ pub struct ShotOptions {
     pub width: u32,
     pub height: u32,
     pub time: f32,
-    pub samples: u32,
+    /// Samples per pixel; `None` for the adapter's default (see [`crate::render::Gpu::samples`]).
+    pub samples: Option<u32>,
     /// Overrides the scene's default camera.
     pub camera: Option<Camera>,
     /// Timed frames after one warm-up frame.
@@ -35,6 +36,8 @@ pub struct ShotReport {
     pub adapter: String,
     pub backend: String,
     pub size: [u32; 2],
+    /// Samples per pixel drawn with.
+    pub msaa: u32,
     pub time: f32,
     /// Instances drawn, and those outside the view left out.
     pub instances: u64,
@@ -76,6 +79,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         gpu,
         target,
         mut world,
+        samples,
     } = {
         let mut h = Headless::new(
             &options.spec,
@@ -119,6 +123,7 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         adapter: gpu.info.name.clone(),
         backend: gpu.backend_name(),
         size: [options.width, options.height],
+        msaa: samples,
         time: options.time,
         instances: stats.instances,
         culled: stats.culled,

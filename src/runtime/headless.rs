@@ -44,15 +44,24 @@ pub struct Headless {
     pub gpu: Gpu,
     pub target: Offscreen,
     pub world: World,
+    /// Samples per pixel, as asked or chosen for the adapter (see [`Gpu::samples`]).
+    pub samples: u32,
 }
 
 impl Headless {
     /// Loads the models of `spec` (bad input fails here, before any GPU work), opens a device
-    /// and builds the world into a `width`×`height` target.
-    pub fn new(spec: &SceneSpec, width: u32, height: u32, samples: u32) -> Result<Headless> {
+    /// and builds the world into a `width`×`height` target, with `samples` per pixel (`None`:
+    /// the adapter's default, see [`Gpu::samples`]).
+    pub fn new(
+        spec: &SceneSpec,
+        width: u32,
+        height: u32,
+        samples: Option<u32>,
+    ) -> Result<Headless> {
         let loaded = Loaded::new(spec.clone())?;
         let gpu = Gpu::headless()?;
         eprintln!("lodlab: adapter {}", gpu.describe());
+        let samples = gpu.samples(samples);
         let target = Offscreen::new(&gpu, width, height, samples);
         let world = World::new(
             &gpu,
@@ -60,7 +69,12 @@ impl Headless {
             crate::render::targets::OFFSCREEN_FORMAT,
             samples,
         )?;
-        Ok(Headless { gpu, target, world })
+        Ok(Headless {
+            gpu,
+            target,
+            world,
+            samples,
+        })
     }
 
     /// Takes the level-of-detail choices of `lod` and waits for the levels they need.

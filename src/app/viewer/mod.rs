@@ -46,7 +46,8 @@ pub struct ViewOptions {
     pub spec: SceneSpec,
     pub width: u32,
     pub height: u32,
-    pub samples: u32,
+    /// Samples per pixel; `None` for the adapter's default (see [`crate::render::Gpu::samples`]).
+    pub samples: Option<u32>,
     pub screenshot: Option<PathBuf>,
     pub frames: usize,
     /// The level-of-detail choices the viewer starts with.
@@ -177,7 +178,8 @@ impl Viewer {
             .with_inner_size(winit::dpi::PhysicalSize::new(options.width, options.height));
         let win = WindowGpu::open(event_loop, attributes)?;
         let (gpu, config) = (&win.gpu, &win.config);
-        let mut world = World::new(gpu, loaded, config.format, options.samples)?;
+        let samples = gpu.samples(options.samples);
+        let mut world = World::new(gpu, loaded, config.format, samples)?;
         world.lod.method = options.lod.method;
         world.lod.compare = options.lod.compare;
         world.lod.policy = options.lod.policy;
@@ -192,7 +194,7 @@ impl Viewer {
             config.width,
             config.height,
             config.format,
-            options.samples,
+            samples,
         );
         let (egui, egui_renderer) = win.egui();
         let settings = Settings {
@@ -422,17 +424,16 @@ impl Viewer {
         Ok(true)
     }
 
-    /// Advances the clocks by the time since the last frame (at most a quarter second), and
-    /// flies the camera: the frame's time step.
+    /// Advances the clocks by the time since the last frame, and flies the camera: the
+    /// frame's time step. The statistics get the frame's true time, however long; the
+    /// animation too, unless the frame was a pause (see [`FrameHistory::animation_step`]).
     fn tick(&mut self) -> f32 {
         let now = Instant::now();
-        let dt = self
-            .last_frame
-            .map_or(0.0, |t| (now - t).as_secs_f32())
-            .min(0.25);
+        let elapsed = self.last_frame.map_or(0.0, |t| (now - t).as_secs_f32());
+        let dt = self.history.animation_step(elapsed);
         if self.last_frame.is_some() {
             self.history
-                .push((now - self.started).as_secs_f64(), dt * 1000.0);
+                .push((now - self.started).as_secs_f64(), elapsed * 1000.0);
         }
         self.last_frame = Some(now);
         if self.settings.playing {

@@ -12,6 +12,11 @@ use std::collections::VecDeque;
 
 /// How much history the frame-time graph shows.
 const HISTORY_SECONDS: f64 = 5.0;
+/// Frames the history keeps however old they are.
+const MIN_SAMPLES: usize = 8;
+/// A frame at least this long may be a pause rather than rendering (see
+/// [`FrameHistory::animation_step`]).
+const PAUSE_SECONDS: f32 = 0.5;
 
 /// Frame times over the last few seconds.
 #[derive(Default)]
@@ -20,16 +25,40 @@ pub struct FrameHistory {
 }
 
 impl FrameHistory {
-    /// Records a frame that took `ms` milliseconds and ended at `now` seconds.
+    /// Records a frame that took `ms` milliseconds and ended at `now` seconds, however long
+    /// that was: on a software rasteriser a frame can take seconds, and the readout must say
+    /// so. The last few frames stay even when they are older than the graph's span, so that
+    /// a slow frame rate still draws a line.
     pub fn push(&mut self, now: f64, ms: f32) {
         self.samples.push_back((now, ms));
-        while self
-            .samples
-            .front()
-            .is_some_and(|(t, _)| now - t > HISTORY_SECONDS)
+        while self.samples.len() > MIN_SAMPLES
+            && self
+                .samples
+                .front()
+                .is_some_and(|(t, _)| now - t > HISTORY_SECONDS)
         {
             self.samples.pop_front();
         }
+    }
+
+    /// The median frame time of the history, in milliseconds (0 with none).
+    pub fn median_ms(&self) -> f32 {
+        let mut ms: Vec<f32> = self.samples.iter().map(|s| s.1).collect();
+        if ms.is_empty() {
+            return 0.0;
+        }
+        ms.sort_by(f32::total_cmp);
+        ms[ms.len() / 2]
+    }
+
+    /// How far the animation advances for a frame that took `seconds`: the wall time, except
+    /// after a pause (a dragged window, a blocking dialog, a level installed), which shows as a
+    /// frame far longer than the usual. A frame counts as a pause beyond four times the median
+    /// of the history, and never below half a second, so a steadily slow renderer still plays
+    /// in real time.
+    pub fn animation_step(&self, seconds: f32) -> f32 {
+        let usual = 4.0 * self.median_ms() / 1000.0;
+        seconds.min(usual.max(PAUSE_SECONDS))
     }
 
     /// Frames per second over the last second.
@@ -611,6 +640,35 @@ mod tests {
         assert!((h.fps() - 50.0).abs() < 0.5);
         // Old samples drop out of the window.
         assert!(h.samples.len() <= 252);
+    }
+
+    #[test]
+    fn slow_frames_read_as_they_are() {
+        // lavapipe drawing a big scene: 3.4 s a frame.
+        let mut h = FrameHistory::default();
+        for k in 1..=10 {
+            h.push(k as f64 * 3.4, 3400.0);
+        }
+        assert!((h.fps() - 1.0 / 3.4).abs() < 1e-3, "{}", h.fps());
+        assert_eq!(h.mean_ms(), 3400.0);
+        // Frames older than the graph's span stay, so there is a line to draw.
+        assert_eq!(h.samples.len(), MIN_SAMPLES);
+        // The animation keeps wall time at that rate...
+        assert_eq!(h.animation_step(3.4), 3.4);
+        // ...but not across a pause far longer than the usual frame.
+        assert_eq!(h.animation_step(60.0), 4.0 * 3.4);
+    }
+
+    #[test]
+    fn a_pause_does_not_jump_the_animation() {
+        let mut h = FrameHistory::default();
+        // Before any frame is known, and at 60 Hz, a long gap is clamped to half a second.
+        assert_eq!(h.animation_step(5.0), PAUSE_SECONDS);
+        for k in 0..100 {
+            h.push(k as f64 / 60.0, 1000.0 / 60.0);
+        }
+        assert_eq!(h.animation_step(1.0 / 60.0), 1.0 / 60.0);
+        assert_eq!(h.animation_step(5.0), PAUSE_SECONDS);
     }
 
     #[test]
