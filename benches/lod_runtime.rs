@@ -47,8 +47,8 @@ fn main() -> Result<()> {
         world.lod.reset();
         world.settle(HEIGHT, TIME, 0.0);
         let stats = world.upload(&gpu, WIDTH as f32 / HEIGHT as f32, TIME);
-        time_renderer(&gpu, &world.renderer, &target, 1)?;
-        let ms = time_renderer(&gpu, &world.renderer, &target, FRAMES)?;
+        time_renderer(&gpu, &world.renderer, &target, 1, None)?;
+        let ms = time_renderer(&gpu, &world.renderer, &target, FRAMES, None)?.0;
         if method == LodMethod::None {
             none_ms = ms;
         }
@@ -123,8 +123,8 @@ fn main() -> Result<()> {
                 region: Region::Full,
             }],
         );
-        time_renderer(&gpu, &world.renderer, &target, 1)?;
-        let ms = time_renderer(&gpu, &world.renderer, &target, FRAMES)?;
+        time_renderer(&gpu, &world.renderer, &target, 1, None)?;
+        let ms = time_renderer(&gpu, &world.renderer, &target, FRAMES, None)?.0;
         if name == "pop" {
             pop_ms = ms;
         }

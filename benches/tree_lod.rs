@@ -54,8 +54,11 @@ fn main() -> Result<()> {
             let mut world = World::new(&gpu, loaded, OFFSCREEN_FORMAT, samples)?;
             let target = Offscreen::new(&gpu, WIDTH, HEIGHT, samples);
             let triangles = world.prepare(&gpu, [WIDTH, HEIGHT], 2.0, 0.0).triangles;
-            time_renderer(&gpu, &world.renderer, &target, 1)?;
-            Ok((time_renderer(&gpu, &world.renderer, &target, 7)?, triangles))
+            time_renderer(&gpu, &world.renderer, &target, 1, None)?;
+            Ok((
+                time_renderer(&gpu, &world.renderer, &target, 7, None)?.0,
+                triangles,
+            ))
         };
         let empty = [
             time(&chain[0].cloud, 0, 4)?.0,

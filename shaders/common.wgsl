@@ -24,18 +24,6 @@ struct Frame {
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 
-// Sky colour seen along a unit direction.
-fn sky_color(dir: vec3<f32>) -> vec3<f32> {
-    let up = clamp(dir.y, -1.0, 1.0);
-    let t = pow(clamp(up, 0.0, 1.0), 0.45);
-    var c = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, t);
-    // Below the horizon the haze thickens towards the ground colour.
-    c = mix(c, frame.sky_horizon.rgb * 0.9, clamp(-up * 4.0, 0.0, 1.0));
-    let sun = max(dot(dir, frame.sun_dir.xyz), 0.0);
-    c += frame.sun_color.rgb * (pow(sun, 900.0) * 6.0 + pow(sun, 12.0) * 0.12);
-    return c;
-}
-
 // Lambert sun plus a sky/ground hemisphere ambient.
 fn shade(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let sun = max(dot(n, frame.sun_dir.xyz), 0.0) * frame.sun_dir.w;

@@ -104,6 +104,32 @@ fn bench_writes_json_and_a_table_of_every_method() {
             "{stdout}"
         );
     }
+    // Where the frame goes, pass by pass, where the adapter has timestamp queries (lavapipe
+    // has them).
+    if r["timing"] == "gpu timestamps" {
+        for name in ["none", "as+is"] {
+            let passes = methods[name]["passes"].as_object().unwrap();
+            for pass in ["characters", "sky and ground"] {
+                let ms = passes[pass]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("{name}: {pass}"));
+                assert!(ms > 0.0, "{name}: {pass} {ms}");
+            }
+            assert!(
+                !passes.contains_key("ui") && !passes.contains_key("transitions"),
+                "only what a frame draws: {passes:?}"
+            );
+            let sum: f64 = passes.values().map(|v| v.as_f64().unwrap()).sum();
+            let frame = methods[name]["median_ms"].as_f64().unwrap();
+            assert!(
+                sum <= 2.0 * frame,
+                "{name}: passes {sum} ms, frame {frame} ms"
+            );
+        }
+        assert!(stdout.contains("GPU time by pass"), "{stdout}");
+    } else {
+        assert!(methods["none"]["passes"].as_object().unwrap().is_empty());
+    }
     // Levels of detail never draw more than full detail along the same frames.
     let none = methods["none"]["triangles"].as_u64().unwrap();
     assert!(methods["as+is"]["triangles"].as_u64().unwrap() <= none);

@@ -278,3 +278,33 @@ fn multisampling_defaults_by_adapter() {
     assert_eq!(report["msaa"].as_u64(), Some(other));
     assert!(!stderr.contains("multisampling"), "{stderr}");
 }
+
+/// `shot` reports each pass's GPU time where the adapter has timestamp queries: only the passes
+/// the frame draws, none longer than the frame; and where it counts fragments, the sky and
+/// ground alone shade every pixel at least once.
+#[test]
+fn shot_reports_where_the_frame_goes() {
+    let (_, empty) = render(spec(&[], 0, None), 0.0, (64, 48), None);
+    let close = Some(Camera::new(Vec3::new(0.0, 0.9, 0.0), 90.0, 5.0, 3.4));
+    let (_, one) = render(spec(&["walker"], 1, None), 0.5, (64, 48), close);
+    if empty.passes.is_empty() {
+        eprintln!("no timestamp queries on this adapter: nothing to check");
+        return;
+    }
+    let names = |r: &lodlab::app::shot::ShotReport| r.passes.keys().cloned().collect::<Vec<_>>();
+    assert_eq!(names(&empty), ["sky and ground"]);
+    assert_eq!(names(&one), ["characters", "shadows", "sky and ground"]);
+    for r in [&empty, &one] {
+        let sum: f64 = r.passes.values().sum();
+        assert!(r.passes.values().all(|&ms| ms >= 0.0), "{:?}", r.passes);
+        assert!(
+            sum <= r.frame_ms * 1.01 + 0.05,
+            "{sum} ms of passes in a {} ms frame",
+            r.frame_ms
+        );
+    }
+    if let Some(x) = empty.overdraw {
+        assert!(x >= 1.0, "sky and ground shade every pixel: {x}");
+        assert!(x < 3.0, "{x}");
+    }
+}

@@ -21,7 +21,7 @@
 use super::shot::histogram;
 use crate::atomic::check_target;
 use crate::render::targets::Offscreen;
-use crate::render::timer::PassTimer;
+use crate::render::timer::{FrameTimer, Pass, PassTimes, overdraw_median, pass_medians};
 use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::runtime::headless::{Headless, ShotLod};
 use crate::runtime::spec::SceneSpec;
@@ -120,12 +120,21 @@ pub struct MethodFigures {
     pub lod_histogram: Vec<u32>,
     /// Mean instances in a transition per frame.
     pub in_transition: f64,
+    /// Median GPU milliseconds of each pass drawn (see [`Pass`]), by pass name; empty without
+    /// timestamp queries.
+    #[serde(default)]
+    pub passes: BTreeMap<String, f64>,
+    /// Median fragments shaded per pixel over all passes, where the adapter counts them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub overdraw: Option<f64>,
 }
 
 /// The frame times and statistics of one method.
 #[derive(Default)]
 struct Samples {
     skinned: Vec<f64>,
+    /// The skinned frames' passes, where timed.
+    passes: Vec<PassTimes>,
     plain: Vec<f64>,
     triangles: u64,
     vertices: u64,
@@ -139,7 +148,7 @@ struct Bench {
     gpu: Gpu,
     world: World,
     target: Offscreen,
-    timer: Option<PassTimer>,
+    timer: Option<FrameTimer>,
     path: CameraPath,
     fov_y: f32,
     size: [u32; 2],
@@ -160,25 +169,29 @@ impl Bench {
         world.upload(&self.gpu, self.size[0] as f32 / self.size[1] as f32, t)
     }
 
-    /// Renders what is shown with `shader` and returns the frame's time in milliseconds.
-    fn time(&mut self, shader: CharacterShader) -> Result<f64> {
+    /// Renders what is shown with `shader` and returns the frame's time in milliseconds, and
+    /// its passes' figures where the adapter has timestamp queries.
+    fn time(&mut self, shader: CharacterShader) -> Result<(f64, Option<PassTimes>)> {
         self.world.renderer.shader = shader;
         let start = Instant::now();
         self.world.renderer.render_timed(
             &self.gpu,
             &self.target.targets,
             &self.target.view,
-            self.timer.as_ref(),
+            self.timer.as_mut(),
         );
-        let ms = match &self.timer {
-            Some(timer) => timer.read_ms(&self.gpu)?,
+        let timed = match &mut self.timer {
+            Some(timer) => {
+                let t = timer.read(&self.gpu)?;
+                (t.frame_ms, Some(t))
+            }
             None => {
                 self.gpu.wait()?;
-                start.elapsed().as_secs_f64() * 1e3
+                (start.elapsed().as_secs_f64() * 1e3, None)
             }
         };
         self.world.renderer.shader = CharacterShader::Skinned;
-        Ok(ms)
+        Ok(timed)
     }
 }
 
@@ -211,7 +224,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     } = scene;
     let home = world.camera;
     let path = CameraPath::new(o.path, &home, o.path_seconds);
-    let timer = PassTimer::new(&gpu);
+    let timer = FrameTimer::new(&gpu);
     let mut bench = Bench {
         gpu,
         world,
@@ -232,7 +245,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         for &m in &o.methods {
             bench.show(m, path_time(&path, k % 7, 7));
             round_ms +=
-                bench.time(CharacterShader::Skinned)? + bench.time(CharacterShader::Plain)?;
+                bench.time(CharacterShader::Skinned)?.0 + bench.time(CharacterShader::Plain)?.0;
         }
         k += 1;
         if warm.elapsed().as_secs_f32() >= o.warmup {
@@ -258,8 +271,12 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
             bar.set_message(m.name());
             for i in start..(start + block).min(n) {
                 let stats = bench.show(m, path_time(&path, i, n));
-                s.skinned.push(bench.time(CharacterShader::Skinned)?);
-                s.plain.push(bench.time(CharacterShader::Plain)?);
+                let (ms, passes) = bench.time(CharacterShader::Skinned)?;
+                s.skinned.push(ms);
+                if let Some(p) = passes {
+                    s.passes.push(p);
+                }
+                s.plain.push(bench.time(CharacterShader::Plain)?.0);
                 s.triangles += stats.triangles;
                 s.vertices += stats.vertices;
                 s.influences += stats.influences;
@@ -275,7 +292,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
 
     let mut methods = BTreeMap::new();
     for (s, m) in samples.iter().zip(&o.methods) {
-        methods.insert(m.name().to_string(), figures(s, n));
+        methods.insert(m.name().to_string(), figures(s, n, o.width, o.height));
     }
     let (cal_method, cal) = o
         .methods
@@ -316,7 +333,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     })
 }
 
-fn figures(s: &Samples, n: usize) -> MethodFigures {
+fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
     let n = n.max(1) as u64;
     let median_ms = percentile(&s.skinned, 0.5);
     let calibration_ms = percentile(&s.plain, 0.5);
@@ -337,6 +354,8 @@ fn figures(s: &Samples, n: usize) -> MethodFigures {
         calibration_ms,
         lod_histogram: histogram(&mean_levels),
         in_transition: s.in_transition as f64 / n as f64,
+        passes: pass_medians(&s.passes),
+        overdraw: overdraw_median(&s.passes, width, height),
     }
 }
 
@@ -410,6 +429,55 @@ pub fn markdown(r: &BenchReport) -> String {
             f.efficiency,
             levels.join(" / ")
         );
+    }
+    out.push_str(&pass_table(r));
+    out
+}
+
+/// Where each method's frame goes: the median GPU milliseconds of each pass, and the
+/// fragments shaded per pixel; empty without timestamp queries.
+fn pass_table(r: &BenchReport) -> String {
+    let drawn: Vec<Pass> = Pass::ALL
+        .into_iter()
+        .filter(|p| r.methods.values().any(|f| f.passes.contains_key(p.name())))
+        .collect();
+    if drawn.is_empty() {
+        return String::new();
+    }
+    let overdraw = r.methods.values().any(|f| f.overdraw.is_some());
+    let mut out = String::from("\nGPU time by pass (median ms):\n\n| method |");
+    for p in &drawn {
+        let _ = write!(out, " {} |", p.name());
+    }
+    out.push_str(if overdraw {
+        " fragments per pixel |\n|---|"
+    } else {
+        "\n|---|"
+    });
+    out.push_str(&"---:|".repeat(drawn.len() + overdraw as usize));
+    out.push('\n');
+    for name in &r.order {
+        let Some(f) = r.methods.get(name) else {
+            continue;
+        };
+        let _ = write!(out, "| {name} |");
+        for p in &drawn {
+            match f.passes.get(p.name()) {
+                Some(ms) => {
+                    let _ = write!(out, " {ms:.1} |");
+                }
+                None => out.push_str(" – |"),
+            }
+        }
+        if overdraw {
+            match f.overdraw {
+                Some(x) => {
+                    let _ = write!(out, " {x:.2} |");
+                }
+                None => out.push_str(" – |"),
+            }
+        }
+        out.push('\n');
     }
     out
 }

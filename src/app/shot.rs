@@ -1,6 +1,7 @@
 //! `lodlab shot`: render a scene headless and deterministically to a PNG.
 
 use crate::render::targets::Offscreen;
+use crate::render::timer::{FrameTimer, PassTimes, overdraw_median, pass_medians};
 use crate::render::{CharacterShader, FrameStats, Gpu};
 use crate::runtime::headless::{Headless, ShotLod, time_renderer};
 use crate::runtime::spec::SceneSpec;
@@ -8,6 +9,7 @@ use crate::runtime::world::World;
 use crate::scene::Camera;
 use anyhow::Result;
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
@@ -61,6 +63,12 @@ pub struct ShotReport {
     pub in_transition: u64,
     /// Median over the timed frames, submit to GPU completion.
     pub frame_ms: f64,
+    /// Median GPU milliseconds of each pass drawn, by name, from timestamp queries (empty
+    /// where the adapter has none).
+    pub passes: BTreeMap<String, f64>,
+    /// Median fragments shaded per pixel, where the adapter counts them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overdraw: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plain_frame_ms: Option<f64>,
     /// `frame_ms / plain_frame_ms`: what skinning costs over a plain draw of the same triangles.
@@ -68,9 +76,16 @@ pub struct ShotReport {
     pub skinning_ratio: Option<f64>,
 }
 
-/// Renders `frames` times and returns the median frame time in milliseconds.
-fn time_frames(gpu: &Gpu, world: &World, target: &Offscreen, frames: usize) -> Result<f64> {
-    time_renderer(gpu, &world.renderer, target, frames)
+/// Renders `frames` times and returns the median frame time in milliseconds, and the frames'
+/// passes where `timer` is given.
+fn time_frames(
+    gpu: &Gpu,
+    world: &World,
+    target: &Offscreen,
+    frames: usize,
+    timer: Option<&mut FrameTimer>,
+) -> Result<(f64, Vec<PassTimes>)> {
+    time_renderer(gpu, &world.renderer, target, frames, timer)
 }
 
 pub fn run(options: &ShotOptions) -> Result<ShotReport> {
@@ -99,8 +114,10 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
     let stats: FrameStats = world.upload(&gpu, aspect, options.time);
 
     // Warm-up (pipeline creation, first uploads), then timed frames.
-    time_frames(&gpu, &world, &target, 1)?;
-    let frame_ms = time_frames(&gpu, &world, &target, options.timed_frames)?;
+    let mut timer = FrameTimer::new(&gpu);
+    time_frames(&gpu, &world, &target, 1, None)?;
+    let (frame_ms, passes) =
+        time_frames(&gpu, &world, &target, options.timed_frames, timer.as_mut())?;
     let mut image = target.read_rgba(&gpu)?;
     if lod.compare.is_some() {
         draw_divider(&mut image);
@@ -108,8 +125,8 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
 
     let plain_frame_ms = if options.calibrate {
         world.renderer.shader = CharacterShader::Plain;
-        time_frames(&gpu, &world, &target, 1)?;
-        let ms = time_frames(&gpu, &world, &target, options.timed_frames)?;
+        time_frames(&gpu, &world, &target, 1, None)?;
+        let (ms, _) = time_frames(&gpu, &world, &target, options.timed_frames, None)?;
         world.renderer.shader = CharacterShader::Skinned;
         Some(ms)
     } else {
@@ -141,6 +158,8 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         levels: histogram(&stats.levels),
         in_transition: stats.in_transition,
         frame_ms,
+        passes: pass_medians(&passes),
+        overdraw: overdraw_median(&passes, options.width, options.height),
         plain_frame_ms,
         skinning_ratio: plain_frame_ms.map(|p| frame_ms / p.max(1e-9)),
     })

@@ -29,7 +29,9 @@ impl Gpu {
         let adapter = pollster::block_on(select_adapter(&instance, surface))?;
         let info = adapter.get_info();
         // Features that only make the debug views nicer are taken when offered.
-        let optional = wgpu::Features::POLYGON_MODE_LINE | wgpu::Features::TIMESTAMP_QUERY;
+        let optional = wgpu::Features::POLYGON_MODE_LINE
+            | wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::PIPELINE_STATISTICS_QUERY;
         let required_features = adapter.features() & optional;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lodlab"),

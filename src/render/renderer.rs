@@ -29,6 +29,7 @@
 use super::character::{self, GpuCharacter};
 use super::gpu::Gpu;
 use super::pipelines::Pipelines;
+use super::timer::{FrameTimer, Pass};
 use super::uniforms::{FrameUniforms, FrameView, GpuInstance, Lighting};
 use crate::bake::CharacterBake;
 use crate::bake::lod_pack::LodPack;
@@ -222,7 +223,9 @@ pub struct SceneRenderer {
     pub debug: DebugView,
     pipelines: Pipelines,
     instance_buffer: wgpu::Buffer,
-    keyed: Vec<(u64, GpuInstance)>,
+    /// The frame's instances with their draw key and distance from the eye (as bits, which
+    /// order like the non-negative floats they are).
+    keyed: Vec<(u64, u32, GpuInstance)>,
     staging: Vec<GpuInstance>,
     draws: Vec<(DrawKey, Range<u32>)>,
     /// Regions of the sides of the current frame.
@@ -438,6 +441,7 @@ impl SceneRenderer {
                 let key = |pass, level: usize, hops: usize| {
                     DrawKey::new(pass, side_index, inst.model, slot, level as u8, hops as u8).0
                 };
+                let near = ((centre - view.eye).length() - radius).max(0.0).to_bits();
                 // The outgoing half of a dissolve is the same instance as its incoming half,
                 // which counts it.
                 let second_half = matches!(
@@ -467,14 +471,14 @@ impl SceneRenderer {
                         let k = (asked as usize).min(last);
                         g.lod = [-1.0, 0.0, 1.0, asked as f32];
                         count(k, 0);
-                        self.keyed.push((key(PASS_OPAQUE, k, 0), g));
+                        self.keyed.push((key(PASS_OPAQUE, k, 0), near, g));
                     }
                     LodDraw::Morph { fine, coarse, t } => {
                         let fine = (fine as usize).min(last);
                         let hops = (coarse as usize).min(last).saturating_sub(fine);
                         g.lod = [t.clamp(0.0, 1.0), hops as f32, 1.0, fine as f32];
                         count(fine, set.levels[fine + hops].influences);
-                        self.keyed.push((key(PASS_MORPH, fine, hops), g));
+                        self.keyed.push((key(PASS_MORPH, fine, hops), near, g));
                     }
                     LodDraw::Alpha { from, to, p } => {
                         let (from, to) = ((from as usize).min(last), (to as usize).min(last));
@@ -489,9 +493,9 @@ impl SceneRenderer {
                         count(opaque, 0);
                         count(faded, 0);
                         g.lod = [p, 0.0, 1.0, opaque as f32];
-                        self.keyed.push((key(PASS_OPAQUE, opaque, 0), g));
+                        self.keyed.push((key(PASS_OPAQUE, opaque, 0), near, g));
                         g.lod = [p, 0.0, opacity, faded as f32];
-                        self.keyed.push((key(PASS_FADE, faded, 0), g));
+                        self.keyed.push((key(PASS_FADE, faded, 0), near, g));
                     }
                     LodDraw::Dissolve { level, p, incoming } => {
                         // The foliage shaders keep a pixel where its threshold lies below
@@ -506,22 +510,27 @@ impl SceneRenderer {
                         };
                         g.lod = [p, 0.0, coverage, level as f32];
                         count(k, 0);
-                        self.keyed.push((key(pass, k, 0), g));
+                        self.keyed.push((key(pass, k, 0), near, g));
                     }
                 }
             }
         }
-        // Group: sort by key, then each run of equal keys is one instanced draw.
-        self.keyed.sort_unstable_by_key(|(k, _)| *k);
+        // Group: sort by key, then each run of equal keys is one instanced draw, its instances
+        // nearest first. The groups are drawn nearest first too (by their nearest instance),
+        // each side in turn, so that early depth tests spare what near things hide.
+        self.keyed.sort_unstable_by_key(|&(k, near, _)| (k, near));
         self.staging.clear();
         self.draws.clear();
-        for (n, (key, g)) in self.keyed.iter().enumerate() {
+        for (n, (key, _, g)) in self.keyed.iter().enumerate() {
             self.staging.push(*g);
             match self.draws.last_mut() {
                 Some((k, range)) if k.0 == *key => range.end = n as u32 + 1,
                 _ => self.draws.push((DrawKey(*key), n as u32..n as u32 + 1)),
             }
         }
+        let keyed = &self.keyed;
+        self.draws
+            .sort_by_key(|(k, range)| (k.side(), keyed[range.start as usize].1));
         let total = self.staging.len();
         if total * std::mem::size_of::<GpuInstance>() > self.instance_buffer.size() as usize {
             self.instance_buffer =
@@ -538,61 +547,86 @@ impl SceneRenderer {
         stats
     }
 
-    /// Records the frame. `view` is the rectangle the scene covers (x, y, width, height), for
-    /// the sides' scissor rectangles.
-    ///
-    /// Opaque characters go first, then the ground and the sky (at the far plane, tested
-    /// against depth), so that each pixel of the environment is shaded once and only where no
-    /// character covers it; then the blob shadows, blended over the ground and hidden behind
-    /// characters by the depth test; then the faded levels of alpha transitions over all of it.
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, view: [u32; 4]) {
+    /// The passes this frame draws, in order (see [`Pass`]): the opaque characters and the
+    /// trees first, each group nearest first, so that early depth testing spares what they
+    /// hide; then the ground and the sky (at the far plane, tested against depth), so that
+    /// each pixel of the environment is shaded once and only where nothing covers it; then
+    /// the blob shadows, blended over the ground and hidden behind characters by the depth
+    /// test; then the faded levels of alpha transitions over all of it.
+    pub fn passes(&self) -> Vec<Pass> {
+        let plain = self.shader == CharacterShader::Plain;
+        let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
+        let foliage = |k: &DrawKey| self.characters[k.model()].two_sided;
+        let any = |f: &dyn Fn(&DrawKey) -> bool| self.draws.iter().any(|(k, _)| f(k));
+        let mut passes = Vec::with_capacity(Pass::COUNT);
+        let shown = |k: &DrawKey| wireframe || k.pass() != PASS_FADE;
+        if any(&|k| plain || (!foliage(k) && shown(k))) {
+            passes.push(Pass::Characters);
+        }
+        if !plain && any(&|k| foliage(k) && shown(k)) {
+            passes.push(Pass::Foliage);
+        }
+        passes.push(Pass::Environment);
+        let overlays = !plain && !wireframe && self.outlines;
+        if !self.draws.is_empty() && (self.shadows || overlays) {
+            passes.push(Pass::Shadows);
+        }
+        if !plain && !wireframe && any(&|k| k.pass() == PASS_FADE) {
+            passes.push(Pass::Transitions);
+        }
+        passes
+    }
+
+    /// Records pass `which` of the frame. `view` is the rectangle the scene covers (x, y,
+    /// width, height), for the sides' scissor rectangles.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, which: Pass, view: [u32; 4]) {
         pass.set_bind_group(0, &self.frame_bind_group, &[]);
         let mut scissor = Scissor {
             view,
             regions: &self.regions,
             side: None,
         };
-        if !self.draws.is_empty() {
-            pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
-            self.draw_opaque(pass, &mut scissor);
-        }
-        // The environment over the whole view.
-        scissor.whole(pass);
-        pass.set_pipeline(&self.pipelines.ground);
-        pass.draw(0..6, 0..1);
-        pass.set_pipeline(&self.pipelines.sky);
-        pass.draw(0..3, 0..1);
-        if self.draws.is_empty() {
-            return;
-        }
-        // Every instance has exactly one opaque draw (opaque level, morph or the incoming half
-        // of a dissolve): its shadow goes with it.
-        if self.shadows {
-            pass.set_pipeline(&self.pipelines.shadow);
-            let casts = |k: &DrawKey| matches!(k.pass(), PASS_OPAQUE | PASS_MORPH);
-            for (key, range) in self.draws.iter().filter(|(k, _)| casts(k)) {
-                scissor.side(pass, key.side());
-                pass.set_bind_group(1, &self.characters[key.model()].full().bind_group, &[]);
-                pass.draw(0..6, range.clone());
+        pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
+        match which {
+            Pass::Characters => self.draw_opaque(pass, &mut scissor, false),
+            Pass::Foliage => self.draw_opaque(pass, &mut scissor, true),
+            Pass::Environment => {
+                // Over the whole view.
+                scissor.whole(pass);
+                pass.set_pipeline(&self.pipelines.ground);
+                pass.draw(0..6, 0..1);
+                pass.set_pipeline(&self.pipelines.sky);
+                pass.draw(0..3, 0..1);
             }
-        }
-        let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
-        if self.shader == CharacterShader::Plain || wireframe {
-            return;
-        }
-        if self.outlines {
-            self.draw_outlines(pass, &mut scissor);
-        }
-        for pipeline in [&self.pipelines.fade_depth, &self.pipelines.fade_color] {
-            let mut set = false;
-            for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
-                if !set {
-                    pass.set_pipeline(pipeline);
-                    set = true;
+            Pass::Shadows => {
+                // Every instance has exactly one opaque draw (opaque level, morph or the
+                // incoming half of a dissolve): its shadow goes with it.
+                if self.shadows {
+                    pass.set_pipeline(&self.pipelines.shadow);
+                    let casts = |k: &DrawKey| matches!(k.pass(), PASS_OPAQUE | PASS_MORPH);
+                    for (key, range) in self.draws.iter().filter(|(k, _)| casts(k)) {
+                        scissor.side(pass, key.side());
+                        let c = &self.characters[key.model()];
+                        pass.set_bind_group(1, &c.full().bind_group, &[]);
+                        pass.draw(0..6, range.clone());
+                    }
                 }
-                scissor.side(pass, key.side());
-                self.draw_group(pass, key, range);
+                // The billboards' outlines, a debug overlay, after the ground so that it
+                // shows where a billboard's cut-out leaves the ground visible.
+                if self.outlines && self.shader != CharacterShader::Plain {
+                    self.draw_outlines(pass, &mut scissor);
+                }
             }
+            Pass::Transitions => {
+                for pipeline in [&self.pipelines.fade_depth, &self.pipelines.fade_color] {
+                    pass.set_pipeline(pipeline);
+                    for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
+                        scissor.side(pass, key.side());
+                        self.draw_group(pass, key, range);
+                    }
+                }
+            }
+            Pass::Ui => {}
         }
     }
 
@@ -630,15 +664,16 @@ impl SceneRenderer {
         pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
     }
 
-    /// The opaque character draws: levels and geomorphs (in wireframe mode the faded levels of
-    /// alpha transitions too, as lines), or the plain calibration draw.
-    fn draw_opaque(&self, pass: &mut wgpu::RenderPass<'_>, scissor: &mut Scissor) {
+    /// The opaque draws of the characters (`foliage` false) or of the trees: levels and
+    /// geomorphs (in wireframe mode the faded levels of alpha transitions too, as lines), or
+    /// the plain calibration draw of everything.
+    fn draw_opaque(&self, pass: &mut wgpu::RenderPass<'_>, scissor: &mut Scissor, foliage: bool) {
         if self.shader == CharacterShader::Plain {
             pass.set_pipeline(&self.pipelines.plain);
             pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
             // Every draw's own level, faded and outgoing halves included: the triangles the
             // frame statistics count.
-            for (key, range) in &self.draws {
+            for &(key, ref range) in &self.draws {
                 scissor.side(pass, key.side());
                 let c = &self.characters[key.model()];
                 let set = c.set(key.slot()).unwrap_or_else(|| c.full());
@@ -658,9 +693,11 @@ impl SceneRenderer {
             .as_ref()
             .filter(|_| self.debug == DebugView::Wireframe);
         let mut current = None;
-        for (key, range) in &self.draws {
-            let two_sided = self.characters[key.model()].two_sided;
-            let (pipeline, id) = match (key.pass(), wire, two_sided) {
+        for &(key, ref range) in &self.draws {
+            if self.characters[key.model()].two_sided != foliage {
+                continue;
+            }
+            let (pipeline, id) = match (key.pass(), wire, foliage) {
                 (PASS_MORPH, Some((_, m)), _) => (m, 0),
                 (_, Some((l, _)), _) => (l, 1),
                 (PASS_FADE, None, _) => continue,
@@ -674,7 +711,7 @@ impl SceneRenderer {
                 pass.set_pipeline(pipeline);
             }
             scissor.side(pass, key.side());
-            self.draw_group(pass, key, range);
+            self.draw_group(pass, &key, range);
         }
     }
 }
@@ -704,41 +741,39 @@ impl Scissor<'_> {
 }
 
 impl SceneRenderer {
-    /// Records the scene pass into `target` through `targets`, drawing only inside `viewport`
-    /// (x, y, width, height in pixels) when one is given.
+    /// Records the frame's passes into `target` through `targets`, drawing only inside
+    /// `viewport` (x, y, width, height in pixels) when one is given; each pass timed by `timer`
+    /// where one is given.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &super::targets::RenderTargets,
         target: &wgpu::TextureView,
         viewport: Option<[u32; 4]>,
+        timer: Option<&FrameTimer>,
     ) {
-        self.encode_timed(encoder, targets, target, viewport, None);
-    }
-
-    /// [`Self::encode`], the pass's GPU time written by `timer` where one is given.
-    pub fn encode_timed(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &super::targets::RenderTargets,
-        target: &wgpu::TextureView,
-        viewport: Option<[u32; 4]>,
-        timer: Option<&super::timer::PassTimer>,
-    ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("scene"),
-            color_attachments: &[Some(
-                targets.color(target, wgpu::LoadOp::Clear(wgpu::Color::BLACK)),
-            )],
-            depth_stencil_attachment: Some(targets.depth()),
-            timestamp_writes: timer.map(|t| t.writes()),
-            ..Default::default()
-        });
         let view = viewport.unwrap_or([0, 0, targets.width, targets.height]);
         let [x, y, w, h] = view;
-        pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
-        pass.set_scissor_rect(x, y, w, h);
-        self.draw(&mut pass, view);
+        let passes = self.passes();
+        for (n, &which) in passes.iter().enumerate() {
+            let (first, last) = (n == 0, n + 1 == passes.len());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(which.name()),
+                color_attachments: &[Some(targets.color(target, first, last))],
+                depth_stencil_attachment: Some(targets.depth(first, last)),
+                timestamp_writes: timer.map(|t| t.writes(which)),
+                ..Default::default()
+            });
+            if let Some(t) = timer {
+                t.begin_count(&mut pass, which);
+            }
+            pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, w, h);
+            self.draw(&mut pass, which, view);
+            if let Some(t) = timer {
+                t.end_count(&mut pass);
+            }
+        }
     }
 
     /// Renders one complete frame into `target` through `targets` and submits it.
@@ -751,20 +786,24 @@ impl SceneRenderer {
         self.render_timed(gpu, targets, target, None)
     }
 
-    /// [`Self::render_to`], the scene pass timed by `timer` where one is given (read it with
-    /// [`super::timer::PassTimer::read_ms`]).
+    /// [`Self::render_to`], each pass timed by `timer` where one is given (read the figures
+    /// with [`FrameTimer::read`]).
     pub fn render_timed(
         &self,
         gpu: &Gpu,
         targets: &super::targets::RenderTargets,
         target: &wgpu::TextureView,
-        timer: Option<&super::timer::PassTimer>,
+        mut timer: Option<&mut FrameTimer>,
     ) -> wgpu::SubmissionIndex {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        self.encode_timed(&mut enc, targets, target, None, timer);
-        if let Some(t) = timer {
+        self.encode(&mut enc, targets, target, None, timer.as_deref());
+        if let Some(t) = timer.as_deref_mut() {
             t.resolve(&mut enc);
         }
-        gpu.queue.submit([enc.finish()])
+        let index = gpu.queue.submit([enc.finish()]);
+        if let Some(t) = timer {
+            t.submitted();
+        }
+        index
     }
 }

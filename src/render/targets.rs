@@ -52,39 +52,62 @@ impl RenderTargets {
         }
     }
 
-    /// A colour attachment that ends up in `target`, resolving from the multisampled texture
-    /// when there is one.
+    /// The colour attachment of one of a frame's passes, which ends up in `target`: the first
+    /// pass clears it (to black), the others load it; the last resolves the multisampled
+    /// texture, when there is one, into `target` and leaves the samples behind.
     pub fn color<'a>(
         &'a self,
         target: &'a wgpu::TextureView,
-        load: wgpu::LoadOp<wgpu::Color>,
+        first: bool,
+        last: bool,
     ) -> wgpu::RenderPassColorAttachment<'a> {
-        let ops = wgpu::Operations {
-            load,
-            store: wgpu::StoreOp::Store,
+        let load = if first {
+            wgpu::LoadOp::Clear(wgpu::Color::BLACK)
+        } else {
+            wgpu::LoadOp::Load
         };
         match &self.msaa {
             Some(msaa) => wgpu::RenderPassColorAttachment {
                 view: msaa,
                 depth_slice: None,
-                resolve_target: Some(target),
-                ops,
+                resolve_target: last.then_some(target),
+                ops: wgpu::Operations {
+                    load,
+                    store: if last {
+                        wgpu::StoreOp::Discard
+                    } else {
+                        wgpu::StoreOp::Store
+                    },
+                },
             },
             None => wgpu::RenderPassColorAttachment {
                 view: target,
                 depth_slice: None,
                 resolve_target: None,
-                ops,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
             },
         }
     }
 
-    pub fn depth(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    /// The depth attachment of one of a frame's passes: cleared by the first, kept between
+    /// passes, dropped after the last.
+    pub fn depth(&self, first: bool, last: bool) -> wgpu::RenderPassDepthStencilAttachment<'_> {
         wgpu::RenderPassDepthStencilAttachment {
             view: &self.depth,
             depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(1.0),
-                store: wgpu::StoreOp::Discard,
+                load: if first {
+                    wgpu::LoadOp::Clear(1.0)
+                } else {
+                    wgpu::LoadOp::Load
+                },
+                store: if last {
+                    wgpu::StoreOp::Discard
+                } else {
+                    wgpu::StoreOp::Store
+                },
             }),
             stencil_ops: None,
         }

@@ -5,6 +5,7 @@
 use super::spec::{Loaded, SceneSpec};
 use super::world::World;
 use crate::render::targets::Offscreen;
+use crate::render::timer::{FrameTimer, PassTimes};
 use crate::render::{DebugView, Gpu, SceneRenderer};
 use crate::scene::foliage::FoliageView;
 use crate::scene::{LodMethod, LodPolicy};
@@ -95,21 +96,27 @@ impl Headless {
 }
 
 /// Renders what `renderer` has prepared `frames` times, waiting for the GPU each time, and
-/// returns the median frame time in milliseconds.
+/// returns the median frame time in milliseconds (submit to completion), with each frame's
+/// passes where `timer` is given.
 pub fn time_renderer(
     gpu: &Gpu,
     renderer: &SceneRenderer,
     target: &Offscreen,
     frames: usize,
-) -> Result<f64> {
+    mut timer: Option<&mut FrameTimer>,
+) -> Result<(f64, Vec<PassTimes>)> {
     let mut times = Vec::with_capacity(frames);
+    let mut passes = Vec::new();
     for _ in 0..frames.max(1) {
         let start = Instant::now();
-        renderer.render_to(gpu, &target.targets, &target.view);
-        gpu.wait()?;
+        renderer.render_timed(gpu, &target.targets, &target.view, timer.as_deref_mut());
+        match timer.as_deref_mut() {
+            Some(t) => passes.push(t.read(gpu)?),
+            None => gpu.wait()?,
+        }
         times.push(start.elapsed().as_secs_f64() * 1e3);
     }
-    Ok(median(times))
+    Ok((median(times), passes))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

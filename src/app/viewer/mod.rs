@@ -12,6 +12,7 @@ use crate::atomic::write_png;
 use crate::render::DebugView;
 use crate::render::FrameStats;
 use crate::render::targets::{Offscreen, RenderTargets};
+use crate::render::timer::{FrameTimer, Pass, PassTimes};
 use crate::runtime::headless::ShotLod;
 use crate::runtime::levels::{BackgroundBake, Poll};
 use crate::runtime::spec::{Loaded, SceneSpec};
@@ -156,6 +157,11 @@ struct Viewer {
     last_frame: Option<Instant>,
     time: f32,
     stats: FrameStats,
+    /// Each pass's GPU time, where the adapter has timestamp queries: read back a frame or
+    /// two late, without waiting.
+    timer: Option<FrameTimer>,
+    /// The passes' times, smoothed over the last second or so of frames.
+    passes: Option<PassTimes>,
     /// The 3D view in physical pixels: x, y, width, height.
     view: [u32; 4],
     frames: usize,
@@ -197,6 +203,7 @@ impl Viewer {
             samples,
         );
         let (egui, egui_renderer) = win.egui();
+        let timer = FrameTimer::new(gpu);
         let settings = Settings {
             count: world.spec.count,
             model: None,
@@ -227,6 +234,8 @@ impl Viewer {
             last_frame: None,
             time: 0.0,
             stats: FrameStats::default(),
+            timer,
+            passes: None,
             view: [0, 0, 1, 1],
             frames: 0,
             bake: None,
@@ -389,7 +398,18 @@ impl Viewer {
             &screen,
         );
         let view = frame.texture.create_view(&Default::default());
-        self.encode(&mut encoder, &self.targets, &view, &primitives, &screen);
+        self.encode(
+            &mut encoder,
+            &self.targets,
+            &view,
+            &primitives,
+            &screen,
+            self.timer.as_ref(),
+        );
+        let timed = match &mut self.timer {
+            Some(t) => t.resolve(&mut encoder),
+            None => false,
+        };
 
         // The screenshot: the same frame once more into a texture that can be read back.
         let last = options.screenshot.is_some() && self.frames + 1 >= options.frames.max(1);
@@ -407,11 +427,23 @@ impl Viewer {
                 &shot.view,
                 &primitives,
                 &screen,
+                None,
             );
             shot
         });
         buffers.push(encoder.finish());
         self.win.gpu.queue.submit(buffers);
+        if let Some(t) = &mut self.timer {
+            if timed {
+                t.submitted();
+            }
+            if let Some(new) = t.try_read(&self.win.gpu)? {
+                self.passes = Some(match self.passes {
+                    Some(old) => old.smoothed(&new, 0.1),
+                    None => new,
+                });
+            }
+        }
         self.win.window.pre_present_notify();
         self.win.gpu.queue.present(frame);
         self.free_egui_textures(&frees);
@@ -456,6 +488,8 @@ impl Viewer {
             models: &self.model_names,
             clips: &self.clip_names,
             stats: self.stats,
+            passes: self.passes,
+            view_pixels: self.view[2] as u64 * self.view[3] as u64,
             time: self.time,
             baking: self.bake.as_ref().map(|b| (b.method, b.fraction())),
             bake_error: self.bake_error.as_deref(),
@@ -560,13 +594,15 @@ impl Viewer {
         view: &wgpu::TextureView,
         primitives: &[egui::ClippedPrimitive],
         screen: &egui_wgpu::ScreenDescriptor,
+        timer: Option<&FrameTimer>,
     ) {
         self.world
             .renderer
-            .encode(encoder, targets, view, Some(self.view));
+            .encode(encoder, targets, view, Some(self.view), timer);
         let mut pass = encoder
             .begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("panel"),
+                timestamp_writes: timer.map(|t| t.writes(Pass::Ui)),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,

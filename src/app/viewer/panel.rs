@@ -4,6 +4,7 @@
 use crate::bake::billboard::chain::MIN_EPSILON_GROWTH;
 
 use crate::bake::spectral::description::DescriptionType;
+use crate::render::timer::PassTimes;
 use crate::render::{DebugView, FrameStats};
 use crate::runtime::world::LevelSummary;
 use crate::scene::foliage::{FoliagePolicy, FoliageView};
@@ -173,6 +174,10 @@ pub struct Info<'a> {
     /// Clip names of every model.
     pub clips: &'a [Vec<String>],
     pub stats: FrameStats,
+    /// Each pass's GPU time (smoothed), where the adapter has timestamp queries.
+    pub passes: Option<PassTimes>,
+    /// Pixels of the 3D view, for fragments per pixel.
+    pub view_pixels: u64,
     pub time: f32,
     /// The method being baked and the fraction done.
     pub baking: Option<(crate::bake::simplify::Method, f32)>,
@@ -201,6 +206,7 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     ui.separator();
 
     statistics(ui, history, &info.stats);
+    pass_times(ui, info.passes.as_ref(), info.view_pixels);
     ui.separator();
     level_of_detail(ui, s, info);
     ui.separator();
@@ -323,6 +329,27 @@ fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameStats) {
     });
     ui.label("instances per level");
     level_histogram(ui, &st.levels);
+}
+
+/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel.
+fn pass_times(ui: &mut egui::Ui, passes: Option<&PassTimes>, pixels: u64) {
+    let Some(p) = passes else {
+        ui.label(egui::RichText::new("GPU time by pass: no timestamp queries here").small());
+        return;
+    };
+    ui.label(format!("GPU time by pass ({:.1} ms a frame)", p.frame_ms));
+    egui::Grid::new("passes").num_columns(2).show(ui, |ui| {
+        for (pass, ms) in p.drawn() {
+            ui.label(pass.name());
+            ui.label(format!("{ms:.2} ms"));
+            ui.end_row();
+        }
+        if let Some(x) = p.overdraw(pixels) {
+            ui.label("fragments per pixel");
+            ui.label(format!("{x:.2}"));
+            ui.end_row();
+        }
+    });
 }
 
 /// Instances per level as bars in the levels' debug colours.
