@@ -131,6 +131,8 @@ fn a_crowd_covers_a_sensible_share_of_the_image() {
         "{}",
         r.triangles
     );
+    // Blob shadows blend over the ground; the image stays opaque.
+    assert!(crowd.pixels().all(|p| p[3] == 255), "see-through pixels");
     let share = changed(&empty, &crowd);
     assert!(
         (0.02..0.6).contains(&share),

@@ -259,7 +259,9 @@ fn trees_stand_on_the_ground_and_are_metric() {
 }
 
 /// The forest renders: trees with green foliage whose quads are cut out by the leaf alpha
-/// (no dark quad corners), with and without multisampling.
+/// (no dark quad corners), with and without multisampling; and every pixel is opaque, so no
+/// leaf edge shows what lies under the image (a pale fringe over a viewer's white) where alpha
+/// to coverage smooths it.
 #[test]
 fn a_forest_shot_shows_trees_with_cut_out_leaves() {
     use lodlab::app::shot::{ShotOptions, run};
@@ -307,6 +309,8 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
             "MSAA {samples}: {:.4} of pixels are dark quads",
             dark / n
         );
+        let see_through = img.pixels().filter(|p| p[3] < 255).count();
+        assert_eq!(see_through, 0, "MSAA {samples}: pixels not opaque");
     }
 }
 

@@ -40,6 +40,10 @@ impl WindowGpu {
             config.format = srgb;
         }
         config.present_mode = wgpu::PresentMode::AutoVsync;
+        // The window is a picture, not a layer over the desktop.
+        if caps.alpha_modes.contains(&wgpu::CompositeAlphaMode::Opaque) {
+            config.alpha_mode = wgpu::CompositeAlphaMode::Opaque;
+        }
         surface.configure(&gpu.device, &config);
         Ok(WindowGpu {
             window,

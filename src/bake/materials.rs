@@ -107,16 +107,25 @@ fn layer_pixels(m: &Material, width: u32, height: u32) -> Vec<u8> {
 
 /// Alpha at or above this is inside a cut-out (foliage is alpha-tested at one half).
 const CUTOFF: u8 = 128;
+/// Rings of texels a cut-out's colour is dilated by at full size, and at each mip level.
+const BASE_DILATION: u32 = 8;
+const MIP_DILATION: u32 = 2;
 
 /// Mip levels down to 1×1, each a 2×2 box average taken in linear light.
 ///
 /// A layer with a cut-out (foliage) is treated as alpha-tested: colour is averaged weighted by
 /// alpha, so the transparent surroundings do not darken the edges, and each level's alpha is
 /// scaled so that the share of texels passing the alpha test stays that of the full-size
-/// texture, so thin leaves and needles do not erode into nothing at a distance.
-fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
+/// texture, so thin leaves and needles do not erode into nothing at a distance. Its colour is
+/// dilated into the transparent texels round the shapes at every level (see [`dilate`]); where
+/// a texel's four children are all transparent it takes their plain average, which carries the
+/// dilated colour on down the chain.
+fn mip_chain(mut base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
     let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
     let cut_out = base.chunks_exact(4).any(|p| p[3] < CUTOFF);
+    if cut_out {
+        dilate(&mut base, width, height, BASE_DILATION);
+    }
     let coverage = |px: &[u8]| {
         px.chunks_exact(4).filter(|p| p[3] >= CUTOFF).count() as f32 / (px.len() / 4) as f32
     };
@@ -130,6 +139,7 @@ fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
         for y in 0..nh {
             for x in 0..nw {
                 let mut acc = [0.0f32; 4];
+                let mut plain = [0.0f32; 3];
                 let mut weight = 0.0f32;
                 for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     let sx = (2 * x + dx).min(w - 1);
@@ -141,12 +151,22 @@ fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
                         1.0
                     };
                     for c in 0..3 {
-                        acc[c] += lut[prev[i + c] as usize] * a;
+                        let v = lut[prev[i + c] as usize];
+                        acc[c] += v * a;
+                        plain[c] += v;
                     }
                     weight += a;
                     acc[3] += prev[i + 3] as f32;
                 }
-                let wsum = if cut_out { weight.max(1e-6) } else { 4.0 };
+                let wsum = if !cut_out {
+                    4.0
+                } else if weight > 0.0 {
+                    weight
+                } else {
+                    // All four transparent: their (dilated) colour, unweighted.
+                    acc[..3].copy_from_slice(&plain);
+                    4.0
+                };
                 next.extend_from_slice(&[
                     linear_to_srgb(acc[0] / wsum),
                     linear_to_srgb(acc[1] / wsum),
@@ -157,11 +177,68 @@ fn mip_chain(base: Vec<u8>, width: u32, height: u32) -> Vec<Vec<u8>> {
         }
         if cut_out {
             preserve_coverage(&mut next, target);
+            dilate(&mut next, nw, nh, MIP_DILATION);
         }
         chain.push(next);
         (w, h) = (nw, nh);
     }
     chain
+}
+
+/// Fills every transparent texel's colour with that of its nearest opaque neighbour (a few
+/// rings out), keeping alpha 0, so that bilinear filtering and mipmaps never mix in black at a
+/// leaf's edge: "dilated colour under alpha". Under alpha to coverage an edge fragment keeps
+/// the colour it samples however little alpha it has, so an undilated edge shows whatever the
+/// transparent texels hold (lit, a pale rim).
+pub fn dilate(pixels: &mut [u8], width: u32, height: u32, rings: u32) {
+    let (w, h) = (width as usize, height as usize);
+    let mut filled: Vec<bool> = pixels.chunks_exact(4).map(|p| p[3] > 0).collect();
+    let neighbours = |i: usize| {
+        let (x, y) = (i % w, i / w);
+        [
+            (x > 0).then(|| i - 1),
+            (x + 1 < w).then(|| i + 1),
+            (y > 0).then(|| i - w),
+            (y + 1 < h).then(|| i + w),
+        ]
+        .into_iter()
+        .flatten()
+    };
+    // A ring at a time, breadth first: only the texels next to the ones filled so far are
+    // visited, so a mostly empty atlas costs what its shapes' outlines cost.
+    let mut ring: Vec<usize> = (0..w * h)
+        .filter(|&i| !filled[i] && neighbours(i).any(|n| filled[n]))
+        .collect();
+    let mut updates: Vec<(usize, [u8; 3])> = Vec::new();
+    for _ in 0..rings {
+        if ring.is_empty() {
+            break;
+        }
+        updates.clear();
+        for &i in &ring {
+            let mut acc = [0u32; 3];
+            let mut n = 0;
+            for j in neighbours(i).filter(|&j| filled[j]) {
+                for c in 0..3 {
+                    acc[c] += pixels[4 * j + c] as u32;
+                }
+                n += 1;
+            }
+            updates.push((i, acc.map(|a| (a / n.max(1)) as u8)));
+        }
+        for &(i, c) in &updates {
+            pixels[4 * i..4 * i + 3].copy_from_slice(&c);
+            filled[i] = true;
+        }
+        let mut next: Vec<usize> = ring
+            .iter()
+            .flat_map(|&i| neighbours(i))
+            .filter(|&j| !filled[j])
+            .collect();
+        next.sort_unstable();
+        next.dedup();
+        ring = next;
+    }
 }
 
 /// Scales a level's alpha so that the share of texels at or above [`CUTOFF`] is `target`
@@ -266,6 +343,56 @@ mod tests {
                 .position(|p| p[3] > 0)
                 .unwrap();
             assert!(l.mips[level][4 * i + 1] > 100, "darkened edge colour");
+        }
+    }
+
+    #[test]
+    fn dilation_fills_colour_but_keeps_alpha() {
+        let mut px = vec![0u8; 4 * 4 * 4];
+        px[(5 * 4)..(5 * 4 + 4)].copy_from_slice(&[200, 100, 50, 255]);
+        dilate(&mut px, 4, 4, 2);
+        assert_eq!(&px[(4 * 4)..(4 * 4 + 4)], &[200, 100, 50, 0]);
+        assert_eq!(px[5 * 4 + 3], 255);
+    }
+
+    /// A leaf shape on black: every level's texels next to the shape carry the leaf's colour,
+    /// not the black around it, so neither bilinear filtering nor alpha to coverage shows a
+    /// dark or (lit) pale rim.
+    #[test]
+    fn cut_out_colour_is_dilated_at_every_level() {
+        let size = 64u32;
+        let mut pixels = Vec::new();
+        for y in 0..size {
+            for x in 0..size {
+                let inside = (x as f32 - 31.5).hypot(y as f32 - 31.5) < 12.0;
+                pixels.extend_from_slice(if inside {
+                    &[60, 140, 30, 255]
+                } else {
+                    &[0, 0, 0, 0]
+                });
+            }
+        }
+        let m = Material {
+            name: "leaf".into(),
+            base_color: [1.0; 4],
+            texture: Some(Rgba8Image {
+                width: size,
+                height: size,
+                pixels,
+            }),
+        };
+        let l = MaterialLayers::bake(&[m]);
+        for (level, px) in l.mips.iter().enumerate().take(5) {
+            let w = size >> level;
+            // The texel just outside the disc's right edge, on its middle row.
+            let (r, y) = (12.0 / (1 << level) as f32, w / 2);
+            let x = (w as f32 / 2.0 + r + 0.5) as u32;
+            let i = ((y * w + x.min(w - 1)) * 4) as usize;
+            assert!(
+                px[i + 1] > 100 && px[i] < px[i + 1],
+                "level {level}: edge texel {:?}",
+                &px[i..i + 4]
+            );
         }
     }
 

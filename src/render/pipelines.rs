@@ -100,10 +100,15 @@ fn pipeline(
             targets: &[Some(wgpu::ColorTargetState {
                 format,
                 blend: spec.blend,
+                // The target's alpha stays the clear's 1 everywhere: a fragment's alpha is for
+                // coverage (foliage's alpha to coverage) or blending (shadows, faded levels)
+                // only. Written, it would leave partly transparent pixels at every leaf's edge
+                // and under every shadow, which a PNG viewer or a compositing window shows
+                // over white: a pale fringe.
                 write_mask: if spec.depth_only {
                     wgpu::ColorWrites::empty()
                 } else {
-                    wgpu::ColorWrites::ALL
+                    wgpu::ColorWrites::COLOR
                 },
             })],
         }),

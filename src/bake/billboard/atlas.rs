@@ -185,50 +185,6 @@ pub fn unpremultiply(pixels: &mut [u8]) {
     }
 }
 
-/// Fills every transparent texel's colour with that of its nearest opaque neighbour (a few
-/// rings out), keeping alpha 0, so that bilinear filtering and mipmaps never mix in black at a
-/// leaf's edge.
-pub fn dilate(pixels: &mut [u8], width: u32, height: u32, rings: u32) {
-    let idx = |x: u32, y: u32| ((y * width + x) * 4) as usize;
-    let mut filled: Vec<bool> = pixels.chunks_exact(4).map(|p| p[3] > 0).collect();
-    for _ in 0..rings {
-        let mut updates = Vec::new();
-        for y in 0..height {
-            for x in 0..width {
-                if filled[(y * width + x) as usize] {
-                    continue;
-                }
-                let mut acc = [0u32; 3];
-                let mut n = 0;
-                for (dx, dy) in [(-1i32, 0i32), (1, 0), (0, -1), (0, 1)] {
-                    let (nx, ny) = (x as i32 + dx, y as i32 + dy);
-                    if nx < 0 || ny < 0 || nx >= width as i32 || ny >= height as i32 {
-                        continue;
-                    }
-                    if filled[(ny as u32 * width + nx as u32) as usize] {
-                        let i = idx(nx as u32, ny as u32);
-                        for c in 0..3 {
-                            acc[c] += pixels[i + c] as u32;
-                        }
-                        n += 1;
-                    }
-                }
-                if n > 0 {
-                    updates.push((x, y, acc.map(|a| (a / n) as u8)));
-                }
-            }
-        }
-        if updates.is_empty() {
-            break;
-        }
-        for (x, y, c) in updates {
-            let i = idx(x, y);
-            pixels[i..i + 3].copy_from_slice(&c);
-            filled[(y * width + x) as usize] = true;
-        }
-    }
-}
-
 /// What draws an atlas: the one GPU-made part of a billboard cloud, behind a narrow seam so
 /// that the bake stays plain CPU code (`render::atlas` implements it; a test may rasterise on
 /// the CPU).
@@ -279,14 +235,5 @@ mod tests {
                 assert!(sep_x || sep_y, "{a:?} overlaps {b:?}");
             }
         }
-    }
-
-    #[test]
-    fn dilation_fills_colour_but_keeps_alpha() {
-        let mut px = vec![0u8; 4 * 4 * 4];
-        px[(5 * 4)..(5 * 4 + 4)].copy_from_slice(&[200, 100, 50, 255]);
-        dilate(&mut px, 4, 4, 2);
-        assert_eq!(&px[(4 * 4)..(4 * 4 + 4)], &[200, 100, 50, 0]);
-        assert_eq!(px[5 * 4 + 3], 255);
     }
 }

@@ -3,14 +3,14 @@
 //! foliage as billboard clouds of growing ε, end to end: the cloud, its atlas (drawn through
 //! [`RasterizeAtlas`], then dilated), and the tree model that draws it; and the chain cached.
 
-use super::atlas::{RasterizeAtlas, atlas_triangles, dilate, layout};
+use super::atlas::{RasterizeAtlas, atlas_triangles, layout};
 use super::cloud::CloudParams;
 use super::siblings::merge_siblings;
 use super::wood::{WoodChain, only_foliage};
 use super::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::anim::skinning_over_loop;
 use crate::bake::cache::{LodCache, Origin};
-use crate::bake::materials::MaterialLayers;
+use crate::bake::materials::{MaterialLayers, dilate};
 use crate::bake::spectral::cloud::{SpectralParams, spectral_cloud};
 use crate::bake::spectral::description::DescriptionType;
 use crate::bake::spectral::metrics::{AnimationError, animation_error, traced_leaves};
@@ -394,7 +394,7 @@ impl CloudLevel {
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 4;
+const CHAIN_VERSION: u32 = 5;
 
 /// The cache key of a tree's chain: its source's hash, the chain options and the versions.
 pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> Result<[u8; 32]> {
