@@ -148,11 +148,27 @@ fn background_bakes_finish_and_fill_the_cache() {
             hash: source_hash(&lodlab::import::source_path(name)).unwrap(),
         })
         .collect();
-    let wait = |job: BackgroundBake| loop {
-        match job.poll() {
-            Poll::Running => std::thread::sleep(std::time::Duration::from_millis(20)),
-            Poll::Done(packs) => break (packs, job.fraction()),
-            Poll::Failed => panic!("the bake thread died"),
+    // Each model's levels come as soon as they are ready; the status names what is baking.
+    let wait = |mut job: BackgroundBake| {
+        let mut packs: Vec<lodlab::runtime::levels::Baked> = vec![None, None];
+        let mut delivered = Vec::new();
+        let status = job.status();
+        loop {
+            let (ready, over) = match job.poll() {
+                Poll::Running(ready) => (ready, false),
+                Poll::Done(ready) => (ready, true),
+                Poll::Failed => panic!("the bake thread died"),
+            };
+            for (i, baked) in ready {
+                delivered.push(i);
+                packs[i] = baked;
+            }
+            if over {
+                delivered.sort();
+                assert_eq!(delivered, [0, 1], "every model handed over once");
+                break (packs, job.fraction(), status);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
         }
     };
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
@@ -162,8 +178,12 @@ fn background_bakes_finish_and_fill_the_cache() {
         let chain = Default::default();
         BackgroundBake::start(gpu.clone(), sources, skip, method, chain, cache.clone())
     };
-    let (packs, fraction) = wait(bake(sources.clone(), vec![false, false]));
+    let (packs, fraction, status) = wait(bake(sources.clone(), vec![false, false]));
     assert_eq!(fraction, 1.0);
+    assert_eq!(
+        status, "as levels of walker · billboard clouds of sapling",
+        "the bar names what it bakes"
+    );
     assert_eq!(packs.len(), 2);
     let Some(Ok(Levels::Pack(pack))) = &packs[0] else {
         panic!("the walker has no packed levels");
@@ -190,7 +210,7 @@ fn background_bakes_finish_and_fill_the_cache() {
         "one cache file per (model, method) and per tree: {files:?}"
     );
     assert!(files[0].starts_with("sapling-clouds-") && files[1].starts_with("walker-as-"));
-    let (again, _) = wait(bake(sources.clone(), vec![false, false]));
+    let (again, _, _) = wait(bake(sources.clone(), vec![false, false]));
     let Some(Ok(Levels::Pack(again_pack))) = &again[0] else {
         panic!("the walker has no packed levels the second time");
     };
@@ -207,7 +227,7 @@ fn background_bakes_finish_and_fill_the_cache() {
         assert!(a.cloud.model == b.cloud.model, "a cached level differs");
     }
     // A model that has what it needs already is left alone.
-    let (skipped, _) = wait(bake(sources, vec![true, true]));
+    let (skipped, _, _) = wait(bake(sources, vec![true, true]));
     assert!(skipped.iter().all(Option::is_none));
 }
 

@@ -80,6 +80,9 @@ fn layer_pixels(m: &Material, width: u32, height: u32) -> Vec<u8> {
             } else {
                 image::imageops::resize(&img, width, height, image::imageops::FilterType::Triangle)
             };
+            if f == [1.0; 4] {
+                return img.into_raw();
+            }
             let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
             img.into_raw()
                 .chunks_exact(4)

@@ -65,32 +65,59 @@ pub fn bake_all(
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
 ) -> Vec<Baked> {
-    sources
-        .par_iter()
-        .enumerate()
-        .map(|(i, s)| {
-            if skip.get(i).copied().unwrap_or(false) {
-                progress(i, 1.0);
-                return None;
-            }
-            let (levels, origin) = if is_tree(&s.model) {
-                match tree_levels(gpu, cache, s, chain, &|f| progress(i, f)) {
-                    Ok((levels, origin)) => (Ok(levels), origin),
-                    Err(e) => (Err(format!("{}: {e:#}", s.model.name)), Origin::Cache),
-                }
-            } else {
-                let options = runtime_options(&s.model);
-                let (lods, origin) =
-                    cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
-                (pack(&lods).map(Levels::Pack), origin)
-            };
-            if let Origin::Baked { warning: Some(w) } = origin {
-                warn(w);
-            }
+    let done = std::sync::Mutex::new((0..sources.len()).map(|_| None).collect::<Vec<Baked>>());
+    let deliver = |i: usize, baked: Baked| {
+        if let Ok(mut d) = done.lock() {
+            d[i] = baked;
+        }
+    };
+    bake_each(
+        gpu, sources, skip, method, chain, cache, progress, warn, &deliver,
+    );
+    done.into_inner().unwrap_or_default()
+}
+
+/// [`bake_all`], handing each model's levels to `deliver(i, levels)` as soon as they are
+/// ready. Characters go first: their levels take a second or so, a tree's chain much longer,
+/// and a viewer shows each as it comes.
+#[allow(clippy::too_many_arguments)]
+pub fn bake_each(
+    gpu: &Gpu,
+    sources: &[LevelSource],
+    skip: &[bool],
+    method: Method,
+    chain: &ChainOptions,
+    cache: &LodCache,
+    progress: &(dyn Fn(usize, f32) + Sync),
+    warn: &(dyn Fn(String) + Sync),
+    deliver: &(dyn Fn(usize, Baked) + Sync),
+) {
+    let mut order: Vec<usize> = (0..sources.len()).collect();
+    order.sort_by_key(|&i| is_tree(&sources[i].model));
+    order.par_iter().with_max_len(1).for_each(|&i| {
+        let s = &sources[i];
+        if skip.get(i).copied().unwrap_or(false) {
             progress(i, 1.0);
-            Some(levels)
-        })
-        .collect()
+            deliver(i, None);
+            return;
+        }
+        let (levels, origin) = if is_tree(&s.model) {
+            match tree_levels(gpu, cache, s, chain, &|f| progress(i, f)) {
+                Ok((levels, origin)) => (Ok(levels), origin),
+                Err(e) => (Err(format!("{}: {e:#}", s.model.name)), Origin::Cache),
+            }
+        } else {
+            let options = runtime_options(&s.model);
+            let (lods, origin) =
+                cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
+            (pack(&lods).map(Levels::Pack), origin)
+        };
+        if let Origin::Baked { warning: Some(w) } = origin {
+            warn(w);
+        }
+        progress(i, 1.0);
+        deliver(i, Some(levels));
+    });
 }
 
 /// A tree's chain from the cache or built now, its levels 1… baked for the GPU.
@@ -121,20 +148,26 @@ fn pack(lods: &SkinnedLods) -> Result<LodPack, String> {
     LodPack::from_levels(&lods.levels).map_err(|e| format!("{} {}: {e}", lods.model, lods.method))
 }
 
-/// A bake running on its own thread.
+/// A bake running on its own thread, handing over each model's levels as they are ready.
 pub struct BackgroundBake {
     pub method: Method,
     /// How the trees' chains it builds are cut.
     pub chain: ChainOptions,
     /// Per model, progress in thousandths.
     progress: Arc<Vec<AtomicU32>>,
-    result: Receiver<Vec<Baked>>,
+    /// Per model, its name and whether it is a tree; and whether this bake makes its levels.
+    models: Vec<(String, bool, bool)>,
+    result: Receiver<(usize, Baked)>,
+    /// Models not handed over yet.
+    pending: usize,
 }
 
 /// What polling a background bake found.
 pub enum Poll {
-    Running,
-    Done(Vec<Baked>),
+    /// These models' levels are ready (maybe none yet); more are to come.
+    Running(Vec<(usize, Baked)>),
+    /// The last models' levels: the bake is over.
+    Done(Vec<(usize, Baked)>),
     /// The thread died without an answer.
     Failed,
 }
@@ -150,41 +183,108 @@ impl BackgroundBake {
     ) -> BackgroundBake {
         let progress: Arc<Vec<AtomicU32>> =
             Arc::new((0..sources.len()).map(|_| AtomicU32::new(0)).collect());
+        let models = sources
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let making = !skip.get(i).copied().unwrap_or(false);
+                (s.model.name.clone(), is_tree(&s.model), making)
+            })
+            .collect();
         let (tx, rx) = channel();
         let p = progress.clone();
+        let pending = sources.len();
         std::thread::spawn(move || {
             let report = |i: usize, f: f32| {
                 p[i].store((f.clamp(0.0, 1.0) * 1000.0) as u32, Ordering::Relaxed);
             };
             let warn = |w: String| eprintln!("warning: {w}");
-            let packs = bake_all(
-                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn,
+            let tx = std::sync::Mutex::new(tx);
+            let deliver = |i: usize, baked: Baked| {
+                if let Ok(tx) = tx.lock() {
+                    let _ = tx.send((i, baked));
+                }
+            };
+            bake_each(
+                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
             );
-            let _ = tx.send(packs);
         });
         BackgroundBake {
             method,
             chain,
             progress,
+            models,
             result: rx,
+            pending,
         }
     }
 
-    /// Fraction done over all models.
+    /// Fraction done over the models it makes levels for.
     pub fn fraction(&self) -> f32 {
-        let n = self.progress.len().max(1) as f32;
-        self.progress
+        let making: Vec<f32> = self
+            .models
             .iter()
-            .map(|p| p.load(Ordering::Relaxed) as f32 / 1000.0)
-            .sum::<f32>()
-            / n
+            .zip(self.progress.iter())
+            .filter(|((_, _, making), _)| *making)
+            .map(|(_, p)| p.load(Ordering::Relaxed) as f32 / 1000.0)
+            .collect();
+        making.iter().sum::<f32>() / making.len().max(1) as f32
     }
 
-    pub fn poll(&self) -> Poll {
-        match self.result.try_recv() {
-            Ok(packs) => Poll::Done(packs),
-            Err(TryRecvError::Empty) => Poll::Running,
-            Err(TryRecvError::Disconnected) => Poll::Failed,
+    /// What it is baking now, for a progress bar: `"as+is levels of walker · billboard clouds
+    /// of broadleaf, conifer"`, the models begun and not finished (or, before any has begun,
+    /// those to come).
+    pub fn status(&self) -> String {
+        let state: Vec<(&str, bool, u32)> = self
+            .models
+            .iter()
+            .zip(self.progress.iter())
+            .filter(|((_, _, making), _)| *making)
+            .map(|((name, tree, _), p)| (name.as_str(), *tree, p.load(Ordering::Relaxed)))
+            .filter(|&(_, _, p)| p < 1000)
+            .collect();
+        let begun: Vec<_> = state.iter().filter(|&&(_, _, p)| p > 0).copied().collect();
+        let shown = if begun.is_empty() { state } else { begun };
+        let names = |trees: bool| {
+            shown
+                .iter()
+                .filter(|&&(_, t, _)| t == trees)
+                .map(|&(n, _, _)| n)
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let (characters, trees) = (names(false), names(true));
+        let mut parts = Vec::new();
+        if !characters.is_empty() {
+            parts.push(format!("{} levels of {characters}", self.method));
+        }
+        if !trees.is_empty() {
+            parts.push(format!("billboard clouds of {trees}"));
+        }
+        if parts.is_empty() {
+            format!("{} levels", self.method)
+        } else {
+            parts.join(" · ")
+        }
+    }
+
+    pub fn poll(&mut self) -> Poll {
+        let mut ready = Vec::new();
+        loop {
+            match self.result.try_recv() {
+                Ok(item) => {
+                    self.pending = self.pending.saturating_sub(1);
+                    ready.push(item);
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) if self.pending > 0 => return Poll::Failed,
+                Err(TryRecvError::Disconnected) => break,
+            }
+        }
+        if self.pending == 0 {
+            Poll::Done(ready)
+        } else {
+            Poll::Running(ready)
         }
     }
 }

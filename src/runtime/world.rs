@@ -274,10 +274,10 @@ impl World {
         gpu: &Gpu,
         method: Method,
         chain: &ChainOptions,
-        packs: Vec<Baked>,
+        packs: impl IntoIterator<Item = (usize, Baked)>,
     ) -> Result<()> {
         let slot = LodMethod::Simplified(method).index();
-        for (m, pack) in packs.into_iter().enumerate() {
+        for (m, pack) in packs {
             match pack.transpose().map_err(anyhow::Error::msg)? {
                 None => {}
                 Some(Levels::Pack(pack)) => {
@@ -313,7 +313,7 @@ impl World {
                 &warn,
             );
             // A model that failed is reported by install_levels; none is retried for ever.
-            self.install_levels(gpu, m, &chain, packs)?;
+            self.install_levels(gpu, m, &chain, packs.into_iter().enumerate())?;
             if self.missing_levels() == Some(m) {
                 bail!("{m}: levels are still missing after baking them");
             }

@@ -73,7 +73,9 @@ pub fn run(options: ViewOptions) -> Result<ExitCode> {
     if let Some(path) = &options.screenshot {
         crate::atomic::check_target(path)?;
     }
+    let launched = Instant::now();
     let loaded = Loaded::new(options.spec.clone())?;
+    let models_seconds = launched.elapsed().as_secs_f32();
     let event_loop = match EventLoop::new() {
         Ok(el) => el,
         Err(e) => {
@@ -83,6 +85,11 @@ pub fn run(options: ViewOptions) -> Result<ExitCode> {
     };
     let mut app = App {
         options,
+        launched: Launch {
+            at: launched,
+            models_seconds,
+            window_seconds: 0.0,
+        },
         loaded: Some(loaded),
         viewer: None,
         error: None,
@@ -96,6 +103,7 @@ pub fn run(options: ViewOptions) -> Result<ExitCode> {
 
 struct App {
     options: ViewOptions,
+    launched: Launch,
     loaded: Option<Loaded>,
     viewer: Option<Viewer>,
     error: Option<anyhow::Error>,
@@ -109,8 +117,11 @@ impl ApplicationHandler for App {
         let Some(loaded) = self.loaded.take() else {
             return;
         };
-        match Viewer::new(event_loop, &self.options, loaded) {
-            Ok(v) => self.viewer = Some(v),
+        match Viewer::new(event_loop, &self.options, loaded, self.launched) {
+            Ok(mut v) => {
+                v.launched.window_seconds = self.launched.at.elapsed().as_secs_f32();
+                self.viewer = Some(v)
+            }
             Err(e) => {
                 self.error = Some(e);
                 event_loop.exit();
@@ -140,7 +151,22 @@ impl ApplicationHandler for App {
     }
 }
 
+/// When the viewer was launched, and how long its models took to load: the start-up figures
+/// it prints.
+#[derive(Clone, Copy)]
+struct Launch {
+    at: Instant,
+    models_seconds: f32,
+    /// Seconds from launch to the window and the scene on the GPU.
+    window_seconds: f32,
+}
+
 struct Viewer {
+    launched: Launch,
+    /// Whether the first frame, and the moment every level the view asks for is on the GPU,
+    /// have been reported.
+    reported_first_frame: bool,
+    reported_levels: bool,
     win: WindowGpu,
     world: World,
     targets: RenderTargets,
@@ -178,7 +204,12 @@ struct Viewer {
 const SETTLE_BEFORE_BAKE: std::time::Duration = std::time::Duration::from_millis(400);
 
 impl Viewer {
-    fn new(event_loop: &ActiveEventLoop, options: &ViewOptions, loaded: Loaded) -> Result<Viewer> {
+    fn new(
+        event_loop: &ActiveEventLoop,
+        options: &ViewOptions,
+        loaded: Loaded,
+        launched: Launch,
+    ) -> Result<Viewer> {
         let attributes = Window::default_attributes()
             .with_title("lodlab")
             .with_inner_size(winit::dpi::PhysicalSize::new(options.width, options.height));
@@ -218,6 +249,9 @@ impl Viewer {
             foliage: options.lod.foliage,
         };
         Ok(Viewer {
+            launched,
+            reported_first_frame: false,
+            reported_levels: false,
             adapter: gpu.info.name.clone(),
             backend: gpu.backend_name(),
             model_names: world.bakes.iter().map(|b| b.name.clone()).collect(),
@@ -246,23 +280,31 @@ impl Viewer {
 
     /// Takes a finished background bake in, and starts the next one a side needs.
     fn update_levels(&mut self) -> Result<()> {
-        if let Some(job) = &self.bake {
-            match job.poll() {
-                Poll::Running => return Ok(()),
-                Poll::Done(packs) => {
-                    let (method, chain) = (job.method, job.chain);
-                    self.bake = None;
-                    let installed = self
-                        .world
-                        .install_levels(&self.win.gpu, method, &chain, packs);
-                    if let Err(e) = installed {
-                        self.bake_error = Some(format!("{method}: {e:#}"));
-                    }
-                }
+        if let Some(job) = &mut self.bake {
+            // Each model's levels go in as soon as they are ready: the characters' within a
+            // second or two, while the trees' chains take longer.
+            let (ready, over) = match job.poll() {
+                Poll::Running(ready) => (ready, false),
+                Poll::Done(ready) => (ready, true),
                 Poll::Failed => {
                     self.bake_error = Some(format!("{}: the bake stopped", job.method));
-                    self.bake = None;
+                    (Vec::new(), true)
                 }
+            };
+            let (method, chain) = (job.method, job.chain);
+            if over {
+                self.bake = None;
+            }
+            if !ready.is_empty() {
+                let installed = self
+                    .world
+                    .install_levels(&self.win.gpu, method, &chain, ready);
+                if let Err(e) = installed {
+                    self.bake_error = Some(format!("{method}: {e:#}"));
+                }
+            }
+            if !over {
+                return Ok(());
             }
         }
         if let Some(method) = self.world.missing_levels()
@@ -448,12 +490,31 @@ impl Viewer {
         self.win.gpu.queue.present(frame);
         self.free_egui_textures(&frees);
         self.frames += 1;
+        self.report_start_up();
 
         if let (Some(shot), Some(path)) = (capture, &options.screenshot) {
             self.write_screenshot(&shot, path)?;
             return Ok(false);
         }
         Ok(true)
+    }
+
+    /// Says on stderr when the first frame was shown, and when every level the view asks for
+    /// came in: what a user waits for at start-up.
+    fn report_start_up(&mut self) {
+        let seconds = self.launched.at.elapsed().as_secs_f32();
+        if !self.reported_first_frame {
+            self.reported_first_frame = true;
+            eprintln!(
+                "lodlab: first frame after {seconds:.1} s (models loaded after {:.1} s, window \
+                 and scene on the GPU after {:.1} s)",
+                self.launched.models_seconds, self.launched.window_seconds
+            );
+        }
+        if !self.reported_levels && self.bake.is_none() && self.world.missing_levels().is_none() {
+            self.reported_levels = true;
+            eprintln!("lodlab: every level in place after {seconds:.1} s");
+        }
     }
 
     /// Advances the clocks by the time since the last frame, and flies the camera: the
@@ -491,7 +552,7 @@ impl Viewer {
             passes: self.passes,
             view_pixels: self.view[2] as u64 * self.view[3] as u64,
             time: self.time,
-            baking: self.bake.as_ref().map(|b| (b.method, b.fraction())),
+            baking: self.bake.as_ref().map(|b| (b.status(), b.fraction())),
             bake_error: self.bake_error.as_deref(),
             wireframe: self.world.renderer.has_wireframe(),
             ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),

@@ -180,7 +180,7 @@ pub struct Info<'a> {
     pub view_pixels: u64,
     pub time: f32,
     /// The method being baked and the fraction done.
-    pub baking: Option<(crate::bake::simplify::Method, f32)>,
+    pub baking: Option<(String, f32)>,
     pub bake_error: Option<&'a str>,
     /// Can the adapter draw wireframes?
     pub wireframe: bool,
@@ -408,12 +408,13 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.strong("Level of detail");
     ui.label(egui::RichText::new("M: next method · T: next transition").small());
     method_combo(ui, "method", &mut s.method, info);
-    if let Some((method, f)) = info.baking {
+    if let Some((what, f)) = &info.baking {
         ui.add(
-            egui::ProgressBar::new(f)
-                .text(format!("baking {method}: {:.0}%", f * 100.0))
+            egui::ProgressBar::new(*f)
+                .text(format!("{:.0}%", f * 100.0))
                 .desired_height(14.0),
         );
+        ui.label(egui::RichText::new(format!("baking {what}")).small());
     }
     if let Some(e) = info.bake_error {
         ui.colored_label(ui.visuals().error_fg_color, e);
