@@ -283,12 +283,37 @@ fn multisampling_defaults_by_adapter() {
 
 /// `shot` reports each pass's GPU time where the adapter has timestamp queries: only the passes
 /// the frame draws, none longer than the frame; and where it counts fragments, the sky and
-/// ground alone shade every pixel at least once.
+/// ground alone shade every pixel at least once. It reports where memory goes too.
 #[test]
 fn shot_reports_where_the_frame_goes() {
     let (_, empty) = render(spec(&[], 0, None), 0.0, (64, 48), None);
     let close = Some(Camera::new(Vec3::new(0.0, 0.9, 0.0), 90.0, 5.0, 3.4));
     let (_, one) = render(spec(&["walker"], 1, None), 0.5, (64, 48), close);
+    // Where memory goes: the walker's textures and buffers by kind, and the process's
+    // resident size (Linux) above what is counted.
+    let mb =
+        |r: &lodlab::app::shot::ShotReport, k: &str| r.memory_mb.get(k).copied().unwrap_or(0.0);
+    for kind in [
+        "animation textures",
+        "vertex textures",
+        "material textures",
+        "index buffers",
+    ] {
+        assert!(mb(&one, kind) > 0.0, "{kind}: {:?}", one.memory_mb);
+    }
+    if cfg!(target_os = "linux") {
+        let counted: f64 = one
+            .memory_mb
+            .iter()
+            .filter(|(k, _)| !k.starts_with("resident"))
+            .map(|(_, v)| v)
+            .sum();
+        assert!(
+            mb(&one, "resident (process)") > counted,
+            "{:?}",
+            one.memory_mb
+        );
+    }
     if empty.passes.is_empty() {
         eprintln!("no timestamp queries on this adapter: nothing to check");
         return;

@@ -69,6 +69,8 @@ pub struct ShotReport {
     /// Median fragments shaded per pixel, where the adapter counts them.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub overdraw: Option<f64>,
+    /// Where memory goes, in MB by kind (see [`World::memory`]).
+    pub memory_mb: BTreeMap<String, f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plain_frame_ms: Option<f64>,
     /// `frame_ms / plain_frame_ms`: what skinning costs over a plain draw of the same triangles.
@@ -159,6 +161,11 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         in_transition: stats.in_transition,
         frame_ms,
         passes: pass_medians(&passes),
+        memory_mb: world
+            .memory(target.targets.bytes())
+            .into_iter()
+            .map(|(k, b)| (k.to_string(), (b as f64 / 1e6 * 10.0).round() / 10.0))
+            .collect(),
         overdraw: overdraw_median(&passes, options.width, options.height),
         plain_frame_ms,
         skinning_ratio: plain_frame_ms.map(|p| frame_ms / p.max(1e-9)),

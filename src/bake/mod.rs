@@ -57,6 +57,22 @@ pub struct CharacterBake {
 }
 
 impl CharacterBake {
+    /// Bytes its textures, meshes and index lists hold on the CPU.
+    pub fn heap_bytes(&self) -> u64 {
+        let am = &self.animation_space;
+        let mesh = std::mem::size_of_val(am.offsets.as_slice())
+            + std::mem::size_of_val(am.influences.as_slice())
+            + std::mem::size_of_val(am.uvs.as_slice())
+            + std::mem::size_of_val(am.materials.as_slice())
+            + std::mem::size_of_val(am.indices.as_slice())
+            + std::mem::size_of_val(am.spectral_rows.as_slice());
+        let textures = self.animation.grid.texels.len() * 16
+            + self.vertices.grid.texels.len() * 16
+            + self.materials.mips.iter().map(Vec::len).sum::<usize>()
+            + self.spectra.as_ref().map_or(0, |s| s.bytes().len());
+        (mesh + textures + 4 * (self.indices.len() + self.outlines.len())) as u64
+    }
+
     pub fn new(model: &Model) -> Result<Self, String> {
         Self::with_motion(model, None)
     }

@@ -2,6 +2,7 @@
 //! every character pass uses.
 
 use super::gpu::Gpu;
+use super::memory::GpuMemory;
 use crate::bake::CharacterBake;
 use crate::bake::lod_pack::{LodPack, PackedLevel};
 use crate::bake::texels::TexelGrid;
@@ -38,6 +39,8 @@ pub struct GpuCharacter {
     pub outlines: Option<(wgpu::Buffer, u32)>,
     /// Indexed by [`crate::scene::LodMethod::index`]; slot 0 (`none`) is always there.
     sets: Vec<Option<GpuLodSet>>,
+    /// What the shared data above takes on the GPU (the sets count their own).
+    shared_bytes: GpuMemory,
 }
 
 /// One method's levels of detail on the GPU, created once (see [`LodPack`]).
@@ -50,6 +53,8 @@ pub struct GpuLodSet {
     /// same levels with the same indices).
     pub static_vertices: wgpu::Buffer,
     pub bind_group: wgpu::BindGroup,
+    /// What the set takes on the GPU.
+    pub bytes: GpuMemory,
 }
 
 /// Layout of group 1: animation texture, vertex texture, material layers, sampler, shadow,
@@ -141,6 +146,7 @@ impl GpuCharacter {
             &format!("{} animation", bake.name),
             &bake.animation.grid,
         );
+        let spectra_bytes = bake.spectra.as_ref().map_or(0, |s| s.bytes().len() as u64);
         let spectra = match &bake.spectra {
             Some(s) if s.rows > 0 => float_texture(
                 gpu,
@@ -214,6 +220,14 @@ impl GpuCharacter {
             }),
             shadow_buffer,
             spectra_view: spectra.create_view(&Default::default()),
+            shared_bytes: GpuMemory {
+                animation_textures: (bake.animation.grid.texels.len() * 16) as u64,
+                material_textures: material_data.len() as u64,
+                spectra_textures: spectra_bytes,
+                other_buffers: (std::mem::size_of::<ShadowUniform>() + bake.outlines.len() * 4)
+                    as u64,
+                ..Default::default()
+            },
             outlines,
             sets: Vec::new(),
         };
@@ -239,15 +253,20 @@ impl GpuCharacter {
                 usage: wgpu::BufferUsages::INDEX,
             });
         let verts_view = verts.create_view(&Default::default());
+        let pose_vertices = pack.vertices.static_vertices(&self.calibration_pose);
         let static_vertices = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("static vertices"),
-                contents: bytemuck::cast_slice(
-                    &pack.vertices.static_vertices(&self.calibration_pose),
-                ),
+                contents: bytemuck::cast_slice(&pose_vertices),
                 usage: wgpu::BufferUsages::VERTEX,
             });
+        let bytes = GpuMemory {
+            vertex_textures: (pack.vertices.grid.texels.len() * 16) as u64,
+            index_buffers: (pack.indices.len() * 4) as u64,
+            calibration_vertices: std::mem::size_of_val(pose_vertices.as_slice()) as u64,
+            ..Default::default()
+        };
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.name),
             layout,
@@ -287,7 +306,17 @@ impl GpuCharacter {
             vertex_count: pack.vertices.vertex_count,
             static_vertices,
             bind_group,
+            bytes,
         });
+    }
+
+    /// What the character holds on the GPU: its shared data and every set.
+    pub fn bytes(&self) -> GpuMemory {
+        let mut total = self.shared_bytes;
+        for set in self.sets.iter().flatten() {
+            total += set.bytes;
+        }
+        total
     }
 
     /// The set in `slot`, if uploaded.

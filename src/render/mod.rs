@@ -4,6 +4,7 @@ pub mod atlas;
 pub mod capture;
 pub mod character;
 pub mod gpu;
+pub mod memory;
 mod pipelines;
 pub mod renderer;
 pub mod shaders;

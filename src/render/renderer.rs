@@ -371,6 +371,18 @@ impl SceneRenderer {
         &self.characters
     }
 
+    /// What the characters and the instance buffer hold on the GPU.
+    pub fn memory(&self) -> super::memory::GpuMemory {
+        let mut total = super::memory::GpuMemory {
+            other_buffers: self.instance_buffer.size(),
+            ..Default::default()
+        };
+        for c in &self.characters {
+            total += c.bytes();
+        }
+        total
+    }
+
     /// Does the adapter draw wireframes?
     pub fn has_wireframe(&self) -> bool {
         self.pipelines.wireframe.is_some()

@@ -52,6 +52,12 @@ impl RenderTargets {
         }
     }
 
+    /// Bytes of the multisampled colour and the depth attachments.
+    pub fn bytes(&self) -> u64 {
+        let per_sample = 4 + if self.msaa.is_some() { 4 } else { 0 };
+        self.width as u64 * self.height as u64 * self.sample_count as u64 * per_sample
+    }
+
     /// The colour attachment of one of a frame's passes, which ends up in `target`: the first
     /// pass clears it (to black), the others load it; the last resolves the multisampled
     /// texture, when there is one, into `target` and leaves the samples behind.

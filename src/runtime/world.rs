@@ -291,6 +291,8 @@ impl World {
             }
         }
         self.lod.reset();
+        // A chain's decoding and its atlases' mipmaps leave hundreds of MB freed on the heap.
+        crate::render::memory::return_freed_memory();
         Ok(())
     }
 
@@ -409,6 +411,27 @@ impl World {
                 )
             })
             .collect()
+    }
+
+    /// Where memory goes, in bytes by kind: on the GPU (see [`GpuMemory`]), the frame's
+    /// render targets (`targets`, the caller's), and the CPU's copies: the models as loaded
+    /// (kept to bake their levels) and their bakes (kept for re-uploads and the crowd); then
+    /// the process's resident size where the platform says it.
+    pub fn memory(&self, targets: u64) -> Vec<(&'static str, u64)> {
+        let mut rows: Vec<(&'static str, u64)> = self.renderer.memory().rows().to_vec();
+        rows.push(("render targets", targets));
+        rows.push((
+            "models (CPU)",
+            self.sources.iter().map(|s| s.model.heap_bytes()).sum(),
+        ));
+        rows.push((
+            "bakes (CPU)",
+            self.bakes.iter().map(CharacterBake::heap_bytes).sum(),
+        ));
+        if let Some(rss) = crate::render::memory::resident_bytes() {
+            rows.push(("resident (process)", rss));
+        }
+        rows
     }
 
     /// Re-lays the crowd for a new count, clip or model choice without reloading anything:

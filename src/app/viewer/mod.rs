@@ -188,6 +188,9 @@ struct Viewer {
     timer: Option<FrameTimer>,
     /// The passes' times, smoothed over the last second or so of frames.
     passes: Option<PassTimes>,
+    /// Where memory goes (see [`World::memory`]) and when that was last looked at.
+    memory: Vec<(&'static str, u64)>,
+    memory_at: Option<Instant>,
     /// The 3D view in physical pixels: x, y, width, height.
     view: [u32; 4],
     frames: usize,
@@ -270,6 +273,8 @@ impl Viewer {
             stats: FrameStats::default(),
             timer,
             passes: None,
+            memory: Vec::new(),
+            memory_at: None,
             view: [0, 0, 1, 1],
             frames: 0,
             bake: None,
@@ -543,6 +548,15 @@ impl Viewer {
         let mut requests = panel::Requests::default();
         let mut central = egui::Rect::NOTHING;
         self.update_levels()?;
+        // Where memory goes, once a second (it reads /proc).
+        if self
+            .memory_at
+            .is_none_or(|t| t.elapsed().as_secs_f32() >= 1.0)
+        {
+            self.memory = self.world.memory(self.targets.bytes());
+            self.memory_at = Some(Instant::now());
+        }
+        let memory = self.memory.clone();
         let info = Info {
             adapter: &self.adapter,
             backend: &self.backend,
@@ -551,6 +565,7 @@ impl Viewer {
             stats: self.stats,
             passes: self.passes,
             view_pixels: self.view[2] as u64 * self.view[3] as u64,
+            memory: &memory,
             time: self.time,
             baking: self.bake.as_ref().map(|b| (b.status(), b.fraction())),
             bake_error: self.bake_error.as_deref(),

@@ -178,6 +178,8 @@ pub struct Info<'a> {
     pub passes: Option<PassTimes>,
     /// Pixels of the 3D view, for fragments per pixel.
     pub view_pixels: u64,
+    /// Where memory goes, bytes by kind.
+    pub memory: &'a [(&'static str, u64)],
     pub time: f32,
     /// The method being baked and the fraction done.
     pub baking: Option<(String, f32)>,
@@ -207,6 +209,7 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
 
     statistics(ui, history, &info.stats);
     pass_times(ui, info.passes.as_ref(), info.view_pixels);
+    memory(ui, info.memory);
     ui.separator();
     level_of_detail(ui, s, info);
     ui.separator();
@@ -350,6 +353,23 @@ fn pass_times(ui: &mut egui::Ui, passes: Option<&PassTimes>, pixels: u64) {
             ui.end_row();
         }
     });
+}
+
+/// Where memory goes, in MB by kind.
+fn memory(ui: &mut egui::Ui, rows: &[(&'static str, u64)]) {
+    egui::CollapsingHeader::new("Memory")
+        .id_salt("memory")
+        .show(ui, |ui| {
+            egui::Grid::new("memory grid")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    for &(name, bytes) in rows.iter().filter(|(_, b)| *b > 0) {
+                        ui.label(name);
+                        ui.label(format!("{:.1} MB", bytes as f64 / 1e6));
+                        ui.end_row();
+                    }
+                });
+        });
 }
 
 /// Instances per level as bars in the levels' debug colours.
