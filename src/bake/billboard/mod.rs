@@ -12,6 +12,7 @@
 pub mod atlas;
 pub mod chain;
 pub mod cloud;
+pub mod impostor;
 pub mod rect;
 pub mod siblings;
 pub mod wood;
