@@ -113,10 +113,22 @@ fn heat(x: f32) -> vec3<f32> {
     return clamp(vec3<f32>(1.5 - abs(4.0 * v - 3.0), 1.5 - abs(4.0 * v - 2.0), 1.5 - abs(4.0 * v - 1.0)), vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
+// Characters shaded by their materials. The debug views are `fs_debug`, a pipeline of their
+// own: a branch on the view here would cost every pixel on a software rasteriser.
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
-    return vec4<f32>(lit(in, texel.rgb, normalize(in.normal)), in.lod.z);
+    return vec4<f32>(lit(in, texel.rgb * in.tint.rgb, normalize(in.normal)), in.lod.z);
+}
+
+// Characters painted by the debug view (frame.views.x): by level, by transition, by
+// influences; the material where the view keeps it.
+@fragment
+fn fs_debug(in: VsOut) -> @location(0) vec4<f32> {
+    let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
+    let d = debug_color(in.lod, in.influences, frame.views.x);
+    let base = select(texel.rgb * in.tint.rgb, d.rgb, d.a > 0.5);
+    return vec4<f32>(lit(in, base, normalize(in.normal)), in.lod.z);
 }
 
 // Interleaved gradient noise (Jimenez 2014): a threshold in [0, 1) per pixel, evenly spread
@@ -236,10 +248,9 @@ fn debug_color(lod: vec4<f32>, influences: f32, view: u32) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-// The character's colour: material (or a debug view's colour), sun and sky light, rim, fog.
-fn lit(in: VsOut, albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let d = debug_color(in.lod, in.influences, frame.views.x);
-    let base = select(albedo * in.tint.rgb, d.rgb, d.a > 0.5);
+// The character's colour from its base colour (material or debug view): sun and sky light,
+// rim, fog.
+fn lit(in: VsOut, base: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     var c = shade(base, n);
     // A touch of rim light separates figures from the ground at a distance.
     let v = normalize(frame.camera_pos.xyz - in.world);

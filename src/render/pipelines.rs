@@ -117,13 +117,28 @@ fn pipeline(
     })
 }
 
+/// A character pipeline twice: shaded by its materials, and painted by a debug view. The debug
+/// views are a fragment shader of their own, so that the shaded one carries no branch on the
+/// view: on a software rasteriser every branch costs every pixel, about a quarter of a
+/// character's fragment time.
+pub(super) struct Shading {
+    pub shaded: wgpu::RenderPipeline,
+    pub debug: wgpu::RenderPipeline,
+}
+
+impl Shading {
+    pub fn get(&self, debug: bool) -> &wgpu::RenderPipeline {
+        if debug { &self.debug } else { &self.shaded }
+    }
+}
+
 /// Every pipeline the scene renderer draws with.
 pub(super) struct Pipelines {
-    pub skinned: wgpu::RenderPipeline,
-    pub morph: wgpu::RenderPipeline,
+    pub skinned: Shading,
+    pub morph: Shading,
     /// The two passes of a faded level: depth only, then colour where the depth is equal.
     pub fade_depth: wgpu::RenderPipeline,
-    pub fade_color: wgpu::RenderPipeline,
+    pub fade_color: Shading,
     /// Line-mode versions of `skinned` and `morph`, where the adapter can draw lines.
     pub wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
@@ -170,11 +185,22 @@ impl Pipelines {
             ..PipelineSpec::new(label, &character_module, vs, "fs_main")
         };
         let build = |layout, spec| pipeline(device, layout, f, s, spec);
-        let skinned = build(&with_characters, character("skinned characters", "vs_main"));
-        let morph = build(
-            &with_characters,
-            character("geomorphed characters", "vs_morph"),
-        );
+        // The shaded pipeline of `spec`, and the same with the debug views' fragment shader.
+        let shading = |spec: PipelineSpec<'_>| Shading {
+            debug: pipeline(
+                device,
+                &with_characters,
+                f,
+                s,
+                PipelineSpec {
+                    fs: "fs_debug",
+                    ..spec
+                },
+            ),
+            shaded: pipeline(device, &with_characters, f, s, spec),
+        };
+        let skinned = shading(character("skinned characters", "vs_main"));
+        let morph = shading(character("geomorphed characters", "vs_morph"));
         let fade_depth = build(
             &with_characters,
             PipelineSpec {
@@ -182,21 +208,18 @@ impl Pipelines {
                 ..character("faded level depth", "vs_main")
             },
         );
-        let fade_color = build(
-            &with_characters,
-            PipelineSpec {
-                depth: Depth::Equal,
-                blend: Some(wgpu::BlendState {
-                    color: wgpu::BlendComponent {
-                        src_factor: wgpu::BlendFactor::SrcAlpha,
-                        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                        operation: wgpu::BlendOperation::Add,
-                    },
-                    alpha: wgpu::BlendComponent::OVER,
-                }),
-                ..character("faded level colour", "vs_main")
-            },
-        );
+        let fade_color = shading(PipelineSpec {
+            depth: Depth::Equal,
+            blend: Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::SrcAlpha,
+                    dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent::OVER,
+            }),
+            ..character("faded level colour", "vs_main")
+        });
         // Foliage: no culling, the texture's alpha as a cut-out; with multisampling, alpha to
         // coverage smooths the cut edges.
         let foliage_fs = if s > 1 {
@@ -236,8 +259,10 @@ impl Pipelines {
             .features()
             .contains(wgpu::Features::POLYGON_MODE_LINE)
             .then(|| {
+                // Wireframes are coloured by level: the debug views' shader.
                 let line = |label, vs| PipelineSpec {
                     polygon_mode: wgpu::PolygonMode::Line,
+                    fs: "fs_debug",
                     ..character(label, vs)
                 };
                 (

@@ -630,7 +630,11 @@ impl SceneRenderer {
                 }
             }
             Pass::Transitions => {
-                for pipeline in [&self.pipelines.fade_depth, &self.pipelines.fade_color] {
+                let debug = self.debug != DebugView::Shaded;
+                for pipeline in [
+                    &self.pipelines.fade_depth,
+                    self.pipelines.fade_color.get(debug),
+                ] {
                     pass.set_pipeline(pipeline);
                     for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
                         scissor.side(pass, key.side());
@@ -704,6 +708,7 @@ impl SceneRenderer {
             .wireframe
             .as_ref()
             .filter(|_| self.debug == DebugView::Wireframe);
+        let debug = self.debug != DebugView::Shaded;
         let mut current = None;
         for &(key, ref range) in &self.draws {
             if self.characters[key.model()].two_sided != foliage {
@@ -715,8 +720,8 @@ impl SceneRenderer {
                 (PASS_FADE, None, _) => continue,
                 (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
                 (_, None, true) => (&self.pipelines.foliage.0, 3),
-                (PASS_MORPH, None, false) => (&self.pipelines.morph, 4),
-                _ => (&self.pipelines.skinned, 5),
+                (PASS_MORPH, None, false) => (self.pipelines.morph.get(debug), 4),
+                _ => (self.pipelines.skinned.get(debug), 5),
             };
             if current != Some(id) {
                 current = Some(id);
