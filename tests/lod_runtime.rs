@@ -259,3 +259,40 @@ fn packed_levels_address_their_own_vertices() {
     // Errors never fall from level to level.
     assert!(pack.errors().windows(2).all(|w| w[0] <= w[1]));
 }
+
+/// A viewer waits for levels before its first frame only when they are all in the cache (a
+/// read, not a bake): `levels_cached` says so once a first world has baked them, and not
+/// before, nor for a method never baked.
+#[test]
+fn levels_count_as_cached_once_baked() {
+    use lodlab::render::Gpu;
+    use lodlab::render::targets::OFFSCREEN_FORMAT;
+    use lodlab::runtime::spec::{Loaded, SceneSpec};
+    use lodlab::runtime::world::World;
+    use lodlab::scene::LodMethod;
+    let dir = tempfile::tempdir().unwrap();
+    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let world = |method| {
+        let spec = SceneSpec {
+            models: vec!["walker".into(), "sapling".into()],
+            count: 2,
+            cache_dir: Some(dir.path().to_path_buf()),
+            ..Default::default()
+        };
+        let mut w = World::new(&gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();
+        w.lod.method = method;
+        w
+    };
+    let mut first = world(LodMethod::AS_IS);
+    assert!(!first.levels_cached(), "an empty cache holds nothing");
+    first.ensure_levels(&gpu).unwrap();
+    assert!(world(LodMethod::AS_IS).levels_cached());
+    assert!(
+        world(LodMethod::None).levels_cached(),
+        "full detail needs no level"
+    );
+    assert!(
+        !world(LodMethod::Simplified(Method::RestPose)).levels_cached(),
+        "rest-pose levels were never baked"
+    );
+}

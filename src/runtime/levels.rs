@@ -120,6 +120,22 @@ pub fn bake_each(
     });
 }
 
+/// Whether the cache holds a file for `s`'s levels by `method` (a tree's chain cut as
+/// `chain`): loading them then takes a second or two, not a bake. A damaged file is found out
+/// when it is read, and rebuilt then.
+pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOptions) -> bool {
+    let path = if is_tree(&s.model) {
+        match crate::bake::billboard::chain::chain_key(&s.hash, chain) {
+            Ok(key) => cache.file(&s.model.name, "clouds", &key),
+            Err(_) => return false,
+        }
+    } else {
+        let key = crate::bake::cache::key(&s.hash, method, &runtime_options(&s.model));
+        cache.path(&s.model.name, method, &key)
+    };
+    path.is_file()
+}
+
 /// A tree's chain from the cache or built now, its levels 1… baked for the GPU.
 fn tree_levels(
     gpu: &Gpu,

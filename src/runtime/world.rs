@@ -296,6 +296,23 @@ impl World {
         Ok(())
     }
 
+    /// Whether every level the view asks for and lacks is in the cache: then
+    /// [`World::ensure_levels`] only reads them (a second or two for the default scene), and a
+    /// viewer may as well wait for that instead of drawing its first frames at full detail.
+    pub fn levels_cached(&self) -> bool {
+        let cache = self.cache();
+        self.lod.methods().all(|m| {
+            let LodMethod::Simplified(method) = m else {
+                return true;
+            };
+            let has = self.has_levels(method);
+            self.sources
+                .iter()
+                .zip(has)
+                .all(|(s, has)| has || super::levels::cached(&cache, s, method, &self.lod.chain))
+        })
+    }
+
     /// Bakes (or reads from the cache) and uploads the levels of every method the view shows
     /// that is not there yet, and the trees' chains as wanted, waiting for them.
     pub fn ensure_levels(&mut self, gpu: &Gpu) -> Result<()> {

@@ -225,8 +225,10 @@ impl Viewer {
         world.lod.policy = options.lod.policy;
         world.renderer.debug = options.lod.debug;
         world.apply_foliage(&options.lod.foliage);
-        if options.screenshot.is_some() {
-            // A screenshot shows the levels asked for, so it waits for them.
+        if options.screenshot.is_some() || world.levels_cached() {
+            // A screenshot shows the levels asked for, so it waits for them; and levels all in
+            // the cache load faster than a first frame at full detail draws, so the viewer
+            // waits for those too. Anything to bake is baked in the background instead.
             world.ensure_levels(gpu)?;
         }
         let targets = RenderTargets::new(
