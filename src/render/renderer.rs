@@ -579,14 +579,20 @@ impl SceneRenderer {
             passes.push(Pass::Foliage);
         }
         passes.push(Pass::Environment);
-        let overlays = !plain && !wireframe && self.outlines;
-        if !self.draws.is_empty() && (self.shadows || overlays) {
+        if !self.draws.is_empty() && (self.shadows || self.shows_outlines()) {
             passes.push(Pass::Shadows);
         }
         if !plain && !wireframe && any(&|k| k.pass() == PASS_FADE) {
             passes.push(Pass::Transitions);
         }
         passes
+    }
+
+    /// Whether the billboards' outlines are drawn: asked for, and neither the plain
+    /// calibration draw nor a wireframe.
+    fn shows_outlines(&self) -> bool {
+        let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
+        self.outlines && self.shader != CharacterShader::Plain && !wireframe
     }
 
     /// Records pass `which` of the frame. `view` is the rectangle the scene covers (x, y,
@@ -625,7 +631,7 @@ impl SceneRenderer {
                 }
                 // The billboards' outlines, a debug overlay, after the ground so that it
                 // shows where a billboard's cut-out leaves the ground visible.
-                if self.outlines && self.shader != CharacterShader::Plain {
+                if self.shows_outlines() {
                     self.draw_outlines(pass, &mut scissor);
                 }
             }
