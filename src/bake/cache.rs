@@ -61,6 +61,19 @@ impl LodCache {
         self.file(model, method, key)
     }
 
+    /// The cache file of `model`'s levels by `method` with `options` (its source hashing to
+    /// `source`), and the key inside it.
+    pub fn levels_file(
+        &self,
+        model: &str,
+        source: &[u8; 32],
+        method: Method,
+        options: &LodOptions,
+    ) -> (PathBuf, [u8; 32]) {
+        let key = key(source, method, options);
+        (self.path(model, method, &key), key)
+    }
+
     /// The cache file for a bake of `kind` (a method, or `clouds`) of a model.
     pub fn file(&self, model: &str, kind: &str, key: &[u8; 32]) -> PathBuf {
         let name: String = model
@@ -196,8 +209,7 @@ impl LodCache {
         options: &LodOptions,
         progress: &(dyn Fn(f32) + Sync),
     ) -> (SkinnedLods, Origin) {
-        let key = key(source, method, options);
-        let path = self.path(&model.name, method, &key);
+        let (path, key) = self.levels_file(&model.name, source, method, options);
         let Ok(found) = self.load_or_build(&path, &key, || {
             Ok::<_, std::convert::Infallible>(super::lod::bake_lods(
                 model, method, options, progress,

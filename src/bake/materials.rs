@@ -283,6 +283,19 @@ mod tests {
     use super::*;
     use crate::model::Rgba8Image;
 
+    /// A material of a square `size`² texture and a unit factor.
+    fn textured(name: &str, size: u32, pixels: Vec<u8>) -> Material {
+        Material {
+            name: name.into(),
+            base_color: [1.0; 4],
+            texture: Some(Rgba8Image {
+                width: size,
+                height: size,
+                pixels,
+            }),
+        }
+    }
+
     #[test]
     fn factor_only_materials_make_plain_layers_with_mips() {
         let m = Material {
@@ -318,15 +331,7 @@ mod tests {
                 pixels.extend_from_slice(&[40, 120, 30, a]);
             }
         }
-        let m = Material {
-            name: "needles".into(),
-            base_color: [1.0; 4],
-            texture: Some(Rgba8Image {
-                width: size,
-                height: size,
-                pixels,
-            }),
-        };
+        let m = textured("needles", size, pixels);
         let l = MaterialLayers::bake(&[m]);
         let share = |px: &[u8]| {
             px.chunks_exact(4).filter(|p| p[3] >= CUTOFF).count() as f32 / (px.len() / 4) as f32
@@ -375,15 +380,7 @@ mod tests {
                 });
             }
         }
-        let m = Material {
-            name: "leaf".into(),
-            base_color: [1.0; 4],
-            texture: Some(Rgba8Image {
-                width: size,
-                height: size,
-                pixels,
-            }),
-        };
+        let m = textured("leaf", size, pixels);
         let l = MaterialLayers::bake(&[m]);
         for (level, px) in l.mips.iter().enumerate().take(5) {
             let w = size >> level;

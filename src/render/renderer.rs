@@ -565,12 +565,12 @@ impl SceneRenderer {
     /// each pixel of the environment is shaded once and only where nothing covers it; then
     /// the blob shadows, blended over the ground and hidden behind characters by the depth
     /// test; then the faded levels of alpha transitions over all of it.
-    pub fn passes(&self) -> Vec<Pass> {
+    pub fn passes(&self) -> smallvec::SmallVec<[Pass; Pass::COUNT]> {
         let plain = self.shader == CharacterShader::Plain;
         let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
         let foliage = |k: &DrawKey| self.characters[k.model()].two_sided;
         let any = |f: &dyn Fn(&DrawKey) -> bool| self.draws.iter().any(|(k, _)| f(k));
-        let mut passes = Vec::with_capacity(Pass::COUNT);
+        let mut passes = smallvec::SmallVec::new();
         let shown = |k: &DrawKey| wireframe || k.pass() != PASS_FADE;
         if any(&|k| plain || (!foliage(k) && shown(k))) {
             passes.push(Pass::Characters);

@@ -87,9 +87,9 @@ impl PassTimes {
 
     /// Fragments shaded per pixel of a `pixels`-pixel view over all passes: the overdraw.
     pub fn overdraw(&self, pixels: u64) -> Option<f64> {
-        let counted: Vec<u64> = self.fragments.iter().flatten().copied().collect();
-        (!counted.is_empty() && pixels > 0)
-            .then(|| counted.iter().sum::<u64>() as f64 / pixels as f64)
+        let counted = self.fragments.iter().flatten();
+        (counted.clone().next().is_some() && pixels > 0)
+            .then(|| counted.sum::<u64>() as f64 / pixels as f64)
     }
 }
 
@@ -236,11 +236,6 @@ impl FrameTimer {
         })
     }
 
-    /// Whether passes' fragments are counted too.
-    pub fn counts_fragments(&self) -> bool {
-        self.statistics.is_some()
-    }
-
     /// The timestamps `pass` writes at its beginning and end; marks it recorded.
     pub fn writes(&self, pass: Pass) -> wgpu::RenderPassTimestampWrites<'_> {
         self.recorded.set(self.recorded.get() | pass.bit());
@@ -268,16 +263,18 @@ impl FrameTimer {
     }
 
     /// Resolves the queries of the passes recorded since the last call, after the last of
-    /// them, into a free read-back slot. Returns false (and times nothing) when every slot is
-    /// still waiting for an earlier frame.
-    pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) -> bool {
+    /// them, into a free read-back slot. Times nothing when no pass was recorded or every
+    /// slot is still waiting for an earlier frame.
+    pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let passes = self.recorded.replace(0);
         let counted = self.counted.replace(0) & passes;
         self.pending = None;
-        let Some(slot) =
-            (0..RING).find(|&s| self.ring[s].state.load(Ordering::Acquire) == IDLE && passes != 0)
-        else {
-            return false;
+        if passes == 0 {
+            return;
+        }
+        let idle = |s: &usize| self.ring[*s].state.load(Ordering::Acquire) == IDLE;
+        let Some(slot) = (0..RING).find(idle) else {
+            return;
         };
         for pass in Pass::ALL.into_iter().filter(|p| passes & p.bit() != 0) {
             let i = pass as u32;
@@ -304,7 +301,6 @@ impl FrameTimer {
         self.ring[slot].passes = passes;
         self.ring[slot].counted = counted;
         self.pending = Some(slot);
-        true
     }
 
     /// After the frame [`Self::resolve`] went into was submitted: starts reading it back.
@@ -322,9 +318,9 @@ impl FrameTimer {
         self.queued.push(slot);
     }
 
-    /// The figures of the frame just submitted, waiting for the GPU to finish it.
+    /// The figures of the frame just submitted (and [`Self::submitted`]), waiting for the GPU
+    /// to finish it.
     pub fn read(&mut self, gpu: &Gpu) -> Result<PassTimes> {
-        self.submitted();
         gpu.wait()?;
         let mut last = None;
         while let Some(t) = self.take_oldest()? {

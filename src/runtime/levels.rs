@@ -4,7 +4,7 @@
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
 use crate::bake::CharacterBake;
-use crate::bake::billboard::chain::{ChainOptions, load_or_build_chain};
+use crate::bake::billboard::chain::{ChainOptions, chain_file, load_or_build_chain};
 use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::lod::SkinnedLods;
@@ -124,14 +124,16 @@ pub fn bake_each(
 /// `chain`): loading them then takes a second or two, not a bake. A damaged file is found out
 /// when it is read, and rebuilt then.
 pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOptions) -> bool {
+    let name = &s.model.name;
     let path = if is_tree(&s.model) {
-        match crate::bake::billboard::chain::chain_key(&s.hash, chain) {
-            Ok(key) => cache.file(&s.model.name, "clouds", &key),
+        match chain_file(cache, name, &s.hash, chain) {
+            Ok((path, _)) => path,
             Err(_) => return false,
         }
     } else {
-        let key = crate::bake::cache::key(&s.hash, method, &runtime_options(&s.model));
-        cache.path(&s.model.name, method, &key)
+        cache
+            .levels_file(name, &s.hash, method, &runtime_options(&s.model))
+            .0
     };
     path.is_file()
 }

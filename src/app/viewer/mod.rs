@@ -455,10 +455,9 @@ impl Viewer {
             &screen,
             self.timer.as_ref(),
         );
-        let timed = match &mut self.timer {
-            Some(t) => t.resolve(&mut encoder),
-            None => false,
-        };
+        if let Some(t) = &mut self.timer {
+            t.resolve(&mut encoder);
+        }
 
         // The screenshot: the same frame once more into a texture that can be read back.
         let last = options.screenshot.is_some() && self.frames + 1 >= options.frames.max(1);
@@ -483,9 +482,7 @@ impl Viewer {
         buffers.push(encoder.finish());
         self.win.gpu.queue.submit(buffers);
         if let Some(t) = &mut self.timer {
-            if timed {
-                t.submitted();
-            }
+            t.submitted();
             if let Some(new) = t.try_read(&self.win.gpu)? {
                 self.passes = Some(match self.passes {
                     Some(old) => old.smoothed(&new, 0.1),
@@ -558,7 +555,6 @@ impl Viewer {
             self.memory = self.world.memory(self.targets.bytes());
             self.memory_at = Some(Instant::now());
         }
-        let memory = self.memory.clone();
         let info = Info {
             adapter: &self.adapter,
             backend: &self.backend,
@@ -567,7 +563,7 @@ impl Viewer {
             stats: self.stats,
             passes: self.passes,
             view_pixels: self.view[2] as u64 * self.view[3] as u64,
-            memory: &memory,
+            memory: &self.memory,
             time: self.time,
             baking: self.bake.as_ref().map(|b| (b.status(), b.fraction())),
             bake_error: self.bake_error.as_deref(),

@@ -396,6 +396,18 @@ impl CloudLevel {
 /// covers the encoding).
 const CHAIN_VERSION: u32 = 5;
 
+/// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
+/// key inside it.
+pub fn chain_file(
+    cache: &LodCache,
+    tree: &str,
+    source: &[u8; 32],
+    opts: &ChainOptions,
+) -> Result<(std::path::PathBuf, [u8; 32])> {
+    let key = chain_key(source, opts)?;
+    Ok((cache.file(tree, "clouds", &key), key))
+}
+
 /// The cache key of a tree's chain: its source's hash, the chain options and the versions.
 pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> Result<[u8; 32]> {
     let mut h = blake3::Hasher::new();
@@ -428,8 +440,8 @@ pub fn load_or_build_chain(
     let (coarse, origin) = if source == &[0; 32] {
         (build()?, Origin::Baked { warning: None })
     } else {
-        let key = chain_key(source, opts)?;
-        cache.load_or_build(&cache.file(&tree.name, "clouds", &key), &key, build)?
+        let (path, key) = chain_file(cache, &tree.name, source, opts)?;
+        cache.load_or_build(&path, &key, build)?
     };
     let mut levels = vec![full_tree(tree)];
     levels.extend(coarse);
