@@ -390,6 +390,7 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     let load = || {
         load_or_build_chain(
             &AtlasRasterizer::new(&gpu),
+            &lodlab::runtime::colour_error::GpuColourError(&gpu),
             &cache,
             &tree,
             &hash,
@@ -400,6 +401,19 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     };
     let (built, origin) = load();
     assert_eq!(origin, Origin::Baked { warning: None });
+    // The chain ends with the impostor, which comes in where the level it stands for would
+    // have: ε still grows level by level.
+    let last = built.last().unwrap();
+    assert!(
+        matches!(
+            last.kind,
+            Some(lodlab::bake::billboard::chain::CloudKind::Impostor { .. })
+        ),
+        "{:?}",
+        last.kind
+    );
+    assert!(last.cloud.impostor.is_some());
+    assert!(built.windows(2).all(|w| w[1].epsilon > w[0].epsilon));
     let (cached, origin) = load();
     assert_eq!(origin, Origin::Cache);
     assert_eq!(cached.len(), built.len());
@@ -491,4 +505,87 @@ fn billboard_outlines_are_the_four_sides_of_every_billboard() {
         assert!(d <= longest_side * 1.001 + 1e-4, "a line of {d} is no side");
     }
     assert!(CharacterBake::new(&m).unwrap().outlines.is_empty());
+}
+
+/// An octahedral impostor (issue 19) shows the tree it was baked from: its atlas holds every
+/// view, upright and inside its cell; drawn through the renderer from round the tree, far off,
+/// its coverage disagrees with the full tree's on far fewer pixels than the same impostor
+/// with every view mirrored (each the silhouette from the opposite side), and one whose views
+/// were left blank disagrees on all of them.
+#[test]
+fn an_impostor_shows_the_tree_it_was_baked_from() {
+    use lodlab::bake::billboard::chain::CloudLevel;
+    use lodlab::bake::billboard::impostor::{ViewGrid, bake_impostor};
+    use lodlab::runtime::colour_error::whole_tree_error;
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let tree = load_model("sapling").unwrap();
+    let grid = ViewGrid {
+        frames: 6,
+        cell: 64,
+    };
+    let (model, frame) = bake_impostor(&AtlasRasterizer::new(&gpu), &tree, grid).unwrap();
+    assert_eq!(frame.frames, 6);
+    let colour = model.materials[0].texture.as_ref().unwrap();
+    assert_eq!((colour.width, colour.height), (384, 384));
+    // Every view shows some of the tree, none spills into its neighbours' cells (their
+    // borders stay clear), and the side views stand upright: something covers the middle of
+    // the cell's lower half (the trunk) in every view on the horizon (the grid's edge).
+    let alpha = |x: u32, y: u32| colour.pixels[4 * (y * colour.width + x) as usize + 3];
+    for j in 0..6 {
+        for i in 0..6 {
+            let (x0, y0) = (i * 64, j * 64);
+            let covered = (0..64 * 64)
+                .filter(|k| alpha(x0 + k % 64, y0 + k / 64) >= 128)
+                .count();
+            assert!(covered > 40, "view ({i}, {j}) is empty");
+            let border = (0..64).any(|k| {
+                alpha(x0 + k, y0) >= 128
+                    || alpha(x0 + k, y0 + 63) >= 128
+                    || alpha(x0, y0 + k) >= 128
+                    || alpha(x0 + 63, y0 + k) >= 128
+            });
+            assert!(!border, "view ({i}, {j}) reaches its cell's border");
+            if i == 0 || j == 0 || i == 5 || j == 5 {
+                let trunk = (36..60).any(|y| (28..36).any(|x| alpha(x0 + x, y0 + y) >= 128));
+                assert!(trunk, "side view ({i}, {j}) has no trunk below its middle");
+            }
+        }
+    }
+    let level = |model: lodlab::model::Model| CloudLevel {
+        impostor: Some(frame),
+        ..CloudLevel::full(&model)
+    };
+    let shown = whole_tree_error(&gpu, &tree, &level(model.clone()), 48.0).unwrap();
+    // Every view mirrored left to right: the silhouettes seen from the opposite sides.
+    let mut mirrored = model.clone();
+    for m in &mut mirrored.materials {
+        let t = m.texture.as_mut().unwrap();
+        let w = t.width as usize;
+        for row in t.pixels.chunks_exact_mut(4 * w) {
+            for cell in row.chunks_exact_mut(4 * 64) {
+                for x in 0..32 {
+                    for c in 0..4 {
+                        cell.swap(4 * x + c, 4 * (63 - x) + c);
+                    }
+                }
+            }
+        }
+    }
+    let wrong = whole_tree_error(&gpu, &tree, &level(mirrored), 48.0).unwrap();
+    let mut blank = model;
+    for m in &mut blank.materials {
+        let t = m.texture.as_mut().unwrap();
+        t.pixels.chunks_exact_mut(4).for_each(|p| p[3] = 0);
+    }
+    let none = whole_tree_error(&gpu, &tree, &level(blank), 48.0).unwrap();
+    // A sparse sapling 48 pixels high: twigs a pixel wide are most of its outline.
+    assert!(
+        shown < 0.6,
+        "the impostor disagrees on {shown:.3} of the tree"
+    );
+    assert!(
+        shown < 0.6 * wrong,
+        "views from the wrong side do about as well: {wrong:.3} against {shown:.3}"
+    );
+    assert!(none > 0.95, "a blank impostor disagrees on only {none:.3}");
 }

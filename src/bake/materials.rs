@@ -246,7 +246,7 @@ pub fn dilate(pixels: &mut [u8], width: u32, height: u32, rings: u32) {
 
 /// Scales a level's alpha so that the share of texels at or above [`CUTOFF`] is `target`
 /// (Castaño's coverage-preserving mipmaps), by bisection on the scale.
-fn preserve_coverage(level: &mut [u8], target: f32) {
+pub(crate) fn preserve_coverage(level: &mut [u8], target: f32) {
     let mut histogram = [0u32; 256];
     for p in level.chunks_exact(4) {
         histogram[p[3] as usize] += 1;

@@ -54,6 +54,9 @@ pub struct CharacterBake {
     /// A billboard cloud's billboard outlines as a line list over `indices`' vertices (empty
     /// for everything else): what the viewer's "billboard outlines" draw.
     pub outlines: Vec<u32>,
+    /// An octahedral impostor's frame: the renderer draws it as one camera-facing quad (see
+    /// [`billboard::impostor`]).
+    pub impostor: Option<billboard::impostor::ImpostorFrame>,
 }
 
 impl CharacterBake {
@@ -79,6 +82,20 @@ impl CharacterBake {
 
     /// [`Self::new`] for a level whose billboards also move by `motion` (a spectral cloud).
     pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
+        Self::build(model, motion, true)
+    }
+
+    /// [`Self::new`] with the vertices in the model's order, not reordered for the GPU's
+    /// caches: for a mesh whose shader finds vertices by index (an impostor's quad).
+    pub fn in_order(model: &Model) -> Result<Self, String> {
+        Self::build(model, None, false)
+    }
+
+    fn build(
+        model: &Model,
+        motion: Option<&SpectralMotion>,
+        optimize: bool,
+    ) -> Result<Self, String> {
         let mut am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
         if let Some(m) = motion {
             if m.vertex_rows.len() != am.vertex_count()
@@ -90,7 +107,7 @@ impl CharacterBake {
             }
             am.spectral_rows = m.vertex_rows.clone();
         }
-        let am = am.optimized_for_gpu();
+        let am = if optimize { am.optimized_for_gpu() } else { am };
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
         let vertices = VertexTexture::pack(&[&am], &[])?;
         let materials = MaterialLayers::bake(&model.materials);
@@ -129,6 +146,7 @@ impl CharacterBake {
                 }),
             animation_space: am,
             spectra: motion.map(|m| m.spectra.clone()),
+            impostor: None,
         })
     }
 

@@ -1,17 +1,22 @@
 //! Bakes a billboard cloud's atlas on the GPU: the leaf triangles of every billboard (laid out
-//! by [`crate::bake::billboard::atlas`]) rasterised into one texture and read back. The result
-//! is plain image data; the bake's caller cleans it up and caches it.
+//! by [`crate::bake::billboard::atlas`]) rasterised into one texture and read back; and an
+//! octahedral impostor's views ([`crate::bake::billboard::impostor`]), the whole tree drawn
+//! from every view into its cell, colour and normal. The results are plain image data; the
+//! bake's caller cleans them up and caches them.
 
 use super::gpu::Gpu;
 use super::shaders;
 use super::targets::read_texture;
 use crate::bake::billboard::atlas::{AtlasLayout, AtlasVertex, RasterizeAtlas};
+use crate::bake::billboard::impostor::{ViewCamera, ViewImages, ViewRequest, ViewVertex};
 use crate::bake::materials::MaterialLayers;
 use crate::model::Rgba8Image;
 use anyhow::Result;
 use wgpu::util::DeviceExt;
 
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The impostor views' normal target: plain unsigned bytes.
+const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// Draws billboard-cloud atlases: the pipeline, its bind group layout and the leaf sampler are
 /// made once, and every atlas of a chain reuses them.
@@ -20,6 +25,8 @@ pub struct AtlasRasterizer<'g> {
     bind_layout: wgpu::BindGroupLayout,
     pipeline: wgpu::RenderPipeline,
     sampler: wgpu::Sampler,
+    /// The impostor views' pipeline and its bind group layout.
+    views: (wgpu::BindGroupLayout, wgpu::RenderPipeline),
 }
 
 impl<'g> AtlasRasterizer<'g> {
@@ -112,11 +119,13 @@ impl<'g> AtlasRasterizer<'g> {
             multiview_mask: None,
             cache: None,
         });
+        let views = views_pipeline(device);
         AtlasRasterizer {
             gpu,
             bind_layout,
             pipeline,
             sampler,
+            views,
         }
     }
 }
@@ -251,4 +260,237 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
             pixels,
         })
     }
+
+    fn rasterize_views(
+        &self,
+        request: &ViewRequest,
+        materials: &MaterialLayers,
+    ) -> Result<ViewImages> {
+        let gpu = self.gpu;
+        let device = &gpu.device;
+        let size = wgpu::Extent3d {
+            width: request.size,
+            height: request.size,
+            depth_or_array_layers: 1,
+        };
+        let target = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let colour = target("impostor colour", FORMAT);
+        let normal = target("impostor normals", NORMAL_FORMAT);
+        let depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("impostor depth"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Depth32Float,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let layers = super::character::material_texture(gpu, materials);
+        let c = request.centre;
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("impostor views"),
+            contents: bytemuck::cast_slice(&[
+                request.size as f32,
+                request.size as f32,
+                0.0,
+                0.0,
+                c.x,
+                c.y,
+                c.z,
+                0.0,
+            ]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("impostor views"),
+            layout: &self.views.0,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&layers.create_view(
+                        &wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2Array),
+                            ..Default::default()
+                        },
+                    )),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        let mut enc = device.create_command_encoder(&Default::default());
+        {
+            let colour_view = colour.create_view(&Default::default());
+            let normal_view = normal.create_view(&Default::default());
+            let depth_view = depth.create_view(&Default::default());
+            let attachment = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("impostor views"),
+                color_attachments: &[attachment(&colour_view), attachment(&normal_view)],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            if !request.vertices.is_empty() && !request.views.is_empty() {
+                let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("impostor triangles"),
+                    contents: bytemuck::cast_slice(&request.vertices),
+                    usage: wgpu::BufferUsages::VERTEX,
+                });
+                let views = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("impostor cameras"),
+                    contents: bytemuck::cast_slice(&request.views),
+                    usage: wgpu::BufferUsages::VERTEX,
+                });
+                pass.set_pipeline(&self.views.1);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_vertex_buffer(1, views.slice(..));
+                pass.draw(
+                    0..request.vertices.len() as u32,
+                    0..request.views.len() as u32,
+                );
+            }
+        }
+        gpu.queue.submit([enc.finish()]);
+        let image = |texture: &wgpu::Texture| -> Result<Rgba8Image> {
+            Ok(Rgba8Image {
+                width: request.size,
+                height: request.size,
+                pixels: read_texture(gpu, texture)?,
+            })
+        };
+        Ok(ViewImages {
+            colour: image(&colour)?,
+            normal: image(&normal)?,
+        })
+    }
+}
+
+/// The impostor views' pipeline: tree triangles per vertex, views per instance, two colour
+/// targets, depth-tested.
+fn views_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("impostor views"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    });
+    let module = shaders::IMPOSTOR_BAKE_SHADER.create(device);
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("impostor views"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let vertex = wgpu::vertex_attr_array![
+        0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32, 4 => Float32x2
+    ];
+    let camera = wgpu::vertex_attr_array![
+        5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4
+    ];
+    let target = |format| {
+        Some(wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })
+    };
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("impostor views"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_view"),
+            compilation_options: Default::default(),
+            buffers: &[
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<ViewVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &vertex,
+                }),
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<ViewCamera>() as u64,
+                    step_mode: wgpu::VertexStepMode::Instance,
+                    attributes: &camera,
+                }),
+            ],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_view"),
+            compilation_options: Default::default(),
+            targets: &[target(FORMAT), target(NORMAL_FORMAT)],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    (layout, pipeline)
 }

@@ -8,11 +8,15 @@ use crate::bake::lod_pack::{LodPack, PackedLevel};
 use crate::bake::texels::TexelGrid;
 use wgpu::util::DeviceExt;
 
-/// Shadow ellipse of a character, mirror of `Shadow` in `shaders/shadow.wgsl`.
+/// A character's uniform: its shadow ellipse (mirror of `Shadow` in `shaders/shadow.wgsl`),
+/// then, for an impostor, its frame (mirror of `ImpostorFrame` in `shaders/impostor.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadowUniform {
+struct CharacterUniform {
     ellipse: [f32; 4],
+    sphere: [f32; 4],
+    grid: [f32; 4],
+    cell: [f32; 4],
 }
 
 /// A character's shared GPU data: animation texture, materials, blob shadow, and one set of
@@ -23,6 +27,8 @@ pub struct GpuCharacter {
     pub sphere: (glam::Vec3, f32),
     /// Foliage: drawn two-sided with its alpha as a cut-out.
     pub two_sided: bool,
+    /// An octahedral impostor: drawn by the impostor shader, one quad facing the eye.
+    pub impostor: bool,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
     /// The pose the plain calibration shader draws every set in: the first frame of the
@@ -133,6 +139,32 @@ fn float_texture(gpu: &Gpu, label: &str, width: u32, height: u32, bytes: &[u8]) 
     )
 }
 
+/// Material layers as an sRGB texture array with their mipmaps.
+pub(crate) fn material_texture(
+    gpu: &Gpu,
+    m: &crate::bake::materials::MaterialLayers,
+) -> wgpu::Texture {
+    gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("materials"),
+            size: wgpu::Extent3d {
+                width: m.width,
+                height: m.height,
+                depth_or_array_layers: m.layer_count,
+            },
+            mip_level_count: m.mips.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::MipMajor,
+        &m.mips.concat(),
+    )
+}
+
 impl GpuCharacter {
     /// Uploads the shared data and the full-detail set of `bake`.
     pub fn upload(
@@ -157,36 +189,28 @@ impl GpuCharacter {
             ),
             _ => float_texture(gpu, "no spectra", 1, 1, &[0; 16]),
         };
-        let m = &bake.materials;
-        let material_data: Vec<u8> = m.mips.concat();
-        let materials = gpu.device.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("materials"),
-                size: wgpu::Extent3d {
-                    width: m.width,
-                    height: m.height,
-                    depth_or_array_layers: m.layer_count,
-                },
-                mip_level_count: m.mips.len() as u32,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8UnormSrgb,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::MipMajor,
-            &material_data,
-        );
+        let materials = material_texture(gpu, &bake.materials);
+        let material_bytes: usize = bake.materials.mips.iter().map(Vec::len).sum();
         // The blob shadow covers the footprint of the animated bounds.
         let b = bake.bounds;
-        let shadow = ShadowUniform {
+        let frame = bake.impostor.as_ref();
+        let shadow = CharacterUniform {
             ellipse: [
                 b.center().x,
                 b.center().z,
                 (b.size().x * 0.5).max(0.05),
                 (b.size().z * 0.5).max(0.05),
             ],
+            sphere: frame.map_or([0.0; 4], |f| {
+                [f.centre[0], f.centre[1], f.centre[2], f.radius]
+            }),
+            grid: frame.map_or([0.0; 4], |f| {
+                [f.frames as f32, f.rows as f32, f.base, f.height]
+            }),
+            cell: frame.map_or([0.0; 4], |f| {
+                let texels = bake.materials.width as f32 / f.frames.max(1) as f32;
+                [1.0 / texels.max(1.0), 0.0, 0.0, 0.0]
+            }),
         };
         let shadow_buffer = gpu
             .device
@@ -209,6 +233,7 @@ impl GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
             two_sided: bake.alpha_tested,
+            impostor: bake.impostor.is_some(),
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),
@@ -222,9 +247,9 @@ impl GpuCharacter {
             spectra_view: spectra.create_view(&Default::default()),
             shared_bytes: GpuMemory {
                 animation_textures: (bake.animation.grid.texels.len() * 16) as u64,
-                material_textures: material_data.len() as u64,
+                material_textures: material_bytes as u64,
                 spectra_textures: spectra_bytes,
-                other_buffers: (std::mem::size_of::<ShadowUniform>() + bake.outlines.len() * 4)
+                other_buffers: (std::mem::size_of::<CharacterUniform>() + bake.outlines.len() * 4)
                     as u64,
                 ..Default::default()
             },

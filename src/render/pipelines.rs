@@ -143,6 +143,8 @@ pub(super) struct Pipelines {
     pub wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
     pub foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
+    /// Octahedral impostors: one quad a tree facing the eye, cut out like foliage.
+    pub impostor: wgpu::RenderPipeline,
     /// Billboard outlines: lines over the billboards, tested against depth.
     pub outline: wgpu::RenderPipeline,
     pub plain: wgpu::RenderPipeline,
@@ -227,7 +229,7 @@ impl Pipelines {
         } else {
             "fs_foliage"
         };
-        let foliage = |label, vs| PipelineSpec {
+        let foliage_spec = |label, vs| PipelineSpec {
             cull: None,
             alpha_to_coverage: true,
             ..PipelineSpec {
@@ -236,11 +238,22 @@ impl Pipelines {
             }
         };
         let foliage = (
-            build(&with_characters, foliage("foliage", "vs_foliage")),
+            build(&with_characters, foliage_spec("foliage", "vs_foliage")),
             build(
                 &with_characters,
-                foliage("geomorphed foliage", "vs_foliage_morph"),
+                foliage_spec("geomorphed foliage", "vs_foliage_morph"),
             ),
+        );
+        let impostor = build(
+            &with_characters,
+            PipelineSpec {
+                fs: if s > 1 {
+                    "fs_impostor_coverage"
+                } else {
+                    "fs_impostor"
+                },
+                ..foliage_spec("octahedral impostors", "vs_impostor")
+            },
         );
         let outline = build(
             &with_characters,
@@ -312,6 +325,7 @@ impl Pipelines {
             fade_color,
             wireframe,
             foliage,
+            impostor,
             outline,
             plain,
             sky,

@@ -720,7 +720,12 @@ impl SceneRenderer {
             if self.characters[key.model()].two_sided != foliage {
                 continue;
             }
+            let impostor = self.characters[key.model()].impostor;
             let (pipeline, id) = match (key.pass(), wire, foliage) {
+                // An impostor's mesh is only where its rows sway: it is always drawn as the
+                // quad its shader makes.
+                (PASS_FADE, None, _) if impostor => continue,
+                _ if impostor => (&self.pipelines.impostor, 6),
                 (PASS_MORPH, Some((_, m)), _) => (m, 0),
                 (_, Some((l, _)), _) => (l, 1),
                 (PASS_FADE, None, _) => continue,

@@ -11,6 +11,8 @@ const CAPTURE: &str = include_str!("../../shaders/capture.wgsl");
 const ENVIRONMENT: &str = include_str!("../../shaders/environment.wgsl");
 const SHADOW: &str = include_str!("../../shaders/shadow.wgsl");
 const ATLAS: &str = include_str!("../../shaders/atlas.wgsl");
+const IMPOSTOR: &str = include_str!("../../shaders/impostor.wgsl");
+const IMPOSTOR_BAKE: &str = include_str!("../../shaders/impostor_bake.wgsl");
 
 /// Colours of the levels of detail, finest first, as the `lod` debug view paints them and the
 /// viewer's panel shows them: the one copy, which WGSL gets as `level_palette`.
@@ -71,7 +73,7 @@ impl ShaderSource {
 
 pub const CHARACTER_SHADER: ShaderSource = ShaderSource {
     name: "character",
-    parts: &[COMMON, SKINNING, MATERIAL, CHARACTER],
+    parts: &[COMMON, SKINNING, MATERIAL, CHARACTER, IMPOSTOR],
 };
 pub const PLAIN_SHADER: ShaderSource = ShaderSource {
     name: "plain",
@@ -94,10 +96,15 @@ pub const ATLAS_SHADER: ShaderSource = ShaderSource {
     name: "atlas",
     parts: &[ATLAS],
 };
+pub const IMPOSTOR_BAKE_SHADER: ShaderSource = ShaderSource {
+    name: "impostor views",
+    parts: &[IMPOSTOR_BAKE],
+};
 
 /// Every module the renderer builds.
 pub const ALL: &[&ShaderSource] = &[
     &ATLAS_SHADER,
+    &IMPOSTOR_BAKE_SHADER,
     &CHARACTER_SHADER,
     &PLAIN_SHADER,
     &CAPTURE_SHADER,

@@ -6,7 +6,6 @@ use super::spec::Loaded;
 use super::world::World;
 use crate::bake::billboard::chain::CloudLevel;
 use crate::bake::billboard::wood::only_foliage;
-use crate::bake::spectral::texture::SpectralMotion;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
@@ -34,14 +33,74 @@ pub fn colour_error_over(
     size: [u32; 2],
     frames: usize,
 ) -> Result<f32> {
-    let world_of = |m: &Model, motion: Option<&SpectralMotion>| -> Result<World> {
-        let mut w = World::new(gpu, Loaded::forest_of(m, motion, 1)?, OFFSCREEN_FORMAT, 1)?;
+    let (lod_foliage, lod_motion) = lod.foliage();
+    let a = Loaded::forest_of(&only_foliage(original), None, 1)?;
+    let b = Loaded::forest_of(&lod_foliage, lod_motion.as_ref(), 1)?;
+    disagreement(gpu, a, b, original, size, frames, FRAMING)
+}
+
+/// The colour error of `level` against the whole of `tree`, wood and all, both drawn about
+/// `height_px` pixels high: how a level is judged at the size where it comes in. Levels of
+/// any kind, impostors included, compare alike.
+pub fn whole_tree_error(
+    gpu: &Gpu,
+    tree: &Model,
+    level: &CloudLevel,
+    height_px: f32,
+) -> Result<f32> {
+    let a = Loaded::forest_of(tree, None, 1)?;
+    let bake = level
+        .bake()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", level.model.name))?;
+    let b = Loaded::forest_of_bake(&level.model, bake, 1);
+    // The metric's camera frames the tree's height in this share of the image.
+    let fov = crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y;
+    let span = 2.0 * FRAMING * (fov * 0.5).tan();
+    let side = (height_px * span).ceil().clamp(8.0, 2048.0) as u32;
+    // Seen from where a tree that high stands on a 720-pixel-high screen: far off, nearly
+    // orthographic, as the level will be seen (a flat impostor drawn 1.25 heights away would
+    // be judged by a perspective no one sees it in).
+    let screen = 2.0 * (fov * 0.5).tan();
+    let distance = (SCREEN_PX / height_px.max(1.0) / screen).clamp(FRAMING, 100.0);
+    disagreement(gpu, a, b, tree, [side, side], METRIC_FRAMES, distance)
+}
+
+/// The screen height [`whole_tree_error`] places a tree on, pixels.
+const SCREEN_PX: f32 = 720.0;
+
+/// [`whole_tree_error`] as the chain's bake asks for it.
+pub struct GpuColourError<'g>(pub &'g Gpu);
+
+impl crate::bake::billboard::chain::MeasureColour for GpuColourError<'_> {
+    fn colour_error(&self, tree: &Model, level: &CloudLevel, height_px: f32) -> Result<f32> {
+        whole_tree_error(self.0, tree, level, height_px)
+    }
+}
+
+/// The metric's camera stands this many tree heights away.
+const FRAMING: f32 = 1.25;
+
+/// The share of `a`'s covered pixels that `b` disagrees on (see [`colour_error`]); `original`
+/// gives the loop's length. The camera stands `distance` tree heights off, its field of view
+/// narrowed to frame the tree as from [`FRAMING`] heights.
+fn disagreement(
+    gpu: &Gpu,
+    a: Loaded,
+    b: Loaded,
+    original: &Model,
+    size: [u32; 2],
+    frames: usize,
+    distance: f32,
+) -> Result<f32> {
+    let world_of = |loaded: Loaded| -> Result<World> {
+        let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
         w.renderer.shadows = false;
+        // No fog: however far off the camera stands, the masks see the whole tree.
+        w.renderer.lighting.fog_density = 0.0;
         Ok(w)
     };
-    let mut a = world_of(&only_foliage(original), None)?;
-    let (lod_foliage, lod_motion) = lod.foliage();
-    let mut b = world_of(&lod_foliage, lod_motion.as_ref())?;
+    let mut a = world_of(a)?;
+    let mut b = world_of(b)?;
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
     let height = bounds.size().y.max(1e-3);
@@ -63,12 +122,13 @@ pub fn colour_error_over(
     for view in 0..METRIC_VIEWS {
         let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
         // At ground level, far enough for the whole tree to fit with a margin.
-        let camera = crate::scene::Camera::new(
+        let mut camera = crate::scene::Camera::new(
             glam::Vec3::new(bounds.center().x, height * 0.5, bounds.center().z),
             yaw,
             0.0,
-            height * 1.25,
+            height * distance,
         );
+        camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
         let background = shoot(&mut a, camera, 0.0, true)?;
         for frame in 0..frames.max(1) {
             let t = duration * frame as f32 / frames.max(1) as f32;

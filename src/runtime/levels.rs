@@ -148,6 +148,7 @@ fn tree_levels(
 ) -> anyhow::Result<(Levels, Origin)> {
     let (chain, origin) = load_or_build_chain(
         &AtlasRasterizer::new(gpu),
+        &super::colour_error::GpuColourError(gpu),
         cache,
         &s.model,
         &s.hash,
@@ -156,7 +157,7 @@ fn tree_levels(
     )?;
     let bakes = chain[1..]
         .par_iter()
-        .map(|l| CharacterBake::with_motion(&l.cloud.model, l.cloud.motion.as_ref()))
+        .map(|l| l.cloud.bake())
         .collect::<Result<Vec<_>, String>>()
         .map_err(anyhow::Error::msg)?;
     Ok((Levels::Tree { chain, bakes }, origin))

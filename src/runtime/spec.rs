@@ -239,7 +239,12 @@ impl Loaded {
     ) -> Result<Loaded> {
         let bake = CharacterBake::with_motion(model, motion)
             .map_err(|e| anyhow::anyhow!("{}: {e}", model.name))?;
-        Ok(Loaded {
+        Ok(Self::forest_of_bake(model, bake, count))
+    }
+
+    /// [`Self::forest_of`] with the model already baked.
+    pub fn forest_of_bake(model: &Model, bake: CharacterBake, count: usize) -> Loaded {
+        Loaded {
             spec: SceneSpec {
                 scene: SceneKind::Forest,
                 count,
@@ -250,7 +255,7 @@ impl Loaded {
                 model: model.clone(),
                 hash: [0; 32],
             }],
-        })
+        }
     }
 
     pub fn new(spec: SceneSpec) -> Result<Loaded> {

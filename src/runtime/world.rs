@@ -72,6 +72,7 @@ impl LevelSummary {
                 None => "full",
                 Some(CloudKind::Skeleton(_)) => "skeleton",
                 Some(CloudKind::Spectral(_)) => "spectral",
+                Some(CloudKind::Impostor { .. }) => "impostor",
             },
             billboards: level.cloud.billboards,
             triangles: level.cloud.model.mesh.triangle_count(),

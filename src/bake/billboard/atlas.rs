@@ -198,6 +198,16 @@ pub trait RasterizeAtlas {
         vertices: &[AtlasVertex],
         leaf: &crate::bake::materials::MaterialLayers,
     ) -> anyhow::Result<crate::model::Rgba8Image>;
+
+    /// The views of an octahedral impostor ([`super::impostor::view_request`]): every
+    /// triangle drawn from every view into its cell, textured by its layer of `materials`,
+    /// depth-tested, cut out where a cut-out layer's alpha is below one half; unlit colour
+    /// and the normal facing the eye, see [`super::impostor::ViewImages`].
+    fn rasterize_views(
+        &self,
+        request: &super::impostor::ViewRequest,
+        materials: &crate::bake::materials::MaterialLayers,
+    ) -> anyhow::Result<super::impostor::ViewImages>;
 }
 
 #[cfg(test)]

@@ -5,10 +5,12 @@
 
 use super::atlas::{RasterizeAtlas, atlas_triangles, layout};
 use super::cloud::CloudParams;
+use super::impostor::{self, ImpostorFrame, ViewGrid};
 use super::siblings::merge_siblings;
 use super::wood::{WoodChain, only_foliage};
 use super::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
 use crate::anim::skinning_over_loop;
+use crate::bake::CharacterBake;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::materials::{MaterialLayers, dilate};
 use crate::bake::spectral::cloud::{SpectralParams, spectral_cloud};
@@ -30,6 +32,9 @@ pub enum CloudKind {
     /// Spectral clouds (thesis Ch. 6): clouds by motion clusters, billboards skinned to their
     /// leaves' shared bone plus a spectral offset (§6.4).
     Spectral(SpectralParams),
+    /// The far level after the coarsest cloud: the whole tree as an octahedral impostor of
+    /// `frames` × `frames` views, one bending quad ([`super::impostor`]).
+    Impostor { frames: u32 },
 }
 
 impl CloudKind {
@@ -51,6 +56,9 @@ impl CloudKind {
                 p.kind.name(),
                 if p.shared_bone { "" } else { ", plain SCA" }
             ),
+            Some(CloudKind::Impostor { frames }) => {
+                format!("octahedral impostor, {frames}×{frames} views")
+            }
         }
     }
 }
@@ -70,6 +78,9 @@ pub struct CloudLevel {
     pub area: f32,
     /// Bytes of its atlas (RGBA8, base level).
     pub texture_bytes: usize,
+    /// An impostor's frame: how its quad is placed and its views are laid out (None for
+    /// meshes and clouds).
+    pub impostor: Option<ImpostorFrame>,
 }
 
 /// The tree drawn with a billboard cloud of its foliage at `params`, made as `kind`, with
@@ -103,6 +114,11 @@ pub fn cloud_level(
         CloudKind::Spectral(sp) => {
             let s = spectral_cloud(tree, foliage, params, sp);
             (foliage, s.cloud, Some((s.lines, sp.bins)), s.clusters)
+        }
+        CloudKind::Impostor { .. } => {
+            return Err(anyhow!(
+                "an impostor is not a billboard cloud: see impostor_level"
+            ));
         }
     };
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
@@ -152,6 +168,7 @@ pub fn cloud_level(
         None => None,
     };
     Ok(CloudLevel {
+        impostor: None,
         billboards: cloud.billboards.len(),
         groups,
         animation,
@@ -388,13 +405,100 @@ impl CloudLevel {
             billboards: 0,
             area: 0.0,
             texture_bytes: 0,
+            impostor: None,
         }
     }
+
+    /// The level baked for the GPU: a mesh or cloud with its spectral motion, an impostor
+    /// with its frame.
+    pub fn bake(&self) -> Result<CharacterBake, String> {
+        let mut bake = match self.impostor {
+            // Its quad's vertices keep their order: the shader finds its rows by index.
+            Some(_) => CharacterBake::in_order(&self.model)?,
+            None => CharacterBake::with_motion(&self.model, self.motion.as_ref())?,
+        };
+        bake.impostor = self.impostor;
+        Ok(bake)
+    }
+}
+
+/// Measures a level's colour error against the full tree (thesis §5.1.3), both drawn whole,
+/// wood and all, `height_px` pixels high: the one step of a chain's bake that draws animated
+/// trees (`runtime::colour_error` implements it).
+pub trait MeasureColour {
+    fn colour_error(&self, tree: &Model, level: &CloudLevel, height_px: f32) -> Result<f32>;
+}
+
+/// The impostor after a chain's clouds (issue 19): the tree's octahedral impostor, and the
+/// level it takes over from. It comes in where a cloud level would have, at that level's ε,
+/// and stands for it and every coarser level: at the finest level k (from the coarse end on,
+/// never level 1) where the impostor's colour error, measured at the size where ε_k projects
+/// to the tolerance, is no worse than level k's own there. So the impostor's error at its
+/// switch size stays within the chain's own, and selection treats it like any level.
+///
+/// Returns the impostor level and k, or `None` where it beats no cloud level (it is then
+/// not part of the chain).
+pub fn impostor_level(
+    raster: &dyn RasterizeAtlas,
+    measure: &dyn MeasureColour,
+    tree: &Model,
+    chain: &[TreeLevel],
+    opts: &ChainOptions,
+) -> Result<Option<(TreeLevel, usize)>> {
+    let start = std::time::Instant::now();
+    let grid = ViewGrid {
+        frames: impostor::FRAMES,
+        cell: impostor::CELL,
+    };
+    let (model, frame) = impostor::bake_impostor(raster, tree, grid)?;
+    let texture_bytes = model
+        .materials
+        .iter()
+        .filter_map(|m| m.texture.as_ref())
+        .map(|t| t.pixels.len())
+        .sum();
+    let level = CloudLevel {
+        model,
+        motion: None,
+        groups: 1,
+        animation: AnimationError::default(),
+        billboards: 1,
+        area: 4.0 * frame.radius * frame.radius,
+        texture_bytes,
+        impostor: Some(frame),
+    };
+    let h = crate::bake::billboard::tree_height(tree);
+    let switch_px = |eps: f32| opts.tolerance_px * h / eps.max(1e-6);
+    let mut replaces = None;
+    for k in (2..chain.len()).rev() {
+        let px = switch_px(chain[k].epsilon);
+        let own = measure.colour_error(tree, &chain[k].cloud, px)?;
+        let error = measure.colour_error(tree, &level, px)?;
+        log::debug!(
+            "{}: at {px:.1} px (level {k}) the impostor's colour error is {error:.3}, the level's {own:.3}",
+            tree.name
+        );
+        if error > own {
+            break;
+        }
+        replaces = Some(k);
+    }
+    Ok(replaces.map(|k| {
+        let level = TreeLevel {
+            epsilon: chain[k].epsilon,
+            kind: Some(CloudKind::Impostor {
+                frames: grid.frames,
+            }),
+            cloud: level,
+            bake_seconds: start.elapsed().as_secs_f64(),
+        };
+        (level, k)
+    }))
 }
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 5;
+const CHAIN_VERSION: u32 = 6;
 
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
 /// key inside it.
@@ -421,10 +525,12 @@ pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> Result<[u8; 32]> {
 }
 
 /// The chain of `tree` (whose source file hashes to `source`) from `cache` if a good one is
-/// there, else built now and stored. The file holds levels 1… (level 0 is the tree). A tree
-/// with no source (all-zero hash: built in memory) is built and not cached.
+/// there, else built now and stored: its clouds, then its impostor (placed by `measure`). The
+/// file holds levels 1… (level 0 is the tree). A tree with no source (all-zero hash: built in
+/// memory) is built and not cached.
 pub fn load_or_build_chain(
     raster: &dyn RasterizeAtlas,
+    measure: &dyn MeasureColour,
     cache: &LodCache,
     tree: &Model,
     source: &[u8; 32],
@@ -434,6 +540,10 @@ pub fn load_or_build_chain(
     let build = || -> Result<Vec<TreeLevel>> {
         let foliage = crate::bake::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
         let mut chain = tree_chain(raster, tree, &foliage, opts, progress)?;
+        if let Some((impostor, k)) = impostor_level(raster, measure, tree, &chain, opts)? {
+            chain.truncate(k);
+            chain.push(impostor);
+        }
         chain.remove(0);
         Ok(chain)
     };

@@ -10,10 +10,22 @@
 //! one grid cell: the renderer blends the three views of the cell's triangle it falls in,
 //! weighted by its barycentric coordinates, so that turning round a tree never pops.
 //!
-//! Pure geometry: plain data in, plain data out. The bake draws the views through the atlas
-//! seam ([`super::atlas::RasterizeAtlas`]); the shader mirrors [`hemi_oct_encode`].
+//! The bake ([`bake_impostor`]) draws the tree at rest from every view of the grid through the
+//! atlas seam ([`RasterizeAtlas::rasterize_views`]), colour and normal, at twice the cell size,
+//! and averages each 2×2 block down: the atlas keeps the coverage of thin twigs as a soft
+//! alpha. The impostor's model is a quad of a few rows, each row skinned like the slab of the
+//! tree at its height (the mean of that slab's influences), so the renderer sways the quad
+//! with the tree's wind as one bending card. `shaders/impostor.wgsl` mirrors [`hemi_oct_encode`],
+//! [`ViewGrid::blend`] and [`ViewGrid::view_axes`].
 
+use super::atlas::RasterizeAtlas;
+use crate::bake::materials::{MaterialLayers, dilate, preserve_coverage};
+use crate::model::{
+    Bounds, Influence, Material, Model, Rgba8Image, SkinnedMesh, linear_to_srgb, srgb_to_linear,
+};
+use anyhow::{Result, anyhow};
 use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
 
 /// The point of the square [−1, 1]² where the hemi-octahedral map puts direction `d`
 /// (y up; a direction below the horizon is taken as its mirror above it).
@@ -85,6 +97,307 @@ impl ViewGrid {
         let up = d.cross(right);
         (right, up)
     }
+}
+
+/// Views on a side of the grid: 8 × 8 views put a view within 22° of any direction.
+pub const FRAMES: u32 = 8;
+/// Texels on a side of a view's cell. An impostor comes in where a tree is a few dozen
+/// pixels high, so 128 texels keep about two texels a pixel there.
+pub const CELL: u32 = 128;
+/// The views are drawn this many times larger, then averaged down.
+const SUPERSAMPLE: u32 = 2;
+/// Rows of the impostor's quad: where it bends.
+pub const ROWS: u32 = 4;
+/// Texels of dilated colour round the tree in every view.
+const DILATE_RINGS: u32 = 4;
+
+/// Where an impostor's views lie and how its quad is placed: what the renderer reads (the
+/// character's uniform, `shaders/impostor.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImpostorFrame {
+    /// Views on a side of the atlas's grid.
+    pub frames: u32,
+    /// The centre of the sphere the views were drawn round, model space, and its radius: a
+    /// view's cell shows the square [−radius, radius]² about the centre.
+    pub centre: [f32; 3],
+    pub radius: f32,
+    /// The heights of the quad's lowest and highest rows, model space.
+    pub base: f32,
+    pub height: f32,
+    /// Rows of the quad (its vertices are `rows + 1` pairs, bottom up).
+    pub rows: u32,
+}
+
+/// A vertex of the tree as the view bake draws it (`shaders/impostor_bake.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ViewVertex {
+    /// Rest position, model space.
+    pub position: [f32; 3],
+    /// Material layer.
+    pub layer: u32,
+    pub normal: [f32; 3],
+    /// 1 where the material cuts its shape out with alpha (foliage).
+    pub cut_out: u32,
+    pub uv: [f32; 2],
+}
+
+/// One view of the bake: its cell's corner in the target (pixels), the cell's size, and the
+/// orthographic camera's axes (right, up, towards the eye), each scaled by 1 / radius.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ViewCamera {
+    pub cell: [f32; 4],
+    pub right: [f32; 4],
+    pub up: [f32; 4],
+    pub toward: [f32; 4],
+}
+
+/// What the view bake draws: every triangle of the tree (as a list of vertices, three a
+/// triangle) from every view, into a `size` × `size` target, about `centre`.
+#[derive(Clone, Debug)]
+pub struct ViewRequest {
+    pub size: u32,
+    pub centre: Vec3,
+    pub vertices: Vec<ViewVertex>,
+    pub views: Vec<ViewCamera>,
+}
+
+/// The drawn views: unlit colour (sRGB, alpha 255 where the tree covers a texel, else 0) and
+/// the model-space normal turned towards the eye (n / 2 + 1/2 as unsigned bytes, alpha as
+/// the colour's).
+#[derive(Clone, Debug)]
+pub struct ViewImages {
+    pub colour: Rgba8Image,
+    pub normal: Rgba8Image,
+}
+
+/// The view bake's input for `tree` at rest seen from every view of `grid`, each drawn
+/// `supersample` times larger than its cell; and the sphere the views are framed on.
+pub fn view_request(tree: &Model, grid: ViewGrid, supersample: u32) -> Result<(ViewRequest, f32)> {
+    let mesh = &tree.mesh;
+    let bounds = Bounds::of(mesh.positions.iter().copied())
+        .ok_or_else(|| anyhow!("{}: no vertices to draw an impostor of", tree.name))?;
+    let centre = bounds.center();
+    // Every view sees the tree inside the sphere round the bounds' centre through its
+    // farthest vertex; a little margin keeps filtering off the neighbouring views.
+    let reach = mesh
+        .positions
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0f32, f32::max);
+    let radius = (reach * 1.04).max(1e-4);
+    let cut_out: Vec<bool> = tree.materials.iter().map(super::is_cut_out).collect();
+    let vertices = mesh
+        .indices
+        .iter()
+        .map(|&i| {
+            let v = i as usize;
+            let layer = mesh.materials[v] as usize;
+            ViewVertex {
+                position: mesh.positions[v].to_array(),
+                layer: layer as u32,
+                normal: mesh.normals[v].to_array(),
+                cut_out: cut_out.get(layer).copied().unwrap_or(false) as u32,
+                uv: mesh.uvs[v].to_array(),
+            }
+        })
+        .collect();
+    let cell = (grid.cell * supersample) as f32;
+    let mut views = Vec::with_capacity((grid.frames * grid.frames) as usize);
+    for j in 0..grid.frames {
+        for i in 0..grid.frames {
+            let d = grid.direction(i, j);
+            let (right, up) = ViewGrid::view_axes(d);
+            let axis = |a: Vec3| (a / radius).extend(0.0).to_array();
+            views.push(ViewCamera {
+                cell: [i as f32 * cell, j as f32 * cell, cell, 0.0],
+                right: axis(right),
+                up: axis(up),
+                toward: axis(d),
+            });
+        }
+    }
+    let request = ViewRequest {
+        size: grid.atlas_size() * supersample,
+        centre,
+        vertices,
+        views,
+    };
+    Ok((request, radius))
+}
+
+/// Averages each `factor` × `factor` block of drawn views into one texel: colour in linear
+/// light over the covered texels, alpha the share covered, the normal the covered texels'
+/// mean (renormalised). The normal comes out sRGB-encoded, so that the renderer's sRGB
+/// material texture hands the shader n / 2 + 1/2 again.
+pub fn average_down(images: &ViewImages, factor: u32) -> ViewImages {
+    let (w, h) = (images.colour.width / factor, images.colour.height / factor);
+    let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
+    let mut colour = vec![0u8; (w * h * 4) as usize];
+    let mut normal = vec![0u8; (w * h * 4) as usize];
+    let sw = images.colour.width as usize;
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let (mut c, mut n, mut covered) = ([0.0f32; 3], Vec3::ZERO, 0u32);
+            for dy in 0..factor as usize {
+                for dx in 0..factor as usize {
+                    let i = 4 * ((y * factor as usize + dy) * sw + x * factor as usize + dx);
+                    if images.colour.pixels[i + 3] < 128 {
+                        continue;
+                    }
+                    covered += 1;
+                    for k in 0..3 {
+                        c[k] += lut[images.colour.pixels[i + k] as usize];
+                    }
+                    let q = &images.normal.pixels[i..i + 3];
+                    n += Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / 127.5 - Vec3::ONE;
+                }
+            }
+            if covered == 0 {
+                continue;
+            }
+            let o = 4 * (y * w as usize + x);
+            let alpha = (255 * covered).div_ceil(factor * factor) as u8;
+            for k in 0..3 {
+                colour[o + k] = linear_to_srgb(c[k] / covered as f32);
+            }
+            colour[o + 3] = alpha;
+            let n = n.normalize_or(Vec3::Y) * 0.5 + Vec3::splat(0.5);
+            normal[o..o + 3].copy_from_slice(&n.to_array().map(linear_to_srgb));
+            normal[o + 3] = alpha;
+        }
+    }
+    let image = |pixels| Rgba8Image {
+        width: w,
+        height: h,
+        pixels,
+    };
+    ViewImages {
+        colour: image(colour),
+        normal: image(normal),
+    }
+}
+
+/// The impostor's quad as a model: `rows + 1` pairs of vertices up the tree's height, a crown's
+/// width apart, each pair skinned with the mean influences of the tree's vertices round its
+/// height (their four heaviest bones), so that row by row the quad follows how that slab of the
+/// tree sways. Layer 0 of its materials is the views' colour, layer 1 their normals.
+pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -> Model {
+    let mesh = &tree.mesh;
+    let rows = frame.rows.max(1);
+    let spacing = frame.height / rows as f32;
+    let half_width = frame.radius * 0.5;
+    let mut out = SkinnedMesh::default();
+    let mut last: Vec<Influence> = vec![Influence {
+        bone: 0,
+        weight: 1.0,
+    }];
+    for r in 0..=rows {
+        let y = frame.base + spacing * r as f32;
+        let mut weights: std::collections::BTreeMap<u32, f32> = Default::default();
+        for v in 0..mesh.vertex_count() {
+            if (mesh.positions[v].y - y).abs() <= spacing {
+                for inf in mesh.influences_of(v) {
+                    *weights.entry(inf.bone).or_default() += inf.weight;
+                }
+            }
+        }
+        let mut heaviest: Vec<(u32, f32)> = weights.into_iter().collect();
+        heaviest.sort_by(|a, b| b.1.total_cmp(&a.1));
+        heaviest.truncate(4);
+        let sum: f32 = heaviest.iter().map(|(_, w)| w).sum();
+        // An empty slab (a gap in the tree) moves as the one below it.
+        if sum > 0.0 {
+            last = heaviest
+                .iter()
+                .map(|&(bone, w)| Influence {
+                    bone,
+                    weight: w / sum,
+                })
+                .collect();
+        }
+        for side in [-1.0f32, 1.0] {
+            out.positions.push(Vec3::new(
+                frame.centre[0] + side * half_width,
+                y,
+                frame.centre[2],
+            ));
+            out.normals.push(Vec3::Z);
+            out.uvs
+                .push(Vec2::new(0.5 + 0.5 * side, 1.0 - r as f32 / rows as f32));
+            out.materials.push(0);
+            out.influence_offsets.push(out.influences.len() as u32);
+            out.influences.extend_from_slice(&last);
+        }
+    }
+    out.influence_offsets.push(out.influences.len() as u32);
+    for r in 0..rows {
+        let (a, b, c, d) = (2 * r, 2 * r + 1, 2 * r + 3, 2 * r + 2);
+        out.indices.extend_from_slice(&[a, b, c, a, c, d]);
+    }
+    Model {
+        name: format!("{} impostor", tree.name),
+        mesh: out,
+        skeleton: tree.skeleton.clone(),
+        clips: tree.clips.clone(),
+        materials: vec![
+            Material {
+                name: "impostor colour".into(),
+                base_color: [1.0; 4],
+                texture: Some(images.colour),
+            },
+            Material {
+                name: "impostor normals".into(),
+                base_color: [1.0; 4],
+                texture: Some(images.normal),
+            },
+        ],
+    }
+}
+
+/// The octahedral impostor of `tree`: its views drawn through `raster`, averaged down and
+/// dilated, and the quad model that shows them.
+pub fn bake_impostor(
+    raster: &dyn RasterizeAtlas,
+    tree: &Model,
+    grid: ViewGrid,
+) -> Result<(Model, ImpostorFrame)> {
+    let (request, radius) = view_request(tree, grid, SUPERSAMPLE)?;
+    let materials = MaterialLayers::bake(&tree.materials);
+    let drawn = raster.rasterize_views(&request, &materials)?;
+    let mut images = average_down(&drawn, SUPERSAMPLE);
+    // The alpha test at one half would drop the twigs and leaf edges that cover less than
+    // half a texel: scale alpha so that as many texels pass as the drawn views covered
+    // (coverage-preserving, as the material mipmaps are).
+    let drawn_px = &drawn.colour.pixels;
+    let covered = drawn_px.chunks_exact(4).filter(|p| p[3] >= 128).count();
+    preserve_coverage(
+        &mut images.colour.pixels,
+        covered as f32 / (drawn_px.len() / 4) as f32,
+    );
+    for (n, c) in images
+        .normal
+        .pixels
+        .chunks_exact_mut(4)
+        .zip(images.colour.pixels.chunks_exact(4))
+    {
+        n[3] = c[3];
+    }
+    for image in [&mut images.colour, &mut images.normal] {
+        dilate(&mut image.pixels, image.width, image.height, DILATE_RINGS);
+    }
+    let bounds = Bounds::of(tree.mesh.positions.iter().copied())
+        .ok_or_else(|| anyhow!("{}: no vertices", tree.name))?;
+    let frame = ImpostorFrame {
+        frames: grid.frames,
+        centre: request.centre.to_array(),
+        radius,
+        base: bounds.min.y,
+        height: bounds.size().y.max(1e-4),
+        rows: ROWS,
+    };
+    Ok((impostor_model(tree, &frame, images), frame))
 }
 
 #[cfg(test)]
@@ -196,6 +509,101 @@ mod tests {
             if d.y < 0.99 {
                 assert!(u.y > 0.0, "{d}: up {u}");
             }
+        }
+    }
+
+    #[test]
+    fn averaging_down_keeps_coverage_colour_and_normals_of_what_is_covered() {
+        // One 2×2 block: two texels covered (red and blue, normals +x and +y), two empty
+        // (white, normal −z: never counted).
+        let colour = Rgba8Image {
+            width: 2,
+            height: 2,
+            pixels: vec![
+                255, 0, 0, 255, 255, 255, 255, 0, //
+                0, 0, 255, 255, 255, 255, 255, 0,
+            ],
+        };
+        let normal = Rgba8Image {
+            width: 2,
+            height: 2,
+            pixels: vec![
+                255, 128, 128, 255, 128, 128, 0, 0, //
+                128, 255, 128, 255, 128, 128, 0, 0,
+            ],
+        };
+        let out = average_down(&ViewImages { colour, normal }, 2);
+        assert_eq!((out.colour.width, out.colour.height), (1, 1));
+        let c = &out.colour.pixels;
+        // Half covered; red and blue averaged in linear light, no white.
+        assert_eq!(c[3], 128);
+        assert_eq!(
+            (c[0], c[1], c[2]),
+            (linear_to_srgb(0.5), 0, linear_to_srgb(0.5))
+        );
+        // The normal is the mean of +x and +y, renormalised, sRGB-encoded.
+        let n: Vec<f32> = out.normal.pixels[..3]
+            .iter()
+            .map(|&b| srgb_to_linear(b) * 2.0 - 1.0)
+            .collect();
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((n[0] - h).abs() < 0.03 && (n[1] - h).abs() < 0.03 && n[2].abs() < 0.03);
+        assert_eq!(out.normal.pixels[3], 128);
+    }
+
+    #[test]
+    fn the_quad_rows_are_skinned_like_the_tree_at_their_height() {
+        let tree = crate::generate::tree::sapling();
+        let bounds = Bounds::of(tree.mesh.positions.iter().copied()).unwrap();
+        let frame = ImpostorFrame {
+            frames: 4,
+            centre: bounds.center().to_array(),
+            radius: bounds.diagonal() * 0.5,
+            base: bounds.min.y,
+            height: bounds.size().y,
+            rows: ROWS,
+        };
+        let blank = Rgba8Image {
+            width: 4,
+            height: 4,
+            pixels: vec![0; 64],
+        };
+        let model = impostor_model(
+            &tree,
+            &frame,
+            ViewImages {
+                colour: blank.clone(),
+                normal: blank,
+            },
+        );
+        let mesh = &model.mesh;
+        assert_eq!(mesh.vertex_count(), 2 * (ROWS as usize + 1));
+        assert_eq!(mesh.triangle_count(), 2 * ROWS as usize);
+        for r in 0..=ROWS as usize {
+            let (l, rt) = (2 * r, 2 * r + 1);
+            // A pair shares its height and its influences; rows climb evenly.
+            assert_eq!(mesh.positions[l].y, mesh.positions[rt].y);
+            assert_eq!(mesh.influences_of(l), mesh.influences_of(rt));
+            let want = frame.base + frame.height * r as f32 / ROWS as f32;
+            assert!((mesh.positions[l].y - want).abs() < 1e-4);
+            let infl = mesh.influences_of(l);
+            assert!(!infl.is_empty() && infl.len() <= 4);
+            let sum: f32 = infl.iter().map(|i| i.weight).sum();
+            assert!((sum - 1.0).abs() < 1e-5);
+        }
+        // The foot of the trunk hangs from the root bone; the top row from bones out in the
+        // crown.
+        assert_eq!(mesh.influences_of(0)[0].bone, 0);
+        assert!(
+            mesh.influences_of(2 * ROWS as usize)
+                .iter()
+                .all(|i| i.bone != 0)
+        );
+        // The renderer finds the rows by vertex index: the bake keeps them in order.
+        let bake = crate::bake::CharacterBake::in_order(&model).unwrap();
+        let (rest, _) = bake.evaluate(0, 0.0, 0.0);
+        for (a, b) in rest.iter().zip(&mesh.positions) {
+            assert!(a.distance(*b) < 1e-3, "{a} != {b}");
         }
     }
 }

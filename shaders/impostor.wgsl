@@ -1,0 +1,207 @@
+// Octahedral impostors (src/bake/billboard/impostor.rs): a tree's far level, one quad facing the
+// eye that shows the tree as baked from the three grid views round the direction it is seen
+// from, blended by their barycentric weights, so that walking round a tree never pops.
+//
+// The quad lies in the plane through the views' sphere centre across the line of sight and
+// spans the sphere. A point of it is found in view k's cell by projecting it along view k's
+// direction (an orthographic reprojection, affine over the quad, so it is worked out per
+// vertex). The quad's rows sway like the slabs of the tree at their heights: each row of the
+// impostor's mesh is a pair of vertices skinned like that slab, and a point of the quad moves
+// as the skinned rows round its height moved from the rest pose.
+//
+// Colour and normal (model space, n / 2 + 1/2) are layers 0 and 1 of the material texture. The
+// normals light the impostor like the tree: sun, sky, rim and fog per pixel.
+
+struct ImpostorFrame {
+    // The blob shadow's ellipse (see shadow.wgsl): the same uniform.
+    ellipse: vec4<f32>,
+    // xyz: the centre of the views' sphere, model space; w: its radius.
+    sphere: vec4<f32>,
+    // x: views on a side of the grid; y: rows of the quad; z: the lowest row's height; w: the
+    // rows' height span.
+    grid: vec4<f32>,
+    // x: a texel's share of a view's cell.
+    cell: vec4<f32>,
+};
+
+@group(1) @binding(4) var<uniform> impostor: ImpostorFrame;
+
+// Mirrors of `hemi_oct_encode`, `hemi_oct_decode` and `ViewGrid::view_axes`.
+fn hemi_oct_encode(d: vec3<f32>) -> vec2<f32> {
+    let a = vec3<f32>(d.x, abs(d.y), d.z);
+    let p = a.xz / max(abs(a.x) + a.y + abs(a.z), 1e-12);
+    return vec2<f32>(p.x + p.y, p.x - p.y);
+}
+
+fn hemi_oct_decode(s: vec2<f32>) -> vec3<f32> {
+    let p = vec2<f32>(s.x + s.y, s.x - s.y) * 0.5;
+    let y = 1.0 - abs(p.x) - abs(p.y);
+    return normalize(vec3<f32>(p.x, max(y, 0.0), p.y));
+}
+
+struct ViewAxes {
+    right: vec3<f32>,
+    up: vec3<f32>,
+};
+
+fn view_axes(d: vec3<f32>) -> ViewAxes {
+    let reference = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, -1.0), d.y > 0.999);
+    let right = normalize(cross(reference, d));
+    return ViewAxes(right, cross(d, right));
+}
+
+struct ImpostorOut {
+    @builtin(position) clip: vec4<f32>,
+    // The point's place in the cells of views 0 and 1 (xy, zw) and 2, each 0..1 over its cell.
+    @location(0) st01: vec4<f32>,
+    @location(1) st2: vec2<f32>,
+    // The cells (column, row) of views 0 and 1.
+    @location(2) @interpolate(flat) cells01: vec4<f32>,
+    // xy: view 2's cell; z: views on a side; w: a texel's share of a cell (the inset that
+    // keeps filtering inside the cell).
+    @location(3) @interpolate(flat) cell2: vec4<f32>,
+    // xyz: the views' weights; w: the dissolve's coverage.
+    @location(4) @interpolate(flat) weights: vec4<f32>,
+    // The instance's rotation (rows), for the normals.
+    @location(5) @interpolate(flat) row0: vec3<f32>,
+    @location(6) @interpolate(flat) row1: vec3<f32>,
+    @location(7) @interpolate(flat) row2: vec3<f32>,
+    // rgb: tint; w: fog.
+    @location(8) tint: vec4<f32>,
+    // The debug view's colour (a = 1) in place of the texture's, or a = 0.
+    @location(9) @interpolate(flat) debug: vec4<f32>,
+    // Towards the eye, world space.
+    @location(10) @interpolate(flat) to_eye: vec3<f32>,
+};
+
+// How far row pair `a` of the quad's mesh has moved from the rest pose (their midpoint).
+fn row_sway(a: u32, now: ClipFrames) -> vec3<f32> {
+    var rest = now;
+    rest.wind = 0.0;
+    let moved = skin_vertex(2u * a, now).position + skin_vertex(2u * a + 1u, now).position;
+    let still = skin_vertex(2u * a, rest).position + skin_vertex(2u * a + 1u, rest).position;
+    return 0.5 * (moved - still);
+}
+
+// Where the quad point `offset` (from the sphere's centre) lies in view `cell`'s cell.
+fn cell_point(cell: vec2<f32>, n: f32, offset: vec3<f32>, radius: f32) -> vec2<f32> {
+    let axes = view_axes(hemi_oct_decode(cell / n * 2.0 - vec2<f32>(1.0)));
+    return vec2<f32>(0.5 + 0.5 * dot(offset, axes.right) / radius, 0.5 - 0.5 * dot(offset, axes.up) / radius);
+}
+
+@vertex
+fn vs_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> ImpostorOut {
+    let centre = impostor.sphere.xyz;
+    let radius = impostor.sphere.w;
+    let frames = impostor.grid.x;
+    let rows = u32(impostor.grid.y);
+    // The eye as seen from the tree, model space: the instance's transform is a rotation and
+    // a uniform scale, so its transpose turns world directions back into model ones.
+    let v = frame.camera_pos.xyz - instance_point(inst, centre);
+    let d = normalize(inst.row0.xyz * v.x + inst.row1.xyz * v.y + inst.row2.xyz * v.z);
+    let axes = view_axes(d);
+    let q = vec2<f32>(2.0 * f32(vi & 1u) - 1.0, 2.0 * f32(vi >> 1u) / f32(rows) - 1.0);
+    let offset = radius * (q.x * axes.right + q.y * axes.up);
+    let rest = centre + offset;
+    // Sway with the rows round this point's height.
+    let now = instance_frames(inst);
+    let h = clamp((rest.y - impostor.grid.z) / max(impostor.grid.w, 1e-6), 0.0, 1.0) * f32(rows);
+    let a = min(u32(floor(h)), rows - 1u);
+    let sway = mix(row_sway(a, now), row_sway(a + 1u, now), h - f32(a));
+    let world = instance_point(inst, rest + sway);
+
+    // The three views round d and their weights (mirror of `ViewGrid::blend`).
+    let n = frames - 1.0;
+    let g = clamp((hemi_oct_encode(d) + vec2<f32>(1.0)) * 0.5 * n, vec2<f32>(0.0), vec2<f32>(n));
+    let base = min(floor(g), vec2<f32>(n - 1.0));
+    let f = g - base;
+    var c1 = base + vec2<f32>(0.0, 1.0);
+    var w = vec3<f32>(1.0 - f.y, f.y - f.x, f.x);
+    if (f.x >= f.y) {
+        c1 = base + vec2<f32>(1.0, 0.0);
+        w = vec3<f32>(1.0 - f.x, f.x - f.y, f.y);
+    }
+    let c2 = base + vec2<f32>(1.0);
+
+    var out: ImpostorOut;
+    out.clip = frame.view_proj * vec4<f32>(world, 1.0);
+    out.st01 = vec4<f32>(cell_point(base, n, offset, radius), cell_point(c1, n, offset, radius));
+    out.st2 = cell_point(c2, n, offset, radius);
+    out.cells01 = vec4<f32>(base, c1);
+    out.cell2 = vec4<f32>(c2, frames, impostor.cell.x);
+    out.weights = vec4<f32>(w, inst.lod.z);
+    out.row0 = inst.row0.xyz;
+    out.row1 = inst.row1.xyz;
+    out.row2 = inst.row2.xyz;
+    out.tint = vec4<f32>(inst.tint.rgb, fog_factor(world));
+    out.debug = debug_color(lod_varying(inst), 1.0, foliage_view());
+    out.to_eye = normalize(v);
+    return out;
+}
+
+struct ImpostorTexel {
+    colour: vec3<f32>,
+    alpha: f32,
+    normal: vec3<f32>,
+};
+
+// One view's colour (premultiplied, weighted) or normal: layer `layer` at `st` in `cell`.
+fn impostor_tap(in: ImpostorOut, cell: vec2<f32>, st: vec2<f32>, layer: i32) -> vec4<f32> {
+    let inset = in.cell2.w;
+    let uv = (cell + clamp(st, vec2<f32>(inset), vec2<f32>(1.0 - inset))) / in.cell2.z;
+    return textureSample(material_tex, material_sampler, uv, layer);
+}
+
+fn impostor_colour(in: ImpostorOut) -> vec4<f32> {
+    let a = impostor_tap(in, in.cells01.xy, in.st01.xy, 0);
+    let b = impostor_tap(in, in.cells01.zw, in.st01.zw, 0);
+    let c = impostor_tap(in, in.cell2.xy, in.st2, 0);
+    let w = in.weights.xyz * vec3<f32>(a.a, b.a, c.a);
+    let alpha = w.x + w.y + w.z;
+    return vec4<f32>((w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) / max(alpha, 1e-4), alpha);
+}
+
+// The lit colour of an impostor pixel of base colour `texel`: the views' normals blended,
+// turned into the world, and lit like foliage (sun and sky, rim, fog).
+fn impostor_lit(in: ImpostorOut, texel: vec3<f32>) -> vec3<f32> {
+    let a = impostor_tap(in, in.cells01.xy, in.st01.xy, 1);
+    let b = impostor_tap(in, in.cells01.zw, in.st01.zw, 1);
+    let c = impostor_tap(in, in.cell2.xy, in.st2, 1);
+    let w = in.weights.xyz * vec3<f32>(a.a, b.a, c.a);
+    let m = (w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) * 2.0 - vec3<f32>(w.x + w.y + w.z);
+    let world = vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m));
+    let nrm = normalize(world + vec3<f32>(0.0, 1e-6, 0.0));
+    let base = select(texel * in.tint.rgb, in.debug.rgb, in.debug.a > 0.5);
+    var lit = shade(base, nrm);
+    lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, in.to_eye), 0.0), 3.0) * 0.12;
+    return mix(lit, frame.sky_horizon.rgb, in.tint.w);
+}
+
+// The dissolve of a tree changing level (see `dissolved` in character.wgsl).
+fn impostor_dissolved(in: ImpostorOut) -> bool {
+    let x = pixel_threshold(in.clip.xy);
+    let coverage = in.weights.w;
+    return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
+}
+
+// Without multisampling: the blended alpha cuts the tree out at one half, as foliage.
+@fragment
+fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
+    let texel = impostor_colour(in);
+    if (texel.a < 0.5 || impostor_dissolved(in)) {
+        discard;
+    }
+    return vec4<f32>(impostor_lit(in, texel.rgb), 1.0);
+}
+
+// With multisampling: alpha to coverage, the alpha sharpened to about a pixel round the
+// contour (as `fs_foliage_coverage`).
+@fragment
+fn fs_impostor_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
+    let texel = impostor_colour(in);
+    let a = clamp((texel.a - 0.5) / max(fwidth(texel.a), 1e-4) + 0.5, 0.0, 1.0);
+    if (impostor_dissolved(in)) {
+        discard;
+    }
+    return vec4<f32>(impostor_lit(in, texel.rgb), a);
+}
