@@ -691,6 +691,11 @@ fn the_foliage_policy_decides_what_trees_become() {
         assert!(chains[0].1, "the chain shown is the one asked for");
         chains[0].2.iter().map(|l| l.kind).collect()
     };
+    // Clouds of one kind after the full tree, the last level maybe the impostor.
+    let clouds_of = |k: &[&str], kind: &str| {
+        let clouds = k.strip_suffix(&["impostor"]).unwrap_or(k);
+        clouds.len() >= 2 && clouds[1..].iter().all(|&c| c == kind)
+    };
 
     // Full: no chain is built, every tree stays at level 0.
     let full = FoliageView {
@@ -710,7 +715,7 @@ fn the_foliage_policy_decides_what_trees_become() {
     let (stats, _) = shoot(&mut world, &skeleton);
     let k = kinds(&world);
     assert_eq!(k[0], "full");
-    assert!(k[1..].iter().all(|&k| k == "skeleton"), "{k:?}");
+    assert!(clouds_of(&k, "skeleton"), "{k:?}");
     assert!(stats.levels[1..].iter().sum::<u32>() > 0);
     assert!(stats.triangles < full_triangles);
     let spectral = FoliageView {
@@ -719,12 +724,12 @@ fn the_foliage_policy_decides_what_trees_become() {
     };
     shoot(&mut world, &spectral);
     let k = kinds(&world);
-    assert!(k[1..].iter().all(|&k| k == "spectral"), "{k:?}");
+    assert!(clouds_of(&k, "spectral"), "{k:?}");
 
     // Back to skeleton clouds: still on the GPU, nothing to bake.
     world.apply_foliage(&skeleton);
     assert_eq!(world.missing_levels(), None);
-    assert!(kinds(&world)[1..].iter().all(|&k| k == "skeleton"));
+    assert!(clouds_of(&kinds(&world), "skeleton"));
     // Other cutting options need a chain of their own; until it comes, the old one shows.
     let mut coarser = skeleton;
     coarser.chain.first_epsilon *= 4.0;

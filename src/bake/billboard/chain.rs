@@ -412,13 +412,23 @@ impl CloudLevel {
     /// The level baked for the GPU: a mesh or cloud with its spectral motion, an impostor
     /// with its frame.
     pub fn bake(&self) -> Result<CharacterBake, String> {
-        let mut bake = match self.impostor {
-            // Its quad's vertices keep their order: the shader finds its rows by index.
-            Some(_) => CharacterBake::in_order(&self.model)?,
-            None => CharacterBake::with_motion(&self.model, self.motion.as_ref())?,
-        };
-        bake.impostor = self.impostor;
-        Ok(bake)
+        match self.impostor {
+            Some(frame) => {
+                // Its quad's vertices keep their order: the shader finds its rows by index.
+                let mut bake = CharacterBake::in_order(&self.model)?;
+                // The tree's bounds, not the card's, grown by how far the card sways (its
+                // depth over the animation: at rest it has none).
+                let [lo, hi] = frame.bounds.map(glam::Vec3::from);
+                let sway = glam::Vec3::splat(bake.bounds.size().z);
+                bake.bounds = crate::model::Bounds {
+                    min: lo - sway,
+                    max: hi + sway,
+                };
+                bake.impostor = Some(frame);
+                Ok(bake)
+            }
+            None => CharacterBake::with_motion(&self.model, self.motion.as_ref()),
+        }
     }
 }
 

@@ -126,6 +126,9 @@ pub struct ImpostorFrame {
     pub height: f32,
     /// Rows of the quad (its vertices are `rows + 1` pairs, bottom up).
     pub rows: u32,
+    /// The tree's bounds at rest, model space: what culling and the blob shadow use (the
+    /// quad's own mesh is only as wide as a card).
+    pub bounds: [[f32; 3]; 2],
 }
 
 /// A vertex of the tree as the view bake draws it (`shaders/impostor_bake.wgsl`).
@@ -396,6 +399,7 @@ pub fn bake_impostor(
         base: bounds.min.y,
         height: bounds.size().y.max(1e-4),
         rows: ROWS,
+        bounds: [bounds.min.to_array(), bounds.max.to_array()],
     };
     Ok((impostor_model(tree, &frame, images), frame))
 }
@@ -562,6 +566,7 @@ mod tests {
             base: bounds.min.y,
             height: bounds.size().y,
             rows: ROWS,
+            bounds: [bounds.min.to_array(), bounds.max.to_array()],
         };
         let blank = Rgba8Image {
             width: 4,
