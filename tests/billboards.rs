@@ -390,7 +390,7 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     let load = || {
         load_or_build_chain(
             &AtlasRasterizer::new(&gpu),
-            &lodlab::runtime::colour_error::GpuColourError(&gpu),
+            &lodlab::runtime::colour_error::GpuColourError::new(&gpu),
             &cache,
             &tree,
             &hash,

@@ -108,7 +108,7 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                 let opts = crate::bake::billboard::chain::ChainOptions::default();
                 let (levels, origin) = crate::bake::billboard::chain::load_or_build_chain(
                     &AtlasRasterizer::new(gpu),
-                    &crate::runtime::colour_error::GpuColourError(gpu),
+                    &crate::runtime::colour_error::GpuColourError::new(gpu),
                     &cache,
                     model,
                     hash,

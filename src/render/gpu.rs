@@ -27,6 +27,17 @@ impl Gpu {
         surface: Option<&wgpu::Surface<'_>>,
     ) -> Result<Gpu> {
         let adapter = pollster::block_on(select_adapter(&instance, surface))?;
+        Self::on_adapter(instance, adapter)
+    }
+
+    /// A device of its own on the same adapter, with a queue of its own: work for it never
+    /// waits behind this one's (a bake's read-backs behind a viewer's frames, which on a
+    /// software rasteriser may take seconds each).
+    pub fn separate(&self) -> Result<Gpu> {
+        Self::on_adapter(self.instance.clone(), self.adapter.clone())
+    }
+
+    fn on_adapter(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Gpu> {
         let info = adapter.get_info();
         // Features that only make the debug views nicer are taken when offered.
         let optional = wgpu::Features::POLYGON_MODE_LINE

@@ -34,9 +34,12 @@ pub fn colour_error_over(
     frames: usize,
 ) -> Result<f32> {
     let (lod_foliage, lod_motion) = lod.foliage();
-    let a = Loaded::forest_of(&only_foliage(original), None, 1)?;
-    let b = Loaded::forest_of(&lod_foliage, lod_motion.as_ref(), 1)?;
-    disagreement(gpu, a, b, original, size, frames, FRAMING)
+    let mut a = metric_world(gpu, Loaded::forest_of(&only_foliage(original), None, 1)?)?;
+    let mut b = metric_world(
+        gpu,
+        Loaded::forest_of(&lod_foliage, lod_motion.as_ref(), 1)?,
+    )?;
+    disagreement(gpu, &mut a, &mut b, original, size, frames, FRAMING)
 }
 
 /// The colour error of `level` against the whole of `tree`, wood and all, both drawn about
@@ -48,33 +51,106 @@ pub fn whole_tree_error(
     level: &CloudLevel,
     height_px: f32,
 ) -> Result<f32> {
-    let a = Loaded::forest_of(tree, None, 1)?;
-    let bake = level
-        .bake()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", level.model.name))?;
-    let b = Loaded::forest_of_bake(&level.model, bake, 1);
-    // The metric's camera frames the tree's height in this share of the image.
-    let fov = crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y;
-    let span = 2.0 * FRAMING * (fov * 0.5).tan();
-    let side = (height_px * span).ceil().clamp(8.0, 2048.0) as u32;
-    // Seen from where a tree that high stands on a 720-pixel-high screen: far off, nearly
-    // orthographic, as the level will be seen (a flat impostor drawn 1.25 heights away would
-    // be judged by a perspective no one sees it in).
-    let screen = 2.0 * (fov * 0.5).tan();
-    let distance = (SCREEN_PX / height_px.max(1.0) / screen).clamp(FRAMING, 100.0);
-    disagreement(gpu, a, b, tree, [side, side], METRIC_FRAMES, distance)
+    use crate::bake::billboard::chain::MeasureColour;
+    let errors = GpuColourError::new(gpu).colour_errors(tree, level, &[height_px])?;
+    Ok(errors[0])
 }
 
 /// The screen height [`whole_tree_error`] places a tree on, pixels.
 const SCREEN_PX: f32 = 720.0;
 
-/// [`whole_tree_error`] as the chain's bake asks for it.
-pub struct GpuColourError<'g>(pub &'g Gpu);
+/// [`whole_tree_error`] as the chain's bake asks for it, many times over for one tree: the
+/// full tree's world is made once, and the level's world once, its character replaced level
+/// by level (making a world builds every pipeline, most of a measurement's cost on a CPU).
+pub struct GpuColourError<'g> {
+    gpu: &'g Gpu,
+    worlds: std::sync::Mutex<Option<Measuring>>,
+}
+
+/// The worlds of the tree being measured: its name, the full tree's and the level's.
+struct Measuring {
+    tree: String,
+    original: World,
+    level: World,
+}
+
+impl<'g> GpuColourError<'g> {
+    pub fn new(gpu: &'g Gpu) -> Self {
+        GpuColourError {
+            gpu,
+            worlds: std::sync::Mutex::new(None),
+        }
+    }
+}
 
 impl crate::bake::billboard::chain::MeasureColour for GpuColourError<'_> {
-    fn colour_error(&self, tree: &Model, level: &CloudLevel, height_px: f32) -> Result<f32> {
-        whole_tree_error(self.0, tree, level, height_px)
+    fn colour_errors(
+        &self,
+        tree: &Model,
+        level: &CloudLevel,
+        heights_px: &[f32],
+    ) -> Result<Vec<f32>> {
+        let gpu = self.gpu;
+        let bake = level
+            .bake()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", level.model.name))?;
+        let mut worlds = self
+            .worlds
+            .lock()
+            .map_err(|_| anyhow::anyhow!("a colour measurement failed midway"))?;
+        match worlds.as_mut() {
+            Some(m) if m.tree == tree.name => {
+                m.level.renderer.replace_character(gpu, 0, &bake)?;
+                m.level.bakes[0] = bake;
+            }
+            _ => {
+                *worlds = Some(Measuring {
+                    tree: tree.name.clone(),
+                    original: metric_world(gpu, Loaded::forest_of(tree, None, 1)?)?,
+                    level: metric_world(gpu, Loaded::forest_of_bake(&level.model, bake, 1))?,
+                });
+            }
+        }
+        let m = worlds.as_mut().expect("just made");
+        heights_px
+            .iter()
+            .map(|&px| {
+                let (size, distance) = framing(px);
+                disagreement(
+                    gpu,
+                    &mut m.original,
+                    &mut m.level,
+                    tree,
+                    size,
+                    METRIC_FRAMES,
+                    distance,
+                )
+            })
+            .collect()
     }
+}
+
+/// The image size and the camera's distance (in tree heights) at which [`whole_tree_error`]
+/// sees a tree `height_px` pixels high.
+fn framing(height_px: f32) -> ([u32; 2], f32) {
+    // The metric's camera frames the tree's height in this share of the image.
+    let fov = crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y;
+    let screen = 2.0 * (fov * 0.5).tan();
+    let side = (height_px * FRAMING * screen).ceil().clamp(8.0, 2048.0) as u32;
+    // Seen from where a tree that high stands on a 720-pixel-high screen: far off, nearly
+    // orthographic, as the level will be seen (a flat impostor drawn 1.25 heights away would
+    // be judged by a perspective no one sees it in).
+    let distance = (SCREEN_PX / height_px.max(1.0) / screen).clamp(FRAMING, 100.0);
+    ([side, side], distance)
+}
+
+/// A world of its own for one tree, as the metric draws it: no shadows, no fog (however far
+/// off the camera stands, the masks see the whole tree).
+fn metric_world(gpu: &Gpu, loaded: Loaded) -> Result<World> {
+    let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
+    w.renderer.shadows = false;
+    w.renderer.lighting.fog_density = 0.0;
+    Ok(w)
 }
 
 /// The metric's camera stands this many tree heights away.
@@ -85,22 +161,13 @@ const FRAMING: f32 = 1.25;
 /// narrowed to frame the tree as from [`FRAMING`] heights.
 fn disagreement(
     gpu: &Gpu,
-    a: Loaded,
-    b: Loaded,
+    a: &mut World,
+    b: &mut World,
     original: &Model,
     size: [u32; 2],
     frames: usize,
     distance: f32,
 ) -> Result<f32> {
-    let world_of = |loaded: Loaded| -> Result<World> {
-        let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
-        w.renderer.shadows = false;
-        // No fog: however far off the camera stands, the masks see the whole tree.
-        w.renderer.lighting.fog_density = 0.0;
-        Ok(w)
-    };
-    let mut a = world_of(a)?;
-    let mut b = world_of(b)?;
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
     let height = bounds.size().y.max(1e-3);
@@ -129,11 +196,11 @@ fn disagreement(
             height * distance,
         );
         camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
-        let background = shoot(&mut a, camera, 0.0, true)?;
+        let background = shoot(a, camera, 0.0, true)?;
         for frame in 0..frames.max(1) {
             let t = duration * frame as f32 / frames.max(1) as f32;
-            let ia = shoot(&mut a, camera, t, false)?;
-            let ib = shoot(&mut b, camera, t, false)?;
+            let ia = shoot(a, camera, t, false)?;
+            let ib = shoot(b, camera, t, false)?;
             for ((p, q), bg) in ia.pixels().zip(ib.pixels()).zip(background.pixels()) {
                 let on = |x: &image::Rgba<u8>| (0..3).any(|c| x[c].abs_diff(bg[c]) > 10);
                 let (ma, mb) = (on(p), on(q));

@@ -148,7 +148,7 @@ fn tree_levels(
 ) -> anyhow::Result<(Levels, Origin)> {
     let (chain, origin) = load_or_build_chain(
         &AtlasRasterizer::new(gpu),
-        &super::colour_error::GpuColourError(gpu),
+        &super::colour_error::GpuColourError::new(gpu),
         cache,
         &s.model,
         &s.hash,
@@ -214,6 +214,12 @@ impl BackgroundBake {
         let p = progress.clone();
         let pending = sources.len();
         std::thread::spawn(move || {
+            // The bake's draws (atlases, impostor views, colour measurements) go to a device
+            // of its own, so that their read-backs do not wait behind the viewer's frames.
+            let gpu = gpu.separate().unwrap_or_else(|e| {
+                log::warn!("baking on the viewer's device: {e:#}");
+                gpu
+            });
             let report = |i: usize, f: f32| {
                 p[i].store((f.clamp(0.0, 1.0) * 1000.0) as u32, Ordering::Relaxed);
             };

@@ -436,7 +436,13 @@ impl CloudLevel {
 /// wood and all, `height_px` pixels high: the one step of a chain's bake that draws animated
 /// trees (`runtime::colour_error` implements it).
 pub trait MeasureColour {
-    fn colour_error(&self, tree: &Model, level: &CloudLevel, height_px: f32) -> Result<f32>;
+    /// The error at each of `heights_px` (a level is uploaded once for all of them).
+    fn colour_errors(
+        &self,
+        tree: &Model,
+        level: &CloudLevel,
+        heights_px: &[f32],
+    ) -> Result<Vec<f32>>;
 }
 
 /// The impostor after a chain's clouds (issue 19): the tree's octahedral impostor, and the
@@ -461,6 +467,11 @@ pub fn impostor_level(
         cell: impostor::CELL,
     };
     let (model, frame) = impostor::bake_impostor(raster, tree, grid)?;
+    log::debug!(
+        "{}: impostor views baked in {:.2} s",
+        tree.name,
+        start.elapsed().as_secs_f64()
+    );
     let texture_bytes = model
         .materials
         .iter()
@@ -479,11 +490,16 @@ pub fn impostor_level(
     };
     let h = crate::bake::billboard::tree_height(tree);
     let switch_px = |eps: f32| opts.tolerance_px * h / eps.max(1e-6);
+    // Its error at every cloud level's switch size, coarsest first.
+    let levels: Vec<usize> = (2..chain.len()).rev().collect();
+    let sizes: Vec<f32> = levels
+        .iter()
+        .map(|&k| switch_px(chain[k].epsilon))
+        .collect();
+    let errors = measure.colour_errors(tree, &level, &sizes)?;
     let mut replaces = None;
-    for k in (2..chain.len()).rev() {
-        let px = switch_px(chain[k].epsilon);
-        let own = measure.colour_error(tree, &chain[k].cloud, px)?;
-        let error = measure.colour_error(tree, &level, px)?;
+    for ((&k, &px), &error) in levels.iter().zip(&sizes).zip(&errors) {
+        let own = measure.colour_errors(tree, &chain[k].cloud, &[px])?[0];
         log::debug!(
             "{}: at {px:.1} px (level {k}) the impostor's colour error is {error:.3}, the level's {own:.3}",
             tree.name
@@ -493,6 +509,11 @@ pub fn impostor_level(
         }
         replaces = Some(k);
     }
+    log::debug!(
+        "{}: impostor baked and placed in {:.2} s",
+        tree.name,
+        start.elapsed().as_secs_f64()
+    );
     Ok(replaces.map(|k| {
         let level = TreeLevel {
             epsilon: chain[k].epsilon,
