@@ -11,6 +11,15 @@
 //
 // Colour and normal (model space, n / 2 + 1/2) are layers 0 and 1 of the material texture. The
 // normals light the impostor like the tree: sun, sky, rim and fog per pixel.
+//
+// Parallax: the normal layer's alpha holds each texel's height towards its view's eye (see
+// `encode_height`). A point of the quad shows the surface where the eye's ray through it meets
+// the tree, at height h over the quad's plane; the view nearest the line of sight, whose ray
+// through the point is almost the eye's, tells h, and every view is read where that surface
+// point projects in its cell: its place for the quad's point, moved by h along the line of
+// sight as that view sees it. The three views then show the same leaves at the same place,
+// instead of three copies side by side that only half agree (which thinned fine foliage under
+// the alpha test and blurred the rest).
 
 struct ImpostorFrame {
     // The blob shadow's ellipse (see shadow.wgsl): the same uniform.
@@ -54,7 +63,8 @@ struct ImpostorOut {
     @builtin(position) clip: vec4<f32>,
     // The point's place in the cells of views 0 and 1 (xy, zw) and 2, each 0..1 over its cell.
     @location(0) st01: vec4<f32>,
-    @location(1) st2: vec2<f32>,
+    // xy: view 2's place; zw: how view 2's place moves per unit of height (a radius).
+    @location(1) st2: vec4<f32>,
     // The cells (column, row) of views 0 and 1.
     @location(2) @interpolate(flat) cells01: vec4<f32>,
     // xy: view 2's cell; z: views on a side; w: a texel's share of a cell (the inset that
@@ -72,6 +82,8 @@ struct ImpostorOut {
     @location(9) @interpolate(flat) debug: vec4<f32>,
     // Towards the eye, world space.
     @location(10) @interpolate(flat) to_eye: vec3<f32>,
+    // How the places of views 0 (xy) and 1 (zw) move per unit of height.
+    @location(11) @interpolate(flat) shift01: vec4<f32>,
 };
 
 // How far row pair `a` of the quad's mesh has moved from the rest pose (their midpoint).
@@ -83,10 +95,12 @@ fn row_sway(a: u32, now: ClipFrames) -> vec3<f32> {
     return 0.5 * (moved - still);
 }
 
-// Where the quad point `offset` (from the sphere's centre) lies in view `cell`'s cell.
-fn cell_point(cell: vec2<f32>, n: f32, offset: vec3<f32>, radius: f32) -> vec2<f32> {
+// Where the quad point `offset` (from the sphere's centre) lies in view `cell`'s cell (xy),
+// and how far that place moves when the point rises a radius along `d` towards the eye (zw).
+fn cell_point(cell: vec2<f32>, n: f32, offset: vec3<f32>, radius: f32, d: vec3<f32>) -> vec4<f32> {
     let axes = view_axes(hemi_oct_decode(cell / n * 2.0 - vec2<f32>(1.0)));
-    return vec2<f32>(0.5 + 0.5 * dot(offset, axes.right) / radius, 0.5 - 0.5 * dot(offset, axes.up) / radius);
+    let st = vec2<f32>(0.5 + 0.5 * dot(offset, axes.right) / radius, 0.5 - 0.5 * dot(offset, axes.up) / radius);
+    return vec4<f32>(st, 0.5 * dot(d, axes.right), -0.5 * dot(d, axes.up));
 }
 
 @vertex
@@ -125,8 +139,11 @@ fn vs_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> ImpostorOut {
 
     var out: ImpostorOut;
     out.clip = frame.view_proj * vec4<f32>(world, 1.0);
-    out.st01 = vec4<f32>(cell_point(base, n, offset, radius), cell_point(c1, n, offset, radius));
-    out.st2 = cell_point(c2, n, offset, radius);
+    let p0 = cell_point(base, n, offset, radius, d);
+    let p1 = cell_point(c1, n, offset, radius, d);
+    out.st01 = vec4<f32>(p0.xy, p1.xy);
+    out.st2 = cell_point(c2, n, offset, radius, d);
+    out.shift01 = vec4<f32>(p0.zw, p1.zw);
     out.cells01 = vec4<f32>(base, c1);
     out.cell2 = vec4<f32>(c2, frames, impostor.cell.x);
     out.weights = vec4<f32>(w, inst.lod.z);
@@ -139,39 +156,72 @@ fn vs_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> ImpostorOut {
     return out;
 }
 
+// Where the three views are read for one pixel, with the texture-space gradients of the
+// quad's own places (the parallax shift jumps at a view's edges, and must not pick a mip).
+struct ImpostorTaps {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    gx: vec2<f32>,
+    gy: vec2<f32>,
+};
+
+// A view's place in the atlas: `st` in `cell`, kept a texel inside it so filtering never
+// reaches the neighbouring view.
+fn impostor_uv(in: ImpostorOut, cell: vec2<f32>, st: vec2<f32>) -> vec2<f32> {
+    let inset = in.cell2.w;
+    return (cell + clamp(st, vec2<f32>(inset), vec2<f32>(1.0 - inset))) / in.cell2.z;
+}
+
+fn impostor_taps(in: ImpostorOut) -> ImpostorTaps {
+    var taps: ImpostorTaps;
+    taps.gx = dpdx(in.st01.xy) / in.cell2.z;
+    taps.gy = dpdy(in.st01.xy) / in.cell2.z;
+    // The height of the surface under this point, from the view nearest the line of sight.
+    let w = in.weights.xyz;
+    let one = w.y > w.x && w.y >= w.z;
+    let two = w.z > w.x && w.z > w.y;
+    let cell = select(select(in.cells01.xy, in.cells01.zw, one), in.cell2.xy, two);
+    let st = select(select(in.st01.xy, in.st01.zw, one), in.st2.xy, two);
+    let probe = textureSampleGrad(material_tex, material_sampler, impostor_uv(in, cell, st), 1, taps.gx, taps.gy).a;
+    let h = (probe * 255.0 - 128.0) / 127.0 * 2.0 - 1.0;
+    taps.uv0 = impostor_uv(in, in.cells01.xy, in.st01.xy + h * in.shift01.xy);
+    taps.uv1 = impostor_uv(in, in.cells01.zw, in.st01.zw + h * in.shift01.zw);
+    taps.uv2 = impostor_uv(in, in.cell2.xy, in.st2.xy + h * in.st2.zw);
+    return taps;
+}
+
+fn impostor_tap(taps: ImpostorTaps, uv: vec2<f32>, layer: i32) -> vec4<f32> {
+    return textureSampleGrad(material_tex, material_sampler, uv, layer, taps.gx, taps.gy);
+}
+
+// The views' colour blended (premultiplied by their coverage), and each view's share.
 struct ImpostorTexel {
     colour: vec3<f32>,
     alpha: f32,
-    normal: vec3<f32>,
+    shares: vec3<f32>,
 };
 
-// One view's colour (premultiplied, weighted) or normal: layer `layer` at `st` in `cell`.
-fn impostor_tap(in: ImpostorOut, cell: vec2<f32>, st: vec2<f32>, layer: i32) -> vec4<f32> {
-    let inset = in.cell2.w;
-    let uv = (cell + clamp(st, vec2<f32>(inset), vec2<f32>(1.0 - inset))) / in.cell2.z;
-    return textureSample(material_tex, material_sampler, uv, layer);
-}
-
-fn impostor_colour(in: ImpostorOut) -> vec4<f32> {
-    let a = impostor_tap(in, in.cells01.xy, in.st01.xy, 0);
-    let b = impostor_tap(in, in.cells01.zw, in.st01.zw, 0);
-    let c = impostor_tap(in, in.cell2.xy, in.st2, 0);
+fn impostor_colour(in: ImpostorOut, taps: ImpostorTaps) -> ImpostorTexel {
+    let a = impostor_tap(taps, taps.uv0, 0);
+    let b = impostor_tap(taps, taps.uv1, 0);
+    let c = impostor_tap(taps, taps.uv2, 0);
     let w = in.weights.xyz * vec3<f32>(a.a, b.a, c.a);
     let alpha = w.x + w.y + w.z;
-    return vec4<f32>((w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) / max(alpha, 1e-4), alpha);
+    return ImpostorTexel((w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) / max(alpha, 1e-4), alpha, w);
 }
 
-// The lit colour of an impostor pixel of base colour `texel`: the views' normals blended,
+// The lit colour of an impostor pixel: the views' normals blended as their colours were,
 // turned into the world, and lit like foliage (sun and sky, rim, fog).
-fn impostor_lit(in: ImpostorOut, texel: vec3<f32>) -> vec3<f32> {
-    let a = impostor_tap(in, in.cells01.xy, in.st01.xy, 1);
-    let b = impostor_tap(in, in.cells01.zw, in.st01.zw, 1);
-    let c = impostor_tap(in, in.cell2.xy, in.st2, 1);
-    let w = in.weights.xyz * vec3<f32>(a.a, b.a, c.a);
+fn impostor_lit(in: ImpostorOut, taps: ImpostorTaps, texel: ImpostorTexel) -> vec3<f32> {
+    let a = impostor_tap(taps, taps.uv0, 1);
+    let b = impostor_tap(taps, taps.uv1, 1);
+    let c = impostor_tap(taps, taps.uv2, 1);
+    let w = texel.shares;
     let m = (w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) * 2.0 - vec3<f32>(w.x + w.y + w.z);
     let world = vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m));
     let nrm = normalize(world + vec3<f32>(0.0, 1e-6, 0.0));
-    let base = select(texel * in.tint.rgb, in.debug.rgb, in.debug.a > 0.5);
+    let base = select(texel.colour * in.tint.rgb, in.debug.rgb, in.debug.a > 0.5);
     var lit = shade(base, nrm);
     lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, in.to_eye), 0.0), 3.0) * 0.12;
     return mix(lit, frame.sky_horizon.rgb, in.tint.w);
@@ -187,21 +237,23 @@ fn impostor_dissolved(in: ImpostorOut) -> bool {
 // Without multisampling: the blended alpha cuts the tree out at one half, as foliage.
 @fragment
 fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
-    let texel = impostor_colour(in);
-    if (texel.a < 0.5 || impostor_dissolved(in)) {
+    let taps = impostor_taps(in);
+    let texel = impostor_colour(in, taps);
+    if (texel.alpha < 0.5 || impostor_dissolved(in)) {
         discard;
     }
-    return vec4<f32>(impostor_lit(in, texel.rgb), 1.0);
+    return vec4<f32>(impostor_lit(in, taps, texel), 1.0);
 }
 
 // With multisampling: alpha to coverage, the alpha sharpened to about a pixel round the
 // contour (as `fs_foliage_coverage`).
 @fragment
 fn fs_impostor_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
-    let texel = impostor_colour(in);
-    let a = clamp((texel.a - 0.5) / max(fwidth(texel.a), 1e-4) + 0.5, 0.0, 1.0);
+    let taps = impostor_taps(in);
+    let texel = impostor_colour(in, taps);
+    let a = clamp((texel.alpha - 0.5) / max(fwidth(texel.alpha), 1e-4) + 0.5, 0.0, 1.0);
     if (impostor_dissolved(in)) {
         discard;
     }
-    return vec4<f32>(impostor_lit(in, texel.rgb), a);
+    return vec4<f32>(impostor_lit(in, taps, texel), a);
 }

@@ -1,7 +1,8 @@
 // Impostor views (src/bake/billboard/impostor.rs): the tree at rest drawn orthographically
 // from every view of the grid into that view's cell of one target, depth-tested. Instance i is
 // view i. The colour target takes the unlit material colour (its alpha marks what is covered),
-// the second target the model-space normal turned towards the eye, as n / 2 + 1/2.
+// the second target the model-space normal turned towards the eye, as n / 2 + 1/2, and in its
+// alpha the point's height towards the eye (mirror of `encode_height`).
 
 struct Bake {
     // xy: target size in pixels.
@@ -73,6 +74,8 @@ fn fs_view(in: VsOut) -> Views {
     }
     var out: Views;
     out.colour = vec4<f32>(texel.rgb, 1.0);
-    out.normal = vec4<f32>(n * 0.5 + vec3<f32>(0.5), 1.0);
+    // Depth 0 is a radius in front of the centre, 1 a radius behind it.
+    let height = 1.0 - in.clip.z;
+    out.normal = vec4<f32>(n * 0.5 + vec3<f32>(0.5), (128.0 + round(127.0 * height)) / 255.0);
     return out;
 }

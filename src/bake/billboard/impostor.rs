@@ -167,8 +167,8 @@ pub struct ViewRequest {
 }
 
 /// The drawn views: unlit colour (sRGB, alpha 255 where the tree covers a texel, else 0) and
-/// the model-space normal turned towards the eye (n / 2 + 1/2 as unsigned bytes, alpha as
-/// the colour's).
+/// the model-space normal turned towards the eye (n / 2 + 1/2 as unsigned bytes), its alpha
+/// the covered point's height towards the eye (see [`encode_height`]).
 #[derive(Clone, Debug)]
 pub struct ViewImages {
     pub colour: Rgba8Image,
@@ -232,8 +232,8 @@ pub fn view_request(tree: &Model, grid: ViewGrid, supersample: u32) -> Result<(V
 
 /// Averages each `factor` × `factor` block of drawn views into one texel: colour in linear
 /// light over the covered texels, alpha the share covered, the normal the covered texels'
-/// mean (renormalised). The normal comes out sRGB-encoded, so that the renderer's sRGB
-/// material texture hands the shader n / 2 + 1/2 again.
+/// mean (renormalised), and their mean height. The normal comes out sRGB-encoded, so that the
+/// renderer's sRGB material texture hands the shader n / 2 + 1/2 again.
 pub fn average_down(images: &ViewImages, factor: u32) -> ViewImages {
     let (w, h) = (images.colour.width / factor, images.colour.height / factor);
     let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
@@ -242,7 +242,7 @@ pub fn average_down(images: &ViewImages, factor: u32) -> ViewImages {
     let sw = images.colour.width as usize;
     for y in 0..h as usize {
         for x in 0..w as usize {
-            let (mut c, mut n, mut covered) = ([0.0f32; 3], Vec3::ZERO, 0u32);
+            let (mut c, mut n, mut height, mut covered) = ([0.0f32; 3], Vec3::ZERO, 0u32, 0u32);
             for dy in 0..factor as usize {
                 for dx in 0..factor as usize {
                     let i = 4 * ((y * factor as usize + dy) * sw + x * factor as usize + dx);
@@ -255,6 +255,7 @@ pub fn average_down(images: &ViewImages, factor: u32) -> ViewImages {
                     }
                     let q = &images.normal.pixels[i..i + 3];
                     n += Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / 127.5 - Vec3::ONE;
+                    height += images.normal.pixels[i + 3] as u32;
                 }
             }
             if covered == 0 {
@@ -268,7 +269,7 @@ pub fn average_down(images: &ViewImages, factor: u32) -> ViewImages {
             colour[o + 3] = alpha;
             let n = n.normalize_or(Vec3::Y) * 0.5 + Vec3::splat(0.5);
             normal[o..o + 3].copy_from_slice(&n.to_array().map(linear_to_srgb));
-            normal[o + 3] = alpha;
+            normal[o + 3] = ((height + covered / 2) / covered) as u8;
         }
     }
     let image = |pixels| Rgba8Image {
@@ -282,12 +283,26 @@ pub fn average_down(images: &ViewImages, factor: u32) -> ViewImages {
     }
 }
 
+/// The normal layer's alpha: a covered point's height `h` towards the eye above the plane
+/// through the sphere's centre, as a share of the radius (−1 … 1), stored as
+/// 128 + 127 · (h / 2 + 1/2). It never falls under the alpha test's cut-off, so the
+/// material's mipmaps average it as plain data, and the renderer shifts each view's lookup by
+/// it (parallax, `shaders/impostor.wgsl`). Mirrored by `fs_view` in `impostor_bake.wgsl`.
+pub fn encode_height(h: f32) -> u8 {
+    128 + (127.0 * (0.5 * h.clamp(-1.0, 1.0) + 0.5)).round() as u8
+}
+
 /// The impostor's quad as a model: `rows + 1` pairs of vertices up the tree's height, a crown's
 /// width apart, each pair skinned with the mean influences of the tree's vertices round its
 /// height (their four heaviest bones), so that row by row the quad follows how that slab of the
 /// tree sways. Layer 0 of its materials is the views' colour, layer 1 their normals.
+///
+/// `tree` and `frame` are at rest ([`at_rest`]); each row vertex is stored where the rest
+/// pose's skinning takes it to its place on the quad, so the renderer's skinned rows stand
+/// there at rest and move from there with the wind.
 pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -> Model {
     let mesh = &tree.mesh;
+    let skinning = rest_skinning(tree);
     let rows = frame.rows.max(1);
     let spacing = frame.height / rows as f32;
     let half_width = frame.radius * 0.5;
@@ -320,12 +335,14 @@ pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -
                 })
                 .collect();
         }
+        let rest: glam::Mat4 = last
+            .iter()
+            .map(|inf| inf.weight * skinning[inf.bone as usize])
+            .fold(glam::Mat4::ZERO, |a, m| a + m);
+        let to_bind = rest.inverse();
         for side in [-1.0f32, 1.0] {
-            out.positions.push(Vec3::new(
-                frame.centre[0] + side * half_width,
-                y,
-                frame.centre[2],
-            ));
+            let at = Vec3::new(frame.centre[0] + side * half_width, y, frame.centre[2]);
+            out.positions.push(to_bind.transform_point3(at));
             out.normals.push(Vec3::Z);
             out.uvs
                 .push(Vec2::new(0.5 + 0.5 * side, 1.0 - r as f32 / rows as f32));
@@ -359,13 +376,48 @@ pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -
     }
 }
 
-/// The octahedral impostor of `tree`: its views drawn through `raster`, averaged down and
-/// dilated, and the quad model that shows them.
+/// The skinning matrices `G_i Ĝ_i⁻¹` of `tree`'s rest pose (see [`at_rest`]).
+fn rest_skinning(tree: &Model) -> Vec<glam::Mat4> {
+    crate::anim::bone_matrices(&tree.skeleton, None, 0.0)
+        .iter()
+        .zip(&tree.skeleton.inverse_bind)
+        .map(|(g, inv)| glam::Mat4::from(*g) * *inv)
+        .collect()
+}
+
+/// `tree` posed as the renderer shows it without wind: its nodes' own transforms, no clip
+/// (frame 0 of the animation texture, the pose `skin_vertex` scales the wind about). That is
+/// not the bind pose its mesh is stored in: a root node's translation alone moved the conifer
+/// by 7% of its height, and an impostor drawn from the bind pose stood that far off its tree.
+pub fn at_rest(tree: &Model) -> Model {
+    let g = crate::anim::bone_matrices(&tree.skeleton, None, 0.0);
+    let skinning = rest_skinning(tree);
+    let mesh = &tree.mesh;
+    let mut posed = tree.clone();
+    posed.mesh.positions = crate::anim::linear_blend_skinning(mesh, &tree.skeleton, &g);
+    posed.mesh.normals = (0..mesh.vertex_count())
+        .map(|v| {
+            let n = mesh.normals[v].extend(0.0);
+            mesh.influences_of(v)
+                .iter()
+                .map(|inf| inf.weight * (skinning[inf.bone as usize] * n))
+                .sum::<glam::Vec4>()
+                .truncate()
+                .normalize_or(mesh.normals[v])
+        })
+        .collect();
+    posed
+}
+
+/// The octahedral impostor of `tree`: its views drawn through `raster` of the tree at rest
+/// ([`at_rest`]), averaged down and dilated, and the quad model that shows them.
 pub fn bake_impostor(
     raster: &dyn RasterizeAtlas,
     tree: &Model,
     grid: ViewGrid,
 ) -> Result<(Model, ImpostorFrame)> {
+    let posed = at_rest(tree);
+    let tree = &posed;
     let (request, radius) = view_request(tree, grid, SUPERSAMPLE)?;
     let materials = MaterialLayers::bake(&tree.materials);
     let drawn = raster.rasterize_views(&request, &materials)?;
@@ -379,6 +431,19 @@ pub fn bake_impostor(
         &mut images.colour.pixels,
         covered as f32 / (drawn_px.len() / 4) as f32,
     );
+    // Heights of the covered texels, uncovered ones at the centre plane, then spread out
+    // from the silhouettes: a parallax probe that lands just off a view's outline moves with
+    // the edge next to it, and filtering never mixes in a height from nowhere.
+    let mut heights: Vec<u8> = images
+        .normal
+        .pixels
+        .chunks_exact(4)
+        .zip(images.colour.pixels.chunks_exact(4))
+        .flat_map(|(n, c)| {
+            let h = if c[3] > 0 { n[3] } else { encode_height(0.0) };
+            [h, h, h, c[3]]
+        })
+        .collect();
     for (n, c) in images
         .normal
         .pixels
@@ -387,8 +452,19 @@ pub fn bake_impostor(
     {
         n[3] = c[3];
     }
-    for image in [&mut images.colour, &mut images.normal] {
-        dilate(&mut image.pixels, image.width, image.height, DILATE_RINGS);
+    let (w, h) = (images.colour.width, images.colour.height);
+    dilate(&mut images.colour.pixels, w, h, DILATE_RINGS);
+    // Normals and heights fill whole cells: their layer is filtered as plain data (its alpha
+    // never falls under the cut-off), so no texel may hold an unset one.
+    dilate(&mut images.normal.pixels, w, h, grid.cell);
+    dilate(&mut heights, w, h, grid.cell);
+    for (n, h) in images
+        .normal
+        .pixels
+        .chunks_exact_mut(4)
+        .zip(heights.chunks_exact(4))
+    {
+        n[3] = h[0];
     }
     let bounds = Bounds::of(tree.mesh.positions.iter().copied())
         .ok_or_else(|| anyhow!("{}: no vertices", tree.name))?;
@@ -517,9 +593,9 @@ mod tests {
     }
 
     #[test]
-    fn averaging_down_keeps_coverage_colour_and_normals_of_what_is_covered() {
-        // One 2×2 block: two texels covered (red and blue, normals +x and +y), two empty
-        // (white, normal −z: never counted).
+    fn averaging_down_keeps_coverage_colour_normals_and_heights_of_what_is_covered() {
+        // One 2×2 block: two texels covered (red and blue, normals +x and +y, heights 200
+        // and 210), two empty (white, normal −z: never counted).
         let colour = Rgba8Image {
             width: 2,
             height: 2,
@@ -532,8 +608,8 @@ mod tests {
             width: 2,
             height: 2,
             pixels: vec![
-                255, 128, 128, 255, 128, 128, 0, 0, //
-                128, 255, 128, 255, 128, 128, 0, 0,
+                255, 128, 128, 200, 128, 128, 0, 0, //
+                128, 255, 128, 210, 128, 128, 0, 0,
             ],
         };
         let out = average_down(&ViewImages { colour, normal }, 2);
@@ -552,12 +628,16 @@ mod tests {
             .collect();
         let h = std::f32::consts::FRAC_1_SQRT_2;
         assert!((n[0] - h).abs() < 0.03 && (n[1] - h).abs() < 0.03 && n[2].abs() < 0.03);
-        assert_eq!(out.normal.pixels[3], 128);
+        // The height is the covered texels' mean.
+        assert_eq!(out.normal.pixels[3], 205);
     }
 
     #[test]
     fn the_quad_rows_are_skinned_like_the_tree_at_their_height() {
-        let tree = crate::generate::tree::sapling();
+        // The built-in conifer as its glTF file has it: its nodes' rest pose stands away from
+        // the bind pose of its mesh, as in many files users bring.
+        let bind = crate::import::load_model("conifer").unwrap();
+        let tree = at_rest(&bind);
         let bounds = Bounds::of(tree.mesh.positions.iter().copied()).unwrap();
         let frame = ImpostorFrame {
             frames: 4,
@@ -584,31 +664,46 @@ mod tests {
         let mesh = &model.mesh;
         assert_eq!(mesh.vertex_count(), 2 * (ROWS as usize + 1));
         assert_eq!(mesh.triangle_count(), 2 * ROWS as usize);
+        // The renderer finds the rows by vertex index (the bake keeps them in order), and at
+        // rest (no wind) its skinning puts them on the quad: the conifer's rest pose stands
+        // away from its bind pose, so this fails if the rows were stored in the wrong one.
+        let bake = crate::bake::CharacterBake::in_order(&model).unwrap();
+        let (rest, _) = bake.evaluate(0, 0.0, 0.0);
         for r in 0..=ROWS as usize {
             let (l, rt) = (2 * r, 2 * r + 1);
-            // A pair shares its height and its influences; rows climb evenly.
-            assert_eq!(mesh.positions[l].y, mesh.positions[rt].y);
+            // A pair shares its influences; rows climb evenly, a crown's width apart.
             assert_eq!(mesh.influences_of(l), mesh.influences_of(rt));
-            let want = frame.base + frame.height * r as f32 / ROWS as f32;
-            assert!((mesh.positions[l].y - want).abs() < 1e-4);
+            let y = frame.base + frame.height * r as f32 / ROWS as f32;
+            for (v, side) in [(l, -1.0), (rt, 1.0)] {
+                let want = Vec3::new(
+                    frame.centre[0] + side * frame.radius * 0.5,
+                    y,
+                    frame.centre[2],
+                );
+                assert!(rest[v].distance(want) < 1e-3, "{} != {want}", rest[v]);
+            }
             let infl = mesh.influences_of(l);
             assert!(!infl.is_empty() && infl.len() <= 4);
             let sum: f32 = infl.iter().map(|i| i.weight).sum();
             assert!((sum - 1.0).abs() < 1e-5);
         }
-        // The foot of the trunk hangs from the root bone; the top row from bones out in the
+        // The foot and the top sway differently; the top row hangs from bones out in the
         // crown.
-        assert_eq!(mesh.influences_of(0)[0].bone, 0);
+        assert_ne!(mesh.influences_of(0), mesh.influences_of(2 * ROWS as usize));
         assert!(
             mesh.influences_of(2 * ROWS as usize)
                 .iter()
                 .all(|i| i.bone != 0)
         );
-        // The renderer finds the rows by vertex index: the bake keeps them in order.
-        let bake = crate::bake::CharacterBake::in_order(&model).unwrap();
-        let (rest, _) = bake.evaluate(0, 0.0, 0.0);
-        for (a, b) in rest.iter().zip(&mesh.positions) {
-            assert!(a.distance(*b) < 1e-3, "{a} != {b}");
-        }
+        // The conifer's rest pose is not its bind pose: a test of the bind pose would pass
+        // without [`at_rest`].
+        let moved = bind
+            .mesh
+            .positions
+            .iter()
+            .zip(&tree.mesh.positions)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0f32, f32::max);
+        assert!(moved > 0.01 * frame.height, "moved {moved}");
     }
 }
