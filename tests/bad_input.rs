@@ -230,3 +230,29 @@ fn cli_reports_bad_models_in_one_line_with_exit_code_1() {
         assert!(!out_png.exists(), "no output may be written for bad input");
     }
 }
+
+/// More characters than the device's instance buffer can hold (issue 20): one line naming the
+/// count and the limit, exit code 1, no panic (it was a wgpu validation panic, and a capacity
+/// overflow for the largest count), and no picture.
+#[test]
+fn cli_refuses_more_instances_than_the_adapter_holds() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_png = dir.path().join("out.png");
+    for count in ["10000000", "18446744073709551615"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+            .args(["shot", "--scene", "crowd", "--count", count, "--out"])
+            .arg(&out_png)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "--count {count}: {stderr}");
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+        assert_eq!(errors.len(), 1, "{stderr}");
+        assert!(
+            errors[0].contains(count) && errors[0].contains("at most"),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!out_png.exists());
+    }
+}

@@ -38,6 +38,11 @@ use crate::scene::{Instance, LodDraw};
 use anyhow::{Result, bail};
 use std::ops::Range;
 
+/// Instance-buffer entries one instance can take in a frame: one per side of a side-by-side
+/// comparison, times two where it changes level (the two levels of an alpha blend or a
+/// dissolve).
+pub const ENTRIES_PER_INSTANCE: usize = 4;
+
 /// Which vertex shader draws the characters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CharacterShader {
@@ -307,6 +312,18 @@ impl SceneRenderer {
         }
     }
 
+    /// The most instances a frame can hold on `device`: every instance takes at most
+    /// [`ENTRIES_PER_INSTANCE`] entries of the one instance buffer, which may be no larger
+    /// than the device's `max_buffer_size`.
+    pub fn max_instances(device: &wgpu::Device) -> usize {
+        Self::max_entries(device) / ENTRIES_PER_INSTANCE
+    }
+
+    fn max_entries(device: &wgpu::Device) -> usize {
+        let bytes = device.limits().max_buffer_size.min(usize::MAX as u64) as usize;
+        bytes / std::mem::size_of::<GpuInstance>()
+    }
+
     fn instance_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
         device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("instances"),
@@ -545,8 +562,14 @@ impl SceneRenderer {
             .sort_by_key(|(k, range)| (k.side(), keyed[range.start as usize].1));
         let total = self.staging.len();
         if total * std::mem::size_of::<GpuInstance>() > self.instance_buffer.size() as usize {
-            self.instance_buffer =
-                Self::instance_buffer(&gpu.device, total.next_power_of_two().max(256));
+            // Doubling amortises growth; the device's limit caps it (the world checked that
+            // its instances fit, see `max_instances`).
+            let capacity = total
+                .next_power_of_two()
+                .max(256)
+                .min(Self::max_entries(&gpu.device))
+                .max(total);
+            self.instance_buffer = Self::instance_buffer(&gpu.device, capacity);
         }
         if total > 0 {
             gpu.queue.write_buffer(

@@ -163,6 +163,7 @@ impl World {
             bakes,
             sources,
         } = loaded;
+        check_instance_count(gpu, &spec)?;
         let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
         for b in &bakes {
             renderer.add_character(gpu, b)?;
@@ -587,4 +588,29 @@ fn lod_model(bake: &CharacterBake, pack: &LodPack) -> LodModel {
         center: bake.bounds.center(),
         radius: bake.bounds.diagonal() * 0.5,
     }
+}
+
+/// Fails, in one line, where the scene's instances would not fit the device's instance buffer
+/// (see [`SceneRenderer::max_instances`]), before any of them is laid out.
+pub fn check_instance_count(gpu: &Gpu, spec: &SceneSpec) -> Result<()> {
+    let max = SceneRenderer::max_instances(&gpu.device);
+    let trees = if spec.scene == crate::scene::SceneKind::Mixed {
+        spec.trees
+    } else {
+        0
+    };
+    let total = spec.count.saturating_add(trees);
+    if total > max {
+        bail!(
+            "{total} instances (--count {}{}) are more than this adapter's buffers hold: at most {max} (max_buffer_size {} MiB)",
+            spec.count,
+            if trees > 0 {
+                format!(", --trees {trees}")
+            } else {
+                String::new()
+            },
+            gpu.device.limits().max_buffer_size >> 20
+        );
+    }
+    Ok(())
 }
