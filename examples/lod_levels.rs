@@ -49,6 +49,7 @@ fn main() -> Result<()> {
             speed: 1.0,
             wind: 1.0,
             tint: Vec4::ONE,
+            fade: None,
         });
         println!(
             "LOD {k}: {} triangles, {} influences, error {:.2} mm",

@@ -6,6 +6,9 @@
 // src/bake/anim_texture.rs and src/bake/vertex_texture.rs; `AnimationTexture::sample_with` is the
 // CPU mirror of `clip_frames` below, and `CharacterBake::evaluate` of `skin_vertex`.
 //
+// A cross-fade between two clips (a walker stopping to wave) blends the two clips' bone
+// matrices by the fade's weight, each at its own time, before they skin the vertex.
+//
 // Wind strength s (per instance, 1 for characters) scales the motion about the rest pose, frame 0
 // of the animation texture: G = Ĝ + s (G(t) − Ĝ). Billboards of a spectral cloud
 // (Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
@@ -47,6 +50,12 @@ struct ClipFrames {
     tau: f32,
     // Wind strength: 1 plays the clip as it is.
     wind: f32,
+    // A cross-fade to a second clip: its earlier and later frames and the blend between them
+    // (as row0, row1 and blend), and its weight (0: the first clip alone).
+    row0b: u32,
+    row1b: u32,
+    blendb: f32,
+    fade: f32,
 };
 
 // `clip`: texel of the clip's first frame, frame count, duration, texels per frame (see
@@ -77,7 +86,40 @@ fn clip_frames(clip: vec4<f32>, time: f32, wind: f32) -> ClipFrames {
     out.blend = a;
     out.tau = tau;
     out.wind = wind;
+    out.row0b = out.row0;
+    out.row1b = out.row1;
+    out.blendb = a;
+    out.fade = 0.0;
     return out;
+}
+
+// Bone `bone`'s rows (texels bone, bone + 1, bone + 2 of a frame) at the time `frames` holds:
+// blended between the two frames round it, and towards the second clip's by the cross-fade's
+// weight (Σ of matrices, as between frames: linear blend of the two clips' poses).
+struct BoneRows {
+    r0: vec4<f32>,
+    r1: vec4<f32>,
+    r2: vec4<f32>,
+};
+
+fn bone_rows(frames: ClipFrames, bone: u32) -> BoneRows {
+    let al = frames.anim;
+    let a = frames.row0 + bone;
+    let b = frames.row1 + bone;
+    var m = BoneRows(
+        mix(texel(anim_tex, al, a), texel(anim_tex, al, b), frames.blend),
+        mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), frames.blend),
+        mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), frames.blend),
+    );
+    if (frames.fade > 0.0) {
+        let c = frames.row0b + bone;
+        let d = frames.row1b + bone;
+        let n0 = mix(texel(anim_tex, al, c), texel(anim_tex, al, d), frames.blendb);
+        let n1 = mix(texel(anim_tex, al, c + 1u), texel(anim_tex, al, d + 1u), frames.blendb);
+        let n2 = mix(texel(anim_tex, al, c + 2u), texel(anim_tex, al, d + 2u), frames.blendb);
+        m = BoneRows(mix(m.r0, n0, frames.fade), mix(m.r1, n1, frames.fade), mix(m.r2, n2, frames.fade));
+    }
+    return m;
 }
 
 // The offset of spectra row `row` at loop time `tau`: Σ_axes Σ_j a cos(2π m τ + φ). Mirror of
@@ -126,11 +168,10 @@ fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
         let p = stored + vec4<f32>(offset * stored.w, 0.0);
         let nb = texel(vertex_tex, vl, first + 2u * i + 1u);
         let bone = 3u * u32(nb.w);
-        let a = frames.row0 + bone;
-        let b = frames.row1 + bone;
-        var r0 = mix(texel(anim_tex, al, a), texel(anim_tex, al, b), frames.blend);
-        var r1 = mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), frames.blend);
-        var r2 = mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), frames.blend);
+        let g = bone_rows(frames, bone);
+        var r0 = g.r0;
+        var r1 = g.r1;
+        var r2 = g.r2;
         if (frames.wind != 1.0) {
             // The rest pose is frame 0: bone b's rows are texels 3b, 3b + 1, 3b + 2.
             let q0 = texel(anim_tex, al, bone);
@@ -173,6 +214,10 @@ struct Instance {
     // not in a transition; y: hops;
     // z: opacity (below 1 only while an alpha transition fades the level); w: the level.
     @location(6) lod: vec4<f32>,
+    // A cross-fade to a second clip: that clip as a frame range (see `clip_frames`), and its
+    // time offset (x), playback speed (y) and weight (z, 0: no cross-fade).
+    @location(10) clip2: vec4<f32>,
+    @location(11) fade: vec4<f32>,
 };
 
 fn instance_point(inst: Instance, p: vec3<f32>) -> vec3<f32> {
@@ -185,5 +230,13 @@ fn instance_vector(inst: Instance, v: vec3<f32>) -> vec3<f32> {
 }
 
 fn instance_frames(inst: Instance) -> ClipFrames {
-    return clip_frames(inst.clip, frame.time.x * inst.timing.y + inst.timing.x, inst.timing.z);
+    var f = clip_frames(inst.clip, frame.time.x * inst.timing.y + inst.timing.x, inst.timing.z);
+    if (inst.fade.z > 0.0) {
+        let g = clip_frames(inst.clip2, frame.time.x * inst.fade.y + inst.fade.x, inst.timing.z);
+        f.row0b = g.row0;
+        f.row1b = g.row1;
+        f.blendb = g.blend;
+        f.fade = inst.fade.z;
+    }
+    return f;
 }

@@ -335,3 +335,65 @@ fn shot_reports_where_the_frame_goes() {
         assert!(x < 3.0, "{x}");
     }
 }
+
+/// A clip cross-fade (issue 20): the GPU blends the two clips' bone matrices, each at its own
+/// time, as the CPU reference does, at every weight from one clip to the other.
+#[test]
+fn gpu_clip_cross_fade_matches_the_cpu_reference() {
+    use lodlab::render::capture::capture_skinned_fading;
+    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let world = World::new(
+        &gpu,
+        Loaded::new(spec(&["walker", "horse"], 2, None)).unwrap(),
+        OFFSCREEN_FORMAT,
+        1,
+    )
+    .unwrap();
+    let place = Affine3A::from_translation(Vec3::new(1.0, 0.0, -3.0));
+    for (m, bake) in world.bakes.iter().enumerate() {
+        assert!(
+            bake.animation.clips.len() >= 2,
+            "{} has one clip",
+            bake.name
+        );
+        let (from, to) = ((0usize, 0.43f32), (1usize, 1.37f32));
+        let size = bake.bounds.diagonal();
+        let mut moved = 0.0f32;
+        for weight in [0.0f32, 0.3, 0.5, 1.0] {
+            let gpu_pos = capture_skinned_fading(
+                &gpu,
+                &world.renderer,
+                m,
+                (from.0 as u32, from.1),
+                (to.0 as u32, to.1),
+                weight,
+                place,
+            )
+            .unwrap();
+            let g = bake.animation.sample_fade(from, to, weight);
+            let (cpu_pos, _) = bake.animation_space.evaluate(&g);
+            for (v, (a, b)) in gpu_pos.iter().zip(&cpu_pos).enumerate() {
+                let expected = place.transform_point3(*b);
+                let err = a.truncate().distance(expected);
+                assert!(
+                    err <= 1e-4 * size,
+                    "{} weight {weight} vertex {v}: GPU {} CPU {expected}",
+                    bake.name,
+                    a.truncate()
+                );
+            }
+            // The fade really moves the pose: weight 1 is the other clip, not the first.
+            if weight == 1.0 {
+                let (first, _) = bake
+                    .animation_space
+                    .evaluate(&bake.animation.sample(from.0, from.1));
+                moved = first
+                    .iter()
+                    .zip(&cpu_pos)
+                    .map(|(a, b)| a.distance(*b))
+                    .fold(0.0, f32::max);
+            }
+        }
+        assert!(moved > 0.01 * size, "{}: the clips pose alike", bake.name);
+    }
+}

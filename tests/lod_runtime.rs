@@ -74,6 +74,7 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
                 speed: 1.0,
                 wind: 1.0,
                 tint: Vec4::ONE,
+                fade: None,
             };
             let mut tracker = LodTracker::default();
             let mut out = Vec::new();

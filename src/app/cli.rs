@@ -285,6 +285,10 @@ pub struct SceneArgs {
     /// Seed of the crowd layout.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Walkers stop now and then to play a clip on the spot (a wave), cross-fading into it and
+    /// back over this many seconds; 0: they never stop.
+    #[arg(long, default_value_t = 0.0, value_name = "SECONDS", value_parser = parse_non_negative)]
+    pub cross_fade: f32,
     /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
@@ -305,6 +309,7 @@ impl SceneArgs {
             trees: self.trees,
             clip: self.clip.clone(),
             seed: self.seed,
+            cross_fade: self.cross_fade,
             cache_dir: self.cache.clone(),
         }
     }

@@ -146,6 +146,26 @@ impl AnimationTexture {
             .collect()
     }
 
+    /// The bone matrices of a cross-fade from `clip` at `time` to clip `to` at `to_time` by
+    /// `weight` (0: `clip` alone): each clip sampled as [`Self::sample`], then the two blended
+    /// linearly, as `bone_rows` in `shaders/skinning.wgsl` does.
+    pub fn sample_fade(
+        &self,
+        (clip, time): (usize, f32),
+        (to, to_time): (usize, f32),
+        weight: f32,
+    ) -> Vec<Affine3A> {
+        let w = weight.clamp(0.0, 1.0);
+        self.sample(clip, time)
+            .into_iter()
+            .zip(self.sample(to, to_time))
+            .map(|(a, b)| Affine3A {
+                matrix3: a.matrix3 * (1.0 - w) + b.matrix3 * w,
+                translation: a.translation * (1.0 - w) + b.translation * w,
+            })
+            .collect()
+    }
+
     /// Loop time in [0, 1) of `time` seconds into `clip`, as the shader computes it for the
     /// spectral offsets.
     pub fn loop_time(&self, clip: usize, time: f32) -> f32 {

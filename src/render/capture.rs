@@ -40,6 +40,43 @@ pub fn capture_skinned_in_wind(
     transform: Affine3A,
     wind: f32,
 ) -> Result<Vec<Vec4>> {
+    capture(gpu, renderer, model, clip, time, transform, wind, None)
+}
+
+/// [`capture_skinned`] cross-fading from `clip` at `time` to `to.0` at `to.1` seconds by
+/// `weight` (0: `clip` alone).
+pub fn capture_skinned_fading(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    model: usize,
+    (clip, time): (u32, f32),
+    to: (u32, f32),
+    weight: f32,
+    transform: Affine3A,
+) -> Result<Vec<Vec4>> {
+    capture(
+        gpu,
+        renderer,
+        model,
+        clip,
+        time,
+        transform,
+        1.0,
+        Some((to, weight)),
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn capture(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    model: usize,
+    clip: u32,
+    time: f32,
+    transform: Affine3A,
+    wind: f32,
+    fade: Option<((u32, f32), f32)>,
+) -> Result<Vec<Vec4>> {
     let Some(character) = renderer.characters().get(model) else {
         bail!("no character {model}");
     };
@@ -77,6 +114,15 @@ pub fn capture_skinned_in_wind(
         Vec4::ONE,
     );
     instance.timing[2] = wind;
+    if let Some(((to, to_time), weight)) = fade {
+        // The frame's time is `time`: the second clip's offset puts it at `to_time`.
+        instance = instance.with_fade(
+            rows[(to as usize).min(rows.len() - 1)],
+            to_time - time,
+            1.0,
+            weight,
+        );
+    }
     let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("capture instance"),
         contents: bytemuck::bytes_of(&instance),

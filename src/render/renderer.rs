@@ -455,13 +455,17 @@ impl SceneRenderer {
                 let last = set.levels.len() - 1;
                 let draw = side.draws.get(i).copied().unwrap_or(LodDraw::Level(0));
                 let rows = &c.clip_rows;
+                let row = |clip: u32| rows[(clip as usize).min(rows.len() - 1)];
                 let mut g = GpuInstance::new(
                     &inst.transform,
-                    rows[(inst.clip as usize).min(rows.len() - 1)],
+                    row(inst.clip),
                     inst.time_offset,
                     inst.speed,
                     inst.tint,
                 );
+                if let Some(f) = inst.fade {
+                    g = g.with_fade(row(f.clip), f.time_offset, f.speed, f.weight);
+                }
                 g.timing[2] = if c.two_sided {
                     inst.wind * self.wind
                 } else {

@@ -94,7 +94,7 @@ impl FrameUniforms {
     }
 }
 
-/// Mirror of `Instance` in `shaders/skinning.wgsl`: 112 bytes per instance.
+/// Mirror of `Instance` in `shaders/skinning.wgsl`: 144 bytes per instance.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuInstance {
@@ -106,6 +106,10 @@ pub struct GpuInstance {
     pub tint: [f32; 4],
     /// Level of detail: transition t (−1 outside transitions), geomorph hops, opacity, level.
     pub lod: [f32; 4],
+    /// A cross-fade's second clip as a frame range (as `clip`).
+    pub clip2: [f32; 4],
+    /// The second clip's time offset and playback speed, and its weight (0: no cross-fade).
+    pub fade: [f32; 4],
 }
 
 impl GpuInstance {
@@ -128,12 +132,29 @@ impl GpuInstance {
             timing: [time_offset, speed, 1.0, 0.0],
             tint: tint.to_array(),
             lod: [-1.0, 0.0, 1.0, 0.0],
+            clip2: clip_rows,
+            fade: [0.0; 4],
         }
     }
 
-    pub const ATTRIBUTES: [wgpu::VertexAttribute; 7] = wgpu::vertex_attr_array![
+    /// Cross-fades towards clip `clip_rows` (played at `scene time · speed + time_offset`) by
+    /// `weight` (0: this instance's own clip alone, 1: the other alone).
+    pub fn with_fade(
+        mut self,
+        clip_rows: [f32; 4],
+        time_offset: f32,
+        speed: f32,
+        weight: f32,
+    ) -> Self {
+        self.clip2 = clip_rows;
+        self.fade = [time_offset, speed, weight.clamp(0.0, 1.0), 0.0];
+        self
+    }
+
+    /// Locations 7–9 belong to the plain calibration shader's own vertex buffer.
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 9] = wgpu::vertex_attr_array![
         0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Float32x4,
-        5 => Float32x4, 6 => Float32x4
+        5 => Float32x4, 6 => Float32x4, 10 => Float32x4, 11 => Float32x4
     ];
 
     pub fn layout() -> wgpu::VertexBufferLayout<'static> {
@@ -165,7 +186,7 @@ mod tests {
     fn sizes_match_wgsl() {
         // Two matrices and nine vec4s (the last, `views`, of u32s), as `Frame` in common.wgsl.
         assert_eq!(std::mem::size_of::<FrameUniforms>(), 2 * 64 + 9 * 16);
-        assert_eq!(std::mem::size_of::<GpuInstance>(), 112);
+        assert_eq!(std::mem::size_of::<GpuInstance>(), 144);
     }
 
     #[test]

@@ -26,6 +26,9 @@ pub struct SceneSpec {
     /// Play this clip (by name) on every model that has it.
     pub clip: Option<String>,
     pub seed: u64,
+    /// Seconds a walker's clip cross-fades into a clip on the spot and back when it stops;
+    /// 0: walkers never stop (see [`CrowdConfig::cross_fade`]).
+    pub cross_fade: f32,
     /// Where baked levels of detail are cached (default: the platform cache folder).
     pub cache_dir: Option<PathBuf>,
 }
@@ -39,6 +42,7 @@ impl Default for SceneSpec {
             trees: DEFAULT_MIXED_TREES,
             clip: None,
             seed: 1,
+            cross_fade: 0.0,
             cache_dir: None,
         }
     }
@@ -92,6 +96,7 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
             let b = &bakes[m];
             CrowdModel {
                 clip_speeds: b.animation.clips.iter().map(|c| c.ground_speed).collect(),
+                clip_durations: b.animation.clips.iter().map(|c| c.duration).collect(),
                 bounds: b.bounds,
             }
         })
@@ -118,6 +123,7 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
                 count: spec.count,
                 seed: spec.seed,
                 clips,
+                cross_fade: spec.cross_fade,
             },
         )
     };
@@ -154,6 +160,7 @@ fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
             .iter()
             .map(|&m| CrowdModel {
                 clip_speeds: vec![0.0],
+                clip_durations: vec![0.0],
                 bounds: bakes[m].bounds,
             })
             .collect();

@@ -4,6 +4,12 @@
 //! Travelling characters share a lane only with characters of the same model and clip, so that
 //! everyone on a lane moves at the same speed and nobody walks through anybody. Characters whose
 //! clip stays on the spot (a wave, an idle) stand in the plaza.
+//!
+//! With a cross-fade time set ([`CrowdConfig::cross_fade`]), the walkers of a lane whose model
+//! also has a clip played on the spot stop now and then to play it (a walker stops and waves):
+//! their clip cross-fades into it, is held for one loop of it, and cross-fades back, and they
+//! slow down and speed up with the walk's weight. A whole lane pauses together, so its spacing
+//! holds.
 
 use crate::model::Bounds;
 use glam::{Affine3A, Quat, Vec2, Vec3, Vec4};
@@ -13,6 +19,8 @@ use glam::{Affine3A, Quat, Vec2, Vec3, Vec4};
 pub struct CrowdModel {
     /// Ground speed of every clip in metres per second (0: played on the spot).
     pub clip_speeds: Vec<f32>,
+    /// Every clip's length in seconds.
+    pub clip_durations: Vec<f32>,
     /// Animated bounds, model space.
     pub bounds: Bounds,
 }
@@ -23,6 +31,9 @@ pub struct CrowdConfig {
     pub seed: u64,
     /// Per model, the clip every character of it plays; `None` (or a missing entry): a mix.
     pub clips: Vec<Option<usize>>,
+    /// Seconds a clip cross-fade takes when walkers stop to play a clip on the spot; 0: they
+    /// never stop.
+    pub cross_fade: f32,
 }
 
 impl Default for CrowdConfig {
@@ -31,6 +42,7 @@ impl Default for CrowdConfig {
             count: super::kind::DEFAULT_CHARACTERS,
             seed: 1,
             clips: Vec::new(),
+            cross_fade: 0.0,
         }
     }
 }
@@ -75,6 +87,89 @@ pub struct Agent {
     pub scale: f32,
     pub tint: Vec4,
     pub path: Path,
+    /// Stops now and then to play a clip on the spot (lane walkers; see [`Pause`]).
+    pub pause: Option<Pause>,
+}
+
+/// A lane's walkers stopping to play a clip on the spot, over and over: each cycle walks for
+/// `walk` seconds, cross-fades into the clip over `fade`, holds it for `hold`, and cross-fades
+/// back over `fade`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pause {
+    /// The clip played while stopped.
+    pub clip: usize,
+    /// Scene time at which a cycle begins.
+    pub start: f32,
+    pub walk: f32,
+    pub fade: f32,
+    pub hold: f32,
+}
+
+impl Pause {
+    pub fn period(&self) -> f32 {
+        self.walk + 2.0 * self.fade + self.hold
+    }
+
+    /// The cycle scene time `t` falls in (counted from `start`), and how far into it `t` is.
+    fn cycle(&self, t: f32) -> (f32, f32) {
+        let p = self.period().max(1e-3);
+        let n = ((t - self.start) / p).floor();
+        (n, t - self.start - n * p)
+    }
+
+    /// The stopped clip's weight at scene time `t`: 0 walking, rising linearly over the first
+    /// fade, 1 while held, falling back over the second.
+    pub fn weight(&self, t: f32) -> f32 {
+        let (_, u) = self.cycle(t);
+        let fade = self.fade.max(1e-6);
+        let held = self.walk + self.fade;
+        if u <= self.walk {
+            0.0
+        } else if u <= held {
+            (u - self.walk) / fade
+        } else if u <= held + self.hold {
+            1.0
+        } else {
+            (1.0 - (u - held - self.hold) / fade).max(0.0)
+        }
+    }
+
+    /// Seconds of walking up to scene time `t`, each weighted by the walk's weight 1 − w: how
+    /// far a walker has got, in seconds at full speed (counted from `start`).
+    pub fn walked(&self, t: f32) -> f32 {
+        let (n, u) = self.cycle(t);
+        let fade = self.fade.max(1e-6);
+        let held = self.walk + self.fade;
+        let within = if u <= self.walk {
+            u
+        } else if u <= held {
+            let x = u - self.walk;
+            self.walk + x - x * x / (2.0 * fade)
+        } else if u <= held + self.hold {
+            self.walk + 0.5 * fade
+        } else {
+            let x = u - held - self.hold;
+            self.walk + 0.5 * fade + x * x / (2.0 * fade)
+        };
+        n * (self.walk + self.fade) + within
+    }
+
+    /// When the stopped clip began its current play (the start of the cycle's first fade).
+    fn clip_start(&self, t: f32) -> f32 {
+        let (n, _) = self.cycle(t);
+        self.start + n * self.period() + self.walk
+    }
+}
+
+/// A cross-fade from an instance's own clip to a second one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClipFade {
+    pub clip: u32,
+    /// The second clip's animation time is `scene time · speed + time_offset`.
+    pub time_offset: f32,
+    pub speed: f32,
+    /// 0: the instance's own clip alone; 1: the second alone.
+    pub weight: f32,
 }
 
 /// One character on screen: what the renderer draws.
@@ -89,6 +184,8 @@ pub struct Instance {
     /// Wind strength (see [`Agent::wind`]).
     pub wind: f32,
     pub tint: Vec4,
+    /// A cross-fade to a second clip under way, if any.
+    pub fade: Option<ClipFade>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -107,7 +204,8 @@ impl Agent {
                 angle,
                 direction,
             } => {
-                let travelled = self.ground_speed * self.speed * time;
+                let walked = self.pause.map_or(time, |p| p.walked(time));
+                let travelled = self.ground_speed * self.speed * walked;
                 let a = angle + direction * travelled / radius.max(1e-3);
                 let (s, c) = a.sin_cos();
                 let pos = Vec2::new(c, s) * radius;
@@ -131,6 +229,15 @@ impl Agent {
             speed: self.speed,
             wind: self.wind,
             tint: self.tint,
+            fade: self.pause.and_then(|p| {
+                let weight = p.weight(time);
+                (weight > 0.0).then(|| ClipFade {
+                    clip: p.clip as u32,
+                    time_offset: -p.clip_start(time),
+                    speed: 1.0,
+                    weight,
+                })
+            }),
         }
     }
 }
@@ -160,6 +267,7 @@ impl Crowd {
                         position: Vec2::ZERO,
                         heading: 0.0,
                     },
+                    pause: None,
                 }],
                 radius: 1.0,
             };
@@ -224,6 +332,7 @@ impl Crowd {
                     position,
                     heading: rng.f32() * std::f32::consts::TAU,
                 },
+                pause: None,
             });
         }
 
@@ -254,6 +363,24 @@ impl Crowd {
             let ground_speed = models[m].clip_speeds[clip];
             // Everyone on a lane plays at the same speed, so nobody catches anybody up.
             let speed = 0.95 + 0.1 * rng.f32();
+            // And stops at the same time, to play the model's first clip on the spot.
+            let on_the_spot = models[m].clip_speeds.iter().position(|&s| s <= 0.0);
+            let pause = match (config.cross_fade > 0.0, on_the_spot) {
+                (true, Some(clip)) => {
+                    let walk = 6.0 + 6.0 * rng.f32();
+                    let fade = config.cross_fade;
+                    let hold = models[m].clip_durations.get(clip).copied().unwrap_or(2.0);
+                    let period = walk + 2.0 * fade + hold;
+                    Some(Pause {
+                        clip,
+                        start: -rng.f32() * period,
+                        walk,
+                        fade,
+                        hold,
+                    })
+                }
+                _ => None,
+            };
             let mut left = members.as_slice();
             radius += lane_gap * 0.5;
             while !left.is_empty() {
@@ -279,6 +406,7 @@ impl Crowd {
                             angle,
                             direction,
                         },
+                        pause,
                     });
                 }
                 left = &left[take..];
@@ -349,10 +477,12 @@ mod tests {
         vec![
             CrowdModel {
                 clip_speeds: vec![1.6, 8.0],
+                clip_durations: vec![1.2, 0.55],
                 bounds: b(0.7, 2.0, 2.4),
             },
             CrowdModel {
                 clip_speeds: vec![1.3, 0.0],
+                clip_durations: vec![1.1, 2.4],
                 bounds: b(0.6, 1.8, 0.4),
             },
         ]
@@ -373,15 +503,22 @@ mod tests {
 
     #[test]
     fn nobody_overlaps_over_time() {
+        for cross_fade in [0.0, 0.6] {
+            nobody_overlaps(cross_fade);
+        }
+    }
+
+    fn nobody_overlaps(cross_fade: f32) {
         let crowd = Crowd::layout(
             &models(),
             &CrowdConfig {
                 count: 300,
+                cross_fade,
                 ..Default::default()
             },
         );
         let mut inst = Vec::new();
-        for t in [0.0, 3.7, 20.0] {
+        for t in [0.0, 3.7, 20.0, 31.3] {
             crowd.instances_at(t, &mut inst);
             for i in 0..inst.len() {
                 for j in i + 1..inst.len() {
@@ -408,6 +545,88 @@ mod tests {
             let p1 = Vec3::from(a.transform_at(1.01).translation);
             let facing = a.transform_at(1.0).transform_vector3(Vec3::Z);
             assert!((p1 - p0).normalize().dot(facing) > 0.99);
+        }
+    }
+
+    #[test]
+    fn a_pause_fades_in_holds_and_fades_out_continuously() {
+        let p = Pause {
+            clip: 1,
+            start: -3.0,
+            walk: 5.0,
+            fade: 0.5,
+            hold: 2.4,
+        };
+        let period = p.period();
+        assert!((period - 8.4).abs() < 1e-6);
+        // Walking, fading in, held, fading out, walking again.
+        let at = |u: f32| p.start + period + u;
+        assert_eq!(p.weight(at(2.0)), 0.0);
+        assert!((p.weight(at(5.25)) - 0.5).abs() < 1e-4);
+        assert_eq!(p.weight(at(6.5)), 1.0);
+        assert!((p.weight(at(8.15)) - 0.5).abs() < 1e-4);
+        // The weight and the distance walked never jump; the distance never goes back, stays
+        // put while the clip is held, and grows by walk + fade a cycle.
+        let mut last = (p.weight(-10.0), p.walked(-10.0));
+        let step = 0.001;
+        let mut t = -10.0 + step;
+        while t < 20.0 {
+            let now = (p.weight(t), p.walked(t));
+            assert!(
+                (now.0 - last.0).abs() <= step / p.fade + 1e-3,
+                "weight jumps at {t}"
+            );
+            assert!(
+                now.1 >= last.1 - 1e-4 && now.1 - last.1 <= step + 1e-3,
+                "at {t}"
+            );
+            last = now;
+            t += step;
+        }
+        assert!((p.walked(at(6.0)) - p.walked(at(7.0))).abs() < 1e-5);
+        assert!((p.walked(at(1.0) + period) - p.walked(at(1.0)) - 5.5).abs() < 1e-3);
+    }
+
+    #[test]
+    fn lane_walkers_stop_to_play_the_clip_on_the_spot_and_walk_on() {
+        let crowd = Crowd::layout(
+            &models(),
+            &CrowdConfig {
+                count: 40,
+                clips: vec![Some(0), Some(0)],
+                cross_fade: 0.6,
+                ..Default::default()
+            },
+        );
+        // Model 1 has a clip on the spot (clip 1), model 0 none: only model 1's walkers stop.
+        for a in &crowd.agents {
+            assert_eq!(a.pause.is_some(), a.model == 1, "{a:?}");
+        }
+        let a = crowd.agents.iter().find(|a| a.model == 1).unwrap();
+        let p = a.pause.unwrap();
+        let held = p.start + p.walk + p.fade + 0.5 * p.hold;
+        let inst = a.instance_at(held);
+        let fade = inst.fade.expect("a cross-fade while stopped");
+        assert_eq!((fade.clip, fade.weight), (1, 1.0));
+        // The clip on the spot began at the start of the fade: its time now is 0.6 + 1.2 s.
+        assert!((held * fade.speed + fade.time_offset - (p.fade + 0.5 * p.hold)).abs() < 1e-3);
+        // Standing still while held, walking again after.
+        let here = Vec3::from(a.transform_at(held).translation);
+        let later = Vec3::from(a.transform_at(held + 0.2).translation);
+        assert!(here.distance(later) < 1e-4);
+        let walking = p.start + p.period() + 1.0;
+        assert!(a.instance_at(walking).fade.is_none());
+        let moved = Vec3::from(a.transform_at(walking).translation)
+            .distance(Vec3::from(a.transform_at(walking + 0.2).translation));
+        assert!(moved > 0.2 * 1.3 * 0.9, "{moved}");
+        // A lane pauses together: every walker of it shares the pause.
+        for b in crowd.agents.iter().filter(|b| b.model == 1) {
+            if let (Path::Circle { radius: r, .. }, Path::Circle { radius: s, .. }) =
+                (a.path, b.path)
+                && r == s
+            {
+                assert_eq!(b.pause, a.pause);
+            }
         }
     }
 }

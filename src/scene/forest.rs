@@ -93,6 +93,7 @@ pub fn around(models: &[CrowdModel], count: usize, seed: u64, clearing: f32) -> 
                 position,
                 heading: rng.f32() * std::f32::consts::TAU,
             },
+            pause: None,
         });
     }
     Crowd {
@@ -113,6 +114,7 @@ mod tests {
     fn a_forest_round_a_clearing_keeps_out_of_it() {
         let m = CrowdModel {
             clip_speeds: vec![0.0],
+            clip_durations: vec![4.0],
             bounds: Bounds {
                 min: Vec3::new(-2.0, 0.0, -2.0),
                 max: Vec3::new(2.0, 8.0, 2.0),
@@ -137,6 +139,7 @@ mod tests {
     fn trees_stand_apart_and_the_layout_is_deterministic() {
         let m = CrowdModel {
             clip_speeds: vec![0.0],
+            clip_durations: vec![4.0],
             bounds: Bounds {
                 min: Vec3::new(-2.0, 0.0, -2.0),
                 max: Vec3::new(2.0, 8.0, 2.0),

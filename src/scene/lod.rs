@@ -479,6 +479,7 @@ mod tests {
             speed: 1.0,
             wind: 1.0,
             tint: Vec4::ONE,
+            fade: None,
         }
     }
 

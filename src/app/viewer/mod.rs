@@ -244,6 +244,7 @@ impl Viewer {
             count: world.spec.count,
             model: None,
             clip: world.spec.clip.clone(),
+            cross_fade: world.spec.cross_fade,
             playing: true,
             speed: 1.0,
             shadows: true,
@@ -592,6 +593,7 @@ impl Viewer {
             std::mem::take(&mut output.platform_output),
         );
         if requests.relayout {
+            self.world.spec.cross_fade = self.settings.cross_fade;
             self.world.relayout(
                 self.settings.model,
                 self.settings.count,

@@ -147,6 +147,9 @@ impl FrameHistory {
     }
 }
 
+/// Seconds a clip cross-fade takes when the panel turns stopping walkers on.
+const DEFAULT_CROSS_FADE: f32 = 0.6;
+
 /// What the user can change.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -155,6 +158,9 @@ pub struct Settings {
     pub model: Option<usize>,
     /// `None`: each character plays a clip of its own.
     pub clip: Option<String>,
+    /// Seconds of a clip cross-fade when walkers stop to play a clip on the spot; 0: they
+    /// never stop.
+    pub cross_fade: f32,
     pub playing: bool,
     pub speed: f32,
     pub shadows: bool,
@@ -275,6 +281,23 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
                 }
             }
         });
+    // Walkers stopping to play a clip on the spot (a wave), cross-fading into it and back.
+    let mut stopping = s.cross_fade > 0.0;
+    if ui
+        .checkbox(&mut stopping, "walkers stop and wave")
+        .on_hover_text("Lanes whose model has a clip played on the spot stop now and then to play it, cross-fading the two clips' bone matrices")
+        .changed()
+    {
+        s.cross_fade = if stopping { DEFAULT_CROSS_FADE } else { 0.0 };
+        req.relayout = true;
+    }
+    if stopping
+        && ui
+            .add(egui::Slider::new(&mut s.cross_fade, 0.1..=3.0).text("cross-fade s"))
+            .changed()
+    {
+        req.relayout = true;
+    }
     ui.separator();
 
     ui.strong("Animation");
