@@ -12,7 +12,7 @@
 //! holds.
 
 use crate::model::Bounds;
-use glam::{Affine3A, Quat, Vec2, Vec3, Vec4};
+use glam::{Affine3A, Vec2, Vec3A, Vec4};
 
 /// What the layout needs to know about a model.
 #[derive(Clone, Debug, PartialEq)]
@@ -197,8 +197,10 @@ pub struct Crowd {
 
 impl Agent {
     pub fn transform_at(&self, time: f32) -> Affine3A {
-        let (pos, heading) = match self.path {
-            Path::Still { position, heading } => (position, heading),
+        // The heading as its sine and cosine: a lane's walkers face along the circle's
+        // tangent, which gives them without an arc tangent (10,000 of these a frame).
+        let (pos, (sin, cos)) = match self.path {
+            Path::Still { position, heading } => (position, heading.sin_cos()),
             Path::Circle {
                 radius,
                 angle,
@@ -210,13 +212,16 @@ impl Agent {
                 let (s, c) = a.sin_cos();
                 let pos = Vec2::new(c, s) * radius;
                 let tangent = Vec2::new(-s, c) * direction;
-                (pos, tangent.x.atan2(tangent.y))
+                (pos, (tangent.x, tangent.y))
             }
         };
-        Affine3A::from_scale_rotation_translation(
-            Vec3::splat(self.scale),
-            Quat::from_rotation_y(heading),
-            Vec3::new(pos.x, 0.0, pos.y),
+        // A turn by the heading about +y (0 facing +z), scaled.
+        let k = self.scale;
+        Affine3A::from_cols(
+            Vec3A::new(cos, 0.0, -sin) * k,
+            Vec3A::new(0.0, k, 0.0),
+            Vec3A::new(sin, 0.0, cos) * k,
+            Vec3A::new(pos.x, 0.0, pos.y),
         )
     }
 
@@ -468,6 +473,7 @@ fn pick_clip(speeds: &[f32], rng: &mut fastrand::Rng) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     fn models() -> Vec<CrowdModel> {
         let b = |x: f32, y: f32, z: f32| Bounds {
