@@ -147,6 +147,10 @@ impl FrameHistory {
     }
 }
 
+/// The instance slider's top: a 10,000-character crowd and then some (`--count` goes
+/// further, up to what the device's instance buffer holds).
+const MAX_PANEL_COUNT: usize = 20_000;
+
 /// Seconds a clip cross-fade takes when the panel turns stopping walkers on.
 const DEFAULT_CROSS_FADE: f32 = 0.6;
 
@@ -231,7 +235,7 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     ui.strong("Crowd");
     if ui
         .add(
-            egui::Slider::new(&mut s.count, 0..=2000)
+            egui::Slider::new(&mut s.count, 0..=MAX_PANEL_COUNT)
                 .logarithmic(true)
                 .text("instances"),
         )
