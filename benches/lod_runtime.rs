@@ -5,7 +5,8 @@
 //! viewpoint, 1280×720 with 4× multisampling, tolerance 1.5 px:
 //! - frames per second and triangles per frame for `none`, `rest-pose`, `as` and `as+is`;
 //! - the cost of transitions: `as+is` with every visible instance forced into a morph (t = ½
-//!   towards the next level) or an alpha blend (p = ¼), against the same frame popping.
+//!   towards the next level), an alpha blend or a dithered cross-fade (p = ¼), against the same
+//!   frame popping.
 
 use anyhow::Result;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
@@ -105,6 +106,13 @@ fn main() -> Result<()> {
             LodDraw::Alpha { from, to, p: 0.25 }
         })
         .collect();
+    let dithers: Vec<LodDraw> = popped
+        .iter()
+        .map(|d| {
+            let (from, to) = pair(d);
+            LodDraw::Dither { from, to, p: 0.25 }
+        })
+        .collect();
     let view = FrameView::from_camera(&world.camera, WIDTH as f32 / HEIGHT as f32, TIME);
     println!("\nas+is, every instance in transition");
     println!(
@@ -112,7 +120,12 @@ fn main() -> Result<()> {
         "draw", "ms/frame", "triangles", "draws", "vs pop"
     );
     let mut pop_ms = 0.0;
-    for (name, draws) in [("pop", &popped), ("morph", &morphs), ("alpha", &alphas)] {
+    for (name, draws) in [
+        ("pop", &popped),
+        ("morph", &morphs),
+        ("alpha", &alphas),
+        ("dither", &dithers),
+    ] {
         let stats = world.renderer.prepare(
             &gpu,
             &view,

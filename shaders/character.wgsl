@@ -117,6 +117,10 @@ fn heat(x: f32) -> vec3<f32> {
 // own: a branch on the view here would cost every pixel on a software rasteriser.
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    return shaded(in);
+}
+
+fn shaded(in: VsOut) -> vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     return vec4<f32>(lit(in, texel.rgb * in.tint.rgb, normalize(in.normal)), in.lod.z);
 }
@@ -125,10 +129,39 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
 // influences; the material where the view keeps it.
 @fragment
 fn fs_debug(in: VsOut) -> @location(0) vec4<f32> {
+    return painted(in);
+}
+
+fn painted(in: VsOut) -> vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     let d = debug_color(in.lod, in.influences, frame.views.x);
     let base = select(texel.rgb * in.tint.rgb, d.rgb, d.a > 0.5);
     return vec4<f32>(lit(in, base, normalize(in.normal)), in.lod.z);
+}
+
+// One half of a dithered cross-fade (`LodDraw::Dither`): lod.z is the half's coverage, read as
+// `dissolved` reads a tree's. Pipelines of their own, so that no other character pays for the
+// test.
+fn dithered_out(in: VsOut) -> bool {
+    let x = pixel_threshold(in.clip.xy);
+    let c = in.lod.z;
+    return select(x >= c, x < -c - 1.0, c < 0.0);
+}
+
+@fragment
+fn fs_dither(in: VsOut) -> @location(0) vec4<f32> {
+    if (dithered_out(in)) {
+        discard;
+    }
+    return shaded(in);
+}
+
+@fragment
+fn fs_debug_dither(in: VsOut) -> @location(0) vec4<f32> {
+    if (dithered_out(in)) {
+        discard;
+    }
+    return painted(in);
 }
 
 // Interleaved gradient noise (Jimenez 2014): a threshold in [0, 1) per pixel, evenly spread

@@ -109,11 +109,18 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
             to: k + 1,
             p,
         };
+        let dither = |p| LodDraw::Dither {
+            from: k,
+            to: k + 1,
+            p,
+        };
         for (what, image, expected) in [
             ("morph t = 0", render(morph(0.0)), &fine),
             ("morph t = 1", render(morph(1.0)), &coarse),
             ("alpha p = 0", render(alpha(0.0)), &fine),
             ("alpha p = 1", render(alpha(1.0)), &coarse),
+            ("dither p = 0", render(dither(0.0)), &fine),
+            ("dither p = 1", render(dither(1.0)), &coarse),
             (
                 "morph over two levels, t = 1",
                 render(LodDraw::Morph {
@@ -127,8 +134,37 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
             let d = max_diff(&image, expected);
             assert!(d <= 1, "level {k}, {what}: differs by {d} from the level");
         }
+        // A dithered cross-fade shows every pixel from exactly one of the two levels, and
+        // more of the incoming one as p grows.
+        let mut shares = Vec::new();
+        for p in [0.25f32, 0.5, 0.75] {
+            let image = render(dither(p));
+            let (mut from_coarse, mut told) = (0usize, 0usize);
+            for ((d, a), b) in image.pixels().zip(fine.pixels()).zip(coarse.pixels()) {
+                let near = |x: &image::Rgba<u8>| (0..3).all(|c| d[c].abs_diff(x[c]) <= 1);
+                assert!(
+                    near(a) || near(b),
+                    "level {k}, dither p = {p}: a pixel of neither level"
+                );
+                if !near(a) {
+                    from_coarse += 1;
+                }
+                if (0..3).any(|c| a[c].abs_diff(b[c]) > 1) {
+                    told += 1;
+                }
+            }
+            shares.push(from_coarse as f32 / told.max(1) as f32);
+        }
+        assert!(
+            shares[0] < shares[1] && shares[1] < shares[2],
+            "level {k}: the incoming level's share does not grow with p: {shares:?}"
+        );
         // Half-way is neither level.
-        for (what, image) in [("morph", render(morph(0.5))), ("alpha", render(alpha(0.5)))] {
+        for (what, image) in [
+            ("morph", render(morph(0.5))),
+            ("alpha", render(alpha(0.5))),
+            ("dither", render(dither(0.5))),
+        ] {
             assert!(
                 differing(&image, &fine, 2) > 0 && differing(&image, &coarse, 2) > 0,
                 "level {k}: {what} half-way shows one of the levels"
@@ -166,7 +202,7 @@ fn a_thousand_instances_take_a_handful_of_draws() {
         match *d {
             LodDraw::Level(k) => groups.insert((inst.model, 0, k, 0)),
             LodDraw::Morph { fine, coarse, .. } => groups.insert((inst.model, 1, fine, coarse)),
-            LodDraw::Alpha { .. } | LodDraw::Dissolve { .. } => {
+            LodDraw::Alpha { .. } | LodDraw::Dither { .. } | LodDraw::Dissolve { .. } => {
                 unreachable!("the default transition is a morph, and there are no trees")
             }
         };

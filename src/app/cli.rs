@@ -337,7 +337,8 @@ pub struct LodArgs {
 /// How instances choose and change levels.
 #[derive(Args, Debug, Clone)]
 pub struct PolicyArgs {
-    /// Transition between levels: pop, alpha, morph.
+    /// Transition between levels: pop, alpha (blend), morph (geomorph), dither (screen-door
+    /// cross-fade).
     #[arg(long, default_value = "morph", value_enum)]
     pub transition: Transition,
     /// What drives alpha and morph: time (over --duration) or zone (morph zones over distance).

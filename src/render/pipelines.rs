@@ -136,6 +136,8 @@ impl Shading {
 pub(super) struct Pipelines {
     pub skinned: Shading,
     pub morph: Shading,
+    /// `skinned` keeping only its half's pixels of a dithered cross-fade.
+    pub dither: Shading,
     /// The two passes of a faded level: depth only, then colour where the depth is equal.
     pub fade_depth: wgpu::RenderPipeline,
     pub fade_color: Shading,
@@ -202,6 +204,28 @@ impl Pipelines {
             shaded: pipeline(device, &with_characters, f, s, spec),
         };
         let skinned = shading(character("skinned characters", "vs_main"));
+        let dither = Shading {
+            debug: pipeline(
+                device,
+                &with_characters,
+                f,
+                s,
+                PipelineSpec {
+                    fs: "fs_debug_dither",
+                    ..character("dithered characters, debug view", "vs_main")
+                },
+            ),
+            shaded: pipeline(
+                device,
+                &with_characters,
+                f,
+                s,
+                PipelineSpec {
+                    fs: "fs_dither",
+                    ..character("dithered characters", "vs_main")
+                },
+            ),
+        };
         let morph = shading(character("geomorphed characters", "vs_morph"));
         let fade_depth = build(
             &with_characters,
@@ -321,6 +345,7 @@ impl Pipelines {
         Pipelines {
             skinned,
             morph,
+            dither,
             fade_depth,
             fade_color,
             wireframe,

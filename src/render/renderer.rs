@@ -19,6 +19,11 @@
 //! incoming one; at p = ½ both halves show the depth-nearest of the two levels, so the switch of
 //! roles is seamless.
 //!
+//! The dithered cross-fade ([`LodDraw::Dither`]) draws both levels of a character opaque, each
+//! by a fragment shader that keeps the pixels of its half (the incoming level where a fixed
+//! per-pixel threshold lies below p): every level is drawn once, with no blending and no second
+//! pass, and p = 0 and p = 1 are exactly the two levels.
+//!
 //! Trees change level by a screen-door cross-dissolve instead ([`LodDraw::Dissolve`]): their
 //! billboard-cloud levels have no vertices in common to morph, and blending thousands of
 //! overlapping cut-out leaves would need sorting. Both levels are drawn opaque, the incoming one
@@ -173,6 +178,11 @@ const PASS_FADE: u64 = 2;
 /// The outgoing half of a dissolve: drawn with the opaque draws, but its shadow is the
 /// incoming half's.
 const PASS_DISSOLVE_OUT: u64 = 3;
+/// The two halves of a character's dithered cross-fade ([`LodDraw::Dither`]): drawn with the
+/// opaque draws by a fragment shader that keeps its half's pixels; the incoming half casts the
+/// shadow.
+const PASS_DITHER_IN: u64 = 4;
+const PASS_DITHER_OUT: u64 = 5;
 
 /// A group of instances drawn by one instanced call. The fields are packed into a sort key:
 /// pass, side, model, method slot, level, hops.
@@ -542,6 +552,27 @@ impl SceneRenderer {
                             g,
                         );
                     }
+                    LodDraw::Dither { from, to, p } => {
+                        // Both levels opaque, on complementary pixels (the coverage sign picks
+                        // the half, as for a tree's dissolve); the incoming one casts the
+                        // shadow.
+                        let (from, to) = ((from as usize).min(last), (to as usize).min(last));
+                        let p = p.clamp(0.0, 1.0);
+                        count(from, 0);
+                        count(to, 0);
+                        for (level, pass, coverage) in
+                            [(to, PASS_DITHER_IN, p), (from, PASS_DITHER_OUT, -1.0 - p)]
+                        {
+                            g.lod = [p, 0.0, coverage, level as f32];
+                            keep(
+                                &mut self.keyed,
+                                &mut self.unsorted,
+                                key(pass, level, 0),
+                                near,
+                                g,
+                            );
+                        }
+                    }
                     LodDraw::Alpha { from, to, p } => {
                         let (from, to) = ((from as usize).min(last), (to as usize).min(last));
                         let p = p.clamp(0.0, 1.0);
@@ -696,7 +727,8 @@ impl SceneRenderer {
                 // incoming half of a dissolve): its shadow goes with it.
                 if self.shadows {
                     pass.set_pipeline(&self.pipelines.shadow);
-                    let casts = |k: &DrawKey| matches!(k.pass(), PASS_OPAQUE | PASS_MORPH);
+                    let casts =
+                        |k: &DrawKey| matches!(k.pass(), PASS_OPAQUE | PASS_MORPH | PASS_DITHER_IN);
                     for (key, range) in self.draws.iter().filter(|(k, _)| casts(k)) {
                         scissor.side(pass, key.side());
                         let c = &self.characters[key.model()];
@@ -807,6 +839,9 @@ impl SceneRenderer {
                 (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
                 (_, None, true) => (&self.pipelines.foliage.0, 3),
                 (PASS_MORPH, None, false) => (self.pipelines.morph.get(debug), 4),
+                (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) => {
+                    (self.pipelines.dither.get(debug), 7)
+                }
                 _ => (self.pipelines.skinned.get(debug), 5),
             };
             if current != Some(id) {

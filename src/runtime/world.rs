@@ -534,6 +534,7 @@ impl World {
                         draws.push(LodDraw::Level(k));
                     }
                     LodDraw::Alpha { from, to, p }
+                    | LodDraw::Dither { from, to, p }
                     | LodDraw::Morph {
                         fine: from,
                         coarse: to,

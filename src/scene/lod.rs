@@ -69,18 +69,29 @@ impl std::fmt::Display for LodMethod {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Transition {
     Pop,
+    /// Houle & Poulin's alpha blend (§3): one level opaque, the other blended over it.
     Alpha,
     Morph,
+    /// A screen-door cross-fade (as Bevy's dithered level changes): both levels opaque, each on
+    /// its own share of the pixels. Each level is drawn once, so it costs less than the alpha
+    /// blend where triangles are the limit; it looks grainy where the blend is smooth.
+    Dither,
 }
 
 impl Transition {
-    pub const ALL: [Transition; 3] = [Transition::Pop, Transition::Alpha, Transition::Morph];
+    pub const ALL: [Transition; 4] = [
+        Transition::Pop,
+        Transition::Alpha,
+        Transition::Morph,
+        Transition::Dither,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Transition::Pop => "pop",
             Transition::Alpha => "alpha",
             Transition::Morph => "morph",
+            Transition::Dither => "dither",
         }
     }
 }
@@ -215,6 +226,13 @@ pub enum LodDraw {
         to: u8,
         p: f32,
     },
+    /// Both levels drawn opaque on complementary pixels, `to` on the pixels whose fixed
+    /// threshold lies below `p` (a dithered cross-fade, [`Transition::Dither`]).
+    Dither {
+        from: u8,
+        to: u8,
+        p: f32,
+    },
     /// One half of a screen-door cross-dissolve between two models drawn as separate
     /// instances (a tree's billboard-cloud levels, which share no vertices to morph and whose
     /// overlapping leaves cannot be blended without sorting): every pixel shows either the
@@ -243,7 +261,7 @@ impl LodDraw {
                     coarse
                 }
             }
-            LodDraw::Alpha { from, to, p } => {
+            LodDraw::Alpha { from, to, p } | LodDraw::Dither { from, to, p } => {
                 if p < 0.5 {
                     from
                 } else {
@@ -259,7 +277,7 @@ impl LodDraw {
         match *self {
             LodDraw::Level(_) => 0.0,
             LodDraw::Morph { t, .. } => t,
-            LodDraw::Alpha { p, .. } | LodDraw::Dissolve { p, .. } => p,
+            LodDraw::Alpha { p, .. } | LodDraw::Dither { p, .. } | LodDraw::Dissolve { p, .. } => p,
         }
     }
 }
@@ -410,6 +428,11 @@ fn transition_draw(kind: Transition, a: Active) -> LodDraw {
     let p = a.p.clamp(0.0, 1.0);
     match kind {
         Transition::Alpha => LodDraw::Alpha {
+            from: a.from,
+            to: a.to,
+            p,
+        },
+        Transition::Dither => LodDraw::Dither {
             from: a.from,
             to: a.to,
             p,
@@ -678,7 +701,9 @@ mod tests {
         let coord = |d: &LodDraw| match *d {
             LodDraw::Level(k) => k as f32,
             LodDraw::Morph { fine, coarse, t } => fine as f32 + t * (coarse - fine) as f32,
-            LodDraw::Alpha { .. } | LodDraw::Dissolve { .. } => unreachable!(),
+            LodDraw::Alpha { .. } | LodDraw::Dither { .. } | LodDraw::Dissolve { .. } => {
+                unreachable!()
+            }
         };
         let mut prev: Option<f32> = None;
         let mut z = 0.3f32;
