@@ -341,7 +341,8 @@ pub struct PolicyArgs {
     /// cross-fade).
     #[arg(long, default_value = "morph", value_enum)]
     pub transition: Transition,
-    /// What drives alpha and morph: time (over --duration) or zone (morph zones over distance).
+    /// What drives alpha, morph and dither: time (over --duration) or zone (morph zones over
+    /// distance).
     #[arg(long, value_enum, default_value = "time")]
     pub drive: Drive,
     /// Seconds a time-driven transition takes.

@@ -44,8 +44,8 @@ use anyhow::{Result, bail};
 use std::ops::Range;
 
 /// Instance-buffer entries one instance can take in a frame: one per side of a side-by-side
-/// comparison, times two where it changes level (the two levels of an alpha blend or a
-/// dissolve).
+/// comparison, times two where it changes level (the two levels of an alpha blend, a dithered
+/// cross-fade or a dissolve).
 pub const ENTRIES_PER_INSTANCE: usize = 4;
 
 /// Which vertex shader draws the characters.
@@ -723,8 +723,9 @@ impl SceneRenderer {
                 pass.draw(0..3, 0..1);
             }
             Pass::Shadows => {
-                // Every instance has exactly one opaque draw (opaque level, morph or the
-                // incoming half of a dissolve): its shadow goes with it.
+                // Every instance has exactly one opaque draw (opaque level, morph, or the
+                // incoming half of a dissolve or a dithered cross-fade): its shadow goes with
+                // it.
                 if self.shadows {
                     pass.set_pipeline(&self.pipelines.shadow);
                     let casts =

@@ -109,7 +109,7 @@ impl std::fmt::Display for Transition {
     }
 }
 
-/// What drives an alpha or morph transition.
+/// What drives an alpha, morph or dither transition.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Drive {
     /// Runs for [`LodPolicy::duration`] seconds once the level changes.

@@ -339,7 +339,17 @@ pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -
             .iter()
             .map(|inf| inf.weight * skinning[inf.bone as usize])
             .fold(glam::Mat4::ZERO, |a, m| a + m);
-        let to_bind = rest.inverse();
+        // A blend of bones that squashes space flat (a zero scale at rest) has no inverse:
+        // the row is then stored where it stands, and sways from a little off its place.
+        let to_bind = if rest.determinant().abs() > 1e-8 {
+            rest.inverse()
+        } else {
+            log::warn!(
+                "{}: the impostor's row {r} hangs from bones whose rest pose has no inverse",
+                tree.name
+            );
+            glam::Mat4::IDENTITY
+        };
         for side in [-1.0f32, 1.0] {
             let at = Vec3::new(frame.centre[0] + side * half_width, y, frame.centre[2]);
             out.positions.push(to_bind.transform_point3(at));
@@ -409,6 +419,26 @@ pub fn at_rest(tree: &Model) -> Model {
     posed
 }
 
+/// Fills every `cell` × `cell` block of an atlas `width` texels wide from its own covered
+/// texels ([`dilate`] block by block, as far as the block reaches): a view's empty margin takes
+/// its own outline's values, never those of the neighbouring view.
+fn dilate_cells(pixels: &mut [u8], width: u32, height: u32, cell: u32) {
+    let (w, c) = (width as usize, cell as usize);
+    let mut block = vec![0u8; 4 * c * c];
+    for j in 0..(height / cell) as usize {
+        for i in 0..(width / cell) as usize {
+            let row = |y: usize| 4 * ((j * c + y) * w + i * c)..4 * ((j * c + y) * w + i * c + c);
+            for y in 0..c {
+                block[4 * y * c..4 * (y + 1) * c].copy_from_slice(&pixels[row(y)]);
+            }
+            dilate(&mut block, cell, cell, 2 * cell);
+            for y in 0..c {
+                pixels[row(y)].copy_from_slice(&block[4 * y * c..4 * (y + 1) * c]);
+            }
+        }
+    }
+}
+
 /// The octahedral impostor of `tree`: its views drawn through `raster` of the tree at rest
 /// ([`at_rest`]), averaged down and dilated, and the quad model that shows them.
 pub fn bake_impostor(
@@ -456,8 +486,8 @@ pub fn bake_impostor(
     dilate(&mut images.colour.pixels, w, h, DILATE_RINGS);
     // Normals and heights fill whole cells: their layer is filtered as plain data (its alpha
     // never falls under the cut-off), so no texel may hold an unset one.
-    dilate(&mut images.normal.pixels, w, h, grid.cell);
-    dilate(&mut heights, w, h, grid.cell);
+    dilate_cells(&mut images.normal.pixels, w, h, grid.cell);
+    dilate_cells(&mut heights, w, h, grid.cell);
     for (n, h) in images
         .normal
         .pixels
@@ -588,6 +618,25 @@ mod tests {
             assert!(r.dot(u).abs() < 1e-5 && r.dot(d).abs() < 1e-5 && u.dot(d).abs() < 1e-5);
             if d.y < 0.99 {
                 assert!(u.y > 0.0, "{d}: up {u}");
+            }
+        }
+    }
+
+    #[test]
+    fn cells_are_filled_from_their_own_view_only() {
+        // Two 4×4 cells side by side, one covered texel in each: red on the left, blue on
+        // the right. Every texel of a cell takes its own cell's colour.
+        let (w, h, c) = (8u32, 4u32, 4u32);
+        let mut px = vec![0u8; (4 * w * h) as usize];
+        px[0..4].copy_from_slice(&[255, 0, 0, 255]);
+        let right = (4 * (3 * w + 7)) as usize;
+        px[right..right + 4].copy_from_slice(&[0, 0, 255, 255]);
+        dilate_cells(&mut px, w, h, c);
+        for y in 0..h {
+            for x in 0..w {
+                let p = &px[(4 * (y * w + x)) as usize..][..3];
+                let want = if x < c { [255, 0, 0] } else { [0, 0, 255] };
+                assert_eq!(p, want, "texel ({x}, {y})");
             }
         }
     }
