@@ -102,24 +102,24 @@ struct BoneRows {
     r2: vec4<f32>,
 };
 
-fn bone_rows(frames: ClipFrames, bone: u32) -> BoneRows {
-    let al = frames.anim;
-    let a = frames.row0 + bone;
-    let b = frames.row1 + bone;
-    var m = BoneRows(
-        mix(texel(anim_tex, al, a), texel(anim_tex, al, b), frames.blend),
-        mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), frames.blend),
-        mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), frames.blend),
+// Bone `bone`'s rows at frames `row0` and `row1` (texel of bone 0, row 0), blended by `blend`.
+fn frame_rows(al: Layout, row0: u32, row1: u32, blend: f32, bone: u32) -> BoneRows {
+    let a = row0 + bone;
+    let b = row1 + bone;
+    return BoneRows(
+        mix(texel(anim_tex, al, a), texel(anim_tex, al, b), blend),
+        mix(texel(anim_tex, al, a + 1u), texel(anim_tex, al, b + 1u), blend),
+        mix(texel(anim_tex, al, a + 2u), texel(anim_tex, al, b + 2u), blend),
     );
-    if (frames.fade > 0.0) {
-        let c = frames.row0b + bone;
-        let d = frames.row1b + bone;
-        let n0 = mix(texel(anim_tex, al, c), texel(anim_tex, al, d), frames.blendb);
-        let n1 = mix(texel(anim_tex, al, c + 1u), texel(anim_tex, al, d + 1u), frames.blendb);
-        let n2 = mix(texel(anim_tex, al, c + 2u), texel(anim_tex, al, d + 2u), frames.blendb);
-        m = BoneRows(mix(m.r0, n0, frames.fade), mix(m.r1, n1, frames.fade), mix(m.r2, n2, frames.fade));
+}
+
+fn bone_rows(frames: ClipFrames, bone: u32) -> BoneRows {
+    let m = frame_rows(frames.anim, frames.row0, frames.row1, frames.blend, bone);
+    if (frames.fade <= 0.0) {
+        return m;
     }
-    return m;
+    let n = frame_rows(frames.anim, frames.row0b, frames.row1b, frames.blendb, bone);
+    return BoneRows(mix(m.r0, n.r0, frames.fade), mix(m.r1, n.r1, frames.fade), mix(m.r2, n.r2, frames.fade));
 }
 
 // The offset of spectra row `row` at loop time `tau`: Σ_axes Σ_j a cos(2π m τ + φ). Mirror of

@@ -40,7 +40,13 @@ pub fn capture_skinned_in_wind(
     transform: Affine3A,
     wind: f32,
 ) -> Result<Vec<Vec4>> {
-    capture(gpu, renderer, model, clip, time, transform, wind, None)
+    let playing = Playing {
+        clip,
+        time,
+        wind,
+        fade: None,
+    };
+    capture(gpu, renderer, model, transform, playing)
 }
 
 /// [`capture_skinned`] cross-fading from `clip` at `time` to `to.0` at `to.1` seconds by
@@ -54,28 +60,35 @@ pub fn capture_skinned_fading(
     weight: f32,
     transform: Affine3A,
 ) -> Result<Vec<Vec4>> {
-    capture(
-        gpu,
-        renderer,
-        model,
+    let playing = Playing {
         clip,
         time,
-        transform,
-        1.0,
-        Some((to, weight)),
-    )
+        wind: 1.0,
+        fade: Some((to, weight)),
+    };
+    capture(gpu, renderer, model, transform, playing)
 }
 
-#[allow(clippy::too_many_arguments)]
+/// What the captured instance plays: `clip` at `time` seconds with wind strength `wind`,
+/// cross-fading to `fade.0` (clip, seconds) by `fade.1` where there is a fade.
+struct Playing {
+    clip: u32,
+    time: f32,
+    wind: f32,
+    fade: Option<((u32, f32), f32)>,
+}
+
 fn capture(
     gpu: &Gpu,
     renderer: &SceneRenderer,
     model: usize,
-    clip: u32,
-    time: f32,
     transform: Affine3A,
-    wind: f32,
-    fade: Option<((u32, f32), f32)>,
+    Playing {
+        clip,
+        time,
+        wind,
+        fade,
+    }: Playing,
 ) -> Result<Vec<Vec4>> {
     let Some(character) = renderer.characters().get(model) else {
         bail!("no character {model}");

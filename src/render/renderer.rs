@@ -238,28 +238,33 @@ pub struct SceneRenderer {
     pub debug: DebugView,
     pipelines: Pipelines,
     instance_buffer: wgpu::Buffer,
-    /// The frame's instances as their draw key, distance from the eye (as bits, which order
-    /// like the non-negative floats they are) and place in `unsorted`: sorting moves these 16
-    /// bytes, not the 144 of an instance (moving instances was a third of a 10,000-character
-    /// frame's CPU time).
-    keyed: Vec<(u64, u32, u32)>,
-    unsorted: Vec<GpuInstance>,
+    keyed: Keyed,
     staging: Vec<GpuInstance>,
     draws: Vec<(DrawKey, Range<u32>)>,
     /// Regions of the sides of the current frame.
     regions: Vec<Region>,
 }
 
-/// Files instance `g` under its draw key `key` and distance `near` for sorting.
-fn keep(
-    keyed: &mut Vec<(u64, u32, u32)>,
-    unsorted: &mut Vec<GpuInstance>,
-    key: u64,
-    near: u32,
-    g: GpuInstance,
-) {
-    keyed.push((key, near, unsorted.len() as u32));
-    unsorted.push(g);
+/// The frame's instances, each filed under its draw key and its distance from the eye (as
+/// bits, which order like the non-negative floats they are). Sorting moves the 16-byte keys
+/// with the instance's place in `instances`, not the 144 bytes of an instance (moving
+/// instances was a third of a 10,000-character frame's CPU time).
+#[derive(Default)]
+struct Keyed {
+    keys: Vec<(u64, u32, u32)>,
+    instances: Vec<GpuInstance>,
+}
+
+impl Keyed {
+    fn clear(&mut self) {
+        self.keys.clear();
+        self.instances.clear();
+    }
+
+    fn keep(&mut self, key: u64, near: u32, g: GpuInstance) {
+        self.keys.push((key, near, self.instances.len() as u32));
+        self.instances.push(g);
+    }
 }
 
 pub(crate) fn frame_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -330,8 +335,7 @@ impl SceneRenderer {
             debug: DebugView::Shaded,
             pipelines,
             instance_buffer,
-            keyed: Vec::new(),
-            unsorted: Vec::new(),
+            keyed: Keyed::default(),
             staging: Vec::new(),
             draws: Vec::new(),
             regions: Vec::new(),
@@ -449,7 +453,6 @@ impl SceneRenderer {
 
         let mut stats = FrameStats::default();
         self.keyed.clear();
-        self.unsorted.clear();
         self.regions.clear();
         let view_proj = view.proj * view.view;
         for (side_index, side) in sides.iter().enumerate() {
@@ -531,26 +534,14 @@ impl SceneRenderer {
                         let k = (asked as usize).min(last);
                         g.lod = [-1.0, 0.0, 1.0, asked as f32];
                         count(k, 0);
-                        keep(
-                            &mut self.keyed,
-                            &mut self.unsorted,
-                            key(PASS_OPAQUE, k, 0),
-                            near,
-                            g,
-                        );
+                        self.keyed.keep(key(PASS_OPAQUE, k, 0), near, g);
                     }
                     LodDraw::Morph { fine, coarse, t } => {
                         let fine = (fine as usize).min(last);
                         let hops = (coarse as usize).min(last).saturating_sub(fine);
                         g.lod = [t.clamp(0.0, 1.0), hops as f32, 1.0, fine as f32];
                         count(fine, set.levels[fine + hops].influences);
-                        keep(
-                            &mut self.keyed,
-                            &mut self.unsorted,
-                            key(PASS_MORPH, fine, hops),
-                            near,
-                            g,
-                        );
+                        self.keyed.keep(key(PASS_MORPH, fine, hops), near, g);
                     }
                     LodDraw::Dither { from, to, p } => {
                         // Both levels opaque, on complementary pixels (the coverage sign picks
@@ -564,13 +555,7 @@ impl SceneRenderer {
                             [(to, PASS_DITHER_IN, p), (from, PASS_DITHER_OUT, -1.0 - p)]
                         {
                             g.lod = [p, 0.0, coverage, level as f32];
-                            keep(
-                                &mut self.keyed,
-                                &mut self.unsorted,
-                                key(pass, level, 0),
-                                near,
-                                g,
-                            );
+                            self.keyed.keep(key(pass, level, 0), near, g);
                         }
                     }
                     LodDraw::Alpha { from, to, p } => {
@@ -586,21 +571,9 @@ impl SceneRenderer {
                         count(opaque, 0);
                         count(faded, 0);
                         g.lod = [p, 0.0, 1.0, opaque as f32];
-                        keep(
-                            &mut self.keyed,
-                            &mut self.unsorted,
-                            key(PASS_OPAQUE, opaque, 0),
-                            near,
-                            g,
-                        );
+                        self.keyed.keep(key(PASS_OPAQUE, opaque, 0), near, g);
                         g.lod = [p, 0.0, opacity, faded as f32];
-                        keep(
-                            &mut self.keyed,
-                            &mut self.unsorted,
-                            key(PASS_FADE, faded, 0),
-                            near,
-                            g,
-                        );
+                        self.keyed.keep(key(PASS_FADE, faded, 0), near, g);
                     }
                     LodDraw::Dissolve { level, p, incoming } => {
                         // The foliage shaders keep a pixel where its threshold lies below
@@ -615,13 +588,7 @@ impl SceneRenderer {
                         };
                         g.lod = [p, 0.0, coverage, level as f32];
                         count(k, 0);
-                        keep(
-                            &mut self.keyed,
-                            &mut self.unsorted,
-                            key(pass, k, 0),
-                            near,
-                            g,
-                        );
+                        self.keyed.keep(key(pass, k, 0), near, g);
                     }
                 }
             }
@@ -629,18 +596,19 @@ impl SceneRenderer {
         // Group: sort by key, then each run of equal keys is one instanced draw, its instances
         // nearest first. The groups are drawn nearest first too (by their nearest instance),
         // each side in turn, so that early depth tests spare what near things hide.
-        self.keyed.sort_unstable_by_key(|&(k, near, _)| (k, near));
+        self.keyed
+            .keys
+            .sort_unstable_by_key(|&(k, near, _)| (k, near));
         self.staging.clear();
         self.draws.clear();
-        for (n, &(key, _, at)) in self.keyed.iter().enumerate() {
-            self.staging.push(self.unsorted[at as usize]);
-            let key = &key;
+        for (n, &(key, _, at)) in self.keyed.keys.iter().enumerate() {
+            self.staging.push(self.keyed.instances[at as usize]);
             match self.draws.last_mut() {
-                Some((k, range)) if k.0 == *key => range.end = n as u32 + 1,
-                _ => self.draws.push((DrawKey(*key), n as u32..n as u32 + 1)),
+                Some((k, range)) if k.0 == key => range.end = n as u32 + 1,
+                _ => self.draws.push((DrawKey(key), n as u32..n as u32 + 1)),
             }
         }
-        let keyed = &self.keyed;
+        let keyed = &self.keyed.keys;
         self.draws
             .sort_by_key(|(k, range)| (k.side(), keyed[range.start as usize].1));
         let total = self.staging.len();
