@@ -257,3 +257,165 @@ fn fs_impostor_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
     }
     return vec4<f32>(impostor_lit(in, taps, texel), a);
 }
+
+// Animated impostors (src/bake/crowd_impostor.rs): a character's last level, one quad facing the
+// eye that shows the view of the grid nearest the line of sight (the heaviest of the three a
+// tree blends, mirror of `nearest_view`) at the two baked frames round the instance's time,
+// cross-faded. The frames are the impostor's own animation texture's: `instance_frames` gives
+// their texels; frame g ≥ 1 (frame 0 is the rest pose) is page g − 1 of the sheets, at column
+// (g − 1) mod columns and row (g − 1) / columns; layer 0 is the colour sheet, layer 1 the
+// model-space normals'. The uniform's grid holds the views on a side, the columns and the rows
+// of pages; cell.x a texel's share of a cell.
+struct AnimatedOut {
+    @builtin(position) clip: vec4<f32>,
+    // The point's place in its view's cell, 0..1.
+    @location(0) st: vec2<f32>,
+    // xy: the earlier frame's view cell in the sheet, in cells; zw: the later frame's.
+    @location(1) @interpolate(flat) cells: vec4<f32>,
+    // x: the blend towards the later frame; y: the dissolve's coverage; z: a texel's share of
+    // a cell; w: unused.
+    @location(2) @interpolate(flat) blend: vec4<f32>,
+    // The sheet's size in cells.
+    @location(9) @interpolate(flat) sheet: vec2<f32>,
+    @location(3) @interpolate(flat) row0: vec3<f32>,
+    @location(4) @interpolate(flat) row1: vec3<f32>,
+    @location(5) @interpolate(flat) row2: vec3<f32>,
+    // rgb: tint; w: fog.
+    @location(6) tint: vec4<f32>,
+    @location(7) @interpolate(flat) debug: vec4<f32>,
+    @location(8) @interpolate(flat) to_eye: vec3<f32>,
+};
+
+@vertex
+fn vs_animated_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> AnimatedOut {
+    let centre = impostor.sphere.xyz;
+    let radius = impostor.sphere.w;
+    let views = impostor.grid.x;
+    let v = frame.camera_pos.xyz - instance_point(inst, centre);
+    let d = normalize(inst.row0.xyz * v.x + inst.row1.xyz * v.y + inst.row2.xyz * v.z);
+    let axes = view_axes(d);
+    let q = vec2<f32>(2.0 * f32(vi & 1u) - 1.0, 2.0 * f32(vi >> 1u) - 1.0);
+    let offset = radius * (q.x * axes.right + q.y * axes.up);
+    let world = instance_point(inst, centre + offset);
+
+    // The heaviest of the three views round d (see `vs_impostor`).
+    let n = views - 1.0;
+    let g = clamp((hemi_oct_encode(d) + vec2<f32>(1.0)) * 0.5 * n, vec2<f32>(0.0), vec2<f32>(n));
+    let base = min(floor(g), vec2<f32>(n - 1.0));
+    let f = g - base;
+    var c1 = base + vec2<f32>(0.0, 1.0);
+    var w = vec3<f32>(1.0 - f.y, f.y - f.x, f.x);
+    if (f.x >= f.y) {
+        c1 = base + vec2<f32>(1.0, 0.0);
+        w = vec3<f32>(1.0 - f.x, f.x - f.y, f.y);
+    }
+    var cell = base;
+    if (w.y > w.x && w.y >= w.z) {
+        cell = c1;
+    } else if (w.z > w.x && w.z > w.y) {
+        cell = base + vec2<f32>(1.0);
+    }
+
+    // The frames round the instance's time, in the clip that weighs more.
+    let now = instance_frames(inst);
+    let stride = max(u32(inst.clip.w), 1u);
+    var f0 = now.row0 / stride;
+    var f1 = now.row1 / stride;
+    var blend = now.blend;
+    if (now.fade > 0.5) {
+        f0 = now.row0b / stride;
+        f1 = now.row1b / stride;
+        blend = now.blendb;
+    }
+
+    let columns = max(u32(impostor.grid.y), 1u);
+    let p0 = max(f0, 1u) - 1u;
+    let p1 = max(f1, 1u) - 1u;
+    let page0 = vec2<f32>(f32(p0 % columns), f32(p0 / columns)) * views;
+    let page1 = vec2<f32>(f32(p1 % columns), f32(p1 / columns)) * views;
+
+    var out: AnimatedOut;
+    out.clip = frame.view_proj * vec4<f32>(world, 1.0);
+    out.st = cell_point(cell, n, offset, radius, d).xy;
+    out.cells = vec4<f32>(page0 + cell, page1 + cell);
+    out.blend = vec4<f32>(blend, inst.lod.z, impostor.cell.x, 0.0);
+    out.sheet = vec2<f32>(f32(columns), impostor.grid.z) * views;
+    out.row0 = inst.row0.xyz;
+    out.row1 = inst.row1.xyz;
+    out.row2 = inst.row2.xyz;
+    out.tint = vec4<f32>(inst.tint.rgb, fog_factor(world));
+    out.debug = debug_color(lod_varying(inst), 1.0, frame.views.x);
+    out.to_eye = normalize(v);
+    return out;
+}
+
+// The two frames' colour (premultiplied by coverage and blended), alpha, and each one's share.
+struct AnimatedTexel {
+    colour: vec3<f32>,
+    alpha: f32,
+    shares: vec2<f32>,
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    gx: vec2<f32>,
+    gy: vec2<f32>,
+};
+
+fn animated_texel(in: AnimatedOut) -> AnimatedTexel {
+    let inset = in.blend.z;
+    let st = clamp(in.st, vec2<f32>(inset), vec2<f32>(1.0 - inset));
+    let uv0 = (in.cells.xy + st) / in.sheet;
+    let uv1 = (in.cells.zw + st) / in.sheet;
+    // Explicit gradients (llvmpipe's implicit ones took a path five times slower here),
+    // halved: a mipmap finer than the pixel keeps thin limbs over the alpha test, where the
+    // filtered coverage of the matching one thinned and thickened them (the impostor's colour
+    // error at its switch size fell from 0.17 to 0.11 with it).
+    let gx = 0.5 * dpdx(in.st) / in.sheet;
+    let gy = 0.5 * dpdy(in.st) / in.sheet;
+    let a = textureSampleGrad(material_tex, material_sampler, uv0, 0, gx, gy);
+    let b = textureSampleGrad(material_tex, material_sampler, uv1, 0, gx, gy);
+    let t = in.blend.x;
+    let w = vec2<f32>((1.0 - t) * a.a, t * b.a);
+    let alpha = w.x + w.y;
+    return AnimatedTexel((w.x * a.rgb + w.y * b.rgb) / max(alpha, 1e-4), alpha, w, uv0, uv1, gx, gy);
+}
+
+// Lit as the mesh levels are (`lit` in character.wgsl): the frames' normals blended as their
+// colours were, turned into the world; sun and sky, rim, fog.
+fn animated_lit(in: AnimatedOut, texel: AnimatedTexel) -> vec3<f32> {
+    let a = textureSampleGrad(material_tex, material_sampler, texel.uv0, 1, texel.gx, texel.gy);
+    let b = textureSampleGrad(material_tex, material_sampler, texel.uv1, 1, texel.gx, texel.gy);
+    let w = texel.shares;
+    let m = (w.x * a.rgb + w.y * b.rgb) * 2.0 - vec3<f32>(w.x + w.y);
+    let nrm = normalize(vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m)) + vec3<f32>(0.0, 1e-6, 0.0));
+    let base = select(texel.colour * in.tint.rgb, in.debug.rgb, in.debug.a > 0.5);
+    var lit = shade(base, nrm);
+    lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, in.to_eye), 0.0), 3.0) * 0.12;
+    return mix(lit, frame.sky_horizon.rgb, in.tint.w);
+}
+
+// The dissolve between the coarsest mesh and the impostor (see `dithered_out`).
+fn animated_dissolved(in: AnimatedOut) -> bool {
+    let x = pixel_threshold(in.clip.xy);
+    let coverage = in.blend.y;
+    return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
+}
+
+@fragment
+fn fs_animated_impostor(in: AnimatedOut) -> @location(0) vec4<f32> {
+    let texel = animated_texel(in);
+    if (texel.alpha < 0.5 || animated_dissolved(in)) {
+        discard;
+    }
+    return vec4<f32>(animated_lit(in, texel), 1.0);
+}
+
+// With multisampling: alpha to coverage, sharpened to about a pixel round the outline.
+@fragment
+fn fs_animated_impostor_coverage(in: AnimatedOut) -> @location(0) vec4<f32> {
+    let texel = animated_texel(in);
+    let a = clamp((texel.alpha - 0.5) / max(fwidth(texel.alpha), 1e-4) + 0.5, 0.0, 1.0);
+    if (animated_dissolved(in)) {
+        discard;
+    }
+    return vec4<f32>(animated_lit(in, texel), a);
+}

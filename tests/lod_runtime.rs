@@ -147,6 +147,7 @@ fn background_bakes_finish_and_fill_the_cache() {
         .map(|name| LevelSource {
             model: load_model(name).unwrap(),
             hash: source_hash(&lodlab::import::source_path(name)).unwrap(),
+            impostor: None,
         })
         .collect();
     // Each model's levels come as soon as they are ready; the status names what is baking.
@@ -186,7 +187,7 @@ fn background_bakes_finish_and_fill_the_cache() {
         "the bar names what it bakes"
     );
     assert_eq!(packs.len(), 2);
-    let Some(Ok(Levels::Pack(pack))) = &packs[0] else {
+    let Some(Ok(Levels::Pack(pack, _))) = &packs[0] else {
         panic!("the walker has no packed levels");
     };
     assert!(pack.levels.len() >= 4);
@@ -212,7 +213,7 @@ fn background_bakes_finish_and_fill_the_cache() {
     );
     assert!(files[0].starts_with("sapling-clouds-") && files[1].starts_with("walker-as-"));
     let (again, _, _) = wait(bake(sources.clone(), vec![false, false]));
-    let Some(Ok(Levels::Pack(again_pack))) = &again[0] else {
+    let Some(Ok(Levels::Pack(again_pack, _))) = &again[0] else {
         panic!("the walker has no packed levels the second time");
     };
     assert_eq!(again_pack, pack);

@@ -289,6 +289,12 @@ pub struct SceneArgs {
     /// back over this many seconds; 0: they never stop.
     #[arg(long, default_value_t = 0.0, value_name = "SECONDS", value_parser = parse_non_negative)]
     pub cross_fade: f32,
+    /// Far characters become animated impostors, their last level of detail under every
+    /// simplified method: VIEWSxFRAMESxCELL is views on a side of the view grid, frames per
+    /// clip and texels on a side of a view (memory grows as views² × frames × cell²), or
+    /// `off`.
+    #[arg(long, default_value = "12x12x24", value_name = "VIEWSxFRAMESxCELL|off", value_parser = parse_impostors)]
+    pub impostors: Impostors,
     /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
@@ -310,6 +316,7 @@ impl SceneArgs {
             clip: self.clip.clone(),
             seed: self.seed,
             cross_fade: self.cross_fade,
+            impostors: self.impostors.0,
             cache_dir: self.cache.clone(),
         }
     }
@@ -610,4 +617,15 @@ fn parse_camera(s: &str) -> Result<Camera, String> {
         glam::Vec3::new(0.0, 1.0, 0.0)
     };
     Ok(Camera::new(target, v[0], v[1], v[2]))
+}
+
+/// `--impostors`: how characters' animated impostors are baked, or none.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Impostors(pub Option<crate::bake::crowd_impostor::ImpostorOptions>);
+
+fn parse_impostors(s: &str) -> Result<Impostors, String> {
+    if s.eq_ignore_ascii_case("off") || s.eq_ignore_ascii_case("none") {
+        return Ok(Impostors(None));
+    }
+    s.parse().map(|o| Impostors(Some(o)))
 }

@@ -43,6 +43,23 @@ pub struct AnimationTexture {
 impl AnimationTexture {
     /// Resamples every clip of `model` (or its rest pose, if it has none) at `rate` Hz.
     pub fn bake(model: &Model, rate: f32) -> Self {
+        Self::bake_counted(model, rate, |duration| {
+            (duration * rate).round().max(1.0) as u32 + 1
+        })
+    }
+
+    /// Resamples every clip of `model` at `frames` evenly spaced times over `[0, d]`
+    /// inclusive, whatever its duration d (at least 2): an animated impostor's frames, one
+    /// atlas page each (see [`crate::bake::crowd_impostor`]). `rate` records the mean.
+    pub fn bake_frames(model: &Model, frames: u32) -> Self {
+        let frames = frames.max(2);
+        let mean =
+            model.clips.iter().map(|c| c.duration).sum::<f32>() / model.clips.len().max(1) as f32;
+        Self::bake_counted(model, (frames - 1) as f32 / mean.max(1e-3), |_| frames)
+    }
+
+    /// [`Self::bake`] with clip frame counts from `count(duration)` (for a clip that lasts).
+    fn bake_counted(model: &Model, rate: f32, count: impl Fn(f32) -> u32) -> Self {
         let skel = &model.skeleton;
         let bones = skel.bone_count() as u32;
         let mut clips = Vec::new();
@@ -54,11 +71,7 @@ impl AnimationTexture {
         };
         for clip in sources {
             let duration = clip.map_or(0.0, |c| c.duration.max(0.0));
-            let count = if duration > 0.0 {
-                (duration * rate).round().max(1.0) as u32 + 1
-            } else {
-                1
-            };
+            let count = if duration > 0.0 { count(duration) } else { 1 };
             clips.push(ClipFrames {
                 name: clip.map_or_else(|| "rest".to_string(), |c| c.name.clone()),
                 first_frame: frames.len() as u32,

@@ -7,6 +7,7 @@ pub mod anim_texture;
 pub mod animation_space;
 pub mod billboard;
 pub mod cache;
+pub mod crowd_impostor;
 pub mod lod;
 pub mod lod_error;
 pub mod lod_pack;
@@ -57,6 +58,9 @@ pub struct CharacterBake {
     /// An octahedral impostor's frame: the renderer draws it as one camera-facing quad (see
     /// [`billboard::impostor`]).
     pub impostor: Option<billboard::impostor::ImpostorFrame>,
+    /// A character's animated impostor (its last level): the renderer draws it as one quad
+    /// facing the eye, showing the view and frames it stands in (see [`crowd_impostor`]).
+    pub animated_impostor: Option<crowd_impostor::AnimatedFrame>,
 }
 
 impl CharacterBake {
@@ -147,6 +151,7 @@ impl CharacterBake {
             animation_space: am,
             spectra: motion.map(|m| m.spectra.clone()),
             impostor: None,
+            animated_impostor: None,
         })
     }
 

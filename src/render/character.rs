@@ -29,6 +29,8 @@ pub struct GpuCharacter {
     pub two_sided: bool,
     /// An octahedral impostor: drawn by the impostor shader, one quad facing the eye.
     pub impostor: bool,
+    /// A character's animated impostor: drawn by its own shader, one quad facing the eye.
+    pub animated_impostor: bool,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
     /// The pose the plain calibration shader draws every set in: the first frame of the
@@ -194,7 +196,7 @@ impl GpuCharacter {
         // The blob shadow covers the footprint of the animated bounds.
         let b = bake.bounds;
         let frame = bake.impostor.as_ref();
-        let shadow = CharacterUniform {
+        let mut shadow = CharacterUniform {
             ellipse: [
                 b.center().x,
                 b.center().z,
@@ -212,6 +214,11 @@ impl GpuCharacter {
                 [1.0 / texels.max(1.0), 0.0, 0.0, 0.0]
             }),
         };
+        if let Some(a) = &bake.animated_impostor {
+            shadow.sphere = [a.centre[0], a.centre[1], a.centre[2], a.radius];
+            shadow.grid = [a.views as f32, a.columns as f32, a.rows as f32, 0.0];
+            shadow.cell = [1.0 / a.cell.max(1) as f32, 0.0, 0.0, 0.0];
+        }
         let shadow_buffer = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -234,6 +241,7 @@ impl GpuCharacter {
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
             two_sided: bake.alpha_tested,
             impostor: bake.impostor.is_some(),
+            animated_impostor: bake.animated_impostor.is_some(),
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),

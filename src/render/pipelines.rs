@@ -147,6 +147,9 @@ pub(super) struct Pipelines {
     pub foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
     /// Octahedral impostors: one quad a tree facing the eye, cut out like foliage.
     pub impostor: wgpu::RenderPipeline,
+    /// Characters' animated impostors: one quad a character facing the eye, cut out at half
+    /// coverage (alpha to coverage with multisampling).
+    pub animated_impostor: wgpu::RenderPipeline,
     /// Billboard outlines: lines over the billboards, tested against depth.
     pub outline: wgpu::RenderPipeline,
     pub plain: wgpu::RenderPipeline,
@@ -279,6 +282,19 @@ impl Pipelines {
                 ..foliage_spec("octahedral impostors", "vs_impostor")
             },
         );
+        let animated_impostor = build(
+            &with_characters,
+            PipelineSpec {
+                cull: None,
+                alpha_to_coverage: true,
+                fs: if s > 1 {
+                    "fs_animated_impostor_coverage"
+                } else {
+                    "fs_animated_impostor"
+                },
+                ..character("animated impostors", "vs_animated_impostor")
+            },
+        );
         let outline = build(
             &with_characters,
             PipelineSpec {
@@ -351,6 +367,7 @@ impl Pipelines {
             wireframe,
             foliage,
             impostor,
+            animated_impostor,
             outline,
             plain,
             sky,

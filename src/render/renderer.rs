@@ -581,10 +581,16 @@ impl SceneRenderer {
                         // shaders/character.wgsl): the two halves cover complementary pixels.
                         let k = (level as usize).min(last);
                         let p = p.clamp(0.0, 1.0);
-                        let (pass, coverage) = if incoming {
-                            (PASS_OPAQUE, p)
-                        } else {
-                            (PASS_DISSOLVE_OUT, -1.0 - p)
+                        // A mesh character's half (a character going to or from its
+                        // animated impostor, see `World::upload`) is dithered as in a
+                        // dithered cross-fade; impostors and trees dissolve in their own
+                        // shaders.
+                        let dithered = !(c.two_sided || c.impostor || c.animated_impostor);
+                        let (pass, coverage) = match (incoming, dithered) {
+                            (true, false) => (PASS_OPAQUE, p),
+                            (false, false) => (PASS_DISSOLVE_OUT, -1.0 - p),
+                            (true, true) => (PASS_DITHER_IN, p),
+                            (false, true) => (PASS_DITHER_OUT, -1.0 - p),
                         };
                         g.lod = [p, 0.0, coverage, level as f32];
                         count(k, 0);
@@ -796,12 +802,14 @@ impl SceneRenderer {
             if self.characters[key.model()].two_sided != foliage {
                 continue;
             }
-            let impostor = self.characters[key.model()].impostor;
+            let c = &self.characters[key.model()];
+            let (impostor, animated) = (c.impostor, c.animated_impostor);
             let (pipeline, id) = match (key.pass(), wire, foliage) {
-                // An impostor's mesh is only where its rows sway: it is always drawn as the
-                // quad its shader makes.
-                (PASS_FADE, None, _) if impostor => continue,
+                // An impostor's mesh is only where its rows sway (or, animated, four
+                // corners): it is always drawn as the quad its shader makes.
+                (PASS_FADE, None, _) if impostor || animated => continue,
                 _ if impostor => (&self.pipelines.impostor, 6),
+                _ if animated => (&self.pipelines.animated_impostor, 8),
                 (PASS_MORPH, Some((_, m)), _) => (m, 0),
                 (_, Some((l, _)), _) => (l, 1),
                 (PASS_FADE, None, _) => continue,

@@ -3,10 +3,12 @@
 //! (the panel shows the progress). Characters get progressive-mesh levels by a method; trees
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
+use super::impostor_placement::{Placement, place_impostor};
 use crate::bake::CharacterBake;
 use crate::bake::billboard::chain::{ChainOptions, chain_file, load_or_build_chain};
 use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin};
+use crate::bake::crowd_impostor::{AnimatedImpostor, ImpostorOptions, load_or_bake_impostor};
 use crate::bake::lod::SkinnedLods;
 use crate::bake::lod_pack::LodPack;
 use crate::bake::simplify::Method;
@@ -24,6 +26,9 @@ pub struct LevelSource {
     pub model: Model,
     /// Hash of its source file (the cache key).
     pub hash: [u8; 32],
+    /// How a character's animated impostor is baked with its levels (`None`: it gets none;
+    /// trees ignore it).
+    pub impostor: Option<ImpostorOptions>,
 }
 
 /// The level options the front ends bake with: the defaults of `lodlab bake`, so that a
@@ -37,14 +42,21 @@ pub const DEFAULT_BAKE_TOLERANCE_PX: f32 = 0.5;
 
 /// A model's levels as baked.
 pub enum Levels {
-    /// A character's progressive-mesh levels by one method.
-    Pack(LodPack),
+    /// A character's progressive-mesh levels by one method, and its animated impostor where
+    /// it has one (the same for every method, placed in each method's chain).
+    Pack(LodPack, Option<ImpostorLevel>),
     /// A tree's billboard-cloud chain (level 0 the tree itself), with levels 1… baked for
     /// the GPU (on the baking thread: their atlases' mipmaps take a while).
     Tree {
         chain: Vec<crate::bake::billboard::chain::TreeLevel>,
         bakes: Vec<CharacterBake>,
     },
+}
+
+/// A character's animated impostor and where it joins one method's chain.
+pub struct ImpostorLevel {
+    pub impostor: Box<AnimatedImpostor>,
+    pub placement: Placement,
 }
 
 /// What baking one model by a method gave: its levels, or `None` for a model skipped (it had
@@ -110,7 +122,17 @@ pub fn bake_each(
             let options = runtime_options(&s.model);
             let (lods, origin) =
                 cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
-            (pack(&lods).map(Levels::Pack), origin)
+            let impostor = s.impostor.and_then(|options| {
+                match impostor_level(gpu, cache, s, &lods, &options, warn) {
+                    Ok(level) => Some(level),
+                    // The mesh levels stand without it.
+                    Err(e) => {
+                        warn(format!("{}: no impostor: {e:#}", s.model.name));
+                        None
+                    }
+                }
+            });
+            (pack(&lods).map(|p| Levels::Pack(p, impostor)), origin)
         };
         if let Origin::Baked { warning: Some(w) } = origin {
             warn(w);
@@ -118,6 +140,68 @@ pub fn bake_each(
         progress(i, 1.0);
         deliver(i, Some(levels));
     });
+}
+
+/// Bump whenever placing an impostor changes its result.
+const PLACEMENT_VERSION: u32 = 1;
+
+/// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
+/// its placement in the chain `lods` (likewise), at the default pixel tolerance.
+fn impostor_level(
+    gpu: &Gpu,
+    cache: &LodCache,
+    s: &LevelSource,
+    lods: &SkinnedLods,
+    options: &ImpostorOptions,
+    warn: &(dyn Fn(String) + Sync),
+) -> anyhow::Result<ImpostorLevel> {
+    let raster = AtlasRasterizer::new(gpu);
+    let (impostor, origin) = load_or_bake_impostor(&raster, cache, &s.model, &s.hash, *options)?;
+    if let Origin::Baked { warning: Some(w) } = origin {
+        warn(w);
+    }
+    let tolerance = crate::scene::LodPolicy::default().tolerance_px;
+    let place = || -> anyhow::Result<Placement> {
+        let start = std::time::Instant::now();
+        let full = CharacterBake::new(&s.model).map_err(anyhow::Error::msg)?;
+        let placement = place_impostor(gpu, &s.model, &full, &lods.levels, &impostor, tolerance)?;
+        log::info!(
+            "{} {}: impostor placed in {:.2} s: error {}; {:?}",
+            s.model.name,
+            lods.method,
+            start.elapsed().as_secs_f64(),
+            placement
+                .epsilon
+                .map_or("none (it beats no level)".to_string(), |e| format!(
+                    "{:.0} mm",
+                    e * 1e3
+                )),
+            placement.measured,
+        );
+        Ok(placement)
+    };
+    let placement = if s.hash == [0; 32] {
+        place()?
+    } else {
+        let (_, levels_key) = cache.levels_file(&s.model.name, &s.hash, lods.method, &lods.options);
+        let mut h = blake3::Hasher::new();
+        h.update(b"lodlab impostor placement");
+        h.update(&PLACEMENT_VERSION.to_le_bytes());
+        h.update(&levels_key);
+        h.update(&crate::bake::crowd_impostor::impostor_key(&s.hash, options));
+        h.update(&tolerance.to_le_bytes());
+        let key = *h.finalize().as_bytes();
+        let path = cache.file(&s.model.name, "placement", &key);
+        let (placement, origin) = cache.load_or_build(&path, &key, place)?;
+        if let Origin::Baked { warning: Some(w) } = origin {
+            warn(w);
+        }
+        placement
+    };
+    Ok(ImpostorLevel {
+        impostor: Box::new(impostor),
+        placement,
+    })
 }
 
 /// Whether the cache holds a file for `s`'s levels by `method` (a tree's chain cut as

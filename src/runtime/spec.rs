@@ -5,6 +5,7 @@
 use super::levels::LevelSource;
 use crate::bake::CharacterBake;
 use crate::bake::cache::source_hash;
+use crate::bake::crowd_impostor::ImpostorOptions;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
 use crate::model::Model;
@@ -31,6 +32,9 @@ pub struct SceneSpec {
     pub cross_fade: f32,
     /// Where baked levels of detail are cached (default: the platform cache folder).
     pub cache_dir: Option<PathBuf>,
+    /// How characters' animated impostors are baked (`None`, the default here: characters
+    /// get none; the front ends bake them unless told `--impostors off`).
+    pub impostors: Option<ImpostorOptions>,
 }
 
 impl Default for SceneSpec {
@@ -44,6 +48,7 @@ impl Default for SceneSpec {
             seed: 1,
             cross_fade: 0.0,
             cache_dir: None,
+            impostors: None,
         }
     }
 }
@@ -75,7 +80,14 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
             let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
             let path = source_path(name);
             let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
-            Ok((bake, LevelSource { model, hash }))
+            Ok((
+                bake,
+                LevelSource {
+                    model,
+                    hash,
+                    impostor: spec.impostors,
+                },
+            ))
         })
         .collect()
 }
@@ -261,6 +273,7 @@ impl Loaded {
             sources: vec![LevelSource {
                 model: model.clone(),
                 hash: [0; 32],
+                impostor: None,
             }],
         }
     }

@@ -34,8 +34,23 @@ pub struct World {
     chains: Vec<InstalledChain>,
     /// Renderer characters of chains let go, to be reused.
     free_characters: Vec<usize>,
-    /// The instances and draws of a frame with trees turned into their level's character.
+    /// The instances and draws of a frame with trees turned into their level's character,
+    /// and far characters into their impostors.
     drawn: [(Vec<Instance>, Vec<LodDraw>); 2],
+    /// Per model: a character's animated impostor on the GPU, its last level under every
+    /// simplified method.
+    impostors: Vec<Option<InstalledImpostor>>,
+}
+
+/// A character's animated impostor on the GPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstalledImpostor {
+    /// The renderer's character that draws it.
+    pub character: usize,
+    pub options: crate::bake::crowd_impostor::ImpostorOptions,
+    pub error: crate::bake::crowd_impostor::ImpostorError,
+    /// Bytes of its pages with their mipmaps, as uploaded.
+    pub bytes: u64,
 }
 
 /// Chains kept on the GPU per tree, the shown one included.
@@ -97,6 +112,14 @@ pub struct LodView {
     draws: [Vec<LodDraw>; 2],
     /// Per model, per method slot: what selection needs, once the levels are on the GPU.
     models: Vec<[Option<LodModel>; 4]>,
+    /// Whether far characters show as their animated impostors (where they have one).
+    impostors: bool,
+    /// Per model and method slot: its impostor's error bound where it has one on the GPU
+    /// placed in that method's chain.
+    impostor_errors: Vec<[Option<f32>; 4]>,
+    /// `models` with each character's impostor appended as its last level (see
+    /// [`with_impostor`]), for the simplified methods.
+    with_impostors: Vec<[Option<LodModel>; 4]>,
 }
 
 impl LodView {
@@ -130,10 +153,52 @@ impl LodView {
     /// method where they are there (and, for a tree, where the policy is not to keep it
     /// full), else its full detail alone.
     fn model(&self, m: usize, slot: usize) -> Option<&LodModel> {
+        if let Some(with) = self.impostor_model(m, slot) {
+            return Some(with);
+        }
         let slots = self.models.get(m)?;
         let full = self.trees.get(m).is_some_and(|&t| self.stays_full(t));
         let chosen = if full { None } else { slots[slot].as_ref() };
         chosen.or(slots[0].as_ref())
+    }
+
+    /// Model `m`'s levels under the method in `slot` with its impostor last, where it is
+    /// shown.
+    fn impostor_model(&self, m: usize, slot: usize) -> Option<&LodModel> {
+        if !self.impostors {
+            return None;
+        }
+        self.with_impostors.get(m)?[slot].as_ref()
+    }
+
+    /// The level at which model `m` shows its impostor under the method in `slot`, if it
+    /// does.
+    pub fn impostor_level(&self, m: usize, slot: usize) -> Option<u8> {
+        self.impostor_model(m, slot)
+            .map(|l| (l.errors.len() - 1) as u8)
+    }
+
+    /// Whether far characters show as their animated impostors.
+    pub fn impostors_shown(&self) -> bool {
+        self.impostors
+    }
+
+    /// Rebuilds [`LodView::with_impostors`] after levels or impostors came.
+    fn refresh_impostors(&mut self) {
+        self.with_impostors = self
+            .models
+            .iter()
+            .zip(&self.impostor_errors)
+            .map(|(slots, errors)| {
+                let mut with: [Option<LodModel>; 4] = Default::default();
+                for (slot, levels) in slots.iter().enumerate().skip(1) {
+                    if let (Some(levels), Some(e)) = (levels, errors[slot]) {
+                        with[slot] = Some(with_impostor(levels, e));
+                    }
+                }
+                with
+            })
+            .collect();
     }
 
     pub fn foliage(&self) -> FoliagePolicy {
@@ -188,6 +253,9 @@ impl World {
                     slots
                 })
                 .collect(),
+            impostors: true,
+            impostor_errors: vec![[None; 4]; n_models],
+            with_impostors: vec![Default::default(); n_models],
         };
         Ok(World {
             spec,
@@ -202,6 +270,7 @@ impl World {
             lod,
             instances: Vec::new(),
             drawn: Default::default(),
+            impostors: vec![None; n_models],
         })
     }
 
@@ -282,9 +351,14 @@ impl World {
         for (m, pack) in packs {
             match pack.transpose().map_err(anyhow::Error::msg)? {
                 None => {}
-                Some(Levels::Pack(pack)) => {
+                Some(Levels::Pack(pack, impostor)) => {
                     self.renderer.add_levels(gpu, m, slot, &pack)?;
                     self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
+                    self.lod.impostor_errors[m][slot] = None;
+                    if let Some(level) = impostor {
+                        self.install_impostor(gpu, m, &level.impostor)?;
+                        self.lod.impostor_errors[m][slot] = level.placement.epsilon;
+                    }
                 }
                 Some(Levels::Tree {
                     chain: levels,
@@ -292,10 +366,82 @@ impl World {
                 }) => self.install_tree_levels(gpu, m, chain, &levels, &bakes)?,
             }
         }
+        self.lod.refresh_impostors();
         self.lod.reset();
         // A chain's decoding and its atlases' mipmaps leave hundreds of MB freed on the heap.
         crate::render::memory::return_freed_memory();
         Ok(())
+    }
+
+    /// Uploads character `m`'s animated impostor (once: it serves every method) as a
+    /// character of its own.
+    fn install_impostor(
+        &mut self,
+        gpu: &Gpu,
+        m: usize,
+        impostor: &crate::bake::crowd_impostor::AnimatedImpostor,
+    ) -> Result<()> {
+        if self.impostors[m].as_ref().map(|i| i.options) == Some(impostor.options) {
+            return Ok(());
+        }
+        let bake = impostor
+            .bake(self.bakes[m].bounds)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
+        let bytes = bake.materials.mips.iter().map(|l| l.len() as u64).sum();
+        let character = match &self.impostors[m] {
+            Some(old) => self.renderer.replace_character(gpu, old.character, &bake)?,
+            None => self.renderer.add_character(gpu, &bake)?,
+        };
+        self.impostors[m] = Some(InstalledImpostor {
+            character,
+            options: impostor.options,
+            error: impostor.error,
+            bytes,
+        });
+        Ok(())
+    }
+
+    /// Shows far characters as their animated impostors, or not; every instance's level is
+    /// reset.
+    pub fn show_impostors(&mut self, shown: bool) {
+        if self.lod.impostors != shown {
+            self.lod.impostors = shown;
+            self.lod.reset();
+        }
+    }
+
+    /// The characters' animated impostors in a line, for the panel: each one's options,
+    /// texture size and the level it comes in at under the method shown, or why there are
+    /// none.
+    pub fn impostor_summary(&self) -> String {
+        let Some(options) = self.spec.impostors else {
+            return "impostors: off (--impostors)".into();
+        };
+        let slot = self.lod.method.index();
+        let mut parts = Vec::new();
+        for (m, installed) in self.impostors.iter().enumerate() {
+            let Some(i) = installed else { continue };
+            let at = match (self.lod.impostor_level(m, slot), slot) {
+                _ if !self.lod.impostors => "hidden".to_string(),
+                (_, 0) => "full detail shows".to_string(),
+                (Some(k), _) => format!("from level {k}"),
+                (None, _) => "beats no level".to_string(),
+            };
+            parts.push(format!(
+                "{} {:.1} MB, {at}",
+                self.bakes[m].name,
+                i.bytes as f64 / 1e6
+            ));
+        }
+        if parts.is_empty() {
+            return format!("impostors {options}: baked with a method's levels");
+        }
+        format!("impostors {options}: {}", parts.join(" · "))
+    }
+
+    /// Per model, its animated impostor where it has one on the GPU.
+    pub fn impostors(&self) -> &[Option<InstalledImpostor>] {
+        &self.impostors
     }
 
     /// Whether every level the view asks for and lacks is in the cache: then
@@ -512,16 +658,41 @@ impl World {
         // two levels (an alpha or a morph transition) they cross-dissolve, the two levels'
         // characters drawn as two instances. Without tree levels the crowd goes to the
         // renderer as it is.
-        let has_trees = self.tree_levels.iter().any(Option::is_some);
+        // Far characters likewise draw their impostor's character: an instance at the
+        // impostor's level is one instance of it; one changing between its coarsest mesh and
+        // its impostor dissolves from one to the other on complementary pixels.
+        let has_impostors = lod.impostors && self.impostors.iter().any(Option::is_some);
+        let has_trees = self.tree_levels.iter().any(Option::is_some) || has_impostors;
         let sides = 1 + lod.compare.is_some() as usize;
-        for i in (0..sides).filter(|_| has_trees) {
+        for (i, method) in lod.methods().enumerate().take(sides) {
+            if !has_trees {
+                break;
+            }
+            let slot = method.index();
             let (instances, draws) = &mut self.drawn[i];
             instances.clear();
             draws.clear();
             for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
                 let Some(levels) = self.tree_levels.get(inst.model).and_then(Option::as_ref) else {
-                    instances.push(*inst);
-                    draws.push(*d);
+                    let impostor = lod.impostor_level(inst.model, slot).zip(
+                        self.impostors
+                            .get(inst.model)
+                            .and_then(Option::as_ref)
+                            .map(|i| i.character),
+                    );
+                    match impostor {
+                        Some((far, character)) => {
+                            let shown = Instance {
+                                model: character,
+                                ..*inst
+                            };
+                            impostor_draws(inst, &shown, *d, far, instances, draws);
+                        }
+                        None => {
+                            instances.push(*inst);
+                            draws.push(*d);
+                        }
+                    }
                     continue;
                 };
                 let at = |k: u8| Instance {
@@ -579,6 +750,58 @@ impl World {
     pub fn prepare(&mut self, gpu: &Gpu, size: [u32; 2], time: f32, dt: f32) -> FrameStats {
         self.select(size[1], time, dt);
         self.upload(gpu, size[0] as f32 / size[1].max(1) as f32, time)
+    }
+}
+
+/// Pushes what instance `inst` draws when its draw `d` may involve its impostor at level
+/// `far` (`shown`: the instance as its impostor's character): the impostor at that level, a
+/// dissolve between it and the mesh level on the other side of a transition, or `d` itself.
+fn impostor_draws(
+    inst: &Instance,
+    shown: &Instance,
+    d: LodDraw,
+    far: u8,
+    instances: &mut Vec<Instance>,
+    draws: &mut Vec<LodDraw>,
+) {
+    let (from, to, p) = match d {
+        LodDraw::Level(k) if k >= far => {
+            instances.push(*shown);
+            draws.push(LodDraw::Level(far));
+            return;
+        }
+        LodDraw::Alpha { from, to, p } | LodDraw::Dither { from, to, p } => (from, to, p),
+        LodDraw::Morph { fine, coarse, t } => (fine, coarse, t),
+        _ => (0, 0, 0.0),
+    };
+    if from < far && to < far {
+        instances.push(*inst);
+        draws.push(d);
+        return;
+    }
+    for (level, incoming) in [(from, false), (to, true)] {
+        instances.push(if level >= far { *shown } else { *inst });
+        draws.push(LodDraw::Dissolve {
+            level: level.min(far),
+            p,
+            incoming,
+        });
+    }
+}
+
+/// `levels` with an impostor of error bound `error` as the last level: it stands for every
+/// level whose error is not below its own, so the errors keep rising.
+pub fn with_impostor(levels: &LodModel, error: f32) -> LodModel {
+    let mut errors: Vec<f32> = levels
+        .errors
+        .iter()
+        .copied()
+        .take_while(|&e| e < error)
+        .collect();
+    errors.push(error);
+    LodModel {
+        errors,
+        ..levels.clone()
     }
 }
 

@@ -253,6 +253,7 @@ impl Viewer {
             policy: world.lod.policy,
             debug: world.renderer.debug,
             foliage: options.lod.foliage,
+            impostors: world.lod.impostors_shown(),
         };
         Ok(Viewer {
             launched,
@@ -572,6 +573,7 @@ impl Viewer {
             ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
             trees: self.world.bakes.iter().any(|b| b.alpha_tested),
             chains: self.world.shown_chains(),
+            impostors: self.world.impostor_summary(),
         };
         let (settings, history) = (&mut self.settings, &self.history);
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
@@ -647,6 +649,7 @@ impl Viewer {
             lod.reset();
         }
         lod.policy = s.policy;
+        self.world.show_impostors(s.impostors);
         self.world.renderer.debug = s.debug;
         let chain_before = (self.world.lod.foliage(), self.world.lod.chain());
         self.world.apply_foliage(&s.foliage);

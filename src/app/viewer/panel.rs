@@ -174,6 +174,8 @@ pub struct Settings {
     pub policy: LodPolicy,
     pub debug: DebugView,
     pub foliage: FoliageView,
+    /// Far characters show as their animated impostors.
+    pub impostors: bool,
 }
 
 /// Facts the panel shows.
@@ -200,6 +202,8 @@ pub struct Info<'a> {
     pub ready: [bool; 4],
     /// Does the scene have trees?
     pub trees: bool,
+    /// The characters' animated impostors, in a line (see `World::impostor_summary`).
+    pub impostors: String,
     /// The chain each tree shows: its name, whether it is cut as the panel says, its levels.
     pub chains: Vec<(String, bool, &'a [LevelSummary])>,
 }
@@ -498,6 +502,9 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
             .suffix(" px")
             .text("tolerance"),
     );
+    ui.checkbox(&mut s.impostors, "far characters as impostors")
+        .on_hover_text("Below its coarsest mesh a character becomes one quad showing it baked from the nearest of a grid of views at the frames round its time, under every simplified method (--impostors)");
+    ui.label(egui::RichText::new(&info.impostors).small());
     ui.add(
         egui::Slider::new(&mut p.hysteresis, 0.0..=0.9)
             .text("hysteresis")

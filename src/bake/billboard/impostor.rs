@@ -105,7 +105,7 @@ pub const FRAMES: u32 = 8;
 /// pixels high, so 128 texels keep about two texels a pixel there.
 pub const CELL: u32 = 128;
 /// The views are drawn this many times larger, then averaged down.
-const SUPERSAMPLE: u32 = 2;
+pub(crate) const SUPERSAMPLE: u32 = 2;
 /// Rows of the impostor's quad: where it bends.
 pub const ROWS: u32 = 4;
 /// Texels of dilated colour round the tree in every view.
@@ -178,18 +178,32 @@ pub struct ViewImages {
 /// The view bake's input for `tree` at rest seen from every view of `grid`, each drawn
 /// `supersample` times larger than its cell; and the sphere the views are framed on.
 pub fn view_request(tree: &Model, grid: ViewGrid, supersample: u32) -> Result<(ViewRequest, f32)> {
-    let mesh = &tree.mesh;
-    let bounds = Bounds::of(mesh.positions.iter().copied())
+    let (centre, radius) = view_sphere(&tree.mesh.positions)
         .ok_or_else(|| anyhow!("{}: no vertices to draw an impostor of", tree.name))?;
-    let centre = bounds.center();
-    // Every view sees the tree inside the sphere round the bounds' centre through its
-    // farthest vertex; a little margin keeps filtering off the neighbouring views.
-    let reach = mesh
-        .positions
+    Ok((views_about(tree, grid, supersample, centre, radius), radius))
+}
+
+/// The sphere every view is framed on: round the bounds' centre of `points`, through the
+/// farthest of them, with a little margin that keeps filtering off the neighbouring views.
+pub fn view_sphere(points: &[Vec3]) -> Option<(Vec3, f32)> {
+    let centre = Bounds::of(points.iter().copied())?.center();
+    let reach = points
         .iter()
         .map(|p| p.distance(centre))
         .fold(0.0f32, f32::max);
-    let radius = (reach * 1.04).max(1e-4);
+    Some((centre, (reach * 1.04).max(1e-4)))
+}
+
+/// The view bake's input for `model` as it stands, seen from every view of `grid` on the
+/// sphere (`centre`, `radius`), each drawn `supersample` times larger than its cell.
+pub fn views_about(
+    model: &Model,
+    grid: ViewGrid,
+    supersample: u32,
+    centre: Vec3,
+    radius: f32,
+) -> ViewRequest {
+    let (tree, mesh) = (model, &model.mesh);
     let cut_out: Vec<bool> = tree.materials.iter().map(super::is_cut_out).collect();
     let vertices = mesh
         .indices
@@ -221,13 +235,12 @@ pub fn view_request(tree: &Model, grid: ViewGrid, supersample: u32) -> Result<(V
             });
         }
     }
-    let request = ViewRequest {
+    ViewRequest {
         size: grid.atlas_size() * supersample,
         centre,
         vertices,
         views,
-    };
-    Ok((request, radius))
+    }
 }
 
 /// Averages each `factor` × `factor` block of drawn views into one texel: colour in linear
@@ -400,8 +413,19 @@ fn rest_skinning(tree: &Model) -> Vec<glam::Mat4> {
 /// not the bind pose its mesh is stored in: a root node's translation alone moved the conifer
 /// by 7% of its height, and an impostor drawn from the bind pose stood that far off its tree.
 pub fn at_rest(tree: &Model) -> Model {
-    let g = crate::anim::bone_matrices(&tree.skeleton, None, 0.0);
-    let skinning = rest_skinning(tree);
+    posed(tree, None, 0.0)
+}
+
+/// `model` posed `t` seconds into `clip` (or at rest, for none): positions and normals
+/// skinned on the CPU as the vertex shader would.
+pub fn posed(model: &Model, clip: Option<&crate::model::Clip>, t: f32) -> Model {
+    let tree = model;
+    let g = crate::anim::bone_matrices(&tree.skeleton, clip, t);
+    let skinning: Vec<glam::Mat4> = g
+        .iter()
+        .zip(&tree.skeleton.inverse_bind)
+        .map(|(g, inv)| glam::Mat4::from(*g) * *inv)
+        .collect();
     let mesh = &tree.mesh;
     let mut posed = tree.clone();
     posed.mesh.positions = crate::anim::linear_blend_skinning(mesh, &tree.skeleton, &g);
@@ -422,7 +446,7 @@ pub fn at_rest(tree: &Model) -> Model {
 /// Fills every `cell` × `cell` block of an atlas `width` texels wide from its own covered
 /// texels ([`dilate`] block by block, as far as the block reaches): a view's empty margin takes
 /// its own outline's values, never those of the neighbouring view.
-fn dilate_cells(pixels: &mut [u8], width: u32, height: u32, cell: u32) {
+pub(crate) fn dilate_cells(pixels: &mut [u8], width: u32, height: u32, cell: u32) {
     let (w, c) = (width as usize, cell as usize);
     let mut block = vec![0u8; 4 * c * c];
     for j in 0..(height / cell) as usize {

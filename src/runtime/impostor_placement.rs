@@ -1,0 +1,243 @@
+//! Where a character's animated impostor joins its chain under one method: measured, as the
+//! trees' impostors are placed (see `bake::billboard::chain::impostor_level`), by its colour
+//! error against full detail at the size where it would switch in, beside the mesh level it
+//! would stand for at that size.
+//!
+//! Level k comes in where its error e_k projects to the pixel tolerance τ, at a height of
+//! τ·H / e_k pixels for a character H high. Scanning from the coarsest level L towards the
+//! finer ones, the impostor takes level k's place (and every coarser one's) while its colour
+//! error at k's switch size is no worse than level k's own there. Where it does not beat even
+//! level L at L's size, it may still come in further off: at half, a quarter or an eighth of
+//! that size, with error 2, 4 or 8 e_L, if it beats level L there. Otherwise the chain keeps
+//! no impostor. So selection treats it like any level, and its error where it shows stays
+//! within what the chain's own levels show there.
+//!
+//! The colour error of an image against full detail is the mean absolute difference of their
+//! colours (0 to 1, over the three channels) over every pixel either covers, divided by the
+//! pixels full detail covers: a missing or extra pixel counts its whole difference from the
+//! background, a pixel shaded differently its difference. It is taken from five views round
+//! the character, 15° above the ground, at five times of its first clip.
+
+use super::spec::Loaded;
+use super::world::World;
+use crate::bake::CharacterBake;
+use crate::bake::crowd_impostor::AnimatedImpostor;
+use crate::bake::lod::LodLevel;
+use crate::bake::lod_pack::LodPack;
+use crate::model::Model;
+use crate::render::Gpu;
+use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+use anyhow::Result;
+use serde::{Deserialize, Serialize};
+
+/// One measurement of a placement: at `px` pixels high, the impostor's colour error and
+/// mesh level `level`'s.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Measured {
+    pub px: f32,
+    pub level: usize,
+    pub impostor: f32,
+    pub mesh: f32,
+}
+
+/// Where the impostor comes in under one method.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Placement {
+    /// Its error bound, scene units: the error of the level it takes the place of, or a
+    /// multiple of the coarsest level's; `None` where it beats no level.
+    pub epsilon: Option<f32>,
+    /// Every measurement, in the order taken.
+    pub measured: Vec<Measured>,
+}
+
+impl Placement {
+    /// The measurement at the size where it comes in.
+    pub fn at_switch(&self) -> Option<&Measured> {
+        self.epsilon
+            .and_then(|_| self.measured.iter().rev().find(|m| m.impostor <= m.mesh))
+    }
+}
+
+/// Views round the character and times of its first clip the colour error is taken over.
+const VIEWS: usize = 5;
+const FRAMES: usize = 5;
+/// The views look down this many degrees, as a crowd's camera does.
+const PITCH_DEG: f32 = 15.0;
+/// The camera frames the character's height in this share of the image.
+const FRAMING: f32 = 1.25;
+/// The screen the character stands on is this many pixels high.
+const SCREEN_PX: f32 = 720.0;
+
+/// The drawings the placement compares, each a world of its own: full detail, the impostor,
+/// and full detail's world again with one mesh level in place of its full-detail set.
+struct Worlds<'a> {
+    gpu: &'a Gpu,
+    full: World,
+    impostor: World,
+    level: World,
+    /// The level `level` shows now.
+    shown: Option<usize>,
+    duration: f32,
+    height: f32,
+    centre: glam::Vec3,
+}
+
+impl<'a> Worlds<'a> {
+    fn new(
+        gpu: &'a Gpu,
+        model: &Model,
+        full: &CharacterBake,
+        impostor: &AnimatedImpostor,
+    ) -> Result<Self> {
+        let world = |loaded: Loaded| -> Result<World> {
+            let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
+            w.renderer.shadows = false;
+            w.renderer.lighting.fog_density = 0.0;
+            Ok(w)
+        };
+        let impostor_bake = impostor
+            .bake(full.bounds)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
+        Ok(Worlds {
+            gpu,
+            full: world(Loaded::forest_of_bake(model, full.clone(), 1))?,
+            impostor: world(Loaded::forest_of_bake(&impostor.model, impostor_bake, 1))?,
+            level: world(Loaded::forest_of_bake(model, full.clone(), 1))?,
+            shown: None,
+            duration: model.clips.first().map_or(1.0, |c| c.duration),
+            height: full.bounds.size().y.max(1e-3),
+            centre: full.bounds.center(),
+        })
+    }
+
+    /// Shows mesh level `k` of `levels` in the level's world.
+    fn show(&mut self, levels: &[LodLevel], k: usize) -> Result<()> {
+        if self.shown != Some(k) {
+            let mut level = levels[k].clone();
+            level.geomorph.clear();
+            let pack = LodPack::from_levels(&[level]).map_err(anyhow::Error::msg)?;
+            self.level.renderer.add_levels(self.gpu, 0, 0, &pack)?;
+            self.shown = Some(k);
+        }
+        Ok(())
+    }
+
+    /// The colour errors of the impostor and of the level shown, both against full detail,
+    /// at `px` pixels high.
+    fn errors(&mut self, px: f32) -> Result<(f32, f32)> {
+        let gpu = self.gpu;
+        let screen =
+            2.0 * (crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y * 0.5).tan();
+        let side = (px * FRAMING * screen).ceil().clamp(8.0, 1024.0) as u32;
+        let distance = (SCREEN_PX / px.max(1.0) / screen).clamp(FRAMING, 200.0);
+        let size = [side, side];
+        let target = Offscreen::new(gpu, side, side, 1);
+        let shoot = |w: &mut World, camera: crate::scene::Camera, t: f32, empty: bool| {
+            w.camera = camera;
+            if empty {
+                w.relayout(None, 0, None);
+            }
+            w.prepare(gpu, size, t, 0.0);
+            w.renderer.render_to(gpu, &target.targets, &target.view);
+            let img = target.read_rgba(gpu);
+            if empty {
+                w.relayout(None, 1, None);
+            }
+            img
+        };
+        let (mut covered, mut off_impostor, mut off_level) = (0u64, 0.0f64, 0.0f64);
+        for view in 0..VIEWS {
+            let yaw = 360.0 * view as f32 / VIEWS as f32;
+            let mut camera = crate::scene::Camera::new(
+                glam::Vec3::new(self.centre.x, self.height * 0.5, self.centre.z),
+                yaw,
+                PITCH_DEG,
+                self.height * distance,
+            );
+            camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
+            let background = shoot(&mut self.full, camera, 0.0, true)?;
+            for frame in 0..FRAMES {
+                let t = self.duration * frame as f32 / FRAMES as f32;
+                let full = shoot(&mut self.full, camera, t, false)?;
+                let imp = shoot(&mut self.impostor, camera, t, false)?;
+                let lvl = shoot(&mut self.level, camera, t, false)?;
+                for (((a, b), c), bg) in full
+                    .pixels()
+                    .zip(imp.pixels())
+                    .zip(lvl.pixels())
+                    .zip(background.pixels())
+                {
+                    let on = |x: &image::Rgba<u8>| (0..3).any(|i| x[i].abs_diff(bg[i]) > 10);
+                    let diff = |x: &image::Rgba<u8>| {
+                        (0..3).map(|i| a[i].abs_diff(x[i]) as f64).sum::<f64>() / (3.0 * 255.0)
+                    };
+                    covered += on(a) as u64;
+                    if on(a) || on(b) {
+                        off_impostor += diff(b);
+                    }
+                    if on(a) || on(c) {
+                        off_level += diff(c);
+                    }
+                }
+            }
+        }
+        let n = covered.max(1) as f64;
+        Ok(((off_impostor / n) as f32, (off_level / n) as f32))
+    }
+}
+
+/// Places `impostor` in the chain `levels` (finest first) of `model` (`full`: its
+/// full-detail bake), for selection at `tolerance_px` (see the module comment).
+pub fn place_impostor(
+    gpu: &Gpu,
+    model: &Model,
+    full: &CharacterBake,
+    levels: &[LodLevel],
+    impostor: &AnimatedImpostor,
+    tolerance_px: f32,
+) -> Result<Placement> {
+    let mut placement = Placement {
+        epsilon: None,
+        measured: Vec::new(),
+    };
+    let coarsest = levels.len().saturating_sub(1);
+    if coarsest == 0 {
+        return Ok(placement);
+    }
+    let mut worlds = Worlds::new(gpu, model, full, impostor)?;
+    let h = worlds.height;
+    let switch_px = |e: f32| tolerance_px * h / e.max(1e-6);
+    let mut measure = |worlds: &mut Worlds, k: usize, px: f32| -> Result<bool> {
+        worlds.show(levels, k)?;
+        let (imp, mesh) = worlds.errors(px)?;
+        log::debug!(
+            "{}: at {px:.1} px the impostor's colour error is {imp:.3}, level {k}'s {mesh:.3}",
+            model.name
+        );
+        placement.measured.push(Measured {
+            px,
+            level: k,
+            impostor: imp,
+            mesh,
+        });
+        Ok(imp <= mesh)
+    };
+    let mut epsilon = None;
+    for k in (1..=coarsest).rev() {
+        if !measure(&mut worlds, k, switch_px(levels[k].error))? {
+            break;
+        }
+        epsilon = Some(levels[k].error);
+    }
+    if epsilon.is_none() {
+        let e = levels[coarsest].error;
+        for scale in [2.0f32, 4.0, 8.0] {
+            if measure(&mut worlds, coarsest, switch_px(e * scale))? {
+                epsilon = Some(e * scale);
+                break;
+            }
+        }
+    }
+    placement.epsilon = epsilon;
+    Ok(placement)
+}
