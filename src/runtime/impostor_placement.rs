@@ -122,9 +122,9 @@ impl<'a> Worlds<'a> {
         Ok(())
     }
 
-    /// The colour errors of the impostor and of the level shown, both against full detail,
-    /// at `px` pixels high.
-    fn errors(&mut self, px: f32) -> Result<(f32, f32)> {
+    /// The colour errors of the impostor and of the level shown (0 where none is), both
+    /// against full detail, at `px` pixels high; the impostor's clock `lag` seconds behind.
+    fn errors(&mut self, px: f32, lag: f32) -> Result<(f32, f32)> {
         let gpu = self.gpu;
         let screen =
             2.0 * (crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y * 0.5).tan();
@@ -159,8 +159,11 @@ impl<'a> Worlds<'a> {
             for frame in 0..FRAMES {
                 let t = self.duration * frame as f32 / FRAMES as f32;
                 let full = shoot(&mut self.full, camera, t, false)?;
-                let imp = shoot(&mut self.impostor, camera, t, false)?;
-                let lvl = shoot(&mut self.level, camera, t, false)?;
+                let imp = shoot(&mut self.impostor, camera, t - lag, false)?;
+                let lvl = match self.shown {
+                    Some(_) => shoot(&mut self.level, camera, t, false)?,
+                    None => full.clone(),
+                };
                 for (((a, b), c), bg) in full
                     .pixels()
                     .zip(imp.pixels())
@@ -186,6 +189,19 @@ impl<'a> Worlds<'a> {
     }
 }
 
+/// The colour error of `impostor` against full detail of `model` (`full`: its bake) at
+/// `px` pixels high (see the module comment), its clock `lag` seconds behind full detail's.
+pub fn impostor_error(
+    gpu: &Gpu,
+    model: &Model,
+    full: &CharacterBake,
+    impostor: &AnimatedImpostor,
+    px: f32,
+    lag: f32,
+) -> Result<f32> {
+    Ok(Worlds::new(gpu, model, full, impostor)?.errors(px, lag)?.0)
+}
+
 /// Places `impostor` in the chain `levels` (finest first) of `model` (`full`: its
 /// full-detail bake), for selection at `tolerance_px` (see the module comment).
 pub fn place_impostor(
@@ -209,7 +225,7 @@ pub fn place_impostor(
     let switch_px = |e: f32| tolerance_px * h / e.max(1e-6);
     let mut measure = |worlds: &mut Worlds, k: usize, px: f32| -> Result<bool> {
         worlds.show(levels, k)?;
-        let (imp, mesh) = worlds.errors(px)?;
+        let (imp, mesh) = worlds.errors(px, 0.0)?;
         log::debug!(
             "{}: at {px:.1} px the impostor's colour error is {imp:.3}, level {k}'s {mesh:.3}",
             model.name

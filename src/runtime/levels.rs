@@ -45,6 +45,10 @@ pub enum Levels {
     /// A character's progressive-mesh levels by one method, and its animated impostor where
     /// it has one (the same for every method, placed in each method's chain).
     Pack(LodPack, Option<ImpostorLevel>),
+    /// A character's impostor placed in one method's chain, handed over after its levels
+    /// (by [`BackgroundBake`]: its first bake takes longer than the levels); `None` where it
+    /// could not be made.
+    Impostor(Option<ImpostorLevel>),
     /// A tree's billboard-cloud chain (level 0 the tree itself), with levels 1… baked for
     /// the GPU (on the baking thread: their atlases' mipmaps take a while).
     Tree {
@@ -84,14 +88,16 @@ pub fn bake_all(
         }
     };
     bake_each(
-        gpu, sources, skip, method, chain, cache, progress, warn, &deliver,
+        gpu, sources, skip, method, chain, cache, progress, warn, &deliver, false,
     );
     done.into_inner().unwrap_or_default()
 }
 
 /// [`bake_all`], handing each model's levels to `deliver(i, levels)` as soon as they are
 /// ready. Characters go first: their levels take a second or so, a tree's chain much longer,
-/// and a viewer shows each as it comes.
+/// and a viewer shows each as it comes. With `impostors_apart`, a character's impostor comes
+/// in a second delivery ([`Levels::Impostor`], one for every character that asks for one),
+/// so that its first bake does not hold its levels back.
 #[allow(clippy::too_many_arguments)]
 pub fn bake_each(
     gpu: &Gpu,
@@ -103,6 +109,7 @@ pub fn bake_each(
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
     deliver: &(dyn Fn(usize, Baked) + Sync),
+    impostors_apart: bool,
 ) {
     let mut order: Vec<usize> = (0..sources.len()).collect();
     order.sort_by_key(|&i| is_tree(&sources[i].model));
@@ -122,17 +129,33 @@ pub fn bake_each(
             let options = runtime_options(&s.model);
             let (lods, origin) =
                 cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
-            let impostor = s.impostor.and_then(|options| {
-                match impostor_level(gpu, cache, s, &lods, &options, warn) {
-                    Ok(level) => Some(level),
-                    // The mesh levels stand without it.
-                    Err(e) => {
-                        warn(format!("{}: no impostor: {e:#}", s.model.name));
-                        None
+            if let Origin::Baked { warning: Some(w) } = &origin {
+                warn(w.clone());
+            }
+            let impostor = || {
+                s.impostor.and_then(|options| {
+                    match impostor_level(gpu, cache, s, &lods, &options, warn) {
+                        Ok(level) => Some(level),
+                        // The mesh levels stand without it.
+                        Err(e) => {
+                            warn(format!("{}: no impostor: {e:#}", s.model.name));
+                            None
+                        }
                     }
-                }
-            });
-            (pack(&lods).map(|p| Levels::Pack(p, impostor)), origin)
+                })
+            };
+            if impostors_apart && s.impostor.is_some() {
+                progress(i, 0.9);
+                deliver(i, Some(pack(&lods).map(|p| Levels::Pack(p, None))));
+                let level = impostor();
+                progress(i, 1.0);
+                deliver(i, Some(Ok(Levels::Impostor(level))));
+                return;
+            }
+            (
+                pack(&lods).map(|p| Levels::Pack(p, impostor())),
+                Origin::Cache,
+            )
         };
         if let Origin::Baked { warning: Some(w) } = origin {
             warn(w);
@@ -296,7 +319,17 @@ impl BackgroundBake {
             .collect();
         let (tx, rx) = channel();
         let p = progress.clone();
-        let pending = sources.len();
+        // One delivery a model, and a second for each character's impostor.
+        let pending = sources.len()
+            + sources
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| {
+                    !skip.get(*i).copied().unwrap_or(false)
+                        && !is_tree(&s.model)
+                        && s.impostor.is_some()
+                })
+                .count();
         std::thread::spawn(move || {
             // The bake's draws (atlases, impostor views, colour measurements) go to a device
             // of its own, so that their read-backs do not wait behind the viewer's frames.
@@ -315,7 +348,7 @@ impl BackgroundBake {
                 }
             };
             bake_each(
-                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
+                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver, true,
             );
         });
         BackgroundBake {

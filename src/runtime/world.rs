@@ -178,6 +178,12 @@ impl LodView {
             .map(|l| (l.errors.len() - 1) as u8)
     }
 
+    /// The error bound of every level model `m` shows under the method in `slot` (its
+    /// impostor last where it shows one), finest first.
+    pub fn errors(&self, m: usize, slot: usize) -> Option<&[f32]> {
+        self.model(m, slot).map(|l| l.errors.as_slice())
+    }
+
     /// Whether far characters show as their animated impostors.
     pub fn impostors_shown(&self) -> bool {
         self.impostors
@@ -360,6 +366,13 @@ impl World {
                         self.lod.impostor_errors[m][slot] = level.placement.epsilon;
                     }
                 }
+                Some(Levels::Impostor(level)) => {
+                    self.lod.impostor_errors[m][slot] = None;
+                    if let Some(level) = level {
+                        self.install_impostor(gpu, m, &level.impostor)?;
+                        self.lod.impostor_errors[m][slot] = level.placement.epsilon;
+                    }
+                }
                 Some(Levels::Tree {
                     chain: levels,
                     bakes,
@@ -414,9 +427,6 @@ impl World {
     /// texture size and the level it comes in at under the method shown, or why there are
     /// none.
     pub fn impostor_summary(&self) -> String {
-        let Some(options) = self.spec.impostors else {
-            return "impostors: off (--impostors)".into();
-        };
         let slot = self.lod.method.index();
         let mut parts = Vec::new();
         for (m, installed) in self.impostors.iter().enumerate() {
@@ -428,15 +438,17 @@ impl World {
                 (None, _) => "beats no level".to_string(),
             };
             parts.push(format!(
-                "{} {:.1} MB, {at}",
+                "{} {} {:.1} MB, {at}",
                 self.bakes[m].name,
+                i.options,
                 i.bytes as f64 / 1e6
             ));
         }
-        if parts.is_empty() {
-            return format!("impostors {options}: baked with a method's levels");
+        match (parts.is_empty(), self.spec.impostors) {
+            (false, _) => format!("impostors: {}", parts.join(" · ")),
+            (true, Some(options)) => format!("impostors {options}: baked with a method's levels"),
+            (true, None) => "impostors: off (--impostors)".into(),
         }
-        format!("impostors {options}: {}", parts.join(" · "))
     }
 
     /// Per model, its animated impostor where it has one on the GPU.
@@ -837,4 +849,114 @@ pub fn check_instance_count(gpu: &Gpu, spec: &SceneSpec) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_character_changing_to_its_impostor_dissolves_between_the_two() {
+        let inst = Instance {
+            model: 0,
+            transform: glam::Affine3A::IDENTITY,
+            clip: 0,
+            time_offset: 0.0,
+            speed: 1.0,
+            wind: 1.0,
+            tint: glam::Vec4::ONE,
+            fade: None,
+        };
+        let shown = Instance { model: 7, ..inst };
+        let far = 5u8;
+        let run = |d: LodDraw| {
+            let (mut i, mut d2) = (Vec::new(), Vec::new());
+            impostor_draws(&inst, &shown, d, far, &mut i, &mut d2);
+            i.iter().map(|x| x.model).zip(d2).collect::<Vec<_>>()
+        };
+        // A mesh level stays the character; the impostor's level is its impostor.
+        assert_eq!(run(LodDraw::Level(3)), vec![(0, LodDraw::Level(3))]);
+        assert_eq!(run(LodDraw::Level(far)), vec![(7, LodDraw::Level(far))]);
+        // Between two mesh levels nothing changes.
+        let between = LodDraw::Alpha {
+            from: 2,
+            to: 3,
+            p: 0.4,
+        };
+        assert_eq!(run(between), vec![(0, between)]);
+        // Into the impostor (any transition): the mesh dissolves out as the impostor dissolves
+        // in, on complementary pixels.
+        for d in [
+            LodDraw::Alpha {
+                from: 4,
+                to: far,
+                p: 0.3,
+            },
+            LodDraw::Dither {
+                from: 4,
+                to: far,
+                p: 0.3,
+            },
+            LodDraw::Morph {
+                fine: 4,
+                coarse: far,
+                t: 0.3,
+            },
+        ] {
+            assert_eq!(
+                run(d),
+                vec![
+                    (
+                        0,
+                        LodDraw::Dissolve {
+                            level: 4,
+                            p: 0.3,
+                            incoming: false
+                        }
+                    ),
+                    (
+                        7,
+                        LodDraw::Dissolve {
+                            level: far,
+                            p: 0.3,
+                            incoming: true
+                        }
+                    ),
+                ]
+            );
+        }
+        // And back out of it.
+        let out = run(LodDraw::Alpha {
+            from: far,
+            to: 4,
+            p: 0.6,
+        });
+        assert_eq!(out[0].0, 7);
+        assert_eq!(
+            out[1],
+            (
+                0,
+                LodDraw::Dissolve {
+                    level: 4,
+                    p: 0.6,
+                    incoming: true
+                }
+            )
+        );
+    }
+
+    #[test]
+    fn an_impostor_stands_for_the_levels_it_is_no_better_than() {
+        let levels = LodModel {
+            errors: vec![0.0, 1.0, 2.0, 4.0],
+            center: glam::Vec3::ZERO,
+            radius: 1.0,
+        };
+        assert_eq!(
+            with_impostor(&levels, 8.0).errors,
+            vec![0.0, 1.0, 2.0, 4.0, 8.0]
+        );
+        assert_eq!(with_impostor(&levels, 4.0).errors, vec![0.0, 1.0, 2.0, 4.0]);
+        assert_eq!(with_impostor(&levels, 1.5).errors, vec![0.0, 1.0, 1.5]);
+    }
 }

@@ -1,0 +1,203 @@
+//! Characters' animated impostors (lavapipe in CI): what the bake makes, that an impostor plays
+//! its character's clip where the character stands, and that far characters of a crowd become
+//! their impostors under selection, and stop when the panel turns them off.
+
+use lodlab::bake::CharacterBake;
+use lodlab::bake::crowd_impostor::{
+    AnimatedImpostor, ImpostorOptions, bake_animated_impostor, sheet_layout,
+};
+use lodlab::bake::simplify::Method;
+use lodlab::import::load_model;
+use lodlab::render::Gpu;
+use lodlab::render::atlas::AtlasRasterizer;
+use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+use lodlab::runtime::impostor_placement::{Placement, impostor_error};
+use lodlab::runtime::levels::{ImpostorLevel, Levels};
+use lodlab::runtime::spec::{Loaded, SceneSpec};
+use lodlab::runtime::world::World;
+use lodlab::scene::{LodDraw, LodMethod};
+use std::sync::OnceLock;
+
+/// Small enough to bake in a few seconds on lavapipe: 8 × 8 views, 6 frames a clip, 24-texel
+/// cells.
+const OPTIONS: &str = "8x6x24";
+
+fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
+}
+
+/// The walker's impostor, baked once for the file.
+fn walker_impostor() -> &'static AnimatedImpostor {
+    static IMPOSTOR: OnceLock<AnimatedImpostor> = OnceLock::new();
+    IMPOSTOR.get_or_init(|| {
+        let walker = load_model("walker").unwrap();
+        let options: ImpostorOptions = OPTIONS.parse().unwrap();
+        bake_animated_impostor(&AtlasRasterizer::new(gpu()), &walker, options).unwrap()
+    })
+}
+
+#[test]
+fn the_bake_lays_every_frame_of_every_clip_in_two_sheets() {
+    let walker = load_model("walker").unwrap();
+    let imp = walker_impostor();
+    let options = imp.options;
+    // Six frames of each of the walker's clips, one page each.
+    assert_eq!(imp.frames as usize, 6 * walker.clips.len());
+    let side = options.views * options.cell;
+    let (columns, rows) = sheet_layout(imp.frames, side).unwrap();
+    assert_eq!((imp.frame.columns, imp.frame.rows), (columns, rows));
+    assert_eq!(imp.model.materials.len(), 2, "a colour and a normal sheet");
+    for m in &imp.model.materials {
+        let t = m.texture.as_ref().unwrap();
+        assert_eq!((t.width, t.height), (columns * side, rows * side));
+    }
+    // Every page shows the walker in every view: each cell of the colour sheet has covered
+    // texels.
+    let colour = imp.model.materials[0].texture.as_ref().unwrap();
+    let cell = options.cell as usize;
+    for page in 0..imp.frames as usize {
+        let px = (page % columns as usize) * side as usize;
+        let py = (page / columns as usize) * side as usize;
+        for j in 0..options.views as usize {
+            for i in 0..options.views as usize {
+                let (x0, y0) = (px + i * cell, py + j * cell);
+                let covered = (0..cell * cell)
+                    .filter(|&t| {
+                        let k = 4 * ((y0 + t / cell) * colour.width as usize + x0 + t % cell);
+                        colour.pixels[k + 3] >= 128
+                    })
+                    .count();
+                assert!(
+                    covered > 10,
+                    "page {page}, view ({i}, {j}): {covered} texels"
+                );
+            }
+        }
+    }
+    // The frame's sphere holds every vertex of every pose.
+    let bake = CharacterBake::new(&walker).unwrap();
+    let centre = glam::Vec3::from(imp.frame.centre);
+    for c in 0..bake.animation.clips.len() {
+        for k in 0..4 {
+            let t = bake.animation.clips[c].duration * k as f32 / 4.0;
+            let (p, _) = bake.evaluate(c, t, 1.0);
+            assert!(p.iter().all(|v| v.distance(centre) <= imp.frame.radius));
+        }
+    }
+    // The bake bounds its worst error, part by part.
+    let e = imp.error;
+    assert!(e.view > 0.0 && e.frame > 0.0 && e.texel > 0.0);
+    assert!(
+        e.view_angle > 10.0 && e.view_angle < 25.0,
+        "{}°",
+        e.view_angle
+    );
+}
+
+/// Drawn as small as a far character, the impostor shows the walker as it is drawn at full
+/// detail at the same moment: its colour error against it is low, and several times what it
+/// is a quarter of a stride later (so it plays the clip in step, not a frame of its own).
+#[test]
+fn an_impostor_plays_its_characters_clip_where_it_stands() {
+    let walker = load_model("walker").unwrap();
+    let full = CharacterBake::new(&walker).unwrap();
+    let imp = walker_impostor();
+    let stride = walker.clips[0].duration;
+    let in_step = impostor_error(gpu(), &walker, &full, imp, 48.0, 0.0).unwrap();
+    let late = impostor_error(gpu(), &walker, &full, imp, 48.0, 0.25 * stride).unwrap();
+    eprintln!("colour error at 48 px: in step {in_step:.3}, a quarter of a stride late {late:.3}");
+    assert!(in_step < 0.2, "colour error {in_step:.3} at 48 px");
+    assert!(
+        late > 1.3 * in_step,
+        "in step {in_step:.3}, a quarter of a stride late {late:.3}"
+    );
+}
+
+/// A crowd seen from far off: with the walker's impostor placed in its as+is chain, the far
+/// walkers draw it (a quad, two triangles, in place of the coarsest mesh), the picture stays
+/// close to the one of meshes, and turning impostors off brings the meshes back.
+#[test]
+fn far_characters_become_their_impostors() {
+    let gpu = gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let spec = SceneSpec {
+        models: vec!["walker".into()],
+        count: 300,
+        cache_dir: Some(dir.path().to_path_buf()),
+        ..Default::default()
+    };
+    let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();
+    world.lod.method = LodMethod::AS_IS;
+    world.ensure_levels(gpu).unwrap();
+    assert!(world.impostors()[0].is_none(), "the spec asked for none");
+    // Far enough that most walkers sit at the coarsest mesh.
+    world.camera =
+        lodlab::scene::Camera::new(glam::Vec3::ZERO, 20.0, 25.0, world.crowd.radius * 4.0);
+    let (w, h) = (640, 360);
+    let target = Offscreen::new(gpu, w, h, 1);
+    let frame = |world: &mut World| {
+        world.lod.reset();
+        world.settle(h, 2.0, 0.0);
+        let stats = world.upload(gpu, w as f32 / h as f32, 2.0);
+        world.renderer.render_to(gpu, &target.targets, &target.view);
+        (stats, target.read_rgba(gpu).unwrap())
+    };
+    let (meshes, mesh_image) = frame(&mut world);
+    let coarsest = meshes.levels.iter().rposition(|&n| n > 0).unwrap();
+    assert!(meshes.levels[coarsest] > 100, "{:?}", meshes.levels);
+
+    // Placed at the coarsest level's error, the impostor takes its place.
+    let slot = LodMethod::AS_IS.index();
+    let errors = world.lod.errors(0, slot).unwrap().to_vec();
+    assert_eq!(errors.len(), coarsest + 1);
+    let level = ImpostorLevel {
+        impostor: Box::new(walker_impostor().clone()),
+        placement: Placement {
+            epsilon: Some(errors[coarsest]),
+            measured: Vec::new(),
+        },
+    };
+    let chain = world.lod.chain();
+    world
+        .install_levels(
+            gpu,
+            Method::InfluenceSimplification,
+            &chain,
+            [(0, Some(Ok(Levels::Impostor(Some(level)))))],
+        )
+        .unwrap();
+    assert_eq!(world.lod.impostor_level(0, slot), Some(coarsest as u8));
+    assert!(world.impostors()[0].is_some());
+    let (impostors, impostor_image) = frame(&mut world);
+    assert_eq!(impostors.levels[coarsest], meshes.levels[coarsest]);
+    // Two triangles for each walker that was a coarsest mesh.
+    let per_mesh = (meshes.triangles - impostors.triangles) / meshes.levels[coarsest] as u64;
+    assert!(per_mesh > 50, "{per_mesh} triangles saved a walker");
+    assert!(world.lod.draws(0).contains(&LodDraw::Level(coarsest as u8)));
+    // The picture barely changes: the crowd's pixels agree.
+    let changed = mesh_image
+        .pixels()
+        .zip(impostor_image.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 24))
+        .count();
+    let share = changed as f32 / (w * h) as f32;
+    assert!(share < 0.01, "{share:.4} of the picture changed");
+    // Turned off, the meshes come back.
+    world.show_impostors(false);
+    let (off, _) = frame(&mut world);
+    assert_eq!(off.triangles, meshes.triangles);
+    assert!(world.impostor_summary().contains("hidden"));
+}
+
+#[test]
+fn a_bad_impostor_option_is_one_line() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(["shot", "--impostors", "1x12x24", "--out", "never.png"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("views must be 2 to 16, not 1"), "{err}");
+    assert!(!std::path::Path::new("never.png").exists());
+}
