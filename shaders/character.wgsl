@@ -148,20 +148,24 @@ fn dithered_out(in: VsOut) -> bool {
     return select(x >= c, x < -c - 1.0, c < 0.0);
 }
 
+// The colour is worked out before the discard: on llvmpipe a texture read after it, with
+// some pixels of a block gone, runs pixel by pixel.
 @fragment
 fn fs_dither(in: VsOut) -> @location(0) vec4<f32> {
+    let colour = shaded(in);
     if (dithered_out(in)) {
         discard;
     }
-    return shaded(in);
+    return colour;
 }
 
 @fragment
 fn fs_debug_dither(in: VsOut) -> @location(0) vec4<f32> {
+    let colour = painted(in);
     if (dithered_out(in)) {
         discard;
     }
-    return painted(in);
+    return colour;
 }
 
 // Interleaved gradient noise (Jimenez 2014): a threshold in [0, 1) per pixel, evenly spread

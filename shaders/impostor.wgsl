@@ -33,6 +33,10 @@ struct ImpostorFrame {
     cell: vec4<f32>,
 };
 
+// An animated impostor's rectangle of each view's cell that any frame covers (s0, t0, s1, t1),
+// texel k for view k, row by row (`AnimatedFrame::rects`).
+@group(1) @binding(6) var impostor_rects: texture_2d<f32>;
+
 @group(1) @binding(4) var<uniform> impostor: ImpostorFrame;
 
 // Mirrors of `hemi_oct_encode`, `hemi_oct_decode` and `ViewGrid::view_axes`.
@@ -211,12 +215,27 @@ fn impostor_colour(in: ImpostorOut, taps: ImpostorTaps) -> ImpostorTexel {
     return ImpostorTexel((w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) / max(alpha, 1e-4), alpha, w);
 }
 
+// The three views' normals, read before any pixel is discarded (see `animated_normals`).
+struct ImpostorNormals {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
+};
+
+fn impostor_normals(taps: ImpostorTaps) -> ImpostorNormals {
+    return ImpostorNormals(
+        impostor_tap(taps, taps.uv0, 1),
+        impostor_tap(taps, taps.uv1, 1),
+        impostor_tap(taps, taps.uv2, 1),
+    );
+}
+
 // The lit colour of an impostor pixel: the views' normals blended as their colours were,
 // turned into the world, and lit like foliage (sun and sky, rim, fog).
-fn impostor_lit(in: ImpostorOut, taps: ImpostorTaps, texel: ImpostorTexel) -> vec3<f32> {
-    let a = impostor_tap(taps, taps.uv0, 1);
-    let b = impostor_tap(taps, taps.uv1, 1);
-    let c = impostor_tap(taps, taps.uv2, 1);
+fn impostor_lit(in: ImpostorOut, normals: ImpostorNormals, texel: ImpostorTexel) -> vec3<f32> {
+    let a = normals.a;
+    let b = normals.b;
+    let c = normals.c;
     let w = texel.shares;
     let m = (w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) * 2.0 - vec3<f32>(w.x + w.y + w.z);
     let world = vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m));
@@ -239,10 +258,11 @@ fn impostor_dissolved(in: ImpostorOut) -> bool {
 fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
     let taps = impostor_taps(in);
     let texel = impostor_colour(in, taps);
+    let normals = impostor_normals(taps);
     if (texel.alpha < 0.5 || impostor_dissolved(in)) {
         discard;
     }
-    return vec4<f32>(impostor_lit(in, taps, texel), 1.0);
+    return vec4<f32>(impostor_lit(in, normals, texel), 1.0);
 }
 
 // With multisampling: alpha to coverage, the alpha sharpened to about a pixel round the
@@ -251,17 +271,19 @@ fn fs_impostor(in: ImpostorOut) -> @location(0) vec4<f32> {
 fn fs_impostor_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
     let taps = impostor_taps(in);
     let texel = impostor_colour(in, taps);
+    let normals = impostor_normals(taps);
     let a = clamp((texel.alpha - 0.5) / max(fwidth(texel.alpha), 1e-4) + 0.5, 0.0, 1.0);
     if (impostor_dissolved(in)) {
         discard;
     }
-    return vec4<f32>(impostor_lit(in, taps, texel), a);
+    return vec4<f32>(impostor_lit(in, normals, texel), a);
 }
 
-// Animated impostors (src/bake/crowd_impostor.rs): a character's last level, one quad facing the
-// eye that shows the view of the grid nearest the line of sight (the heaviest of the three a
-// tree blends, mirror of `nearest_view`) at the two baked frames round the instance's time,
-// cross-faded. The frames are the impostor's own animation texture's: `instance_frames` gives
+// Animated impostors (src/bake/crowd_impostor.rs): a character's last level, one quad that shows
+// the view of the grid nearest the line of sight (the heaviest of the three a tree blends,
+// mirror of `nearest_view`) at the two baked frames round the instance's time, cross-faded. The
+// quad is square to that view, through the sphere's centre, and covers only the rectangle of
+// the view's cell that any frame covers. The frames are the impostor's own animation texture's: `instance_frames` gives
 // their texels; frame g ≥ 1 (frame 0 is the rest pose) is page g − 1 of the sheets, at column
 // (g − 1) mod columns and row (g − 1) / columns; layer 0 is the colour sheet, layer 1 the
 // model-space normals'. The uniform's grid holds the views on a side, the columns and the rows
@@ -293,10 +315,6 @@ fn vs_animated_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> Anima
     let views = impostor.grid.x;
     let v = frame.camera_pos.xyz - instance_point(inst, centre);
     let d = normalize(inst.row0.xyz * v.x + inst.row1.xyz * v.y + inst.row2.xyz * v.z);
-    let axes = view_axes(d);
-    let q = vec2<f32>(2.0 * f32(vi & 1u) - 1.0, 2.0 * f32(vi >> 1u) - 1.0);
-    let offset = radius * (q.x * axes.right + q.y * axes.up);
-    let world = instance_point(inst, centre + offset);
 
     // The heaviest of the three views round d (see `vs_impostor`).
     let n = views - 1.0;
@@ -334,9 +352,29 @@ fn vs_animated_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> Anima
     let page0 = vec2<f32>(f32(p0 % columns), f32(p0 / columns)) * views;
     let page1 = vec2<f32>(f32(p1 % columns), f32(p1 / columns)) * views;
 
+    // The quad faces the eye, and a point of it shows what lies behind it along the view
+    // drawn: `offset` (a share of the radius along the eye's axes q) reads the view's cell at
+    // st, where (2 st.x − 1, 1 − 2 st.y) = (offset · right_k, offset · up_k) / radius = M q.
+    // It spans only the rectangle of the cell that any frame covers: its corners are M⁻¹ of
+    // the rectangle's. (Square to the eye, st is affine on the screen; a quad square to the
+    // view drawn instead made llvmpipe's texture reads five times slower.)
+    let eye = view_axes(d);
+    let drawn = view_axes(hemi_oct_decode(cell / n * 2.0 - vec2<f32>(1.0)));
+    let rect = textureLoad(impostor_rects, vec2<u32>(u32(cell.y * views + cell.x), 0u), 0);
+    let st = mix(rect.xy, rect.zw, vec2<f32>(f32(vi & 1u), f32(vi >> 1u)));
+    let a = vec2<f32>(2.0 * st.x - 1.0, 1.0 - 2.0 * st.y);
+    let m00 = dot(eye.right, drawn.right);
+    let m01 = dot(eye.up, drawn.right);
+    let m10 = dot(eye.right, drawn.up);
+    let m11 = dot(eye.up, drawn.up);
+    let det = m00 * m11 - m01 * m10;
+    let q = vec2<f32>(m11 * a.x - m01 * a.y, m00 * a.y - m10 * a.x) / select(det, 1e-4, abs(det) < 1e-4);
+    let offset = radius * (q.x * eye.right + q.y * eye.up);
+    let world = instance_point(inst, centre + offset);
+
     var out: AnimatedOut;
     out.clip = frame.view_proj * vec4<f32>(world, 1.0);
-    out.st = cell_point(cell, n, offset, radius, d).xy;
+    out.st = st;
     out.cells = vec4<f32>(page0 + cell, page1 + cell);
     out.blend = vec4<f32>(blend, inst.lod.z, impostor.cell.x, 0.0);
     out.sheet = vec2<f32>(f32(columns), impostor.grid.z) * views;
@@ -379,11 +417,26 @@ fn animated_texel(in: AnimatedOut) -> AnimatedTexel {
     return AnimatedTexel((w.x * a.rgb + w.y * b.rgb) / max(alpha, 1e-4), alpha, w, uv0, uv1, gx, gy);
 }
 
+// The two frames' normals, read before any pixel is discarded: on llvmpipe a texture read
+// after a discard, with some pixels of a block gone, runs pixel by pixel (it made the 10,000
+// crowd's impostors five times slower once their quads were cut down to what they cover).
+struct AnimatedNormals {
+    a: vec4<f32>,
+    b: vec4<f32>,
+};
+
+fn animated_normals(texel: AnimatedTexel) -> AnimatedNormals {
+    return AnimatedNormals(
+        textureSampleGrad(material_tex, material_sampler, texel.uv0, 1, texel.gx, texel.gy),
+        textureSampleGrad(material_tex, material_sampler, texel.uv1, 1, texel.gx, texel.gy),
+    );
+}
+
 // Lit as the mesh levels are (`lit` in character.wgsl): the frames' normals blended as their
 // colours were, turned into the world; sun and sky, rim, fog.
-fn animated_lit(in: AnimatedOut, texel: AnimatedTexel) -> vec3<f32> {
-    let a = textureSampleGrad(material_tex, material_sampler, texel.uv0, 1, texel.gx, texel.gy);
-    let b = textureSampleGrad(material_tex, material_sampler, texel.uv1, 1, texel.gx, texel.gy);
+fn animated_lit(in: AnimatedOut, texel: AnimatedTexel, normals: AnimatedNormals) -> vec3<f32> {
+    let a = normals.a;
+    let b = normals.b;
     let w = texel.shares;
     let m = (w.x * a.rgb + w.y * b.rgb) * 2.0 - vec3<f32>(w.x + w.y);
     let nrm = normalize(vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m)) + vec3<f32>(0.0, 1e-6, 0.0));
@@ -403,19 +456,21 @@ fn animated_dissolved(in: AnimatedOut) -> bool {
 @fragment
 fn fs_animated_impostor(in: AnimatedOut) -> @location(0) vec4<f32> {
     let texel = animated_texel(in);
+    let normals = animated_normals(texel);
     if (texel.alpha < 0.5 || animated_dissolved(in)) {
         discard;
     }
-    return vec4<f32>(animated_lit(in, texel), 1.0);
+    return vec4<f32>(animated_lit(in, texel, normals), 1.0);
 }
 
 // With multisampling: alpha to coverage, sharpened to about a pixel round the outline.
 @fragment
 fn fs_animated_impostor_coverage(in: AnimatedOut) -> @location(0) vec4<f32> {
     let texel = animated_texel(in);
+    let normals = animated_normals(texel);
     let a = clamp((texel.alpha - 0.5) / max(fwidth(texel.alpha), 1e-4) + 0.5, 0.0, 1.0);
     if (animated_dissolved(in)) {
         discard;
     }
-    return vec4<f32>(animated_lit(in, texel), a);
+    return vec4<f32>(animated_lit(in, texel, normals), a);
 }

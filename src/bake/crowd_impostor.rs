@@ -8,8 +8,9 @@
 //! ([`super::billboard::impostor::ViewGrid`]): `views` × `views` directions over the upper
 //! hemisphere, each drawn orthographically into a `cell` × `cell` texel cell of a page. A far
 //! character is a few dozen pixels high, so the renderer reads only the view nearest the line
-//! of sight (the heaviest of [`ViewGrid::blend`]), reprojecting the quad's points into it,
-//! and pays four texture reads a pixel where the trees' three-view blend pays seven.
+//! of sight (the heaviest of [`ViewGrid::blend`]), on a quad square to that view and only as
+//! large as what the view ever covers ([`AnimatedFrame::rects`]), and pays four texture reads
+//! a pixel where the trees' three-view blend pays seven.
 //!
 //! Frames. Every clip is sampled at `frames` times over its length (the ends included, as the
 //! animation texture samples it), and each sample is one page: all its views. The pages lie
@@ -159,7 +160,7 @@ impl ImpostorOptions {
 
 /// Where an animated impostor's views lie: what the renderer's uniform carries (mirror of
 /// `ImpostorFrame` in `shaders/impostor.wgsl`, read by `vs_animated_impostor`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AnimatedFrame {
     /// Views on a side of the grid.
     pub views: u32,
@@ -172,6 +173,65 @@ pub struct AnimatedFrame {
     /// The sphere every view is framed on (model space), over every frame of every clip.
     pub centre: [f32; 3],
     pub radius: f32,
+    /// Per view (row by row), the part of its cell any frame covers: s0, t0, s1, t1 in 0..1
+    /// of the cell, a texel wider all round. The renderer's quad spans only that: a walker
+    /// covers a fifth of its view sphere's square, and on a software rasteriser every
+    /// fragment of the quad costs, kept or cut out.
+    pub rects: Vec<[f32; 4]>,
+}
+
+/// The most views an impostor has: its rectangles fill the renderer's uniform.
+pub const MAX_VIEWS: usize = 256;
+
+/// The part of each view's cell that any page covers (see [`AnimatedFrame::rects`]), from the
+/// colour sheet of `pages` pages laid out `columns` a row.
+pub fn covered_rects(
+    colour: &Rgba8Image,
+    options: &ImpostorOptions,
+    pages: u32,
+    columns: u32,
+) -> Vec<[f32; 4]> {
+    let (views, cell) = (options.views as usize, options.cell as usize);
+    let side = views * cell;
+    let mut rects = vec![[f32::MAX, f32::MAX, f32::MIN, f32::MIN]; views * views];
+    for page in 0..pages as usize {
+        let (px, py) = (
+            page % columns as usize * side,
+            page / columns as usize * side,
+        );
+        for y in 0..side {
+            for x in 0..side {
+                let k = 4 * ((py + y) * colour.width as usize + px + x);
+                if colour.pixels[k + 3] == 0 {
+                    continue;
+                }
+                let r = &mut rects[(y / cell) * views + x / cell];
+                let (u, v) = ((x % cell) as f32, (y % cell) as f32);
+                *r = [
+                    r[0].min(u),
+                    r[1].min(v),
+                    r[2].max(u + 1.0),
+                    r[3].max(v + 1.0),
+                ];
+            }
+        }
+    }
+    let c = cell as f32;
+    rects
+        .into_iter()
+        .map(|r| {
+            if r[0] > r[2] {
+                // Nothing covered: an empty quad.
+                return [0.5; 4];
+            }
+            [
+                ((r[0] - 1.0) / c).max(0.0),
+                ((r[1] - 1.0) / c).max(0.0),
+                ((r[2] + 1.0) / c).min(1.0),
+                ((r[3] + 1.0) / c).min(1.0),
+            ]
+        })
+        .collect()
 }
 
 /// The parts of an impostor's worst-case error bound, scene units (see the module comment).
@@ -228,7 +288,7 @@ impl AnimatedImpostor {
         // Its pages' alpha is coverage, not a cut-out material: it is a character, drawn in
         // the characters' pass by its own shader.
         bake.alpha_tested = false;
-        bake.animated_impostor = Some(self.frame);
+        bake.animated_impostor = Some(self.frame.clone());
         Ok(bake)
     }
 }
@@ -344,6 +404,7 @@ pub fn bake_animated_impostor(
         texel: radius / options.cell as f32,
     };
     let frames = poses.len() as u32;
+    let rects = covered_rects(&colour, &options, frames, columns);
     Ok(AnimatedImpostor {
         model: quad_model(model, vec![colour, normal]),
         frame: AnimatedFrame {
@@ -353,6 +414,7 @@ pub fn bake_animated_impostor(
             rows,
             centre: centre.to_array(),
             radius,
+            rects,
         },
         options,
         error,
@@ -440,7 +502,7 @@ fn quad_model(model: &Model, sheets: Vec<Rgba8Image>) -> Model {
 }
 
 /// Bump whenever the impostor's bake changes its output.
-const IMPOSTOR_VERSION: u32 = 2;
+const IMPOSTOR_VERSION: u32 = 3;
 
 /// The cache key of `model`'s impostor (its source hashing to `source`) baked with `options`.
 pub fn impostor_key(source: &[u8; 32], options: &ImpostorOptions) -> [u8; 32] {
@@ -516,6 +578,40 @@ mod tests {
         assert!("8xtwelvex32".parse::<ImpostorOptions>().is_err());
         // Two pages of 256² texels a frame, 12 frames, 2 clips, with mipmaps.
         assert_eq!(o.bytes(2), 2 * 12 * 2 * 256 * 256 * 4 * 4 / 3);
+    }
+
+    #[test]
+    fn each_views_rectangle_holds_what_any_frame_covers_there() {
+        // Two views a side of 4-texel cells, two pages side by side: view (1, 0) is covered
+        // at texel (1, 1) on page 0 and (2, 3) on page 1; nothing else is covered.
+        let options = ImpostorOptions {
+            views: 2,
+            frames: 2,
+            cell: 4,
+        };
+        let mut sheet = Rgba8Image {
+            width: 16,
+            height: 8,
+            pixels: vec![0; 16 * 8 * 4],
+        };
+        for (x, y) in [(4 + 1, 1), (8 + 4 + 2, 3)] {
+            sheet.pixels[4 * (y * 16 + x) + 3] = 255;
+        }
+        let rects = covered_rects(&sheet, &options, 2, 2);
+        assert_eq!(rects.len(), 4);
+        // Texels 1..3 across and 1..4 down, a texel wider all round, within the cell.
+        assert_eq!(rects[1], [0.0, 0.0, 1.0, 1.0]);
+        let only_one = ImpostorOptions { cell: 8, ..options };
+        let mut big = Rgba8Image {
+            width: 32,
+            height: 16,
+            pixels: vec![0; 32 * 16 * 4],
+        };
+        big.pixels[4 * (3 * 32 + 8 + 4) + 3] = 255;
+        let rects = covered_rects(&big, &only_one, 1, 2);
+        assert_eq!(rects[1], [3.0 / 8.0, 2.0 / 8.0, 6.0 / 8.0, 5.0 / 8.0]);
+        // An empty view gets an empty quad.
+        assert_eq!(rects[0], [0.5; 4]);
     }
 
     #[test]

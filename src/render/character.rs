@@ -41,6 +41,9 @@ pub struct GpuCharacter {
     /// The spectra texture of a spectral cloud; one empty texel for everything else (the
     /// shader reads K as a third of its width, so K = 0 there).
     spectra_view: wgpu::TextureView,
+    /// An animated impostor's per-view rectangles, one texel a view (see
+    /// `AnimatedFrame::rects`); one empty texel for everything else.
+    rects_view: wgpu::TextureView,
     shadow_buffer: wgpu::Buffer,
     /// A billboard cloud's billboard outlines: a line-list index buffer over the full-detail
     /// vertices, and its index count.
@@ -66,7 +69,7 @@ pub struct GpuLodSet {
 }
 
 /// Layout of group 1: animation texture, vertex texture, material layers, sampler, shadow,
-/// spectra texture.
+/// spectra texture, an animated impostor's view rectangles.
 pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let data_texture = |binding| wgpu::BindGroupLayoutEntry {
         binding,
@@ -110,6 +113,7 @@ pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 count: None,
             },
             data_texture(5),
+            data_texture(6),
         ],
     })
 }
@@ -191,6 +195,18 @@ impl GpuCharacter {
             ),
             _ => float_texture(gpu, "no spectra", 1, 1, &[0; 16]),
         };
+        // A texel a view, read by index in the vertex shader: indexing an array in the
+        // uniform by a per-instance index took llvmpipe five times as long.
+        let rects = match &bake.animated_impostor {
+            Some(a) if !a.rects.is_empty() => float_texture(
+                gpu,
+                &format!("{} impostor views", bake.name),
+                a.rects.len() as u32,
+                1,
+                bytemuck::cast_slice(&a.rects),
+            ),
+            _ => float_texture(gpu, "no impostor views", 1, 1, &[0; 16]),
+        };
         let materials = material_texture(gpu, &bake.materials);
         let material_bytes: usize = bake.materials.mips.iter().map(Vec::len).sum();
         // The blob shadow covers the footprint of the animated bounds.
@@ -253,6 +269,7 @@ impl GpuCharacter {
             }),
             shadow_buffer,
             spectra_view: spectra.create_view(&Default::default()),
+            rects_view: rects.create_view(&Default::default()),
             shared_bytes: GpuMemory {
                 animation_textures: (bake.animation.grid.texels.len() * 16) as u64,
                 material_textures: material_bytes as u64,
@@ -327,6 +344,10 @@ impl GpuCharacter {
                 wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::TextureView(&self.spectra_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&self.rects_view),
                 },
             ],
         });
