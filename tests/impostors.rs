@@ -201,3 +201,65 @@ fn a_bad_impostor_option_is_one_line() {
     assert!(err.contains("views must be 2 to 16, not 1"), "{err}");
     assert!(!std::path::Path::new("never.png").exists());
 }
+
+/// In the viewer's background bake a character's impostor comes after its levels, in a
+/// delivery of its own, and is placed in the method's chain; a second bake reads both from the
+/// cache.
+#[test]
+fn the_background_bake_hands_over_levels_then_the_impostor() {
+    use lodlab::bake::cache::{LodCache, source_hash};
+    use lodlab::runtime::levels::{BackgroundBake, LevelSource, Poll};
+    let dir = tempfile::tempdir().unwrap();
+    let cache = LodCache::new(Some(dir.path().to_path_buf()));
+    let source = LevelSource {
+        model: load_model("walker").unwrap(),
+        hash: source_hash(&lodlab::import::source_path("walker")).unwrap(),
+        impostor: Some(OPTIONS.parse().unwrap()),
+    };
+    let run = || {
+        let mut job = BackgroundBake::start(
+            gpu().clone(),
+            vec![source.clone()],
+            vec![false],
+            Method::InfluenceSimplification,
+            Default::default(),
+            cache.clone(),
+        );
+        let mut kinds = Vec::new();
+        loop {
+            let (ready, over) = match job.poll() {
+                Poll::Running(ready) => (ready, false),
+                Poll::Done(ready) => (ready, true),
+                Poll::Failed => panic!("the bake thread died"),
+            };
+            for (i, baked) in ready {
+                assert_eq!(i, 0);
+                kinds.push(match baked {
+                    Some(Ok(Levels::Pack(pack, None))) => format!("levels {}", pack.levels.len()),
+                    Some(Ok(Levels::Impostor(Some(level)))) => {
+                        let placed = level.placement.epsilon.is_some();
+                        assert!(!level.placement.measured.is_empty());
+                        format!("impostor placed {placed}")
+                    }
+                    _ => "something else".to_string(),
+                });
+            }
+            if over {
+                break kinds;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+    };
+    let first = run();
+    assert_eq!(first.len(), 2, "{first:?}");
+    assert!(first[0].starts_with("levels "), "{first:?}");
+    assert!(first[1].starts_with("impostor placed"), "{first:?}");
+    // From the cache: the same, impostor and placement read back.
+    assert_eq!(run(), first);
+    let files: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(files.iter().any(|f| f.contains("-impostor-")), "{files:?}");
+    assert!(files.iter().any(|f| f.contains("-placement-")), "{files:?}");
+}

@@ -96,8 +96,9 @@ pub fn bake_all(
 /// [`bake_all`], handing each model's levels to `deliver(i, levels)` as soon as they are
 /// ready. Characters go first: their levels take a second or so, a tree's chain much longer,
 /// and a viewer shows each as it comes. With `impostors_apart`, a character's impostor comes
-/// in a second delivery ([`Levels::Impostor`], one for every character that asks for one),
-/// so that its first bake does not hold its levels back.
+/// in a second delivery ([`Levels::Impostor`], one for every character that asks for one)
+/// after every model's levels, so that its first bake holds back neither its own levels nor
+/// the trees' chains.
 #[allow(clippy::too_many_arguments)]
 pub fn bake_each(
     gpu: &Gpu,
@@ -113,6 +114,8 @@ pub fn bake_each(
 ) {
     let mut order: Vec<usize> = (0..sources.len()).collect();
     order.sort_by_key(|&i| is_tree(&sources[i].model));
+    // With `impostors_apart`, the characters' levels whose impostors are still to come.
+    let later: std::sync::Mutex<Vec<(usize, SkinnedLods)>> = Default::default();
     order.par_iter().with_max_len(1).for_each(|&i| {
         let s = &sources[i];
         if skip.get(i).copied().unwrap_or(false) {
@@ -132,24 +135,20 @@ pub fn bake_each(
             if let Origin::Baked { warning: Some(w) } = &origin {
                 warn(w.clone());
             }
+            // The mesh levels stand without it.
             let impostor = || {
                 s.impostor.and_then(|options| {
-                    match impostor_level(gpu, cache, s, &lods, &options, warn) {
-                        Ok(level) => Some(level),
-                        // The mesh levels stand without it.
-                        Err(e) => {
-                            warn(format!("{}: no impostor: {e:#}", s.model.name));
-                            None
-                        }
-                    }
+                    impostor_level(gpu, cache, s, &lods, &options, warn)
+                        .map_err(|e| warn(format!("{}: no impostor: {e:#}", s.model.name)))
+                        .ok()
                 })
             };
             if impostors_apart && s.impostor.is_some() {
                 progress(i, 0.9);
                 deliver(i, Some(pack(&lods).map(|p| Levels::Pack(p, None))));
-                let level = impostor();
-                progress(i, 1.0);
-                deliver(i, Some(Ok(Levels::Impostor(level))));
+                if let Ok(mut later) = later.lock() {
+                    later.push((i, lods));
+                }
                 return;
             }
             (
@@ -162,6 +161,19 @@ pub fn bake_each(
         }
         progress(i, 1.0);
         deliver(i, Some(levels));
+    });
+    // The impostors last, once every model's levels (the trees' chains included, which the
+    // frame rate needs far more) are in.
+    let later = later.into_inner().unwrap_or_default();
+    later.par_iter().with_max_len(1).for_each(|(i, lods)| {
+        let s = &sources[*i];
+        let level = s.impostor.and_then(|options| {
+            impostor_level(gpu, cache, s, lods, &options, warn)
+                .map_err(|e| warn(format!("{}: no impostor: {e:#}", s.model.name)))
+                .ok()
+        });
+        progress(*i, 1.0);
+        deliver(*i, Some(Ok(Levels::Impostor(level))));
     });
 }
 
