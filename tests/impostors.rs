@@ -226,7 +226,9 @@ fn the_background_bake_hands_over_levels_then_the_impostor() {
             cache.clone(),
         );
         let mut kinds = Vec::new();
+        let mut statuses = std::collections::BTreeSet::new();
         loop {
+            statuses.insert(job.status());
             let (ready, over) = match job.poll() {
                 Poll::Running(ready) => (ready, false),
                 Poll::Done(ready) => (ready, true),
@@ -245,17 +247,19 @@ fn the_background_bake_hands_over_levels_then_the_impostor() {
                 });
             }
             if over {
-                break kinds;
+                break (kinds, statuses);
             }
             std::thread::sleep(std::time::Duration::from_millis(20));
         }
     };
-    let first = run();
+    let (first, statuses) = run();
+    // While the impostor bakes, the progress bar says so.
+    assert!(statuses.contains("impostors of walker"), "{statuses:?}");
     assert_eq!(first.len(), 2, "{first:?}");
     assert!(first[0].starts_with("levels "), "{first:?}");
     assert!(first[1].starts_with("impostor placed"), "{first:?}");
     // From the cache: the same, impostor and placement read back.
-    assert_eq!(run(), first);
+    assert_eq!(run().0, first);
     let files: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -144,7 +144,7 @@ pub fn bake_each(
                 })
             };
             if impostors_apart && s.impostor.is_some() {
-                progress(i, 0.9);
+                progress(i, IMPOSTOR_PENDING);
                 deliver(i, Some(pack(&lods).map(|p| Levels::Pack(p, None))));
                 if let Ok(mut later) = later.lock() {
                     later.push((i, lods));
@@ -176,6 +176,9 @@ pub fn bake_each(
         deliver(*i, Some(Ok(Levels::Impostor(level))));
     });
 }
+
+/// A character's progress once its levels are handed over and its impostor is to come.
+const IMPOSTOR_PENDING: f32 = 0.9;
 
 /// Bump whenever placing an impostor changes its result.
 const PLACEMENT_VERSION: u32 = 1;
@@ -399,18 +402,25 @@ impl BackgroundBake {
             .collect();
         let begun: Vec<_> = state.iter().filter(|&&(_, _, p)| p > 0).copied().collect();
         let shown = if begun.is_empty() { state } else { begun };
-        let names = |trees: bool| {
+        // A character whose levels are in and whose impostor is baking stands at
+        // IMPOSTOR_PENDING.
+        let pending = (IMPOSTOR_PENDING * 1000.0) as u32;
+        let names = |trees: bool, impostor: bool| {
             shown
                 .iter()
-                .filter(|&&(_, t, _)| t == trees)
+                .filter(|&&(_, t, p)| t == trees && (!trees && p == pending) == impostor)
                 .map(|&(n, _, _)| n)
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let (characters, trees) = (names(false), names(true));
+        let (characters, impostors, trees) =
+            (names(false, false), names(false, true), names(true, false));
         let mut parts = Vec::new();
         if !characters.is_empty() {
             parts.push(format!("{} levels of {characters}", self.method));
+        }
+        if !impostors.is_empty() {
+            parts.push(format!("impostors of {impostors}"));
         }
         if !trees.is_empty() {
             parts.push(format!("billboard clouds of {trees}"));
