@@ -82,13 +82,22 @@ pub fn bake_all(
     warn: &(dyn Fn(String) + Sync),
 ) -> Vec<Baked> {
     let done = std::sync::Mutex::new((0..sources.len()).map(|_| None).collect::<Vec<Baked>>());
+    // Impostors come after every model's levels (baking them beside the trees' chains made
+    // the two fight over the CPU), each joining its character's levels.
     let deliver = |i: usize, baked: Baked| {
         if let Ok(mut d) = done.lock() {
-            d[i] = baked;
+            match (baked, &mut d[i]) {
+                (Some(Ok(Levels::Impostor(level))), Some(Ok(Levels::Pack(_, impostor)))) => {
+                    *impostor = level;
+                }
+                // Levels that failed keep their error.
+                (Some(Ok(Levels::Impostor(_))), _) => {}
+                (baked, slot) => *slot = baked,
+            }
         }
     };
     bake_each(
-        gpu, sources, skip, method, chain, cache, progress, warn, &deliver, false,
+        gpu, sources, skip, method, chain, cache, progress, warn, &deliver, true,
     );
     done.into_inner().unwrap_or_default()
 }
