@@ -143,9 +143,7 @@ fn painted(in: VsOut) -> vec4<f32> {
 // `dissolved` reads a tree's. Pipelines of their own, so that no other character pays for the
 // test.
 fn dithered_out(in: VsOut) -> bool {
-    let x = pixel_threshold(in.clip.xy);
-    let c = in.lod.z;
-    return select(x >= c, x < -c - 1.0, c < 0.0);
+    return screened_out(in.clip.xy, in.lod.z);
 }
 
 // The colour is worked out before the discard: on llvmpipe a texture read after it, with
@@ -174,13 +172,19 @@ fn pixel_threshold(pixel: vec2<f32>) -> f32 {
     return fract(52.9829189 * fract(dot(floor(pixel), vec2<f32>(0.06711056, 0.00583715))));
 }
 
-// The screen-door cross-dissolve of a tree changing level (see `LodDraw::Dissolve` and the
-// comment at the top of src/render/renderer.rs): lod.z ≥ 0 keeps the pixels whose threshold lies
-// below it (1, outside dissolves, keeps all), lod.z < 0 those whose threshold is at or above
-// −lod.z − 1, so the incoming and outgoing halves of one dissolve cover complementary pixels.
+// The screen door of every dissolve and dithered cross-fade (see `LodDraw::Dissolve` and the
+// comment at the top of src/render/renderer.rs): is `pixel` out of a half of coverage
+// `coverage`? A coverage c ≥ 0 keeps the pixels whose threshold lies below it (1, outside
+// dissolves, keeps all), c < 0 those whose threshold is at or above −c − 1, so the incoming
+// and outgoing halves of one dissolve cover complementary pixels.
+fn screened_out(pixel: vec2<f32>, coverage: f32) -> bool {
+    let x = pixel_threshold(pixel);
+    return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
+}
+
+// A tree changing level.
 fn dissolved(in: FoliageOut) -> bool {
-    let x = pixel_threshold(in.clip.xy);
-    return select(x >= in.coverage, x < -in.coverage - 1.0, in.coverage < 0.0);
+    return screened_out(in.clip.xy, in.coverage);
 }
 
 // Foliage is lit per vertex: leaves and billboards are flat, so sun, sky and rim light are the

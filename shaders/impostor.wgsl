@@ -238,19 +238,24 @@ fn impostor_lit(in: ImpostorOut, normals: ImpostorNormals, texel: ImpostorTexel)
     let c = normals.c;
     let w = texel.shares;
     let m = (w.x * a.rgb + w.y * b.rgb + w.z * c.rgb) * 2.0 - vec3<f32>(w.x + w.y + w.z);
-    let world = vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m));
-    let nrm = normalize(world + vec3<f32>(0.0, 1e-6, 0.0));
-    let base = select(texel.colour * in.tint.rgb, in.debug.rgb, in.debug.a > 0.5);
+    let rows = mat3x3<f32>(in.row0, in.row1, in.row2);
+    return impostor_light(texel.colour, in.tint, in.debug, m * rows, in.to_eye);
+}
+
+// An impostor pixel lit: `colour` tinted (or the debug view's colour, where it has one), with
+// `world_normal` (a blend of normals turned into the world, not normalised), sun and sky, rim
+// and `tint.w` of fog.
+fn impostor_light(colour: vec3<f32>, tint: vec4<f32>, debug: vec4<f32>, world_normal: vec3<f32>, to_eye: vec3<f32>) -> vec3<f32> {
+    let nrm = normalize(world_normal + vec3<f32>(0.0, 1e-6, 0.0));
+    let base = select(colour * tint.rgb, debug.rgb, debug.a > 0.5);
     var lit = shade(base, nrm);
-    lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, in.to_eye), 0.0), 3.0) * 0.12;
-    return mix(lit, frame.sky_horizon.rgb, in.tint.w);
+    lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, to_eye), 0.0), 3.0) * 0.12;
+    return mix(lit, frame.sky_horizon.rgb, tint.w);
 }
 
 // The dissolve of a tree changing level (see `dissolved` in character.wgsl).
 fn impostor_dissolved(in: ImpostorOut) -> bool {
-    let x = pixel_threshold(in.clip.xy);
-    let coverage = in.weights.w;
-    return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
+    return screened_out(in.clip.xy, in.weights.w);
 }
 
 // Without multisampling: the blended alpha cuts the tree out at one half, as foliage.
@@ -439,18 +444,13 @@ fn animated_lit(in: AnimatedOut, texel: AnimatedTexel, normals: AnimatedNormals)
     let b = normals.b;
     let w = texel.shares;
     let m = (w.x * a.rgb + w.y * b.rgb) * 2.0 - vec3<f32>(w.x + w.y);
-    let nrm = normalize(vec3<f32>(dot(in.row0, m), dot(in.row1, m), dot(in.row2, m)) + vec3<f32>(0.0, 1e-6, 0.0));
-    let base = select(texel.colour * in.tint.rgb, in.debug.rgb, in.debug.a > 0.5);
-    var lit = shade(base, nrm);
-    lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, in.to_eye), 0.0), 3.0) * 0.12;
-    return mix(lit, frame.sky_horizon.rgb, in.tint.w);
+    let rows = mat3x3<f32>(in.row0, in.row1, in.row2);
+    return impostor_light(texel.colour, in.tint, in.debug, m * rows, in.to_eye);
 }
 
 // The dissolve between the coarsest mesh and the impostor (see `dithered_out`).
 fn animated_dissolved(in: AnimatedOut) -> bool {
-    let x = pixel_threshold(in.clip.xy);
-    let coverage = in.blend.y;
-    return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
+    return screened_out(in.clip.xy, in.blend.y);
 }
 
 @fragment

@@ -40,6 +40,16 @@ pub struct AnimationTexture {
     pub grid: TexelGrid,
 }
 
+/// The time of frame `k` of a clip of `count` frames lasting `duration`: evenly spaced over
+/// `[0, duration]`, ends included.
+pub fn frame_time(duration: f32, count: u32, k: u32) -> f32 {
+    if count > 1 {
+        duration * k as f32 / (count - 1) as f32
+    } else {
+        0.0
+    }
+}
+
 impl AnimationTexture {
     /// Resamples every clip of `model` (or its rest pose, if it has none) at `rate` Hz.
     pub fn bake(model: &Model, rate: f32) -> Self {
@@ -80,11 +90,7 @@ impl AnimationTexture {
                 ground_speed: clip.map_or(0.0, |c| c.ground_speed),
             });
             for k in 0..count {
-                let t = if count > 1 {
-                    duration * k as f32 / (count - 1) as f32
-                } else {
-                    0.0
-                };
+                let t = frame_time(duration, count, k);
                 frames.push(crate::anim::bone_matrices(skel, clip, t));
             }
         }

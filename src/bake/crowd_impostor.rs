@@ -180,9 +180,6 @@ pub struct AnimatedFrame {
     pub rects: Vec<[f32; 4]>,
 }
 
-/// The most views an impostor has: its rectangles fill the renderer's uniform.
-pub const MAX_VIEWS: usize = 256;
-
 /// The part of each view's cell that any page covers (see [`AnimatedFrame::rects`]), from the
 /// colour sheet of `pages` pages laid out `columns` a row.
 pub fn covered_rects(
@@ -324,25 +321,20 @@ pub fn worst_view_angle(grid: &ViewGrid) -> f32 {
 }
 
 /// The times each page shows: per clip (or the rest pose, for a model without clips), the
-/// clip and the times [`AnimationTexture::bake_frames`] samples it at, in page order.
+/// clip and the times [`AnimationTexture::bake_frames`] samples it at, in page order (its
+/// frames after the rest pose, frame 0).
 fn page_times(model: &Model, frames: u32) -> Vec<(Option<&crate::model::Clip>, f32)> {
-    if model.clips.is_empty() {
-        return vec![(None, 0.0)];
-    }
-    let mut times = Vec::new();
-    for clip in &model.clips {
-        let d = clip.duration.max(0.0);
-        let count = if d > 0.0 { frames.max(2) } else { 1 };
-        for k in 0..count {
-            let t = if count > 1 {
-                d * k as f32 / (count - 1) as f32
-            } else {
-                0.0
-            };
-            times.push((Some(clip), t));
-        }
-    }
-    times
+    let anim = AnimationTexture::bake_frames(model, frames);
+    anim.clips
+        .iter()
+        .enumerate()
+        .flat_map(|(c, clip)| {
+            (0..clip.frame_count).map(move |k| {
+                let t = super::anim_texture::frame_time(clip.duration, clip.frame_count, k);
+                (model.clips.get(c), t)
+            })
+        })
+        .collect()
 }
 
 /// Bakes the animated impostor of `model`: every page's views drawn through `raster` at

@@ -131,8 +131,8 @@ impl crate::bake::billboard::chain::MeasureColour for GpuColourError<'_> {
 }
 
 /// The image size and the camera's distance (in tree heights) at which [`whole_tree_error`]
-/// sees a tree `height_px` pixels high.
-fn framing(height_px: f32) -> ([u32; 2], f32) {
+/// sees a tree `height_px` pixels high (and `impostor_placement` a character).
+pub(crate) fn framing(height_px: f32) -> ([u32; 2], f32) {
     // The metric's camera frames the tree's height in this share of the image.
     let fov = crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y;
     let screen = 2.0 * (fov * 0.5).tan();
@@ -146,7 +146,7 @@ fn framing(height_px: f32) -> ([u32; 2], f32) {
 
 /// A world of its own for one tree, as the metric draws it: no shadows, no fog (however far
 /// off the camera stands, the masks see the whole tree).
-fn metric_world(gpu: &Gpu, loaded: Loaded) -> Result<World> {
+pub(crate) fn metric_world(gpu: &Gpu, loaded: Loaded) -> Result<World> {
     let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
     w.renderer.shadows = false;
     w.renderer.lighting.fog_density = 0.0;
@@ -154,7 +154,55 @@ fn metric_world(gpu: &Gpu, loaded: Loaded) -> Result<World> {
 }
 
 /// The metric's camera stands this many tree heights away.
-const FRAMING: f32 = 1.25;
+pub(crate) const FRAMING: f32 = 1.25;
+
+/// `w`'s one model (`centre` and `height` its bounds') seen from `yaw` round it and `pitch`
+/// above, `distance` heights off, the field of view narrowed to frame it as from
+/// [`FRAMING`] heights.
+pub(crate) fn metric_camera(
+    centre: glam::Vec3,
+    height: f32,
+    yaw: f32,
+    pitch: f32,
+    distance: f32,
+) -> crate::scene::Camera {
+    let mut camera = crate::scene::Camera::new(
+        glam::Vec3::new(centre.x, height * 0.5, centre.z),
+        yaw,
+        pitch,
+        height * distance,
+    );
+    camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
+    camera
+}
+
+/// `w` drawn into `target` from `camera` at time `t`; with `empty`, without its instances
+/// (the background).
+pub(crate) fn picture(
+    gpu: &Gpu,
+    w: &mut World,
+    target: &Offscreen,
+    camera: crate::scene::Camera,
+    t: f32,
+    empty: bool,
+) -> Result<image::RgbaImage> {
+    w.camera = camera;
+    if empty {
+        w.relayout(None, 0, None);
+    }
+    w.prepare(
+        gpu,
+        [target.texture.width(), target.texture.height()],
+        t,
+        0.0,
+    );
+    w.renderer.render_to(gpu, &target.targets, &target.view);
+    let img = target.read_rgba(gpu);
+    if empty {
+        w.relayout(None, 1, None);
+    }
+    img
+}
 
 /// The share of `a`'s covered pixels that `b` disagrees on (see [`colour_error`]); `original`
 /// gives the loop's length. The camera stands `distance` tree heights off, its field of view
@@ -173,29 +221,11 @@ fn disagreement(
     let height = bounds.size().y.max(1e-3);
     let duration = original.clips.first().map_or(1.0, |c| c.duration);
     let (mut wrong, mut covered) = (0u64, 0u64);
-    let shoot = |w: &mut World, camera: crate::scene::Camera, t: f32, empty: bool| {
-        w.camera = camera;
-        if empty {
-            w.relayout(None, 0, None);
-        }
-        w.prepare(gpu, size, t, 0.0);
-        w.renderer.render_to(gpu, &target.targets, &target.view);
-        let img = target.read_rgba(gpu);
-        if empty {
-            w.relayout(None, 1, None);
-        }
-        img
-    };
+    let shoot = |w: &mut World, camera, t, empty| picture(gpu, w, &target, camera, t, empty);
     for view in 0..METRIC_VIEWS {
         let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
         // At ground level, far enough for the whole tree to fit with a margin.
-        let mut camera = crate::scene::Camera::new(
-            glam::Vec3::new(bounds.center().x, height * 0.5, bounds.center().z),
-            yaw,
-            0.0,
-            height * distance,
-        );
-        camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
+        let camera = metric_camera(bounds.center(), height, yaw, 0.0, distance);
         let background = shoot(a, camera, 0.0, true)?;
         for frame in 0..frames.max(1) {
             let t = duration * frame as f32 / frames.max(1) as f32;

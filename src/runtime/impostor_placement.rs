@@ -16,8 +16,12 @@
 //! colours (0 to 1, over the three channels) over every pixel either covers, divided by the
 //! pixels full detail covers: a missing or extra pixel counts its whole difference from the
 //! background, a pixel shaded differently its difference. It is taken from five views round
-//! the character, 15° above the ground, at five times of its first clip.
+//! the character, 15° above the ground, at five times of its first clip, framed as the trees'
+//! colour metric frames a tree (`colour_error::framing`).
 
+use super::colour_error::{
+    METRIC_FRAMES, METRIC_VIEWS, framing, metric_camera, metric_world, picture,
+};
 use super::spec::Loaded;
 use super::world::World;
 use crate::bake::CharacterBake;
@@ -26,7 +30,7 @@ use crate::bake::lod::LodLevel;
 use crate::bake::lod_pack::LodPack;
 use crate::model::Model;
 use crate::render::Gpu;
-use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+use crate::render::targets::Offscreen;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 
@@ -50,23 +54,8 @@ pub struct Placement {
     pub measured: Vec<Measured>,
 }
 
-impl Placement {
-    /// The measurement at the size where it comes in.
-    pub fn at_switch(&self) -> Option<&Measured> {
-        self.epsilon
-            .and_then(|_| self.measured.iter().rev().find(|m| m.impostor <= m.mesh))
-    }
-}
-
-/// Views round the character and times of its first clip the colour error is taken over.
-const VIEWS: usize = 5;
-const FRAMES: usize = 5;
 /// The views look down this many degrees, as a crowd's camera does.
 const PITCH_DEG: f32 = 15.0;
-/// The camera frames the character's height in this share of the image.
-const FRAMING: f32 = 1.25;
-/// The screen the character stands on is this many pixels high.
-const SCREEN_PX: f32 = 720.0;
 
 /// The drawings the placement compares, each a world of its own: full detail, the impostor,
 /// and full detail's world again with one mesh level in place of its full-detail set.
@@ -89,12 +78,7 @@ impl<'a> Worlds<'a> {
         full: &CharacterBake,
         impostor: &AnimatedImpostor,
     ) -> Result<Self> {
-        let world = |loaded: Loaded| -> Result<World> {
-            let mut w = World::new(gpu, loaded, OFFSCREEN_FORMAT, 1)?;
-            w.renderer.shadows = false;
-            w.renderer.lighting.fog_density = 0.0;
-            Ok(w)
-        };
+        let world = |loaded: Loaded| metric_world(gpu, loaded);
         let impostor_bake = impostor
             .bake(full.bounds)
             .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
@@ -126,38 +110,16 @@ impl<'a> Worlds<'a> {
     /// against full detail, at `px` pixels high; the impostor's clock `lag` seconds behind.
     fn errors(&mut self, px: f32, lag: f32) -> Result<(f32, f32)> {
         let gpu = self.gpu;
-        let screen =
-            2.0 * (crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y * 0.5).tan();
-        let side = (px * FRAMING * screen).ceil().clamp(8.0, 1024.0) as u32;
-        let distance = (SCREEN_PX / px.max(1.0) / screen).clamp(FRAMING, 200.0);
-        let size = [side, side];
-        let target = Offscreen::new(gpu, side, side, 1);
-        let shoot = |w: &mut World, camera: crate::scene::Camera, t: f32, empty: bool| {
-            w.camera = camera;
-            if empty {
-                w.relayout(None, 0, None);
-            }
-            w.prepare(gpu, size, t, 0.0);
-            w.renderer.render_to(gpu, &target.targets, &target.view);
-            let img = target.read_rgba(gpu);
-            if empty {
-                w.relayout(None, 1, None);
-            }
-            img
-        };
+        let (size, distance) = framing(px);
+        let target = Offscreen::new(gpu, size[0], size[1], 1);
+        let shoot = |w: &mut World, camera, t, empty| picture(gpu, w, &target, camera, t, empty);
         let (mut covered, mut off_impostor, mut off_level) = (0u64, 0.0f64, 0.0f64);
-        for view in 0..VIEWS {
-            let yaw = 360.0 * view as f32 / VIEWS as f32;
-            let mut camera = crate::scene::Camera::new(
-                glam::Vec3::new(self.centre.x, self.height * 0.5, self.centre.z),
-                yaw,
-                PITCH_DEG,
-                self.height * distance,
-            );
-            camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
+        for view in 0..METRIC_VIEWS {
+            let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
+            let camera = metric_camera(self.centre, self.height, yaw, PITCH_DEG, distance);
             let background = shoot(&mut self.full, camera, 0.0, true)?;
-            for frame in 0..FRAMES {
-                let t = self.duration * frame as f32 / FRAMES as f32;
+            for frame in 0..METRIC_FRAMES {
+                let t = self.duration * frame as f32 / METRIC_FRAMES as f32;
                 let full = shoot(&mut self.full, camera, t, false)?;
                 let imp = shoot(&mut self.impostor, camera, t - lag, false)?;
                 let lvl = match self.shown {

@@ -97,17 +97,17 @@ pub fn bake_all(
         }
     };
     bake_each(
-        gpu, sources, skip, method, chain, cache, progress, warn, &deliver, true,
+        gpu, sources, skip, method, chain, cache, progress, warn, &deliver,
     );
     done.into_inner().unwrap_or_default()
 }
 
 /// [`bake_all`], handing each model's levels to `deliver(i, levels)` as soon as they are
 /// ready. Characters go first: their levels take a second or so, a tree's chain much longer,
-/// and a viewer shows each as it comes. With `impostors_apart`, a character's impostor comes
-/// in a second delivery ([`Levels::Impostor`], one for every character that asks for one)
-/// after every model's levels, so that its first bake holds back neither its own levels nor
-/// the trees' chains.
+/// and a viewer shows each as it comes. A character's impostor comes in a second delivery
+/// ([`Levels::Impostor`], one for every character that asks for one; the mesh levels stand
+/// without it where it fails) after every model's levels, so that its first bake holds back
+/// neither its own levels nor the trees' chains.
 #[allow(clippy::too_many_arguments)]
 pub fn bake_each(
     gpu: &Gpu,
@@ -119,11 +119,10 @@ pub fn bake_each(
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
     deliver: &(dyn Fn(usize, Baked) + Sync),
-    impostors_apart: bool,
 ) {
     let mut order: Vec<usize> = (0..sources.len()).collect();
     order.sort_by_key(|&i| is_tree(&sources[i].model));
-    // With `impostors_apart`, the characters' levels whose impostors are still to come.
+    // The characters' levels whose impostors are still to come.
     let later: std::sync::Mutex<Vec<(usize, SkinnedLods)>> = Default::default();
     order.par_iter().with_max_len(1).for_each(|&i| {
         let s = &sources[i];
@@ -144,15 +143,7 @@ pub fn bake_each(
             if let Origin::Baked { warning: Some(w) } = &origin {
                 warn(w.clone());
             }
-            // The mesh levels stand without it.
-            let impostor = || {
-                s.impostor.and_then(|options| {
-                    impostor_level(gpu, cache, s, &lods, &options, warn)
-                        .map_err(|e| warn(format!("{}: no impostor: {e:#}", s.model.name)))
-                        .ok()
-                })
-            };
-            if impostors_apart && s.impostor.is_some() {
+            if s.impostor.is_some() {
                 progress(i, IMPOSTOR_PENDING);
                 deliver(i, Some(pack(&lods).map(|p| Levels::Pack(p, None))));
                 if let Ok(mut later) = later.lock() {
@@ -160,10 +151,7 @@ pub fn bake_each(
                 }
                 return;
             }
-            (
-                pack(&lods).map(|p| Levels::Pack(p, impostor())),
-                Origin::Cache,
-            )
+            (pack(&lods).map(|p| Levels::Pack(p, None)), Origin::Cache)
         };
         if let Origin::Baked { warning: Some(w) } = origin {
             warn(w);
@@ -190,7 +178,7 @@ pub fn bake_each(
 const IMPOSTOR_PENDING: f32 = 0.9;
 
 /// Bump whenever placing an impostor changes its result.
-const PLACEMENT_VERSION: u32 = 1;
+const PLACEMENT_VERSION: u32 = 2;
 
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
@@ -372,7 +360,7 @@ impl BackgroundBake {
                 }
             };
             bake_each(
-                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver, true,
+                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
             );
         });
         BackgroundBake {

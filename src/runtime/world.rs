@@ -48,7 +48,6 @@ pub struct InstalledImpostor {
     /// The renderer's character that draws it.
     pub character: usize,
     pub options: crate::bake::crowd_impostor::ImpostorOptions,
-    pub error: crate::bake::crowd_impostor::ImpostorError,
     /// Bytes of its pages with their mipmaps, as uploaded.
     pub bytes: u64,
 }
@@ -408,7 +407,6 @@ impl World {
         self.impostors[m] = Some(InstalledImpostor {
             character,
             options: impostor.options,
-            error: impostor.error,
             bytes,
         });
         Ok(())
@@ -674,25 +672,22 @@ impl World {
         // impostor's level is one instance of it; one changing between its coarsest mesh and
         // its impostor dissolves from one to the other on complementary pixels.
         let has_impostors = lod.impostors && self.impostors.iter().any(Option::is_some);
-        let has_trees = self.tree_levels.iter().any(Option::is_some) || has_impostors;
-        let sides = 1 + lod.compare.is_some() as usize;
-        for (i, method) in lod.methods().enumerate().take(sides) {
-            if !has_trees {
-                break;
-            }
+        let remap = self.tree_levels.iter().any(Option::is_some) || has_impostors;
+        for (i, method) in lod.methods().enumerate().filter(|_| remap) {
+            // Per model: its impostor's level under this side's method and its character.
             let slot = method.index();
+            let far: Vec<Option<(u8, usize)>> = (0..self.impostors.len())
+                .map(|m| {
+                    let character = self.impostors[m].as_ref()?.character;
+                    Some((lod.impostor_level(m, slot)?, character))
+                })
+                .collect();
             let (instances, draws) = &mut self.drawn[i];
             instances.clear();
             draws.clear();
             for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
                 let Some(levels) = self.tree_levels.get(inst.model).and_then(Option::as_ref) else {
-                    let impostor = lod.impostor_level(inst.model, slot).zip(
-                        self.impostors
-                            .get(inst.model)
-                            .and_then(Option::as_ref)
-                            .map(|i| i.character),
-                    );
-                    match impostor {
+                    match far.get(inst.model).copied().flatten() {
                         Some((far, character)) => {
                             let shown = Instance {
                                 model: character,
@@ -735,12 +730,8 @@ impl World {
         let instances = &self.instances;
         let side = |i: usize, m: LodMethod, region| Side {
             method: if lod.has(m) { m.index() } else { 0 },
-            instances: if has_trees { &drawn[i].0 } else { instances },
-            draws: if has_trees {
-                &drawn[i].1
-            } else {
-                &lod.draws[i]
-            },
+            instances: if remap { &drawn[i].0 } else { instances },
+            draws: if remap { &drawn[i].1 } else { &lod.draws[i] },
             region,
         };
         match lod.compare {
