@@ -23,7 +23,13 @@ struct VsOut {
     // z: opacity.
     @location(5) @interpolate(flat) lod: vec4<f32>,
     @location(6) influences: f32,
+    // The normal-map layers plus one (0: vertex normals) of the vertex drawn (x) and, in a
+    // geomorph, of its target (y); set by the `_mapped` vertex shaders only.
+    @location(7) @interpolate(flat) normal_layer: vec2<f32>,
 };
+
+// The normal maps of the set's coarse levels (see src/bake/normal_map.rs).
+@group(1) @binding(7) var normal_tex: texture_2d_array<f32>;
 
 fn lod_varying(inst: Instance) -> vec4<f32> {
     let t = inst.lod.x;
@@ -41,6 +47,7 @@ fn finish(inst: Instance, position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>,
     out.tint = inst.tint;
     out.lod = lod_varying(inst);
     out.influences = influences;
+    out.normal_layer = vec2<f32>(0.0);
     return out;
 }
 
@@ -52,6 +59,28 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
 @vertex
 fn vs_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
     return morphed(vi, inst);
+}
+
+// `vs_main` and `vs_morph` for the levels lit through normal maps: they also read the
+// vertices' layers (the plain ones skip that read, the vertex shader's share of a crowd's frame
+// being large on a software rasteriser).
+@vertex
+fn vs_main_mapped(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
+    var out = skinned(vi, inst);
+    let layer = normal_layer(vi);
+    out.normal_layer = vec2<f32>(layer, layer);
+    return out;
+}
+
+@vertex
+fn vs_morph_mapped(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
+    var out = morphed(vi, inst);
+    var coarse_vi = vi;
+    for (var h = 0u; h < u32(inst.lod.y); h = h + 1u) {
+        coarse_vi = geomorph_target(coarse_vi);
+    }
+    out.normal_layer = vec2<f32>(normal_layer(vi), normal_layer(coarse_vi));
+    return out;
 }
 
 fn skinned(vi: u32, inst: Instance) -> VsOut {
@@ -121,8 +150,90 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
 }
 
 fn shaded(in: VsOut) -> vec4<f32> {
+    return shaded_with(in, normalize(in.normal));
+}
+
+// The normal of a coarse level's fragment lit through its normal map: the stored normal
+// (full detail's, see src/bake/normal_map.rs) in the frame of the triangle, rebuilt here from
+// the derivatives of the skinned position and of the texture coordinate, as the bake built it
+// in the rest pose: n the interpolated normal, t = ∂P/∂u made orthogonal to n, b = ±n × t by
+// the triangle's handedness in texture space. Where the texture coordinates give no frame (no
+// area), the vertex normal stays. The map is read with explicit gradients: llvmpipe's implicit
+// ones take a slow path.
+struct TangentFrame {
+    t: vec3<f32>,
+    b: vec3<f32>,
+    n: vec3<f32>,
+    // The texture coordinate's screen derivatives.
+    duv1: vec2<f32>,
+    duv2: vec2<f32>,
+    // The texture coordinates span the triangle.
+    ok: bool,
+};
+
+fn tangent_frame(in: VsOut) -> TangentFrame {
+    var f: TangentFrame;
+    f.n = normalize(in.normal);
+    let dp1 = dpdx(in.world);
+    let dp2 = dpdy(in.world);
+    f.duv1 = dpdx(in.uv);
+    f.duv2 = dpdy(in.uv);
+    let det = f.duv1.x * f.duv2.y - f.duv2.x * f.duv1.y;
+    let s = select(-1.0, 1.0, det >= 0.0);
+    let dpdu = (dp1 * f.duv2.y - dp2 * f.duv1.y) * s;
+    let dpdv = (dp2 * f.duv1.x - dp1 * f.duv2.x) * s;
+    let t_raw = dpdu - f.n * dot(f.n, dpdu);
+    let tl = length(t_raw);
+    f.t = t_raw / max(tl, 1e-20);
+    f.b = select(-1.0, 1.0, dot(cross(dpdu, dpdv), f.n) >= 0.0) * cross(f.n, f.t);
+    f.ok = tl > 1e-12 && det != 0.0;
+    return f;
+}
+
+// The stored normal of layer `layer` plus one at the fragment, (0, 0, 1) for none.
+fn stored_normal(in: VsOut, f: TangentFrame, layer: f32) -> vec3<f32> {
+    // Stored as 128 + 127·x (see `encode` in src/bake/normal_map.rs).
+    let m = (textureSampleGrad(normal_tex, material_sampler, in.uv, u32(max(layer - 1.0, 0.0)), f.duv1, f.duv2).xyz * 255.0 - 128.0) / 127.0;
+    return select(vec3<f32>(0.0, 0.0, 1.0), m, layer > 0.5);
+}
+
+// The stored normal `m` in the frame `f`.
+fn framed(f: TangentFrame, m: vec3<f32>) -> vec3<f32> {
+    return select(f.n, normalize(m.x * f.t + m.y * f.b + m.z * f.n), f.ok);
+}
+
+fn shaded_with(in: VsOut, n: vec3<f32>) -> vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
-    return vec4<f32>(lit(in, texel.rgb * in.tint.rgb, normalize(in.normal)), in.lod.z);
+    return vec4<f32>(lit(in, texel.rgb * in.tint.rgb, n), in.lod.z);
+}
+
+fn shaded_mapped(in: VsOut) -> vec4<f32> {
+    let f = tangent_frame(in);
+    return shaded_with(in, framed(f, stored_normal(in, f, in.normal_layer.x)));
+}
+
+// `fs_main` and `fs_dither` for the levels lit through normal maps.
+@fragment
+fn fs_mapped(in: VsOut) -> @location(0) vec4<f32> {
+    return shaded_mapped(in);
+}
+
+@fragment
+fn fs_dither_mapped(in: VsOut) -> @location(0) vec4<f32> {
+    let colour = shaded_mapped(in);
+    if (dithered_out(in)) {
+        discard;
+    }
+    return colour;
+}
+
+// A geomorph lit through its two levels' maps, blended by the transition's t (lod.y).
+@fragment
+fn fs_morph_mapped(in: VsOut) -> @location(0) vec4<f32> {
+    let f = tangent_frame(in);
+    let fine = stored_normal(in, f, in.normal_layer.x);
+    let coarse = stored_normal(in, f, in.normal_layer.y);
+    return shaded_with(in, framed(f, mix(fine, coarse, clamp(in.lod.y, 0.0, 1.0))));
 }
 
 // Characters painted by the debug view (frame.views.x): by level, by transition, by

@@ -193,6 +193,12 @@ fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
     return out;
 }
 
+// The normal-map layer that lights a vertex plus one, 0 for none (see
+// src/bake/vertex_texture.rs and src/bake/normal_map.rs).
+fn normal_layer(vertex_index: u32) -> f32 {
+    return texel(vertex_tex, layout_of(vertex_tex), 2u * vertex_index + 1u).z;
+}
+
 // The vertex a vertex morphs into at the next coarser level (see src/bake/vertex_texture.rs);
 // a vertex of the coarsest level is its own target.
 fn geomorph_target(vertex_index: u32) -> u32 {

@@ -334,6 +334,10 @@ pub struct LodArgs {
     /// Debug view: shaded, lod, transition, wireframe, influences.
     #[arg(long, default_value = "shaded", value_enum)]
     pub debug_view: DebugView,
+    /// Light the coarse levels with their vertex normals only, not through the normal maps
+    /// baked from full detail.
+    #[arg(long)]
+    pub no_normal_maps: bool,
     /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
     #[arg(long, value_name = "A,B", value_parser = parse_compare)]
     pub compare: Option<(LodMethod, LodMethod)>,
@@ -471,6 +475,7 @@ impl LodArgs {
             compare,
             policy: self.policy.policy(),
             debug: self.debug_view,
+            normal_maps: !self.no_normal_maps,
             foliage: self.foliage.view(),
             ..Default::default()
         }

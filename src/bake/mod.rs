@@ -12,10 +12,12 @@ pub mod lod;
 pub mod lod_error;
 pub mod lod_pack;
 pub mod materials;
+pub mod normal_map;
 pub mod silhouette;
 pub mod simplify;
 pub mod spectral;
 pub mod texels;
+pub mod uv_grid;
 pub mod vertex_texture;
 
 use crate::model::{Bounds, Model};
@@ -113,7 +115,7 @@ impl CharacterBake {
         }
         let am = if optimize { am.optimized_for_gpu() } else { am };
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
-        let vertices = VertexTexture::pack(&[&am], &[])?;
+        let vertices = VertexTexture::pack(&[&am], &[], &[])?;
         let materials = MaterialLayers::bake(&model.materials);
 
         // Bounds over a few frames of every clip: enough for framing, shadows and culling.

@@ -4,10 +4,11 @@
 //!
 //! Layout, by linear texel index (see [`super::texels`]):
 //! - texel `2v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
-//! - texel `2v + 1`: `(geomorph target, spectral row + 1, 0, 0)`: the vertex (index into this
-//!   texture) that `v` morphs into at the next coarser level (Houle & Poulin §5.1), itself on
-//!   the coarsest level; and the row of the spectra texture whose offset moves it, 0 for none
-//!   (see [`crate::bake::spectral::texture`]);
+//! - texel `2v + 1`: `(geomorph target, spectral row + 1, normal-map layer + 1, 0)`: the vertex
+//!   (index into this texture) that `v` morphs into at the next coarser level (Houle & Poulin
+//!   §5.1), itself on the coarsest level; the row of the spectra texture whose offset moves it,
+//!   0 for none (see [`crate::bake::spectral::texture`]); and the layer of the normal maps that
+//!   lights it, 0 for none (see [`crate::bake::normal_map`]);
 //! - each influence two texels: `p_i` as `(x, y, z, w)`, then `(n_i.x, n_i.y, n_i.z, bone)`.
 //!
 //! Integers are stored as floats, exact up to 2^24 texels. The levels of detail of a model share
@@ -39,8 +40,13 @@ pub struct VertexTexture {
 impl VertexTexture {
     /// Packs meshes one after another: all headers first, then all influences. `geomorphs[k]`,
     /// where given, maps every vertex of mesh k to a vertex of mesh k+1; a mesh without one
-    /// morphs into itself.
-    pub fn pack(meshes: &[&AnimationSpaceMesh], geomorphs: &[&[u32]]) -> Result<Self, String> {
+    /// morphs into itself. `normal_layers[k][m]`, where given, is the normal-map layer of mesh
+    /// k's vertices of material m.
+    pub fn pack(
+        meshes: &[&AnimationSpaceMesh],
+        geomorphs: &[&[u32]],
+        normal_layers: &[Vec<Option<u32>>],
+    ) -> Result<Self, String> {
         let vertex_count: usize = meshes.iter().map(|m| m.vertex_count()).sum();
         let influence_count: usize = meshes.iter().map(|m| m.influences.len()).sum();
         let total = 2 * vertex_count + 2 * influence_count;
@@ -91,7 +97,11 @@ impl VertexTexture {
                     Some(&r) if r != crate::bake::spectral::texture::NO_ROW => r as f32 + 1.0,
                     _ => 0.0,
                 };
-                headers.push([target as f32, row, 0.0, 0.0]);
+                let layer = normal_layers
+                    .get(k)
+                    .and_then(|l| l.get(mesh.materials[v] as usize).copied().flatten())
+                    .map_or(0.0, |l| l as f32 + 1.0);
+                headers.push([target as f32, row, layer, 0.0]);
                 for inf in infs {
                     body.push(inf.p.to_array());
                     body.push([inf.n.x, inf.n.y, inf.n.z, inf.bone as f32]);
@@ -172,7 +182,12 @@ mod tests {
             indices: vec![],
             spectral_rows: vec![crate::bake::spectral::texture::NO_ROW, 7],
         };
-        let t = VertexTexture::pack(&[&mesh, &mesh], &[&[1, 1]]).unwrap();
+        let t = VertexTexture::pack(
+            &[&mesh, &mesh],
+            &[&[1, 1]],
+            &[vec![], vec![None, None, None, Some(5)]],
+        )
+        .unwrap();
         assert_eq!(t.base_vertices, vec![0, 2]);
         // Level 0 morphs into vertex 1 of level 1; level 1, the coarsest, into itself.
         assert_eq!(t.grid.get(1)[0], 3.0);
@@ -182,8 +197,11 @@ mod tests {
         // Vertex 1 reads spectra row 7 (stored plus one); vertex 0 none.
         assert_eq!(t.grid.get(1)[1], 0.0);
         assert_eq!(t.grid.get(3)[1], 8.0);
+        // Only level 1's vertex of material 3 has a normal-map layer (stored plus one).
+        let layers: Vec<f32> = (0..4).map(|v| t.grid.get(2 * v + 1)[2]).collect();
+        assert_eq!(layers, vec![0.0, 0.0, 0.0, 6.0]);
         // A map that does not fit the next level is refused.
-        assert!(VertexTexture::pack(&[&mesh, &mesh], &[&[0, 2]]).is_err());
+        assert!(VertexTexture::pack(&[&mesh, &mesh], &[&[0, 2]], &[]).is_err());
         let h = t.grid.get(2 * 3);
         assert_eq!(h[1] as u32 % MATERIAL_STRIDE, 2);
         assert_eq!(h[1] as u32 / MATERIAL_STRIDE, 3);

@@ -69,7 +69,7 @@ pub struct GpuLodSet {
 }
 
 /// Layout of group 1: animation texture, vertex texture, material layers, sampler, shadow,
-/// spectra texture, an animated impostor's view rectangles.
+/// spectra texture, an animated impostor's view rectangles, the set's normal maps.
 pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let data_texture = |binding| wgpu::BindGroupLayoutEntry {
         binding,
@@ -114,6 +114,16 @@ pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             },
             data_texture(5),
             data_texture(6),
+            wgpu::BindGroupLayoutEntry {
+                binding: 7,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2Array,
+                    multisampled: false,
+                },
+                count: None,
+            },
         ],
     })
 }
@@ -168,6 +178,39 @@ pub(crate) fn material_texture(
         },
         wgpu::util::TextureDataOrder::MipMajor,
         &m.mips.concat(),
+    )
+}
+
+/// A set's normal maps as a linear RGBA8 texture array with their mipmaps; one flat texel
+/// for a set without any.
+fn normal_map_texture(
+    gpu: &Gpu,
+    maps: Option<&crate::bake::normal_map::NormalMaps>,
+) -> wgpu::Texture {
+    let (size, layers, mips, bytes) = match maps {
+        Some(n) if n.layer_count > 0 => {
+            (n.size, n.layer_count, n.mips.len() as u32, n.mips.concat())
+        }
+        _ => (1, 1, 1, vec![128, 128, 255, 0]),
+    };
+    gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("normal maps"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: mips,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::MipMajor,
+        &bytes,
     )
 }
 
@@ -303,6 +346,11 @@ impl GpuCharacter {
                 usage: wgpu::BufferUsages::INDEX,
             });
         let verts_view = verts.create_view(&Default::default());
+        let normal_maps = normal_map_texture(gpu, pack.normal_maps.as_ref());
+        let normal_view = normal_maps.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
         let pose_vertices = pack.vertices.static_vertices(&self.calibration_pose);
         let static_vertices = gpu
             .device
@@ -315,6 +363,7 @@ impl GpuCharacter {
             vertex_textures: (pack.vertices.grid.texels.len() * 16) as u64,
             index_buffers: (pack.indices.len() * 4) as u64,
             calibration_vertices: std::mem::size_of_val(pose_vertices.as_slice()) as u64,
+            normal_maps: pack.normal_maps.as_ref().map_or(0, |n| n.bytes() as u64),
             ..Default::default()
         };
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -348,6 +397,10 @@ impl GpuCharacter {
                 wgpu::BindGroupEntry {
                     binding: 6,
                     resource: wgpu::BindingResource::TextureView(&self.rects_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::TextureView(&normal_view),
                 },
             ],
         });

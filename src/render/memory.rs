@@ -14,6 +14,8 @@ pub struct GpuMemory {
     pub index_buffers: u64,
     /// Material layers with their mipmaps: billboard-cloud atlases among them.
     pub material_textures: u64,
+    /// Coarse levels' normal maps with their mipmaps.
+    pub normal_maps: u64,
     /// Spectral clouds' DFT spectra.
     pub spectra_textures: u64,
     /// Every level's vertices in one pose for the plain calibration shader.
@@ -28,12 +30,13 @@ impl GpuMemory {
     }
 
     /// Names and bytes, largest kinds of data first as they usually are.
-    pub fn rows(&self) -> [(&'static str, u64); 7] {
+    pub fn rows(&self) -> [(&'static str, u64); 8] {
         [
             ("material textures", self.material_textures),
             ("vertex textures", self.vertex_textures),
             ("animation textures", self.animation_textures),
             ("index buffers", self.index_buffers),
+            ("normal maps", self.normal_maps),
             ("calibration vertices", self.calibration_vertices),
             ("spectra textures", self.spectra_textures),
             ("other buffers", self.other_buffers),
@@ -47,6 +50,7 @@ impl std::ops::AddAssign for GpuMemory {
         self.vertex_textures += o.vertex_textures;
         self.index_buffers += o.index_buffers;
         self.material_textures += o.material_textures;
+        self.normal_maps += o.normal_maps;
         self.spectra_textures += o.spectra_textures;
         self.calibration_vertices += o.calibration_vertices;
         self.other_buffers += o.other_buffers;

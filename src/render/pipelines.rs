@@ -132,6 +132,16 @@ impl Shading {
     }
 }
 
+/// The shaded character pipelines again for levels lit through normal maps (the debug views
+/// keep vertex normals): their own vertex shaders read each vertex's layer, their fragment
+/// shaders the map.
+pub(super) struct Mapped {
+    pub skinned: wgpu::RenderPipeline,
+    pub morph: wgpu::RenderPipeline,
+    pub dither: wgpu::RenderPipeline,
+    pub fade_color: wgpu::RenderPipeline,
+}
+
 /// Every pipeline the scene renderer draws with.
 pub(super) struct Pipelines {
     pub skinned: Shading,
@@ -141,6 +151,7 @@ pub(super) struct Pipelines {
     /// The two passes of a faded level: depth only, then colour where the depth is equal.
     pub fade_depth: wgpu::RenderPipeline,
     pub fade_color: Shading,
+    pub mapped: Mapped,
     /// Line-mode versions of `skinned` and `morph`, where the adapter can draw lines.
     pub wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
@@ -237,7 +248,7 @@ impl Pipelines {
                 ..character("faded level depth", "vs_main")
             },
         );
-        let fade_color = shading(PipelineSpec {
+        let fade_color_spec = |label, vs| PipelineSpec {
             depth: Depth::Equal,
             blend: Some(wgpu::BlendState {
                 color: wgpu::BlendComponent {
@@ -247,8 +258,30 @@ impl Pipelines {
                 },
                 alpha: wgpu::BlendComponent::OVER,
             }),
-            ..character("faded level colour", "vs_main")
-        });
+            ..character(label, vs)
+        };
+        let fade_color = shading(fade_color_spec("faded level colour", "vs_main"));
+        let mapped_spec = |spec: PipelineSpec<'_>, fs| {
+            pipeline(device, &with_characters, f, s, PipelineSpec { fs, ..spec })
+        };
+        let mapped = Mapped {
+            skinned: mapped_spec(
+                character("normal-mapped characters", "vs_main_mapped"),
+                "fs_mapped",
+            ),
+            morph: mapped_spec(
+                character("normal-mapped geomorphs", "vs_morph_mapped"),
+                "fs_morph_mapped",
+            ),
+            dither: mapped_spec(
+                character("normal-mapped dithered characters", "vs_main_mapped"),
+                "fs_dither_mapped",
+            ),
+            fade_color: mapped_spec(
+                fade_color_spec("normal-mapped faded level colour", "vs_main_mapped"),
+                "fs_mapped",
+            ),
+        };
         // Foliage: no culling, the texture's alpha as a cut-out; with multisampling, alpha to
         // coverage smooths the cut edges.
         let foliage_fs = if s > 1 {
@@ -364,6 +397,7 @@ impl Pipelines {
             dither,
             fade_depth,
             fade_color,
+            mapped,
             wireframe,
             foliage,
             impostor,

@@ -215,12 +215,18 @@ impl DrawKey {
     fn level(self) -> usize {
         (self.0 >> 8 & 0xff) as usize
     }
+    fn hops(self) -> usize {
+        (self.0 & 0xff) as usize
+    }
 }
 
 pub struct SceneRenderer {
     pub lighting: Lighting,
     pub shader: CharacterShader,
     pub shadows: bool,
+    /// Light the coarse levels through their normal maps, where their sets have them (see
+    /// `bake::normal_map`); off, every level keeps its vertex normals.
+    pub normal_maps: bool,
     /// Scales every tree's own wind strength (foliage only; characters play their clips as
     /// they are).
     pub wind: f32,
@@ -323,6 +329,7 @@ impl SceneRenderer {
             lighting: Lighting::default(),
             shader: CharacterShader::Skinned,
             shadows: true,
+            normal_maps: true,
             wind: 1.0,
             outlines: false,
             foliage_tint: false,
@@ -719,15 +726,25 @@ impl SceneRenderer {
             }
             Pass::Transitions => {
                 let debug = self.debug != DebugView::Shaded;
-                for pipeline in [
-                    &self.pipelines.fade_depth,
-                    self.pipelines.fade_color.get(debug),
-                ] {
-                    pass.set_pipeline(pipeline);
-                    for (key, range) in self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE) {
-                        scissor.side(pass, key.side());
-                        self.draw_group(pass, key, range);
+                let fades = || self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE);
+                pass.set_pipeline(&self.pipelines.fade_depth);
+                for (key, range) in fades() {
+                    scissor.side(pass, key.side());
+                    self.draw_group(pass, key, range);
+                }
+                let mut current = None;
+                for (key, range) in fades() {
+                    let mapped = self.mapped(key, debug);
+                    if current != Some(mapped) {
+                        current = Some(mapped);
+                        pass.set_pipeline(if mapped {
+                            &self.pipelines.mapped.fade_color
+                        } else {
+                            self.pipelines.fade_color.get(debug)
+                        });
                     }
+                    scissor.side(pass, key.side());
+                    self.draw_group(pass, key, range);
                 }
             }
             Pass::Ui => {}
@@ -755,6 +772,30 @@ impl SceneRenderer {
             pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..*count, 0, range.clone());
         }
+    }
+
+    /// Whether the draw `key` is lit through normal maps: shaded (not a debug view), maps on,
+    /// a character's level (or, in a geomorph, either end) that has one.
+    fn mapped(&self, key: &DrawKey, debug: bool) -> bool {
+        if debug || !self.normal_maps {
+            return false;
+        }
+        let c = &self.characters[key.model()];
+        if c.two_sided || c.impostor || c.animated_impostor {
+            return false;
+        }
+        let Some(set) = c.set(key.slot()) else {
+            return false;
+        };
+        let last = key.level()
+            + if key.pass() == PASS_MORPH {
+                key.hops()
+            } else {
+                0
+            };
+        set.levels
+            .get(key.level()..=last.min(set.levels.len().saturating_sub(1)))
+            .is_some_and(|l| l.iter().any(|l| l.normal_mapped))
     }
 
     /// One instanced draw of a group's level from its method's set.
@@ -815,10 +856,17 @@ impl SceneRenderer {
                 (PASS_FADE, None, _) => continue,
                 (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
                 (_, None, true) => (&self.pipelines.foliage.0, 3),
+                (PASS_MORPH, None, false) if self.mapped(&key, debug) => {
+                    (&self.pipelines.mapped.morph, 9)
+                }
                 (PASS_MORPH, None, false) => (self.pipelines.morph.get(debug), 4),
+                (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) if self.mapped(&key, debug) => {
+                    (&self.pipelines.mapped.dither, 10)
+                }
                 (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) => {
                     (self.pipelines.dither.get(debug), 7)
                 }
+                _ if self.mapped(&key, debug) => (&self.pipelines.mapped.skinned, 11),
                 _ => (self.pipelines.skinned.get(debug), 5),
             };
             if current != Some(id) {

@@ -20,6 +20,8 @@ pub struct ShotLod {
     pub compare: Option<LodMethod>,
     pub policy: LodPolicy,
     pub debug: DebugView,
+    /// Light coarse levels through their normal maps (off: vertex normals everywhere).
+    pub normal_maps: bool,
     /// What trees become, and how they look.
     pub foliage: FoliageView,
     /// Selection runs over this many seconds before the shot's time at 60 Hz, so that the
@@ -34,6 +36,7 @@ impl Default for ShotLod {
             compare: None,
             policy: LodPolicy::default(),
             debug: DebugView::Shaded,
+            normal_maps: true,
             foliage: FoliageView::default(),
             settle_seconds: 1.0,
         }
@@ -85,6 +88,7 @@ impl Headless {
         world.lod.compare = lod.compare;
         world.lod.policy = lod.policy;
         world.renderer.debug = lod.debug;
+        world.renderer.normal_maps = lod.normal_maps;
         world.apply_foliage(&lod.foliage);
         if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
             anyhow::bail!(

@@ -22,12 +22,12 @@
 use super::colour_error::{
     METRIC_FRAMES, METRIC_VIEWS, framing, metric_camera, metric_world, picture,
 };
+use super::levels::mapped_pack;
 use super::spec::Loaded;
 use super::world::World;
 use crate::bake::CharacterBake;
 use crate::bake::crowd_impostor::AnimatedImpostor;
 use crate::bake::lod::LodLevel;
-use crate::bake::lod_pack::LodPack;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;
@@ -61,6 +61,7 @@ const PITCH_DEG: f32 = 15.0;
 /// and full detail's world again with one mesh level in place of its full-detail set.
 struct Worlds<'a> {
     gpu: &'a Gpu,
+    model: &'a Model,
     full: World,
     impostor: World,
     level: World,
@@ -74,7 +75,7 @@ struct Worlds<'a> {
 impl<'a> Worlds<'a> {
     fn new(
         gpu: &'a Gpu,
-        model: &Model,
+        model: &'a Model,
         full: &CharacterBake,
         impostor: &AnimatedImpostor,
     ) -> Result<Self> {
@@ -84,6 +85,7 @@ impl<'a> Worlds<'a> {
             .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
         Ok(Worlds {
             gpu,
+            model,
             full: world(Loaded::forest_of_bake(model, full.clone(), 1))?,
             impostor: world(Loaded::forest_of_bake(&impostor.model, impostor_bake, 1))?,
             level: world(Loaded::forest_of_bake(model, full.clone(), 1))?,
@@ -99,7 +101,7 @@ impl<'a> Worlds<'a> {
         if self.shown != Some(k) {
             let mut level = levels[k].clone();
             level.geomorph.clear();
-            let pack = LodPack::from_levels(&[level]).map_err(anyhow::Error::msg)?;
+            let pack = mapped_pack(self.model, levels, &[level]).map_err(anyhow::Error::msg)?;
             self.level.renderer.add_levels(self.gpu, 0, 0, &pack)?;
             self.shown = Some(k);
         }
@@ -126,29 +128,35 @@ impl<'a> Worlds<'a> {
                     Some(_) => shoot(&mut self.level, camera, t, false)?,
                     None => full.clone(),
                 };
-                for (((a, b), c), bg) in full
-                    .pixels()
-                    .zip(imp.pixels())
-                    .zip(lvl.pixels())
-                    .zip(background.pixels())
-                {
-                    let on = |x: &image::Rgba<u8>| (0..3).any(|i| x[i].abs_diff(bg[i]) > 10);
-                    let diff = |x: &image::Rgba<u8>| {
-                        (0..3).map(|i| a[i].abs_diff(x[i]) as f64).sum::<f64>() / (3.0 * 255.0)
-                    };
-                    covered += on(a) as u64;
-                    if on(a) || on(b) {
-                        off_impostor += diff(b);
-                    }
-                    if on(a) || on(c) {
-                        off_level += diff(c);
-                    }
-                }
+                let (n, off) = colour_off(&full, &imp, &background);
+                covered += n;
+                off_impostor += off;
+                off_level += colour_off(&full, &lvl, &background).1;
             }
         }
         let n = covered.max(1) as f64;
         Ok(((off_impostor / n) as f32, (off_level / n) as f32))
     }
+}
+
+/// The colour error's terms over one picture (see the module comment): the pixels `full`
+/// covers, and the colour difference of `other` from `full` summed over the pixels either
+/// covers, each a mean over the three channels in 0..1. A pixel is covered where it differs
+/// from `background` (the same view with nothing in it).
+pub(crate) fn colour_off(
+    full: &image::RgbaImage,
+    other: &image::RgbaImage,
+    background: &image::RgbaImage,
+) -> (u64, f64) {
+    let (mut covered, mut off) = (0u64, 0.0f64);
+    for ((a, b), bg) in full.pixels().zip(other.pixels()).zip(background.pixels()) {
+        let on = |x: &image::Rgba<u8>| (0..3).any(|i| x[i].abs_diff(bg[i]) > 10);
+        covered += on(a) as u64;
+        if on(a) || on(b) {
+            off += (0..3).map(|i| a[i].abs_diff(b[i]) as f64).sum::<f64>() / (3.0 * 255.0);
+        }
+    }
+    (covered, off)
 }
 
 /// The colour error of `impostor` against full detail of `model` (`full`: its bake) at

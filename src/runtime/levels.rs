@@ -145,13 +145,19 @@ pub fn bake_each(
             }
             if s.impostor.is_some() {
                 progress(i, IMPOSTOR_PENDING);
-                deliver(i, Some(pack(&lods).map(|p| Levels::Pack(p, None))));
+                deliver(
+                    i,
+                    Some(pack(&s.model, &lods).map(|p| Levels::Pack(p, None))),
+                );
                 if let Ok(mut later) = later.lock() {
                     later.push((i, lods));
                 }
                 return;
             }
-            (pack(&lods).map(|p| Levels::Pack(p, None)), Origin::Cache)
+            (
+                pack(&s.model, &lods).map(|p| Levels::Pack(p, None)),
+                Origin::Cache,
+            )
         };
         if let Origin::Baked { warning: Some(w) } = origin {
             warn(w);
@@ -178,7 +184,7 @@ pub fn bake_each(
 const IMPOSTOR_PENDING: f32 = 0.9;
 
 /// Bump whenever placing an impostor changes its result.
-const PLACEMENT_VERSION: u32 = 2;
+const PLACEMENT_VERSION: u32 = 3;
 
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
@@ -282,8 +288,30 @@ fn tree_levels(
     Ok((Levels::Tree { chain, bakes }, origin))
 }
 
-fn pack(lods: &SkinnedLods) -> Result<LodPack, String> {
-    LodPack::from_levels(&lods.levels).map_err(|e| format!("{} {}: {e}", lods.model, lods.method))
+/// `lods` of `model` packed for the GPU, with normal maps for the coarse levels (see
+/// [`crate::bake::normal_map`]).
+fn pack(model: &Model, lods: &SkinnedLods) -> Result<LodPack, String> {
+    mapped_pack(model, &lods.levels, &lods.levels)
+        .map_err(|e| format!("{} {}: {e}", lods.model, lods.method))
+}
+
+/// `levels` (some of `chain`, whose first level is full detail) of `model` packed as the
+/// runtime packs them, with their normal maps: [`pack`]'s levels, or one level alone for a
+/// metric to draw.
+pub(crate) fn mapped_pack(
+    model: &Model,
+    chain: &[crate::bake::lod::LodLevel],
+    levels: &[crate::bake::lod::LodLevel],
+) -> Result<LodPack, String> {
+    let rest_bones = crate::bake::simplify::SimplifyInput::rest_bones(&model.skeleton);
+    let full = &chain.first().ok_or("no levels")?.mesh;
+    LodPack::with_normal_maps(
+        levels,
+        full,
+        &rest_bones,
+        model.materials.len(),
+        crate::bake::normal_map::NORMAL_MAP_SIZE,
+    )
 }
 
 /// A bake running on its own thread, handing over each model's levels as they are ready.

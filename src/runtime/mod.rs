@@ -9,5 +9,6 @@ pub mod colour_error;
 pub mod headless;
 pub mod impostor_placement;
 pub mod levels;
+pub mod shading_error;
 pub mod spec;
 pub mod world;

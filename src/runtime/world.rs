@@ -40,6 +40,19 @@ pub struct World {
     /// Per model: a character's animated impostor on the GPU, its last level under every
     /// simplified method.
     impostors: Vec<Option<InstalledImpostor>>,
+    /// Per model and method slot: its levels' normal maps as uploaded.
+    normal_maps: Vec<Vec<Option<NormalMapInfo>>>,
+}
+
+/// A set of levels' normal maps, as the panel reports them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalMapInfo {
+    /// Levels lit through a map.
+    pub levels: usize,
+    /// Bytes of the maps with their mipmaps.
+    pub bytes: u64,
+    /// Why no level has one, where none has.
+    pub unmapped: Option<crate::bake::normal_map::UvProblem>,
 }
 
 /// A character's animated impostor on the GPU.
@@ -276,6 +289,7 @@ impl World {
             instances: Vec::new(),
             drawn: Default::default(),
             impostors: vec![None; n_models],
+            normal_maps: vec![Vec::new(); n_models],
         })
     }
 
@@ -358,6 +372,16 @@ impl World {
                 None => {}
                 Some(Levels::Pack(pack, impostor)) => {
                     self.renderer.add_levels(gpu, m, slot, &pack)?;
+                    let info = pack.normal_maps.as_ref().map(|n| NormalMapInfo {
+                        levels: pack.levels.iter().filter(|l| l.normal_mapped).count(),
+                        bytes: n.bytes() as u64,
+                        unmapped: n.unmapped_reason(),
+                    });
+                    let of_model = &mut self.normal_maps[m];
+                    if of_model.len() <= slot {
+                        of_model.resize(slot + 1, None);
+                    }
+                    of_model[slot] = info;
                     self.lod.models[m][slot] = Some(lod_model(&self.bakes[m], &pack));
                     self.lod.impostor_errors[m][slot] = None;
                     if let Some(level) = impostor {
@@ -447,6 +471,42 @@ impl World {
             (true, Some(options)) => format!("impostors {options}: baked with a method's levels"),
             (true, None) => "impostors: off (--impostors)".into(),
         }
+    }
+
+    /// The characters' normal maps under the method shown, in a line for the panel: levels
+    /// lit through one and megabytes, or why a model's levels keep their vertex normals.
+    pub fn normal_map_summary(&self) -> String {
+        if !self.renderer.normal_maps {
+            return "normal maps: off, vertex normals (--no-normal-maps)".into();
+        }
+        let slot = self.lod.method.index();
+        let parts: Vec<String> = self
+            .normal_maps
+            .iter()
+            .enumerate()
+            .filter_map(|(m, infos)| {
+                let info = infos.get(slot).copied().flatten()?;
+                let name = &self.bakes[m].name;
+                Some(match info.unmapped {
+                    Some(problem) => format!("{name}: vertex normals, {problem}"),
+                    None => format!(
+                        "{name} {} levels {:.1} MB",
+                        info.levels,
+                        info.bytes as f64 / 1e6
+                    ),
+                })
+            })
+            .collect();
+        if parts.is_empty() {
+            "normal maps: none (full detail or trees shown)".into()
+        } else {
+            format!("normal maps: {}", parts.join(" · "))
+        }
+    }
+
+    /// Per model and method slot, its levels' normal maps as uploaded.
+    pub fn normal_maps(&self, m: usize, slot: usize) -> Option<NormalMapInfo> {
+        self.normal_maps.get(m)?.get(slot).copied().flatten()
     }
 
     /// Per model, its animated impostor where it has one on the GPU.

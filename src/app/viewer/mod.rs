@@ -224,6 +224,7 @@ impl Viewer {
         world.lod.compare = options.lod.compare;
         world.lod.policy = options.lod.policy;
         world.renderer.debug = options.lod.debug;
+        world.renderer.normal_maps = options.lod.normal_maps;
         world.apply_foliage(&options.lod.foliage);
         if options.screenshot.is_some() || world.levels_cached() {
             // A screenshot shows the levels asked for, so it waits for them; and levels all in
@@ -252,6 +253,7 @@ impl Viewer {
             compare: world.lod.compare,
             policy: world.lod.policy,
             debug: world.renderer.debug,
+            normal_maps: world.renderer.normal_maps,
             foliage: options.lod.foliage,
             impostors: world.lod.impostors_shown(),
         };
@@ -574,6 +576,7 @@ impl Viewer {
             trees: self.world.bakes.iter().any(|b| b.alpha_tested),
             chains: self.world.shown_chains(),
             impostors: self.world.impostor_summary(),
+            normal_maps: self.world.normal_map_summary(),
         };
         let (settings, history) = (&mut self.settings, &self.history);
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
@@ -651,6 +654,7 @@ impl Viewer {
         lod.policy = s.policy;
         self.world.show_impostors(s.impostors);
         self.world.renderer.debug = s.debug;
+        self.world.renderer.normal_maps = s.normal_maps;
         let chain_before = (self.world.lod.foliage(), self.world.lod.chain());
         self.world.apply_foliage(&s.foliage);
         if (self.world.lod.foliage(), self.world.lod.chain()) != chain_before {

@@ -176,6 +176,8 @@ pub struct Settings {
     pub foliage: FoliageView,
     /// Far characters show as their animated impostors.
     pub impostors: bool,
+    /// Coarse levels are lit through their normal maps.
+    pub normal_maps: bool,
 }
 
 /// Facts the panel shows.
@@ -204,6 +206,8 @@ pub struct Info<'a> {
     pub trees: bool,
     /// The characters' animated impostors, in a line (see `World::impostor_summary`).
     pub impostors: String,
+    /// The characters' normal maps, in a line (see `World::normal_map_summary`).
+    pub normal_maps: String,
     /// The chain each tree shows: its name, whether it is cut as the panel says, its levels.
     pub chains: Vec<(String, bool, &'a [LevelSummary])>,
 }
@@ -505,6 +509,9 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.checkbox(&mut s.impostors, "far characters as impostors")
         .on_hover_text("Below its coarsest mesh a character becomes one quad showing it baked from the nearest of a grid of views at the frames round its time, under every simplified method (--impostors)");
     ui.label(egui::RichText::new(&info.impostors).small());
+    ui.checkbox(&mut s.normal_maps, "normal maps on coarse levels")
+        .on_hover_text("Coarse levels are lit by full detail's normals, baked into a normal map on each level's texture coordinates (Merry et al.); off, by their own vertex normals (--no-normal-maps). Models without usable texture coordinates keep their vertex normals");
+    ui.label(egui::RichText::new(&info.normal_maps).small());
     ui.add(
         egui::Slider::new(&mut p.hysteresis, 0.0..=0.9)
             .text("hysteresis")
