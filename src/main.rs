@@ -129,6 +129,7 @@ fn bench(a: BenchArgs) -> anyhow::Result<ExitCode> {
         methods: dedup(a.methods),
         policy: a.policy.policy(),
         foliage: a.foliage.view(),
+        normal_maps: !a.no_normal_maps,
         width: a.size.0,
         height: a.size.1,
         samples: a.msaa,

@@ -256,6 +256,28 @@ fn report_writes_curves_plot_and_timings() {
         }
     }
     assert!(json["methods"]["as+is"]["cache_hit_rate"].as_f64().unwrap() > 0.0);
+    // Every level but full detail's lighting, by vertex normals and through its map.
+    for method in ["rest-pose", "as", "as+is"] {
+        let m = &json["methods"][method];
+        let shading = m["shading"].as_array().unwrap();
+        assert_eq!(
+            shading.len(),
+            m["levels"].as_array().unwrap().len() - 1,
+            "{method}"
+        );
+        for s in shading {
+            assert!(s["vertex_normals"].as_f64().unwrap() >= 0.0);
+            assert!(s["normal_maps"].as_f64().unwrap() >= 0.0);
+        }
+    }
+    assert!(
+        json["methods"]["meshopt"]["shading"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    let timings = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
+    assert!(timings.contains("## Lighting"), "{timings}");
     assert!(json["methods"]["as"]["cache_hit_rate"].is_null());
     let png = image::open(out_dir.join("error.png")).unwrap();
     assert_eq!((png.width(), png.height()), (1000, 640));

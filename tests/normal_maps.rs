@@ -57,7 +57,11 @@ fn coarse_levels_are_lit_closer_to_full_detail_through_their_maps() {
 #[test]
 fn a_model_without_texture_coordinates_keeps_its_vertex_normals() {
     let mut walker = load_model("walker").unwrap();
-    walker.mesh.uvs.iter_mut().for_each(|uv| *uv = glam::Vec2::ZERO);
+    walker
+        .mesh
+        .uvs
+        .iter_mut()
+        .for_each(|uv| *uv = glam::Vec2::ZERO);
     let lods = levels(&walker);
     let rest = SimplifyInput::rest_bones(&walker.skeleton);
     let pack = LodPack::with_normal_maps(
@@ -105,7 +109,7 @@ fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
         lodlab::scene::Camera::new(glam::Vec3::ZERO, 20.0, 20.0, world.crowd.radius * 1.5);
     let (w, h) = (480, 270);
     let target = Offscreen::new(gpu, w, h, 1);
-    let mut frame = |world: &mut World| {
+    let frame = |world: &mut World| {
         world.lod.reset();
         world.settle(h, 2.0, 0.0);
         let stats = world.upload(gpu, w as f32 / h as f32, 2.0);
@@ -113,7 +117,11 @@ fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
         (stats, target.read_rgba(gpu).unwrap())
     };
     let (on, lit) = frame(&mut world);
-    assert!(on.levels.iter().skip(1).sum::<u32>() > 10, "{:?}", on.levels);
+    assert!(
+        on.levels.iter().skip(1).sum::<u32>() > 10,
+        "{:?}",
+        on.levels
+    );
     world.renderer.normal_maps = false;
     let (off, plain) = frame(&mut world);
     assert_eq!(on.triangles, off.triangles);

@@ -52,6 +52,8 @@ pub struct BenchOptions {
     pub methods: Vec<LodMethod>,
     pub policy: LodPolicy,
     pub foliage: FoliageView,
+    /// Light coarse levels through their normal maps.
+    pub normal_maps: bool,
     pub width: u32,
     pub height: u32,
     /// Samples per pixel; `None` for the adapter's default (see [`crate::render::Gpu::samples`]).
@@ -87,6 +89,9 @@ pub struct BenchReport {
     pub transition: String,
     pub drive: String,
     pub tolerance_px: f32,
+    /// Coarse levels were lit through their normal maps.
+    #[serde(default)]
+    pub normal_maps: bool,
     pub calibration: Calibration,
     pub methods: BTreeMap<String, MethodFigures>,
     /// The methods in the order they were given (`methods` is keyed by name).
@@ -213,6 +218,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
             method,
             policy: o.policy,
             foliage: o.foliage,
+            normal_maps: o.normal_maps,
             ..Default::default()
         })?;
     }
@@ -327,6 +333,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         transition: o.policy.transition.name().into(),
         drive: o.policy.drive.name().into(),
         tolerance_px: o.policy.tolerance_px,
+        normal_maps: o.normal_maps,
         calibration,
         methods,
         order: o.methods.iter().map(|m| m.name().to_string()).collect(),

@@ -166,6 +166,9 @@ pub struct BenchArgs {
     pub policy: PolicyArgs,
     #[command(flatten)]
     pub foliage: FoliageArgs,
+    /// Light the coarse levels with their vertex normals only, not through their normal maps.
+    #[arg(long)]
+    pub no_normal_maps: bool,
     /// Image size.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),

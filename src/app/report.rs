@@ -3,6 +3,9 @@
 //! silhouette strays where the renderer switches to it, and optionally meshoptimizer as the
 //! baseline a user would otherwise reach for.
 //!
+//! Each level's lighting is measured too: its colour error against full detail lit by its own
+//! vertex normals and through its normal map ([`crate::runtime::shading_error`]).
+//!
 //! The curves measure through the texture where the model's texture coordinates are a
 //! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
 
@@ -56,7 +59,15 @@ pub struct MethodReport {
     pub curve: Vec<CurvePoint>,
     /// The levels the viewer uses (empty for the meshopt baseline).
     pub levels: Vec<LevelReport>,
+    /// Every level but full detail's colour error against full detail, lit by its vertex
+    /// normals and through its normal map, [`SHADING_PX`] high (empty for the meshopt
+    /// baseline, or where no GPU adapter could draw them).
+    pub shading: Vec<crate::runtime::shading_error::LevelShading>,
 }
+
+/// The character's height on screen, pixels, at which every level's lighting is compared with
+/// full detail's: close enough for a level's shading to show.
+pub const SHADING_PX: f32 = 400.0;
 
 /// One level of detail as the viewer bakes it, and how its silhouette compares.
 #[derive(Clone, Debug, Serialize)]
@@ -118,6 +129,11 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     let lod_opts = crate::runtime::levels::runtime_options(&model);
     let poses = pose_samples(&model, SILHOUETTE_POSES);
 
+    // The lighting needs a GPU adapter (lavapipe will do); without one the rest stands.
+    let gpu = crate::render::Gpu::headless()
+        .map_err(|e| log::warn!("no GPU adapter, so no shading errors: {e:#}"))
+        .ok();
+    let full = crate::bake::CharacterBake::new(&model).map_err(anyhow::Error::msg)?;
     let mut methods = BTreeMap::new();
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
     for method in Method::ALL {
@@ -130,6 +146,21 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         let measured = clock.elapsed().as_secs_f64();
         bar.set_message("silhouettes");
         let levels = level_reports(&lods, &poses);
+        bar.set_message("lighting");
+        let shading = match &gpu {
+            Some(gpu) => {
+                let which: Vec<usize> = (1..lods.levels.len()).collect();
+                crate::runtime::shading_error::shading_errors(
+                    gpu,
+                    &model,
+                    &full,
+                    &lods.levels,
+                    &which,
+                    SHADING_PX,
+                )?
+            }
+            None => Vec::new(),
+        };
         log::debug!(
             "{} by {method}: bake {:.2} s, error curve {measured:.2} s, silhouettes {:.2} s",
             model.name,
@@ -147,6 +178,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
                 },
                 curve,
                 levels,
+                shading,
             },
         );
         sequences.push((method, lods.sequence));
@@ -348,6 +380,7 @@ fn meshopt_curve(
         cache_hit_rate: None,
         curve,
         levels: Vec::new(),
+        shading: Vec::new(),
     }
 }
 
@@ -608,6 +641,7 @@ fn timings_markdown(
         );
     }
     md += &levels_markdown(report, lod_opts);
+    md += &shading_markdown(report);
     let c = &report.comparison;
     let pct = |x: Option<f64>| x.map_or("–".into(), |x| format!("{:.0}%", x * 100.0));
     md += &format!(
@@ -629,6 +663,49 @@ fn timings_markdown(
             .collect::<Vec<_>>()
             .join(", ")
     );
+    md
+}
+
+/// Every level's lighting against full detail's, per method: vertex normals against the
+/// normal map.
+fn shading_markdown(report: &Report) -> String {
+    let mut md = format!(
+        "\n## Lighting\n\n\
+         Each level's colour error against full detail, {SHADING_PX} px high: the mean colour \
+         difference (0 to 1) over the pixels either covers, divided by the pixels full detail \
+         covers, from {} views 15° above the ground at {} times of the first clip. Both columns \
+         draw the same triangles, lit by the level's own vertex normals or through its normal \
+         map (full detail's normals baked on its texture coordinates); their difference is the \
+         lighting alone.\n",
+        crate::runtime::colour_error::METRIC_VIEWS,
+        crate::runtime::colour_error::METRIC_FRAMES,
+    );
+    let measured: Vec<_> = report
+        .methods
+        .iter()
+        .filter(|(_, m)| !m.shading.is_empty())
+        .collect();
+    if measured.is_empty() {
+        md += "\nNot measured: no GPU adapter.\n";
+    }
+    for (name, m) in measured {
+        md += &format!(
+            "\n### {name}\n\n| LOD | triangles | vertex normals | normal map | change |\n|---|---|---|---|---|\n"
+        );
+        for s in &m.shading {
+            let change = if !s.mapped {
+                "no map".to_string()
+            } else if s.vertex_normals > 0.0 {
+                format!("{:+.0}%", 100.0 * (s.normal_maps / s.vertex_normals - 1.0))
+            } else {
+                "–".to_string()
+            };
+            md += &format!(
+                "| {} | {} | {:.5} | {:.5} | {change} |\n",
+                s.level, s.triangles, s.vertex_normals, s.normal_maps
+            );
+        }
+    }
     md
 }
 

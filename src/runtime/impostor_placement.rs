@@ -55,10 +55,11 @@ pub struct Placement {
 }
 
 /// The views look down this many degrees, as a crowd's camera does.
-const PITCH_DEG: f32 = 15.0;
+pub(crate) const PITCH_DEG: f32 = 15.0;
 
 /// The drawings the placement compares, each a world of its own: full detail, the impostor,
-/// and full detail's world again with one mesh level in place of its full-detail set.
+/// and full detail's world again with one mesh level in place of its full-detail set, lit
+/// through its normal map as the runtime draws it.
 struct Worlds<'a> {
     gpu: &'a Gpu,
     model: &'a Model,

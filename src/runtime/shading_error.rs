@@ -11,7 +11,7 @@
 use super::colour_error::{
     METRIC_FRAMES, METRIC_VIEWS, framing, metric_camera, metric_world, picture,
 };
-use super::impostor_placement::colour_off;
+use super::impostor_placement::{PITCH_DEG, colour_off};
 use super::levels::mapped_pack;
 use super::spec::Loaded;
 use crate::bake::CharacterBake;
@@ -64,7 +64,7 @@ pub fn shading_errors(
         let (mut covered, mut off_plain, mut off_mapped) = (0u64, 0.0f64, 0.0f64);
         for view in 0..METRIC_VIEWS {
             let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
-            let camera = metric_camera(centre, height, yaw, 15.0, distance);
+            let camera = metric_camera(centre, height, yaw, PITCH_DEG, distance);
             let background = picture(gpu, &mut full_world, &target, camera, 0.0, true)?;
             for frame in 0..METRIC_FRAMES {
                 let t = duration * frame as f32 / METRIC_FRAMES as f32;
