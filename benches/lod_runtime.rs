@@ -6,7 +6,8 @@
 //! - frames per second and triangles per frame for `none`, `rest-pose`, `as` and `as+is`;
 //! - the cost of transitions: `as+is` with every visible instance forced into a morph (t = ½
 //!   towards the next level), an alpha blend or a dithered cross-fade (p = ¼), against the same
-//!   frame popping.
+//!   frame popping; and popping and dithering with the coarse levels lit by their vertex
+//!   normals instead of their normal maps.
 
 use anyhow::Result;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
@@ -116,16 +117,19 @@ fn main() -> Result<()> {
     let view = FrameView::from_camera(&world.camera, WIDTH as f32 / HEIGHT as f32, TIME);
     println!("\nas+is, every instance in transition");
     println!(
-        "{:<10} {:>9} {:>12} {:>9} {:>10}",
+        "{:<22} {:>9} {:>12} {:>9} {:>10}",
         "draw", "ms/frame", "triangles", "draws", "vs pop"
     );
     let mut pop_ms = 0.0;
-    for (name, draws) in [
-        ("pop", &popped),
-        ("morph", &morphs),
-        ("alpha", &alphas),
-        ("dither", &dithers),
+    for (name, draws, normal_maps) in [
+        ("pop", &popped, true),
+        ("morph", &morphs, true),
+        ("alpha", &alphas, true),
+        ("dither", &dithers, true),
+        ("pop, vertex normals", &popped, false),
+        ("dither, vertex normals", &dithers, false),
     ] {
+        world.renderer.normal_maps = normal_maps;
         let stats = world.renderer.prepare(
             &gpu,
             &view,
@@ -142,7 +146,7 @@ fn main() -> Result<()> {
             pop_ms = ms;
         }
         println!(
-            "{:<10} {:>9.1} {:>12} {:>9} {:>9.2}x",
+            "{:<22} {:>9.1} {:>12} {:>9} {:>9.2}x",
             name,
             ms,
             stats.triangles,
