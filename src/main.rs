@@ -3,7 +3,7 @@
 
 use clap::Parser;
 use lodlab::app::cli::{
-    BakeArgs, BenchArgs, Cli, Command, GenAssetsArgs, RecordArgs, ReportArgs, ShotArgs,
+    BakeArgs, BenchArgs, Cli, Command, ExportArgs, GenAssetsArgs, RecordArgs, ReportArgs, ShotArgs,
     StudyCommand, ViewArgs,
 };
 use lodlab::app::shot::{self, ShotOptions};
@@ -18,6 +18,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::GenAssets(a)) => gen_assets(a),
         Some(Command::Bake(a)) => bake(a),
         Some(Command::Report(a)) => report(a),
+        Some(Command::Export(a)) => export(a),
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Record(a)) => record(a),
         Some(Command::Study(a)) => study(a.command),
@@ -69,6 +70,26 @@ fn bake(a: BakeArgs) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {warning}");
     }
     print!("{}", lodlab::app::bake::table(&results));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab export`: a character's levels as glTF files.
+fn export(a: ExportArgs) -> anyhow::Result<ExitCode> {
+    let Some(model) = a.model.or(a.model_flag) else {
+        anyhow::bail!("export needs a model: lodlab export --model NAME|PATH --out DIR");
+    };
+    let exported = lodlab::app::export::run(&lodlab::app::export::ExportOptions {
+        model,
+        method: a.method,
+        out: a.out,
+        tolerance_px: a.tolerance,
+        cache_dir: a.cache,
+    })?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&exported)?);
+    } else {
+        print!("{}", lodlab::app::export::table(&exported));
+    }
     Ok(ExitCode::SUCCESS)
 }
 

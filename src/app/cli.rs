@@ -44,6 +44,9 @@ pub enum Command {
     /// tree's chain of billboard clouds), or fetch them from the cache, and print them as a
     /// table.
     Bake(BakeArgs),
+    /// Write a character's levels of detail by one method as glTF: a .glb per level (skin,
+    /// clips, materials) and one .glb holding them all under MSFT_lod, for other engines.
+    Export(ExportArgs),
     /// Measure a model's levels of detail: for a character, error curves (report.json,
     /// error.png, as in Merry et al. Figure 7) and bake timings (timings.md, their Table 1);
     /// for a tree, its billboard-cloud chain (report.json, colour-error.png, levels.png).
@@ -251,6 +254,36 @@ pub struct BakeArgs {
     /// Cache folder (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct ExportArgs {
+    /// Model: a built-in asset name or a glTF path; the same as --model.
+    #[arg(value_name = "MODEL", required_unless_present = "model_flag")]
+    pub model: Option<String>,
+    /// A model, as shot, bench and view take it.
+    #[arg(long = "model", value_name = "NAME|PATH", conflicts_with = "model")]
+    pub model_flag: Option<String>,
+    /// Simplification method of the levels.
+    #[arg(long, value_enum, default_value = "as+is")]
+    pub method: crate::bake::simplify::Method,
+    /// Folder to write the files into (made if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// The pixel tolerance the MSFT_screencoverage hints are worked out for (a level switches
+    /// where the next one's error projects to it, on a 1920×1080 screen).
+    #[arg(long, default_value_t = 1.5, value_parser = parse_export_tolerance)]
+    pub tolerance: f32,
+    /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Print what was written as JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_export_tolerance(s: &str) -> Result<f32, String> {
+    parse_in(s, "tolerance", 0.25..=16.0)
 }
 
 #[derive(Args, Debug)]

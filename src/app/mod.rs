@@ -3,6 +3,7 @@
 pub mod bake;
 pub mod bench;
 pub mod cli;
+pub mod export;
 pub mod gen_assets;
 pub mod record;
 pub mod report;

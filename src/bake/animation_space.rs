@@ -66,6 +66,58 @@ impl AnimationSpaceMesh {
         }
     }
 
+    /// Back to linear-blend skinning, for formats that know no animation space (glTF): each
+    /// vertex at its rest-pose position `v̂ = Σ Ĝ_i p_i` and normal, each influence weighted
+    /// `w_i` = the homogeneous coordinate of `p_i`, renormalised. The inverse of
+    /// [`Self::from_skinned`] wherever `p_i = w_i Ĝ_i⁻¹ v̂` still holds: every level of the
+    /// rest-pose and AS methods, whose half-edge collapses keep vertices as they were.
+    /// Influence simplification gives a vertex per-bone positions that linear-blend skinning
+    /// cannot hold ("not representable within the SSD framework", Merry et al. §6.4): the result
+    /// is exact in the rest pose and an approximation elsewhere. Influences of no weight are
+    /// dropped.
+    pub fn to_skinned(&self, skeleton: &Skeleton) -> SkinnedMesh {
+        let bind: Vec<glam::Affine3A> = skeleton
+            .inverse_bind
+            .iter()
+            .map(|m| glam::Affine3A::from_mat4(m.inverse()))
+            .collect();
+        let (positions, normals) = self.evaluate(&bind);
+        let mut mesh = SkinnedMesh {
+            positions,
+            normals: normals
+                .into_iter()
+                .map(|n| n.normalize_or(Vec3::Y))
+                .collect(),
+            uvs: self.uvs.clone(),
+            materials: self.materials.clone(),
+            indices: self.indices.clone(),
+            ..Default::default()
+        };
+        mesh.influence_offsets.push(0);
+        for v in 0..self.vertex_count() {
+            let infs = self.influences_of(v);
+            let total: f32 = infs.iter().map(|i| i.p.w.max(0.0)).sum();
+            for i in infs {
+                let w = i.p.w.max(0.0) / total.max(f32::MIN_POSITIVE);
+                if w > 0.0 {
+                    mesh.influences.push(crate::model::Influence {
+                        bone: i.bone,
+                        weight: w,
+                    });
+                }
+            }
+            if mesh.influences.len() == *mesh.influence_offsets.last().unwrap_or(&0) as usize {
+                // No weight at all: the vertex follows its first bone.
+                mesh.influences.push(crate::model::Influence {
+                    bone: infs.first().map_or(0, |i| i.bone),
+                    weight: 1.0,
+                });
+            }
+            mesh.influence_offsets.push(mesh.influences.len() as u32);
+        }
+        mesh
+    }
+
     pub fn vertex_count(&self) -> usize {
         self.offsets.len().saturating_sub(1)
     }

@@ -1,10 +1,10 @@
 //! Normal maps for the coarse levels: full detail's shading on fewer triangles.
 //!
-//! Merry, Marais & Gain ("Animation Space: A Truly Linear Framework for Character Animation",
-//! 2006) base their simplification on appearance-preserving simplification (Cohen, Olano &
-//! Manocha 1998): half-edge collapses keep the remaining vertices' texture coordinates, so a
-//! point of a coarse level corresponds to the point of full detail with the same coordinate, and
-//! full detail's normals can be sampled into a map that lights the coarse level (§3; their
+//! Merry, Marais & Gain ("Analytic simplification of animated characters") base their
+//! simplification on appearance-preserving simplification (Cohen, Olano & Manocha 1998):
+//! half-edge collapses keep the remaining vertices' texture coordinates, so a point of a coarse
+//! level corresponds to the point of full detail with the same coordinate, and full detail's
+//! normals can be sampled into a map that lights the coarse level (their §2 and §3; their
 //! renderer uses tangent-space normal maps, §6.4). This module bakes those maps.
 //!
 //! - **Correspondence.** A texel of level k lies in one of k's triangles (in texture space); its

@@ -2,6 +2,11 @@
 //! clip (with its ground speed in the animation's `extras`) and the base colour texture as an
 //! embedded PNG. The output is a pure function of the model, byte for byte, so committed assets
 //! can be checked against their generator.
+//!
+//! [`to_lod_glb`] writes several meshes of one model (its levels of detail) into one file: one
+//! node per level, all bound to the one skin, the finest carrying `MSFT_lod` with the others'
+//! node indices and `MSFT_screencoverage` in its `extras` (Microsoft's vendor extension, read
+//! by Babylon.js and three.js's loader).
 
 use crate::model::{ChannelTarget, Interpolation, Model, SkinnedMesh};
 use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
@@ -191,10 +196,9 @@ fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Att
 
 /// One primitive per material, each with the vertices it uses (in order), so that an importer
 /// merging primitives in order gets the mesh back as it was.
-fn primitives(b: &mut Builder, model: &Model) -> Vec<gj::mesh::Primitive> {
-    let mesh = &model.mesh;
+fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::mesh::Primitive> {
     let mut primitives = Vec::new();
-    for material in 0..model.materials.len().max(1) {
+    for material in 0..materials.max(1) {
         let used: Vec<usize> = (0..mesh.vertex_count())
             .filter(|&v| mesh.materials.get(v).copied().unwrap_or(0) as usize == material)
             .collect();
@@ -282,9 +286,16 @@ fn materials(b: &mut Builder, model: &Model, root: &mut gj::Root) {
     }
 }
 
-/// The skeleton's nodes (rest transforms and children), the mesh's node, the skin and the
-/// scene whose roots are the skeleton's roots and the mesh node.
-fn skeleton(b: &mut Builder, model: &Model, root: &mut gj::Root) {
+/// The skeleton's nodes (rest transforms and children), a node for each of `meshes` meshes
+/// (bound to the skin), the skin and the scene whose roots are the skeleton's roots and the
+/// first mesh's node (every mesh's node where `all_in_scene`). Returns the meshes' nodes.
+fn skeleton(
+    b: &mut Builder,
+    model: &Model,
+    root: &mut gj::Root,
+    meshes: usize,
+    all_in_scene: bool,
+) -> Vec<Index<gj::Node>> {
     let skel = &model.skeleton;
     let mut nodes: Vec<gj::Node> = skel
         .nodes
@@ -307,20 +318,29 @@ fn skeleton(b: &mut Builder, model: &Model, root: &mut gj::Root) {
                 .push(Index::new(i as u32));
         }
     }
-    let mesh_node = Index::push(
-        &mut nodes,
-        gj::Node {
-            name: Some(model.name.clone()),
-            mesh: Some(Index::new(0)),
-            skin: Some(Index::new(0)),
-            ..Default::default()
-        },
-    );
+    let mesh_nodes: Vec<Index<gj::Node>> = (0..meshes)
+        .map(|k| {
+            Index::push(
+                &mut nodes,
+                gj::Node {
+                    name: Some(if meshes == 1 {
+                        model.name.clone()
+                    } else {
+                        format!("{}_LOD{k}", model.name)
+                    }),
+                    mesh: Some(Index::new(k as u32)),
+                    skin: Some(Index::new(0)),
+                    ..Default::default()
+                },
+            )
+        })
+        .collect();
     let mut roots: Vec<Index<gj::Node>> = (0..skel.nodes.len())
         .filter(|&i| skel.nodes[i].parent.is_none())
         .map(|i| Index::new(i as u32))
         .collect();
-    roots.push(mesh_node);
+    let shown = if all_in_scene { meshes } else { 1 };
+    roots.extend(mesh_nodes.iter().take(shown).copied());
     root.nodes = nodes;
 
     let ibm: Vec<f32> = skel
@@ -343,6 +363,7 @@ fn skeleton(b: &mut Builder, model: &Model, root: &mut gj::Root) {
         name: None,
         nodes: roots,
     }));
+    mesh_nodes
 }
 
 /// Every clip, with its ground speed in the animation's `extras`.
@@ -406,24 +427,67 @@ fn animations(b: &mut Builder, model: &Model) -> Vec<gj::Animation> {
 
 /// Encodes `model` as a `.glb` file.
 pub fn to_glb(model: &Model) -> Vec<u8> {
+    let (root, bin) = document(model, &[&model.mesh], "lodlab gen-assets", true);
+    let json = gj::serialize::to_vec(&root).expect("serialising JSON into memory");
+    glb_bytes(json, bin)
+}
+
+/// Encodes `model` with `levels` (finest first, each a mesh of its skeleton and materials) in
+/// place of its mesh, as one `.glb`: the finest level's node carries `MSFT_lod`, naming the
+/// others' nodes, and `MSFT_screencoverage` (`coverage`, one value a level: the share of the
+/// screen's area below which the next level takes over, the last one the share below which
+/// nothing is drawn). A reader without the extension shows the finest level.
+pub fn to_lod_glb(
+    model: &Model,
+    levels: &[&SkinnedMesh],
+    coverage: &[f32],
+    generator: &str,
+) -> Vec<u8> {
+    assert_eq!(levels.len(), coverage.len(), "a coverage value per level");
+    let (root, bin) = document(model, levels, generator, false);
+    let mut json = serde_json::to_value(&root).expect("a glTF document is JSON");
+    let finest = skeleton_nodes(model);
+    let ids: Vec<usize> = (1..levels.len()).map(|k| finest + k).collect();
+    let node = &mut json["nodes"][finest];
+    node["extensions"] = serde_json::json!({ "MSFT_lod": { "ids": ids } });
+    node["extras"] = serde_json::json!({ "MSFT_screencoverage": coverage });
+    json["extensionsUsed"] = serde_json::json!(["MSFT_lod"]);
+    let json = serde_json::to_vec(&json).expect("serialising JSON into memory");
+    glb_bytes(json, bin)
+}
+
+/// A file holding `model`'s skeleton, materials and clips and the meshes `meshes` as its
+/// meshes 0, 1, …, and its binary chunk.
+fn document(
+    model: &Model,
+    meshes: &[&SkinnedMesh],
+    generator: &str,
+    all_in_scene: bool,
+) -> (gj::Root, Vec<u8>) {
     let mut b = Builder::default();
     let mut root = gj::Root {
         asset: gj::Asset {
-            generator: Some("lodlab gen-assets".into()),
+            generator: Some(generator.into()),
             ..Default::default()
         },
         ..Default::default()
     };
-    let primitives = primitives(&mut b, model);
-    root.push(gj::Mesh {
-        extensions: None,
-        extras: None,
-        name: Some(model.name.clone()),
-        primitives,
-        weights: None,
-    });
+    for (k, mesh) in meshes.iter().enumerate() {
+        let primitives = primitives(&mut b, mesh, model.materials.len());
+        root.push(gj::Mesh {
+            extensions: None,
+            extras: None,
+            name: Some(if meshes.len() == 1 {
+                model.name.clone()
+            } else {
+                format!("{}_LOD{k}", model.name)
+            }),
+            primitives,
+            weights: None,
+        });
+    }
     materials(&mut b, model, &mut root);
-    skeleton(&mut b, model, &mut root);
+    skeleton(&mut b, model, &mut root, meshes.len(), all_in_scene);
     root.animations = animations(&mut b, model);
     while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
@@ -438,7 +502,16 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
         extras: None,
     });
 
-    let mut json_bytes = gj::serialize::to_vec(&root).expect("serialising JSON into memory");
+    (root, b.bin)
+}
+
+/// The node index of the first mesh's node: the skeleton's nodes come first.
+fn skeleton_nodes(model: &Model) -> usize {
+    model.skeleton.nodes.len()
+}
+
+/// A GLB container of `json_bytes` and the binary chunk `bin`.
+fn glb_bytes(mut json_bytes: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
     while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
@@ -446,10 +519,10 @@ pub fn to_glb(model: &Model) -> Vec<u8> {
         header: gltf::binary::Header {
             magic: *b"glTF",
             version: 2,
-            length: (12 + 8 + json_bytes.len() + 8 + b.bin.len()) as u32,
+            length: (12 + 8 + json_bytes.len() + 8 + bin.len()) as u32,
         },
         json: Cow::Owned(json_bytes),
-        bin: Some(Cow::Owned(b.bin)),
+        bin: Some(Cow::Owned(bin)),
     };
     glb.to_vec().expect("writing a GLB into memory")
 }

@@ -264,6 +264,22 @@ fn read_inverse_bind(
 
 /// Every mesh bound to `skin`, each once, all its primitives merged into one mesh (normals
 /// computed where a primitive has none), and the materials they use.
+/// The nodes that `MSFT_lod` names as lower levels of detail of another node: a reader takes
+/// the highest level only, as one without the extension would (lodlab makes its own levels).
+fn msft_lod_lower_levels(doc: &gltf::Document) -> Vec<usize> {
+    doc.nodes()
+        .filter_map(|n| {
+            n.extensions()?
+                .get("MSFT_lod")?
+                .get("ids")?
+                .as_array()
+                .cloned()
+        })
+        .flatten()
+        .filter_map(|id| id.as_u64().map(|i| i as usize))
+        .collect()
+}
+
 fn read_skinned_meshes(
     doc: &gltf::Document,
     skin: &gltf::Skin,
@@ -277,11 +293,15 @@ fn read_skinned_meshes(
     let mut mesh = SkinnedMesh::default();
     let mut needs_normals: Vec<bool> = Vec::new();
     let mut seen_meshes = Vec::new();
+    let lower_lods = msft_lod_lower_levels(doc);
     for node in doc.nodes() {
         let (Some(m), Some(s)) = (node.mesh(), node.skin()) else {
             continue;
         };
-        if s.index() != skin.index() || seen_meshes.contains(&m.index()) {
+        if s.index() != skin.index()
+            || seen_meshes.contains(&m.index())
+            || lower_lods.contains(&node.index())
+        {
             continue;
         }
         seen_meshes.push(m.index());

@@ -1,6 +1,7 @@
 //! What the normal maps buy: each coarse level's colour error against full detail, lit by its
-//! own vertex normals and through its normal map (Merry, Marais & Gain 2006 light their coarse
-//! levels through tangent-space normal maps, §6.4; see `bake::normal_map`).
+//! own vertex normals and through its normal map (Merry, Marais & Gain, "Analytic simplification
+//! of animated characters", light their coarse levels through tangent-space normal maps, §6.4;
+//! see `bake::normal_map`).
 //!
 //! The error is the impostor placement's (see `impostor_placement`): the mean colour
 //! difference over the pixels either picture covers, divided by the pixels full detail covers,

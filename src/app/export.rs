@@ -1,0 +1,213 @@
+//! `lodlab export`: a character's levels of detail by one method as glTF, for other engines:
+//! one `.glb` per level (skin, clips, materials and textures with each), and one `.glb` holding
+//! every level under `MSFT_lod`, with `MSFT_screencoverage` switching hints.
+//!
+//! glTF skins by linear blending, so each level goes back from animation space to joint weights
+//! ([`AnimationSpaceMesh::to_skinned`]): exact for `rest-pose` and `as`, whose levels keep their
+//! vertices as they were; for `as+is` exact in the rest pose and an approximation elsewhere,
+//! since influence simplification gives a vertex a position per bone. A vertex with more than
+//! four influences gets several `JOINTS_n`/`WEIGHTS_n` sets, four influences a set.
+//!
+//! [`AnimationSpaceMesh::to_skinned`]: crate::bake::animation_space::AnimationSpaceMesh::to_skinned
+
+use crate::bake::cache::{LodCache, Origin, source_hash};
+use crate::bake::lod::model_height;
+use crate::bake::simplify::Method;
+use crate::error::InputError;
+use crate::generate::glb::{to_glb, to_lod_glb};
+use crate::import::{load_model, source_path};
+use crate::model::{Model, SkinnedMesh};
+use anyhow::Result;
+use serde::Serialize;
+use std::path::PathBuf;
+
+#[derive(Clone, Debug)]
+pub struct ExportOptions {
+    pub model: String,
+    pub method: Method,
+    pub out: PathBuf,
+    /// The pixel tolerance the screen-coverage hints are worked out for.
+    pub tolerance_px: f32,
+    pub cache_dir: Option<PathBuf>,
+}
+
+/// The screen the coverage hints assume, pixels.
+pub const SCREEN: [f32; 2] = [1920.0, 1080.0];
+
+/// One exported level.
+#[derive(Clone, Debug, Serialize)]
+pub struct ExportedLevel {
+    pub level: usize,
+    pub triangles: usize,
+    pub vertices: usize,
+    /// The most influences any vertex has.
+    pub max_influences: usize,
+    /// `JOINTS_n`/`WEIGHTS_n` sets: four influences a set.
+    pub weight_sets: usize,
+    /// The level's error bound, scene units.
+    pub error: f32,
+    /// Its `MSFT_screencoverage` value: the share of the screen's area below which the next
+    /// level takes over (0 for the last: drawn to the end).
+    pub coverage: f32,
+    pub file: PathBuf,
+    pub bytes: usize,
+}
+
+/// What an export wrote.
+#[derive(Clone, Debug, Serialize)]
+pub struct Exported {
+    pub model: String,
+    pub method: String,
+    pub levels: Vec<ExportedLevel>,
+    /// The file with every level under `MSFT_lod`.
+    pub lod_file: PathBuf,
+    pub lod_bytes: usize,
+    pub from_cache: bool,
+}
+
+/// `model` with `mesh` in place of its own.
+fn with_mesh(model: &Model, mesh: SkinnedMesh) -> Model {
+    Model {
+        mesh,
+        ..model.clone()
+    }
+}
+
+/// The `MSFT_screencoverage` value of a level coming in at `height_px` pixels high on
+/// [`SCREEN`]: the share of its area covered by the model's bounding box seen from the side.
+fn coverage(height_px: f32, aspect: f32) -> f32 {
+    (height_px * height_px * aspect / (SCREEN[0] * SCREEN[1])).clamp(0.0, 1.0)
+}
+
+pub fn run(opts: &ExportOptions) -> Result<Exported> {
+    let model = load_model(&opts.model)?;
+    if crate::bake::billboard::is_tree(&model) {
+        anyhow::bail!(
+            "{}: a tree; export writes a character's levels (a tree's are billboard clouds)",
+            opts.model
+        );
+    }
+    let path = source_path(&opts.model);
+    let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
+    std::fs::create_dir_all(&opts.out)
+        .map_err(|e| InputError::new(&opts.out, format!("cannot create the folder ({e})")))?;
+    let cache = LodCache::new(opts.cache_dir.clone());
+    let options = crate::runtime::levels::runtime_options(&model);
+    let (lods, origin) = cache.load_or_bake(&model, &hash, opts.method, &options, &|_| {});
+    if let Origin::Baked { warning: Some(w) } = &origin {
+        log::warn!("{w}");
+    }
+    // The bounding box seen from the side, in the scene's units (the importer's).
+    let rest = crate::bake::simplify::SimplifyInput::rest_bones(&model.skeleton);
+    let bounds = crate::model::Bounds::of(lods.levels[0].mesh.rest_positions(&rest))
+        .ok_or_else(|| anyhow::anyhow!("{}: an empty mesh", opts.model))?;
+    let height = model_height(&model);
+    let aspect = bounds.size().x.max(bounds.size().z) / height.max(1e-6);
+    let meshes: Vec<SkinnedMesh> = lods
+        .levels
+        .iter()
+        .map(|l| l.mesh.to_skinned(&model.skeleton))
+        .collect();
+    let stem = file_stem(&model.name);
+    let mut levels = Vec::with_capacity(meshes.len());
+    for (k, (level, mesh)) in lods.levels.iter().zip(&meshes).enumerate() {
+        // The next level takes over where its error projects to the tolerance.
+        let next = lods.levels.get(k + 1).map_or(0.0, |n| {
+            coverage(opts.tolerance_px * height / n.error.max(1e-9), aspect)
+        });
+        let bytes = to_glb(&with_mesh(&model, mesh.clone()));
+        let file = opts
+            .out
+            .join(format!("{stem}-{}-lod{k}.glb", opts.method.name()));
+        crate::atomic::write(&file, &bytes)?;
+        let most = (0..mesh.vertex_count())
+            .map(|v| mesh.influences_of(v).len())
+            .max()
+            .unwrap_or(0);
+        levels.push(ExportedLevel {
+            level: k,
+            triangles: mesh.triangle_count(),
+            vertices: mesh.vertex_count(),
+            max_influences: most,
+            weight_sets: most.max(1).div_ceil(4),
+            error: level.error,
+            coverage: next,
+            file,
+            bytes: bytes.len(),
+        });
+    }
+    let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
+    let hints: Vec<f32> = levels.iter().map(|l| l.coverage).collect();
+    let generator = format!("lodlab export ({} levels)", opts.method.name());
+    let lod_bytes = to_lod_glb(&model, &refs, &hints, &generator);
+    let lod_file = opts
+        .out
+        .join(format!("{stem}-{}-lods.glb", opts.method.name()));
+    crate::atomic::write(&lod_file, &lod_bytes)?;
+    Ok(Exported {
+        model: model.name.clone(),
+        method: opts.method.name().to_string(),
+        levels,
+        lod_file,
+        lod_bytes: lod_bytes.len(),
+        from_cache: origin == Origin::Cache,
+    })
+}
+
+/// A file name from a model name: letters, digits, `-` and `_` kept, anything else `_`.
+fn file_stem(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if s.is_empty() { "model".into() } else { s }
+}
+
+/// The table `lodlab export` prints.
+pub fn table(e: &Exported) -> String {
+    let mut out = format!(
+        "{} by {}: {} levels{}\n{:<5} {:>9} {:>8} {:>14} {:>11} {:>10} {:>10} {:>8}  file\n",
+        e.model,
+        e.method,
+        e.levels.len(),
+        if e.from_cache {
+            " (from the cache)"
+        } else {
+            ""
+        },
+        "LOD",
+        "triangles",
+        "vertices",
+        "influences/v",
+        "weight sets",
+        "error (mm)",
+        "coverage",
+        "KB"
+    );
+    for l in &e.levels {
+        out += &format!(
+            "{:<5} {:>9} {:>8} {:>14} {:>11} {:>10.3} {:>10.6} {:>8}  {}\n",
+            l.level,
+            l.triangles,
+            l.vertices,
+            l.max_influences,
+            l.weight_sets,
+            l.error * 1000.0,
+            l.coverage,
+            l.bytes / 1024,
+            l.file.display()
+        );
+    }
+    out += &format!(
+        "all levels under MSFT_lod: {} ({} KB)\n",
+        e.lod_file.display(),
+        e.lod_bytes / 1024
+    );
+    out
+}

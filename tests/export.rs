@@ -1,0 +1,232 @@
+//! `lodlab export`: a character's levels as glTF files that other tools accept and lodlab reads
+//! back as it drew them. The Khronos glTF-Validator runs where `tools/gltf` is installed
+//! (`npm ci --prefix tools/gltf`; CI installs it and sets `LODLAB_REQUIRE_GLTF_TOOLS`).
+
+mod common;
+
+use lodlab::bake::animation_space::AnimationSpaceMesh;
+use lodlab::generate::glb::to_glb;
+use lodlab::import::load_model;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+/// `tools/gltf` with its packages installed, or `None` (with one line saying so) where they
+/// are not and CI does not require them.
+fn gltf_tools() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/gltf");
+    let installed = dir.join("node_modules/gltf-validator").is_dir()
+        && Command::new("node").arg("--version").output().is_ok();
+    if installed {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("LODLAB_REQUIRE_GLTF_TOOLS").is_none(),
+        "LODLAB_REQUIRE_GLTF_TOOLS is set but tools/gltf is not installed (npm ci --prefix tools/gltf)"
+    );
+    eprintln!("skipped: the glTF tools are not installed (npm ci --prefix tools/gltf)");
+    None
+}
+
+/// The validator's verdict on each file: (errors, warnings).
+fn validate(tools: &Path, files: &[PathBuf]) -> Vec<(u64, u64, Value)> {
+    let out = Command::new("node")
+        .arg(tools.join("validate.js"))
+        .args(files)
+        .output()
+        .expect("node runs");
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| {
+            let v: Value = serde_json::from_str(l).unwrap();
+            (
+                v["errors"].as_u64().unwrap(),
+                v["warnings"].as_u64().unwrap(),
+                v,
+            )
+        })
+        .collect()
+}
+
+fn export(model: &str, method: &str, dir: &Path) -> Value {
+    let cache = dir.join("cache");
+    let out = lodlab(&[
+        "export",
+        model,
+        "--method",
+        method,
+        "--out",
+        dir.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn glb_json(path: &Path) -> Value {
+    let bytes = std::fs::read(path).unwrap();
+    let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+    serde_json::from_slice(&glb.json).unwrap()
+}
+
+#[test]
+fn every_level_is_a_valid_glb_that_reads_back_as_exported() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = export("walker", "as+is", dir.path());
+    let levels = e["levels"].as_array().unwrap();
+    assert!(levels.len() >= 5, "{} levels", levels.len());
+    let mut files = Vec::new();
+    let mut last_coverage = f64::MAX;
+    for (k, l) in levels.iter().enumerate() {
+        let file = PathBuf::from(l["file"].as_str().unwrap());
+        // Each file reads back with the level's triangles and the model's clips.
+        let m = load_model(file.to_str().unwrap()).unwrap();
+        assert_eq!(
+            m.mesh.triangle_count() as u64,
+            l["triangles"].as_u64().unwrap()
+        );
+        assert_eq!(m.clips.len(), load_model("walker").unwrap().clips.len());
+        assert!(
+            m.materials[0].texture.is_some(),
+            "level {k} keeps its texture"
+        );
+        let c = l["coverage"].as_f64().unwrap();
+        assert!(c <= last_coverage, "coverage falls level by level");
+        last_coverage = c;
+        files.push(file);
+    }
+    assert_eq!(levels.last().unwrap()["coverage"], 0.0);
+
+    // The all-levels file: MSFT_lod on the finest node naming the others, a coverage hint a
+    // level, and lodlab (like any reader) takes the finest.
+    let lod_file = PathBuf::from(e["lod_file"].as_str().unwrap());
+    let json = glb_json(&lod_file);
+    assert_eq!(json["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
+    let finest = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n.get("extensions").is_some())
+        .unwrap();
+    let ids = finest["extensions"]["MSFT_lod"]["ids"].as_array().unwrap();
+    assert_eq!(ids.len(), levels.len() - 1);
+    let hints = finest["extras"]["MSFT_screencoverage"].as_array().unwrap();
+    assert_eq!(hints.len(), levels.len());
+    for id in ids {
+        let node = &json["nodes"][id.as_u64().unwrap() as usize];
+        assert!(node["mesh"].is_u64() && node["skin"] == finest["skin"]);
+    }
+    let m = load_model(lod_file.to_str().unwrap()).unwrap();
+    assert_eq!(
+        m.mesh.triangle_count() as u64,
+        levels[0]["triangles"].as_u64().unwrap()
+    );
+    files.push(lod_file);
+
+    if let Some(tools) = gltf_tools() {
+        for (errors, warnings, report) in validate(&tools, &files) {
+            assert_eq!((errors, warnings), (0, 0), "{report}");
+        }
+    }
+}
+
+/// Full detail exported and read back draws the same picture as the model itself.
+#[test]
+fn the_exported_full_detail_renders_as_the_original() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = export("walker", "as", dir.path());
+    let lod0 = e["levels"][0]["file"].as_str().unwrap().to_string();
+    let shoot = |model: &str, name: &str| {
+        let png = dir.path().join(name);
+        let out = lodlab(&[
+            "shot",
+            "--scene",
+            "study",
+            "--model",
+            model,
+            "--count",
+            "1",
+            "--camera",
+            "200,10,3.2,0,0.9,0",
+            "--size",
+            "200x300",
+            "--frames",
+            "1",
+            "--out",
+            png.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        image::open(&png).unwrap().to_rgba8()
+    };
+    let a = shoot("walker", "original.png");
+    let b = shoot(&lod0, "exported.png");
+    let off = a
+        .pixels()
+        .zip(b.pixels())
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > 8))
+        .count();
+    assert!(off < 20, "{off} pixels differ");
+}
+
+/// Linear-blend skinning → animation space → linear-blend skinning gives the mesh back, and a
+/// vertex of six influences keeps all six (two weight sets in glTF).
+#[test]
+fn linear_blend_skinning_survives_animation_space() {
+    let model = common::six_influence_model();
+    let am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
+    let back = am.to_skinned(&model.skeleton);
+    for v in 0..model.mesh.vertex_count() {
+        assert!(back.positions[v].distance(model.mesh.positions[v]) < 1e-5);
+        assert!(back.normals[v].distance(model.mesh.normals[v]) < 1e-5);
+        let (a, b) = (model.mesh.influences_of(v), back.influences_of(v));
+        assert_eq!(a.len(), 6);
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(b) {
+            assert_eq!(x.bone, y.bone);
+            assert!((x.weight - y.weight).abs() < 1e-5);
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("six.glb");
+    std::fs::write(&path, to_glb(&model)).unwrap();
+    let e = export(path.to_str().unwrap(), "as", dir.path());
+    assert_eq!(e["levels"][0]["max_influences"], 6);
+    assert_eq!(e["levels"][0]["weight_sets"], 2);
+    let json = glb_json(Path::new(e["levels"][0]["file"].as_str().unwrap()));
+    let attributes = &json["meshes"][0]["primitives"][0]["attributes"];
+    assert!(attributes.get("JOINTS_1").is_some() && attributes.get("WEIGHTS_1").is_some());
+    if let Some(tools) = gltf_tools() {
+        let file = PathBuf::from(e["levels"][0]["file"].as_str().unwrap());
+        for (errors, _, report) in validate(&tools, &[file]) {
+            assert_eq!(errors, 0, "{report}");
+        }
+    }
+}
+
+#[test]
+fn export_refuses_a_tree_and_a_missing_model_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for model in ["sapling", "no-such-model.glb"] {
+        let out = lodlab(&["export", model, "--out", dir.path().to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(1), "{model}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
