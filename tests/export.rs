@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::gltf_tools;
 use lodlab::bake::animation_space::AnimationSpaceMesh;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::load_model;
@@ -16,23 +17,6 @@ fn lodlab(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("lodlab runs")
-}
-
-/// `tools/gltf` with its packages installed, or `None` (with one line saying so) where they
-/// are not and CI does not require them.
-fn gltf_tools() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/gltf");
-    let installed = dir.join("node_modules/gltf-validator").is_dir()
-        && Command::new("node").arg("--version").output().is_ok();
-    if installed {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("LODLAB_REQUIRE_GLTF_TOOLS").is_none(),
-        "LODLAB_REQUIRE_GLTF_TOOLS is set but tools/gltf is not installed (npm ci --prefix tools/gltf)"
-    );
-    eprintln!("skipped: the glTF tools are not installed (npm ci --prefix tools/gltf)");
-    None
 }
 
 /// The validator's verdict on each file: (errors, warnings).

@@ -37,7 +37,18 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
     if meta.len() == 0 {
         return Err(fail("is empty, not a glTF file".into()));
     }
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| match e {
+    let imported = match unpacked(path).map_err(fail)? {
+        Some(glb) => {
+            let base = path.parent().unwrap_or(Path::new("."));
+            gltf::Gltf::from_slice(&glb).and_then(|g| {
+                let buffers = gltf::import_buffers(&g.document, Some(base), g.blob)?;
+                let images = gltf::import_images(&g.document, Some(base), &buffers)?;
+                Ok((g.document, buffers, images))
+            })
+        }
+        None => gltf::import(path),
+    };
+    let (doc, buffers, images) = imported.map_err(|e| match e {
         gltf::Error::Io(_) => match missing_reference(path) {
             Some(missing) => fail(format!("refers to {missing}, which cannot be read")),
             None => fail(gltf_problem(&e)),
@@ -49,6 +60,33 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "model".into());
     build(&name, &doc, &buffers, &images).map_err(fail)
+}
+
+/// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or
+/// `KHR_mesh_quantization` (what gltfpack writes), else `None`: the gltf crate reads it as it is.
+fn unpacked(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    let bytes = std::fs::read(path).map_err(|e| io_problem(&e))?;
+    // The extensions are named in the JSON: a `.glb`'s first chunk, or the whole `.gltf`.
+    let json_part = match bytes.get(12..16) {
+        Some(len) if bytes.starts_with(b"glTF") => {
+            let n = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
+            &bytes[20.min(bytes.len())..(20 + n).min(bytes.len())]
+        }
+        _ => &bytes[..],
+    };
+    let mentions = |name: &[u8]| json_part.windows(name.len()).any(|w| w == name);
+    if !(mentions(b"EXT_meshopt_compression") || mentions(b"KHR_mesh_quantization")) {
+        return Ok(None);
+    }
+    let Ok((json, _)) = super::gltfpack::split(&bytes) else {
+        // Not glTF at all: the gltf crate says what is wrong with it.
+        return Ok(None);
+    };
+    if !super::gltfpack::needs_unpacking(&json) {
+        return Ok(None);
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    super::gltfpack::unpack(&bytes, base).map(Some)
 }
 
 /// The first external buffer or image a `.gltf` names that is not there to read.
@@ -264,6 +302,20 @@ fn read_inverse_bind(
 
 /// Every mesh bound to `skin`, each once, all its primitives merged into one mesh (normals
 /// computed where a primitive has none), and the materials they use.
+/// `KHR_texture_transform` baked into texture coordinates: uv′ = T·R·S·uv, T the offset, R
+/// the rotation (counter-clockwise, in radians), S the scale, as the extension defines them.
+/// gltfpack writes quantised texture coordinates with the transform that maps them back.
+fn apply_texture_transform(uvs: &mut [Vec2], offset: [f32; 2], rotation: f32, scale: [f32; 2]) {
+    let (sin, cos) = rotation.sin_cos();
+    for uv in uvs {
+        let (x, y) = (uv.x * scale[0], uv.y * scale[1]);
+        *uv = Vec2::new(
+            cos * x + sin * y + offset[0],
+            -sin * x + cos * y + offset[1],
+        );
+    }
+}
+
 /// The nodes that `MSFT_lod` names as lower levels of detail of another node: a reader takes
 /// the highest level only, as one without the extension would (lodlab makes its own levels).
 fn msft_lod_lower_levels(doc: &gltf::Document) -> Vec<usize> {
@@ -318,12 +370,17 @@ fn read_skinned_meshes(
                     s
                 }
             };
-            let uv_set = material
-                .pbr_metallic_roughness()
-                .base_color_texture()
-                .map(|t| t.tex_coord())
+            let base_colour = material.pbr_metallic_roughness().base_color_texture();
+            let transform = base_colour.as_ref().and_then(|t| t.texture_transform());
+            let uv_set = transform
+                .as_ref()
+                .and_then(|t| t.tex_coord())
+                .or(base_colour.as_ref().map(|t| t.tex_coord()))
                 .unwrap_or(0);
-            let raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
+            let mut raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
+            if let Some(t) = transform {
+                apply_texture_transform(&mut raw.uvs, t.offset(), t.rotation(), t.scale());
+            }
             append_primitive(&mut mesh, &mut needs_normals, raw, slot);
         }
     }
@@ -394,6 +451,33 @@ fn guess_ground_speed(name: &str, height: f32) -> f32 {
     per_height * height
 }
 
+/// The elements of vertex attribute `$accessor`, `$n` floats each, whatever its component
+/// type: `KHR_mesh_quantization` (what gltfpack writes) allows signed and unsigned 8- and
+/// 16-bit integers, normalised (mapped to [-1, 1] or [0, 1] as the glTF specification says)
+/// or not (their values). `None` for a component type no attribute may have.
+macro_rules! read_floats {
+    ($accessor:expr, $buffer:expr, $n:literal) => {{
+        use gltf::accessor::{DataType, Iter};
+        let a = $accessor;
+        let normalized = a.normalized();
+        let convert = |c: f32, scale: f32| {
+            if normalized { (c / scale).max(-1.0) } else { c }
+        };
+        match a.data_type() {
+            DataType::F32 => Iter::<[f32; $n]>::new(a, $buffer).map(|it| it.collect::<Vec<_>>()),
+            DataType::I8 => Iter::<[i8; $n]>::new(a, $buffer)
+                .map(|it| it.map(|v| v.map(|c| convert(c as f32, 127.0))).collect()),
+            DataType::U8 => Iter::<[u8; $n]>::new(a, $buffer)
+                .map(|it| it.map(|v| v.map(|c| convert(c as f32, 255.0))).collect()),
+            DataType::I16 => Iter::<[i16; $n]>::new(a, $buffer)
+                .map(|it| it.map(|v| v.map(|c| convert(c as f32, 32767.0))).collect()),
+            DataType::U16 => Iter::<[u16; $n]>::new(a, $buffer)
+                .map(|it| it.map(|v| v.map(|c| convert(c as f32, 65535.0))).collect()),
+            DataType::U32 => None,
+        }
+    }};
+}
+
 fn read_primitive<'a, 's, F>(
     prim: &'a gltf::Primitive<'a>,
     buffer: F,
@@ -407,17 +491,25 @@ where
     if prim.morph_targets().len() > 0 {
         return Err(format!("{label}: morph targets are not supported"));
     }
-    let reader = prim.reader(buffer);
-    let positions: Vec<Vec3> = reader
-        .read_positions()
+    let reader = prim.reader(buffer.clone());
+    let attribute = |s: gltf::Semantic| prim.get(&s);
+    let positions: Vec<Vec3> = attribute(gltf::Semantic::Positions)
+        .and_then(|a| read_floats!(a, buffer.clone(), 3))
         .ok_or_else(|| format!("{label}: has no POSITION attribute"))?
+        .into_iter()
         .map(Vec3::from)
         .collect();
     let n = positions.len();
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
         return Err(format!("{label}: vertex {i} has a non-finite position"));
     }
-    let normals: Option<Vec<Vec3>> = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+    let normals: Option<Vec<Vec3>> = attribute(gltf::Semantic::Normals)
+        .and_then(|a| read_floats!(a, buffer.clone(), 3))
+        .map(|ns| {
+            ns.into_iter()
+                .map(|n| Vec3::from(n).normalize_or_zero())
+                .collect()
+        });
     if let Some(ns) = &normals {
         if ns.len() != n {
             return Err(format!("{label}: NORMAL count differs from POSITION count"));
@@ -426,8 +518,10 @@ where
             return Err(format!("{label}: vertex {i} has a non-finite normal"));
         }
     }
-    let uvs: Vec<Vec2> = match reader.read_tex_coords(uv_set) {
-        Some(it) => it.into_f32().map(Vec2::from).collect(),
+    let uvs: Vec<Vec2> = match attribute(gltf::Semantic::TexCoords(uv_set))
+        .and_then(|a| read_floats!(a, buffer.clone(), 2))
+    {
+        Some(uvs) => uvs.into_iter().map(Vec2::from).collect(),
         None => vec![Vec2::ZERO; n],
     };
     if uvs.len() != n {

@@ -1,6 +1,7 @@
 //! Import: turning glTF files into [`crate::model::Model`]s.
 
 pub mod gltf;
+pub mod gltfpack;
 pub mod weld;
 
 use crate::error::InputError;

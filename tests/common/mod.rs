@@ -7,6 +7,8 @@ use lodlab::generate::rig::{Pose, Rig, bake_clip, euler, wave};
 use lodlab::model::{Influence, Material, Model, SkinnedMesh};
 use serde_json::Value;
 use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
 /// A strip of four quads bent by two bones over one clip.
 pub fn tiny_model() -> Model {
@@ -144,4 +146,23 @@ pub fn six_influence_model() -> Model {
             texture: None,
         }],
     }
+}
+
+/// `tools/gltf` with its packages installed (the Khronos glTF-Validator and gltfpack), or
+/// `None`, with one line saying so, where they are not and CI does not require them
+/// (`LODLAB_REQUIRE_GLTF_TOOLS`, which `.ci/run` sets after `npm ci --prefix tools/gltf`).
+pub fn gltf_tools() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/gltf");
+    let installed = dir.join("node_modules/gltf-validator").is_dir()
+        && dir.join("node_modules/gltfpack").is_dir()
+        && Command::new("node").arg("--version").output().is_ok();
+    if installed {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("LODLAB_REQUIRE_GLTF_TOOLS").is_none(),
+        "LODLAB_REQUIRE_GLTF_TOOLS is set but tools/gltf is not installed (npm ci --prefix tools/gltf)"
+    );
+    eprintln!("skipped: the glTF tools are not installed (npm ci --prefix tools/gltf)");
+    None
 }

@@ -1,0 +1,236 @@
+//! What gltfpack (meshoptimizer's glTF optimiser) writes, made readable: `EXT_meshopt_compression`
+//! buffer views are decoded, and `KHR_mesh_quantization` is taken off the required extensions
+//! (the importer reads quantised attributes itself, see `read_floats` in `super::gltf`).
+//!
+//! The gltf crate refuses a file whose `extensionsRequired` names an extension it does not
+//! know, and cannot load a compressed view's fallback buffer (it has no data). So a file that
+//! uses either extension is rewritten before the crate reads it: every buffer the file loads
+//! (its binary chunk, data URIs, files beside it) and every decoded view go into one binary
+//! chunk, the views are pointed into it, and the fallback buffers are dropped.
+//!
+//! `EXT_meshopt_compression` (Khronos glTF extension registry, vendor extensions): a view's
+//! extension names the compressed bytes (`buffer`, `byteOffset`, `byteLength`), what they
+//! decode to (`count` elements of `byteStride` bytes), the codec (`mode`: `ATTRIBUTES`,
+//! `TRIANGLES` or `INDICES`) and a filter applied after it (`OCTAHEDRAL`, `QUATERNION`,
+//! `EXPONENTIAL` or none). The meshopt crate's bindings decode them.
+
+use serde_json::Value;
+use std::borrow::Cow;
+use std::path::Path;
+
+const MESHOPT: &str = "EXT_meshopt_compression";
+const QUANTIZATION: &str = "KHR_mesh_quantization";
+
+/// Whether the document (its JSON) uses an extension this module unpacks.
+pub fn needs_unpacking(json: &Value) -> bool {
+    let names = |key: &str| {
+        json.get(key)
+            .and_then(Value::as_array)
+            .is_some_and(|a| a.iter().any(|e| e == MESHOPT || e == QUANTIZATION))
+    };
+    names("extensionsUsed") || names("extensionsRequired")
+}
+
+/// The JSON chunk and the binary chunk of a `.glb`, or the whole file as JSON.
+pub fn split(bytes: &[u8]) -> Result<(Value, Option<Vec<u8>>), String> {
+    if bytes.starts_with(b"glTF") {
+        let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| format!("invalid GLB ({e})"))?;
+        let json = serde_json::from_slice(&glb.json).map_err(|e| format!("invalid JSON ({e})"))?;
+        Ok((json, glb.bin.map(Cow::into_owned)))
+    } else {
+        let json = serde_json::from_slice(bytes).map_err(|e| format!("invalid JSON ({e})"))?;
+        Ok((json, None))
+    }
+}
+
+/// A `.glb` of `json` and the binary chunk `bin`.
+fn glb(json: &Value, bin: Vec<u8>) -> Result<Vec<u8>, String> {
+    let mut j = serde_json::to_vec(json).map_err(|e| e.to_string())?;
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    let length = 12 + 8 + j.len() + 8 + bin.len();
+    gltf::binary::Glb {
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: u32::try_from(length).map_err(|_| "larger than 4 GB".to_string())?,
+        },
+        json: Cow::Owned(j),
+        bin: Some(Cow::Owned(bin)),
+    }
+    .to_vec()
+    .map_err(|e| e.to_string())
+}
+
+fn is_fallback(buffer: &Value) -> bool {
+    buffer["extensions"][MESHOPT]["fallback"] == true
+}
+
+fn field(v: &Value, key: &str, what: &str) -> Result<usize, String> {
+    v.get(key)
+        .and_then(Value::as_u64)
+        .map(|x| x as usize)
+        .ok_or_else(|| format!("{what} has no valid {key}"))
+}
+
+/// Decodes one compressed view (its `EXT_meshopt_compression` object `ext`) from `data`, the
+/// bytes of the buffer it names.
+fn decode(ext: &Value, data: &[u8], what: &str) -> Result<Vec<u8>, String> {
+    let offset = ext.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
+    let length = field(ext, "byteLength", what)?;
+    let stride = field(ext, "byteStride", what)?;
+    let count = field(ext, "count", what)?;
+    let src = offset
+        .checked_add(length)
+        .and_then(|end| data.get(offset..end))
+        .ok_or_else(|| format!("{what}: compressed bytes lie past the end of their buffer"))?;
+    let size = count
+        .checked_mul(stride)
+        .filter(|&s| s <= 1 << 30 && stride > 0 && stride <= 256)
+        .ok_or_else(|| format!("{what}: {count} elements of {stride} bytes is out of range"))?;
+    let mut out = vec![0u8; size];
+    let mode = ext.get("mode").and_then(Value::as_str).unwrap_or("");
+    // SAFETY: `out` holds exactly `count` elements of `stride` bytes, the size every decoder
+    // below is told; the decoders read `src` within its length and check its contents.
+    let code = unsafe {
+        let dst = out.as_mut_ptr().cast();
+        match mode {
+            "ATTRIBUTES" if stride.is_multiple_of(4) => meshopt::ffi::meshopt_decodeVertexBuffer(
+                dst,
+                count,
+                stride,
+                src.as_ptr(),
+                src.len(),
+            ),
+            "TRIANGLES" if stride == 2 || stride == 4 => {
+                meshopt::ffi::meshopt_decodeIndexBuffer(dst, count, stride, src.as_ptr(), src.len())
+            }
+            "INDICES" if stride == 2 || stride == 4 => meshopt::ffi::meshopt_decodeIndexSequence(
+                dst,
+                count,
+                stride,
+                src.as_ptr(),
+                src.len(),
+            ),
+            _ => {
+                return Err(format!(
+                    "{what}: mode {mode:?} with byteStride {stride} is not valid"
+                ));
+            }
+        }
+    };
+    if code != 0 {
+        return Err(format!(
+            "{what}: the compressed data is corrupt (meshopt error {code})"
+        ));
+    }
+    let filter = ext.get("filter").and_then(Value::as_str).unwrap_or("NONE");
+    // SAFETY: as above; each filter rewrites `count` elements of `stride` bytes in place, and
+    // the strides are the ones the extension allows each filter.
+    unsafe {
+        let buf = out.as_mut_ptr().cast();
+        match (filter, stride) {
+            ("NONE", _) => {}
+            ("OCTAHEDRAL", 4 | 8) => meshopt::ffi::meshopt_decodeFilterOct(buf, count, stride),
+            ("QUATERNION", 8) => meshopt::ffi::meshopt_decodeFilterQuat(buf, count, stride),
+            ("EXPONENTIAL", s) if s.is_multiple_of(4) => {
+                meshopt::ffi::meshopt_decodeFilterExp(buf, count, stride)
+            }
+            _ => {
+                return Err(format!(
+                    "{what}: filter {filter:?} with byteStride {stride} is not valid"
+                ));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// `bytes` (a `.glb` or `.gltf` at `base`'s folder) rewritten as a `.glb` that the gltf crate
+/// reads: compressed views decoded, every buffer in one binary chunk, the two extensions off
+/// the required list. Images the file names by URI stay where they are (read from `base`).
+pub fn unpack(bytes: &[u8], base: &Path) -> Result<Vec<u8>, String> {
+    let (mut json, bin) = split(bytes)?;
+    if !json.is_object() {
+        return Err("its JSON is not an object".into());
+    }
+    let buffers: Vec<Value> = json["buffers"].as_array().cloned().unwrap_or_default();
+    // Load every buffer with data through the gltf crate (binary chunk, data URIs, files):
+    // a document of the buffers alone, the fallback buffers left out.
+    let kept: Vec<usize> = (0..buffers.len())
+        .filter(|&i| !is_fallback(&buffers[i]))
+        .collect();
+    let only_buffers = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "buffers": kept.iter().map(|&i| buffers[i].clone()).collect::<Vec<_>>(),
+    });
+    let loaded = if kept.is_empty() {
+        Vec::new()
+    } else {
+        let shell = glb(&only_buffers, bin.unwrap_or_default())?;
+        let doc = gltf::Gltf::from_slice_without_validation(&shell)
+            .map_err(|e| format!("its buffers cannot be read ({e})"))?;
+        gltf::import_buffers(&doc.document, Some(base), doc.blob)
+            .map_err(|e| format!("its buffers cannot be read ({e})"))?
+    };
+    let mut data: Vec<Option<&[u8]>> = vec![None; buffers.len()];
+    for (k, &i) in kept.iter().enumerate() {
+        data[i] = loaded.get(k).map(|d| &d.0[..]);
+    }
+    // One chunk: each kept buffer, then each decoded view, every start 4-byte aligned.
+    let mut chunk: Vec<u8> = Vec::new();
+    let mut start = vec![0usize; buffers.len()];
+    for &i in &kept {
+        while !chunk.len().is_multiple_of(4) {
+            chunk.push(0);
+        }
+        start[i] = chunk.len();
+        chunk.extend_from_slice(data[i].unwrap_or_default());
+    }
+    if let Some(views) = json["bufferViews"].as_array_mut() {
+        for (v, view) in views.iter_mut().enumerate() {
+            let what = format!("bufferViews[{v}]");
+            if !view.is_object() {
+                return Err(format!("{what} is not an object"));
+            }
+            if let Some(ext) = view["extensions"].get(MESHOPT).cloned() {
+                let b = field(&ext, "buffer", &what)?;
+                let src = data
+                    .get(b)
+                    .copied()
+                    .flatten()
+                    .ok_or_else(|| format!("{what}: its compressed buffer {b} has no data"))?;
+                let decoded = decode(&ext, src, &what)?;
+                while !chunk.len().is_multiple_of(4) {
+                    chunk.push(0);
+                }
+                view["buffer"] = 0.into();
+                view["byteOffset"] = chunk.len().into();
+                view["byteLength"] = decoded.len().into();
+                chunk.extend_from_slice(&decoded);
+                if let Some(e) = view["extensions"].as_object_mut() {
+                    e.remove(MESHOPT);
+                }
+            } else {
+                let b = field(view, "buffer", &what)?;
+                if data.get(b).copied().flatten().is_none() {
+                    return Err(format!("{what} refers to buffer {b}, which has no data"));
+                }
+                let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
+                view["buffer"] = 0.into();
+                view["byteOffset"] = (start[b] + offset).into();
+            }
+        }
+    }
+    while chunk.is_empty() || !chunk.len().is_multiple_of(4) {
+        chunk.push(0);
+    }
+    json["buffers"] = serde_json::json!([{ "byteLength": chunk.len() }]);
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        if let Some(list) = json[key].as_array_mut() {
+            list.retain(|e| e != MESHOPT && e != QUANTIZATION);
+        }
+    }
+    glb(&json, chunk)
+}
