@@ -180,7 +180,21 @@ pub struct Rgba8Image {
     pub pixels: Vec<u8>,
 }
 
-/// The part of a glTF material lodlab renders: the base colour.
+/// How a material's alpha is read (glTF's `alphaMode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AlphaMode {
+    /// Alpha is ignored: the surface is solid.
+    #[default]
+    Opaque,
+    /// Alpha below the cutoff cuts the surface out (foliage).
+    Mask,
+    /// Alpha blends the surface over what is behind it. lodlab cuts it out at one half, as a
+    /// mask: its crowds and forests are drawn without sorting.
+    Blend,
+}
+
+/// The part of a glTF material lodlab renders: the base colour, and how its alpha and back
+/// faces are taken.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     pub name: String,
@@ -188,6 +202,52 @@ pub struct Material {
     pub base_color: [f32; 4],
     /// sRGB-encoded base colour texture.
     pub texture: Option<Rgba8Image>,
+    pub alpha_mode: AlphaMode,
+    /// glTF's `alphaCutoff`: under [`AlphaMode::Mask`], alpha below it is cut out.
+    pub alpha_cutoff: f32,
+    /// glTF's `doubleSided`.
+    pub double_sided: bool,
+}
+
+impl Material {
+    /// A solid, one-sided material (glTF's defaults).
+    pub fn opaque(name: &str, base_color: [f32; 4], texture: Option<Rgba8Image>) -> Material {
+        Material {
+            name: name.into(),
+            base_color,
+            texture,
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: 0.5,
+            double_sided: false,
+        }
+    }
+
+    /// Whether its alpha cuts its shape out anywhere: a mask (or a blend, which lodlab draws
+    /// as a mask at one half) whose factor or texture has alpha below the cutoff. Opaque
+    /// materials never do, whatever their texture's alpha.
+    pub fn cuts_out(&self) -> bool {
+        let cutoff = match self.alpha_mode {
+            AlphaMode::Opaque => return false,
+            AlphaMode::Mask => self.alpha_cutoff,
+            AlphaMode::Blend => 0.5,
+        };
+        let a = self.base_color[3];
+        a < cutoff
+            || self.texture.as_ref().is_some_and(|t| {
+                t.pixels
+                    .chunks_exact(4)
+                    .any(|px| px[3] as f32 / 255.0 * a < cutoff)
+            })
+    }
+
+    /// A two-sided material whose alpha cuts its shape out at one half (leaves, billboards).
+    pub fn cut_out(name: &str, base_color: [f32; 4], texture: Option<Rgba8Image>) -> Material {
+        Material {
+            alpha_mode: AlphaMode::Mask,
+            double_sided: true,
+            ..Material::opaque(name, base_color, texture)
+        }
+    }
 }
 
 /// A skinned, animated character.

@@ -164,3 +164,94 @@ fn welding_keeps_uv_seams_split() {
         assert!(n.dot(m.mesh.normals[v]) > 0.9999);
     }
 }
+
+/// A model of `tiny_model`'s mesh with one textured material whose alpha is 0.4 on one half
+/// of the texture and 1 on the other.
+fn half_transparent(mode: lodlab::model::AlphaMode, cutoff: f32) -> lodlab::model::Model {
+    let mut m = tiny_model();
+    let mut pixels = Vec::new();
+    for i in 0..16 {
+        pixels.extend_from_slice(&[200, 120, 60, if i % 2 == 0 { 102 } else { 255 }]);
+    }
+    let texture = lodlab::model::Rgba8Image {
+        width: 4,
+        height: 4,
+        pixels,
+    };
+    m.materials = vec![lodlab::model::Material {
+        alpha_mode: mode,
+        alpha_cutoff: cutoff,
+        double_sided: mode != lodlab::model::AlphaMode::Opaque,
+        ..lodlab::model::Material::opaque("half", [1.0; 4], Some(texture))
+    }];
+    m
+}
+
+/// alphaMode, alphaCutoff and doubleSided survive a file both ways, and only MASK and BLEND
+/// cut anything out: an OPAQUE material's alpha is ignored however low it is.
+#[test]
+fn alpha_modes_round_trip_and_only_masks_cut_out() {
+    use lodlab::bake::billboard::is_tree;
+    use lodlab::bake::materials::MaterialLayers;
+    use lodlab::model::AlphaMode;
+    for (mode, cutoff, cuts, name) in [
+        (AlphaMode::Opaque, 0.5, false, "OPAQUE"),
+        (AlphaMode::Mask, 0.5, true, "MASK"),
+        (AlphaMode::Mask, 0.3, false, "MASK"),
+        (AlphaMode::Blend, 0.5, true, "BLEND"),
+    ] {
+        let model = half_transparent(mode, cutoff);
+        let bytes = to_glb(&model);
+        let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+        let json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+        let material = &json["materials"][0];
+        assert_eq!(material["alphaMode"].as_str().unwrap_or("OPAQUE"), name);
+        assert_eq!(
+            material["doubleSided"].as_bool().unwrap_or(false),
+            mode != AlphaMode::Opaque
+        );
+        let (_dir, path) = write(&bytes, "alpha.glb");
+        let back = load(&path).unwrap();
+        let m = &back.materials[0];
+        assert_eq!(
+            (m.alpha_mode, m.double_sided),
+            (mode, mode != AlphaMode::Opaque)
+        );
+        if mode == AlphaMode::Mask {
+            assert_eq!(m.alpha_cutoff, cutoff);
+        }
+        // Alpha 0.4 is cut out under a 0.5 mask or a blend, kept under a 0.3 mask or opaque.
+        assert_eq!(m.cuts_out(), cuts, "{mode:?} at {cutoff}");
+        assert_eq!(is_tree(&back), cuts);
+        // The layer the shaders test at one half says the same.
+        let layers = MaterialLayers::bake(&back.materials);
+        let below_half = layers.mips[0].chunks_exact(4).any(|p| p[3] < 128);
+        assert_eq!(below_half, cuts, "{mode:?} at {cutoff}");
+    }
+}
+
+/// The generated trees' foliage is written MASK and double-sided, so other viewers cut the
+/// leaves out instead of showing opaque squares; the bark stays opaque.
+#[test]
+fn generated_foliage_is_written_as_a_two_sided_mask() {
+    let tree = lodlab::import::load_model("sapling").unwrap();
+    let bytes = to_glb(&tree);
+    let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    let materials = json["materials"].as_array().unwrap();
+    let leaves = materials.iter().find(|m| m["name"] == "leaves").unwrap();
+    assert_eq!(leaves["alphaMode"], "MASK");
+    assert_eq!(leaves["doubleSided"], true);
+    let bark = materials.iter().find(|m| m["name"] == "bark").unwrap();
+    assert!(bark.get("alphaMode").is_none_or(|m| m == "OPAQUE"));
+    if let Some(tools) = common::gltf_tools() {
+        let (_dir, path) = write(&bytes, "sapling.glb");
+        let out = std::process::Command::new("node")
+            .arg(tools.join("validate.js"))
+            .arg(&path)
+            .output()
+            .unwrap();
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(report["errors"], 0, "{report}");
+    }
+}

@@ -478,11 +478,7 @@ fn quad_model(model: &Model, sheets: Vec<Rgba8Image>) -> Model {
     let materials = sheets
         .into_iter()
         .zip(["impostor colour", "impostor normals"])
-        .map(|(texture, name)| Material {
-            name: name.into(),
-            base_color: [1.0; 4],
-            texture: Some(texture),
-        })
+        .map(|(texture, name)| Material::cut_out(name, [1.0; 4], Some(texture)))
         .collect();
     Model {
         name: format!("{} impostor", model.name),
@@ -494,7 +490,7 @@ fn quad_model(model: &Model, sheets: Vec<Rgba8Image>) -> Model {
 }
 
 /// Bump whenever the impostor's bake changes its output.
-const IMPOSTOR_VERSION: u32 = 3;
+const IMPOSTOR_VERSION: u32 = 4;
 
 /// The cache key of `model`'s impostor (its source hashing to `source`) baked with `options`.
 pub fn impostor_key(source: &[u8; 32], options: &ImpostorOptions) -> [u8; 32] {

@@ -5,7 +5,7 @@
 //! `texture × base colour factor` (a plain colour where there is no texture). The layer index goes
 //! into each vertex's header in the vertex texture.
 
-use crate::model::{Material, linear_to_srgb, srgb_to_linear};
+use crate::model::{AlphaMode, Material, linear_to_srgb, srgb_to_linear};
 use serde::{Deserialize, Serialize};
 
 /// Layers are never larger than this on a side.
@@ -38,11 +38,7 @@ impl MaterialLayers {
 
         let mut levels: Vec<Vec<u8>> = Vec::new();
         let materials_or_default: Vec<Material> = if materials.is_empty() {
-            vec![Material {
-                name: "default".into(),
-                base_color: [1.0; 4],
-                texture: None,
-            }]
+            vec![Material::opaque("default", [1.0; 4], None)]
         } else {
             materials.to_vec()
         };
@@ -70,6 +66,24 @@ impl MaterialLayers {
 
 /// One material's layer at the common size: texture (resized) times factor, in sRGB.
 fn layer_pixels(m: &Material, width: u32, height: u32) -> Vec<u8> {
+    let mut pixels = coloured_pixels(m, width, height);
+    // The shaders cut out at one half: an opaque material's alpha goes to one, a mask's is
+    // scaled so that its own cutoff lands on one half.
+    match m.alpha_mode {
+        AlphaMode::Opaque => pixels.chunks_exact_mut(4).for_each(|p| p[3] = 255),
+        AlphaMode::Mask if m.alpha_cutoff != 0.5 => {
+            let scale = 0.5 / m.alpha_cutoff.clamp(1.0 / 255.0, 1.0);
+            for p in pixels.chunks_exact_mut(4) {
+                p[3] = (p[3] as f32 * scale).round().min(255.0) as u8;
+            }
+        }
+        _ => {}
+    }
+    pixels
+}
+
+/// The base colour texture (or factor) times the factor, `width` × `height`.
+fn coloured_pixels(m: &Material, width: u32, height: u32) -> Vec<u8> {
     let f = m.base_color;
     match &m.texture {
         Some(tex) => {
@@ -283,25 +297,20 @@ mod tests {
     use super::*;
     use crate::model::Rgba8Image;
 
-    /// A material of a square `size`² texture and a unit factor.
+    /// A cut-out material of a square `size`² texture and a unit factor.
     fn textured(name: &str, size: u32, pixels: Vec<u8>) -> Material {
-        Material {
-            name: name.into(),
-            base_color: [1.0; 4],
-            texture: Some(Rgba8Image {
-                width: size,
-                height: size,
-                pixels,
-            }),
-        }
+        let texture = Rgba8Image {
+            width: size,
+            height: size,
+            pixels,
+        };
+        Material::cut_out(name, [1.0; 4], Some(texture))
     }
 
     #[test]
     fn factor_only_materials_make_plain_layers_with_mips() {
         let m = Material {
-            name: "red".into(),
-            base_color: [1.0, 0.0, 0.0, 1.0],
-            texture: None,
+            ..Material::opaque("red", [1.0, 0.0, 0.0, 1.0], None)
         };
         let l = MaterialLayers::bake(&[m.clone(), m]);
         assert_eq!((l.width, l.height, l.layer_count), (4, 4, 2));
@@ -403,11 +412,7 @@ mod tests {
             height: 2,
             pixels: vec![255; 16],
         };
-        let m = Material {
-            name: "half".into(),
-            base_color: [0.5, 1.0, 1.0, 1.0],
-            texture: Some(tex),
-        };
+        let m = Material::opaque("half", [0.5, 1.0, 1.0, 1.0], Some(tex));
         let l = MaterialLayers::bake(&[m]);
         assert_eq!(l.mips[0][0], linear_to_srgb(0.5));
         assert_eq!(l.mips[0][1], 255);

@@ -20,7 +20,7 @@ pub mod texels;
 pub mod uv_grid;
 pub mod vertex_texture;
 
-use crate::model::{Bounds, Model};
+use crate::model::{Bounds, Material, Model};
 use anim_texture::AnimationTexture;
 use animation_space::AnimationSpaceMesh;
 use glam::Vec3;
@@ -137,12 +137,7 @@ impl CharacterBake {
             indices: am.indices.clone(),
             materials,
             bounds,
-            alpha_tested: model.materials.iter().any(|m| {
-                m.base_color[3] < 0.5
-                    || m.texture
-                        .as_ref()
-                        .is_some_and(|t| t.pixels.chunks_exact(4).any(|px| px[3] < 128))
-            }),
+            alpha_tested: model.materials.iter().any(Material::cuts_out),
             outlines: model
                 .materials
                 .iter()

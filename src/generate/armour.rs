@@ -435,10 +435,6 @@ pub fn armour_at(detail: f32) -> Model {
         mesh: p.b.build(0.0),
         skeleton: r.skeleton(),
         clips: vec![walk],
-        materials: vec![Material {
-            name: "steel".into(),
-            base_color: [0.62, 0.64, 0.68, 1.0],
-            texture: None,
-        }],
+        materials: vec![Material::opaque("steel", [0.62, 0.64, 0.68, 1.0], None)],
     }
 }

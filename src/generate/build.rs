@@ -51,11 +51,7 @@ pub fn assemble_subdivided(
         mesh: finished.mesh,
         skeleton: rig.skeleton(),
         clips,
-        materials: vec![Material {
-            name: material.into(),
-            base_color: [1.0; 4],
-            texture: Some(texture),
-        }],
+        materials: vec![Material::opaque(material, [1.0; 4], Some(texture))],
     }
 }
 

@@ -61,10 +61,6 @@ pub fn bent_cylinder(rings: usize, sides: usize) -> Model {
         mesh,
         skeleton: rig.skeleton(),
         clips: vec![clip],
-        materials: vec![Material {
-            name: "grey".into(),
-            base_color: [0.7, 0.7, 0.7, 1.0],
-            texture: None,
-        }],
+        materials: vec![Material::opaque("grey", [0.7, 0.7, 0.7, 1.0], None)],
     }
 }

@@ -8,7 +8,7 @@
 //! node indices and `MSFT_screencoverage` in its `extras` (Microsoft's vendor extension, read
 //! by Babylon.js and three.js's loader).
 
-use crate::model::{ChannelTarget, Interpolation, Model, SkinnedMesh};
+use crate::model::{AlphaMode, ChannelTarget, Interpolation, Model, SkinnedMesh};
 use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
 use gltf::json::validation::{Checked::Valid, USize64};
 use gltf::json::{self as gj, Index};
@@ -278,9 +278,18 @@ fn materials(b: &mut Builder, model: &Model, root: &mut gj::Root) {
                 extras: None,
             });
         }
+        let alpha_mode = match m.alpha_mode {
+            AlphaMode::Opaque => gj::material::AlphaMode::Opaque,
+            AlphaMode::Mask => gj::material::AlphaMode::Mask,
+            AlphaMode::Blend => gj::material::AlphaMode::Blend,
+        };
         root.push(gj::Material {
             name: Some(m.name.clone()),
             pbr_metallic_roughness: pbr,
+            alpha_mode: Valid(alpha_mode),
+            alpha_cutoff: (m.alpha_mode == AlphaMode::Mask)
+                .then_some(gj::material::AlphaCutoff(m.alpha_cutoff)),
+            double_sided: m.double_sided,
             ..Default::default()
         });
     }

@@ -109,10 +109,6 @@ pub fn split_tube() -> Model {
         mesh: b.build(2e-7),
         skeleton: rig.skeleton(),
         clips: vec![clip],
-        materials: vec![Material {
-            name: "scales".into(),
-            base_color: [0.45, 0.62, 0.38, 1.0],
-            texture: None,
-        }],
+        materials: vec![Material::opaque("scales", [0.45, 0.62, 0.38, 1.0], None)],
     }
 }

@@ -685,16 +685,12 @@ fn build(sp: &Species) -> Model {
         skeleton: rig.skeleton(),
         clips: vec![clip],
         materials: vec![
-            Material {
-                name: "bark".into(),
-                base_color: [1.0; 4],
-                texture: Some(bark_texture()),
-            },
-            Material {
-                name: if sp.conifer { "needles" } else { "leaves" }.into(),
-                base_color: [1.0; 4],
-                texture: Some(foliage_texture(sp.conifer)),
-            },
+            Material::opaque("bark", [1.0; 4], Some(bark_texture())),
+            Material::cut_out(
+                if sp.conifer { "needles" } else { "leaves" },
+                [1.0; 4],
+                Some(foliage_texture(sp.conifer)),
+            ),
         ],
     }
 }

@@ -11,8 +11,8 @@
 use super::weld::{compute_normals, weld_map};
 use crate::error::InputError;
 use crate::model::{
-    Bounds, Channel, ChannelTarget, Clip, Influence, Interpolation, Material, Model, Node,
-    Rgba8Image, Skeleton, SkinnedMesh, Trs,
+    AlphaMode, Bounds, Channel, ChannelTarget, Clip, Influence, Interpolation, Material, Model,
+    Node, Rgba8Image, Skeleton, SkinnedMesh, Trs,
 };
 use glam::{Affine3A, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
@@ -723,6 +723,12 @@ fn convert_material(
     if base_color.iter().any(|c| !c.is_finite()) {
         return Err("a material has a non-finite base colour".into());
     }
+    let alpha_cutoff = material.alpha_cutoff().unwrap_or(0.5);
+    if !alpha_cutoff.is_finite() || alpha_cutoff < 0.0 {
+        return Err(format!(
+            "a material has an invalid alphaCutoff {alpha_cutoff}"
+        ));
+    }
     Ok(Material {
         name: material
             .name()
@@ -730,6 +736,13 @@ fn convert_material(
             .unwrap_or_else(|| format!("material{}", material.index().unwrap_or(0))),
         base_color,
         texture,
+        alpha_mode: match material.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        alpha_cutoff,
+        double_sided: material.double_sided(),
     })
 }
 

@@ -56,11 +56,7 @@ pub fn tiny_model() -> Model {
         mesh,
         skeleton: rig.skeleton(),
         clips: vec![clip],
-        materials: vec![Material {
-            name: "grey".into(),
-            base_color: [0.6, 0.6, 0.6, 1.0],
-            texture: None,
-        }],
+        materials: vec![Material::opaque("grey", [0.6, 0.6, 0.6, 1.0], None)],
     }
 }
 
@@ -140,11 +136,7 @@ pub fn six_influence_model() -> Model {
         mesh,
         skeleton: rig.skeleton(),
         clips: vec![clip],
-        materials: vec![Material {
-            name: "white".into(),
-            base_color: [1.0; 4],
-            texture: None,
-        }],
+        materials: vec![Material::opaque("white", [1.0; 4], None)],
     }
 }
 

@@ -385,16 +385,8 @@ pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -
         skeleton: tree.skeleton.clone(),
         clips: tree.clips.clone(),
         materials: vec![
-            Material {
-                name: "impostor colour".into(),
-                base_color: [1.0; 4],
-                texture: Some(images.colour),
-            },
-            Material {
-                name: "impostor normals".into(),
-                base_color: [1.0; 4],
-                texture: Some(images.normal),
-            },
+            Material::cut_out("impostor colour", [1.0; 4], Some(images.colour)),
+            Material::cut_out("impostor normals", [1.0; 4], Some(images.normal)),
         ],
     }
 }

@@ -43,10 +43,7 @@ pub fn is_tree(model: &Model) -> bool {
 
 /// Does this material cut its shape out with alpha (foliage)?
 pub fn is_cut_out(m: &crate::model::Material) -> bool {
-    m.base_color[3] < 0.5
-        || m.texture
-            .as_ref()
-            .is_some_and(|t| t.pixels.chunks_exact(4).any(|px| px[3] < 128))
+    m.cuts_out()
 }
 
 /// The leaves of `model`: triangles of cut-out materials, joined into leaves where they share
@@ -433,11 +430,7 @@ pub fn cloud_model(
         }
     }
     let atlas_material = materials.len() as u16;
-    materials.push(Material {
-        name: BILLBOARD_MATERIAL.into(),
-        base_color: [1.0; 4],
-        texture: Some(atlas),
-    });
+    materials.push(Material::cut_out(BILLBOARD_MATERIAL, [1.0; 4], Some(atlas)));
     let mut mesh = SkinnedMesh::empty();
     mesh.copy_triangles_from(src, |t| {
         keep.get(src.materials[t[0] as usize] as usize)
