@@ -61,16 +61,20 @@ fn truncated_and_non_gltf_files() {
     );
 }
 
+/// A file without a skin loads as a prop (see tests/import_features.rs); one without any mesh
+/// in its scene is one line.
 #[test]
-fn gltf_without_a_skin() {
+fn gltf_without_a_mesh() {
     let dir = tempfile::tempdir().unwrap();
     let glb = edit_glb(&to_glb(&tiny_model()), |j| {
         j.as_object_mut().unwrap().remove("skins");
         for n in j["nodes"].as_array_mut().unwrap() {
-            n.as_object_mut().unwrap().remove("skin");
+            let n = n.as_object_mut().unwrap();
+            n.remove("skin");
+            n.remove("mesh");
         }
     });
-    expect_error(&write(dir.path(), "static.glb", &glb), "has no skin");
+    expect_error(&write(dir.path(), "empty-scene.glb", &glb), "has no mesh");
 }
 
 #[test]
@@ -255,4 +259,20 @@ fn cli_refuses_more_instances_than_the_adapter_holds() {
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(!out_png.exists());
     }
+}
+
+/// A misspelt built-in name (no such file either) lists the built-in names, in one line.
+#[test]
+fn an_unknown_builtin_lists_the_builtins() {
+    let err = lodlab::import::load_model("hors").unwrap_err().to_string();
+    assert!(err.starts_with("hors: no such file"), "{err}");
+    for name in ["horse", "walker", "broadleaf", "conifer", "sapling"] {
+        assert!(err.contains(name), "{err}");
+    }
+    assert!(!err.contains('\n'));
+    // A path that is not there stays a plain missing file.
+    let err = lodlab::import::load_model("models/hors.glb")
+        .unwrap_err()
+        .to_string();
+    assert!(!err.contains("built-in"), "{err}");
 }

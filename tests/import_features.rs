@@ -255,3 +255,182 @@ fn generated_foliage_is_written_as_a_two_sided_mask() {
         assert_eq!(report["errors"], 0, "{report}");
     }
 }
+
+/// `tiny_model`'s file with its skin, skin attributes and clips taken out: a static prop.
+fn prop_glb() -> Vec<u8> {
+    edit_glb(&to_glb(&tiny_model()), |j| {
+        let root = j.as_object_mut().unwrap();
+        root.remove("skins");
+        root.remove("animations");
+        for n in j["nodes"].as_array_mut().unwrap() {
+            n.as_object_mut().unwrap().remove("skin");
+        }
+        for m in j["meshes"].as_array_mut().unwrap() {
+            for p in m["primitives"].as_array_mut().unwrap() {
+                let a = p["attributes"].as_object_mut().unwrap();
+                a.retain(|k, _| !k.starts_with("JOINTS_") && !k.starts_with("WEIGHTS_"));
+            }
+        }
+        // The mesh node moved and turned: the prop keeps the placement.
+        let mesh_node = j["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .find(|n| n.get("mesh").is_some())
+            .unwrap();
+        mesh_node["rotation"] = serde_json::json!([0.0, 0.7071068, 0.0, 0.7071068]);
+    })
+}
+
+/// An unskinned mesh is a character of one bone: it loads with its triangles turned by its
+/// node, simplifies, and draws.
+#[test]
+fn an_unskinned_mesh_loads_as_a_one_bone_prop() {
+    let original = tiny_model();
+    let (dir, path) = write(&prop_glb(), "prop.glb");
+    let prop = load(&path).unwrap();
+    assert_eq!(prop.skeleton.bone_count(), 1);
+    assert!(prop.clips.is_empty());
+    assert_eq!(prop.mesh.triangle_count(), original.mesh.triangle_count());
+    assert!(
+        prop.mesh
+            .influences
+            .iter()
+            .all(|i| i.bone == 0 && i.weight == 1.0)
+    );
+    // Turned a quarter about y: the strip's x extent became its z extent.
+    let extent = |m: &lodlab::model::Model| {
+        let b = lodlab::model::Bounds::of(m.mesh.positions.iter().copied()).unwrap();
+        b.size()
+    };
+    let (a, b) = (extent(&original), extent(&prop));
+    assert!((a.x / a.y - b.z / b.y).abs() < 1e-3, "{a} {b}");
+    let lods = lodlab::bake::lod::bake_lods(
+        &prop,
+        lodlab::bake::simplify::Method::AnimationSpace,
+        &lodlab::runtime::levels::runtime_options(&prop),
+        &|_| {},
+    );
+    assert!(!lods.levels.is_empty());
+    let png = dir.path().join("prop.png");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args([
+            "shot", "--scene", "study", "--count", "1", "--size", "96x96", "--frames", "1",
+        ])
+        .args(["--method", "as", "--model"])
+        .arg(&path)
+        .arg("--out")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(json["triangles"].as_u64().unwrap() > 0);
+}
+
+/// Morph targets are left out with a warning; the base shape loads.
+#[test]
+fn morph_targets_are_left_out_with_a_warning() {
+    let glb = edit_glb(&to_glb(&tiny_model()), |j| {
+        let p = &mut j["meshes"][0]["primitives"][0];
+        let position = p["attributes"]["POSITION"].clone();
+        p["targets"] = serde_json::json!([{ "POSITION": position }]);
+        j["meshes"][0]["weights"] = serde_json::json!([0.0]);
+    });
+    let (_dir, path) = write(&glb, "morphs.glb");
+    let m = load(&path).unwrap();
+    assert_eq!(m.mesh.triangle_count(), tiny_model().mesh.triangle_count());
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(["bake", "--methods", "as"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("morphs.glb") && err.contains("morph targets are left out"),
+        "{err}"
+    );
+}
+
+/// Two skins: the second mesh's skin lists the same joints in reverse order. Both meshes load,
+/// their joints merged (the same node with the same bind matrix is one bone), each vertex on
+/// the bone its own skin names.
+#[test]
+fn several_skins_load_with_their_joints_merged() {
+    let original = tiny_model();
+    let glb = edit_glb(&to_glb(&original), |j| {
+        let mut skin = j["skins"][0].clone();
+        let joints: Vec<serde_json::Value> = skin["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .rev()
+            .cloned()
+            .collect();
+        skin["joints"] = joints.into();
+        // No inverse bind matrices in the copy: identities, unlike the first skin's.
+        skin.as_object_mut().unwrap().remove("inverseBindMatrices");
+        j["skins"].as_array_mut().unwrap().push(skin);
+        let mesh_node = j["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|n| n.get("mesh").is_some())
+            .unwrap()
+            .clone();
+        let mut second = mesh_node.clone();
+        second["skin"] = 1.into();
+        // A mesh of its own (a mesh is read once however many nodes use it).
+        let mesh = j["meshes"][0].clone();
+        j["meshes"].as_array_mut().unwrap().push(mesh);
+        second["mesh"] = 1.into();
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        nodes.push(second);
+        let index = nodes.len() - 1;
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(index.into());
+    });
+    let (_dir, path) = write(&glb, "two-skins.glb");
+    let m = load(&path).unwrap();
+    assert_eq!(m.mesh.triangle_count(), 2 * original.mesh.triangle_count());
+    let joints = original.skeleton.joints.len();
+    // The second skin's identity bind matrices differ from the first skin's except where
+    // those are identities already: only the differing joints become bones of their own.
+    let differing = original
+        .skeleton
+        .inverse_bind
+        .iter()
+        .filter(|m| !m.abs_diff_eq(glam::Mat4::IDENTITY, 1e-5))
+        .count();
+    assert!(differing > 0);
+    assert_eq!(m.skeleton.joints.len(), joints + differing);
+    let n = original.mesh.vertex_count();
+    for v in 0..n {
+        let (a, b) = (m.mesh.influences_of(v), m.mesh.influences_of(v + n));
+        assert_eq!(a.len(), b.len());
+        for x in a {
+            // The same JOINTS index names, in the reversed skin, the mirrored joint's node,
+            // with the second skin's (identity) bind matrix.
+            let node = m.skeleton.joints[joints - 1 - x.bone as usize];
+            let y = b
+                .iter()
+                .find(|y| m.skeleton.joints[y.bone as usize] == node)
+                .expect("the second mesh's vertex follows the reversed joint");
+            assert_eq!(y.weight, x.weight);
+            assert!(
+                m.skeleton.inverse_bind[y.bone as usize].abs_diff_eq(glam::Mat4::IDENTITY, 1e-5)
+            );
+        }
+    }
+}

@@ -59,7 +59,12 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "model".into());
-    build(&name, &doc, &buffers, &images).map_err(fail)
+    let mut warnings = Vec::new();
+    let model = build(&name, &doc, &buffers, &images, &mut warnings).map_err(fail)?;
+    for w in warnings {
+        log::warn!("{}: {w}", path.display());
+    }
+    Ok(model)
 }
 
 /// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or
@@ -157,37 +162,135 @@ fn build(
     doc: &gltf::Document,
     buffers: &[gltf::buffer::Data],
     images: &[gltf::image::Data],
+    warnings: &mut Vec<String>,
 ) -> Result<Model, String> {
     let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
-
-    // The skin: the first one a mesh node uses.
-    if doc.skins().len() == 0 {
-        return Err("has no skin: lodlab needs a skinned (rigged) mesh".into());
-    }
-    let skin_user = doc
+    let lower_lods = msft_lod_lower_levels(doc);
+    let shown = |n: &gltf::Node| n.mesh().is_some() && !lower_lods.contains(&n.index());
+    let skinned: Vec<gltf::Node> = doc
         .nodes()
-        .find(|n| n.skin().is_some() && n.mesh().is_some())
-        .ok_or("has a skin but no mesh uses it")?;
-    let skin = skin_user.skin().expect("checked above");
-    let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
-    if joints.is_empty() {
-        return Err(format!("skin {} has no joints", skin.index()));
+        .filter(|n| shown(n) && n.skin().is_some())
+        .collect();
+    if skinned.is_empty() {
+        return build_rigid(name, doc, buffers, images, warnings);
     }
-    let (nodes, remap) = read_hierarchy(doc, &joints)?;
-    let inverse_bind = read_inverse_bind(&skin, buffers, joints.len())?;
+    // Every skin a mesh uses, in order of first use, their joints merged into one list of
+    // bones: a joint another skin has already, with the same inverse bind matrix, is shared;
+    // otherwise it is a bone of its own (bones may share a node).
+    let mut skins: Vec<gltf::Skin> = Vec::new();
+    for n in &skinned {
+        let s = n.skin().expect("filtered on a skin");
+        if !skins.iter().any(|k| k.index() == s.index()) {
+            skins.push(s);
+        }
+    }
+    let (mut bone_nodes, mut inverse_bind): (Vec<usize>, Vec<Mat4>) = (Vec::new(), Vec::new());
+    let mut maps: Vec<Vec<u32>> = Vec::with_capacity(skins.len());
+    for skin in &skins {
+        let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        if joints.is_empty() {
+            return Err(format!("skin {} has no joints", skin.index()));
+        }
+        let ibm = read_inverse_bind(skin, buffers, joints.len())?;
+        let mut map = Vec::with_capacity(joints.len());
+        for (&j, m) in joints.iter().zip(&ibm) {
+            let same = |(&n, b): (&usize, &Mat4)| n == j && b.abs_diff_eq(*m, 1e-5);
+            let bone = match bone_nodes.iter().zip(&inverse_bind).position(same) {
+                Some(i) => i,
+                None => {
+                    bone_nodes.push(j);
+                    inverse_bind.push(*m);
+                    bone_nodes.len() - 1
+                }
+            };
+            map.push(bone as u32);
+        }
+        maps.push(map);
+    }
+    let (nodes, remap) = read_hierarchy(doc, &bone_nodes)?;
     let mut skeleton = Skeleton {
         nodes,
-        joints: joints.iter().map(|&j| remap[j]).collect(),
+        joints: bone_nodes.iter().map(|&j| remap[j]).collect(),
         inverse_bind,
         root_transform: Affine3A::IDENTITY,
     };
-    let (mesh, materials) = read_skinned_meshes(doc, &skin, buffers, images, joints.len())?;
+    let bound: Vec<(gltf::Node, Binding)> = skinned
+        .iter()
+        .map(|n| {
+            let s = n.skin().expect("filtered on a skin").index();
+            let k = skins
+                .iter()
+                .position(|x| x.index() == s)
+                .expect("collected above");
+            (n.clone(), Binding::Skin(&maps[k]))
+        })
+        .collect();
+    let unskinned = doc
+        .nodes()
+        .filter(|n| shown(n) && n.skin().is_none())
+        .count();
+    if unskinned > 0 {
+        warnings.push(format!(
+            "{unskinned} mesh node(s) without a skin left out: only the skinned character is loaded"
+        ));
+    }
+    let (mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
     let mut clips = Vec::new();
     for anim in doc.animations() {
         if let Some(clip) = read_clip(&anim, buffer, &remap)? {
             clips.push(clip);
         }
     }
+    place_in_scene(&mesh, &mut skeleton, &mut clips)?;
+    Ok(Model {
+        name: name.to_string(),
+        mesh,
+        skeleton,
+        clips,
+        materials,
+    })
+}
+
+/// A file without a skinned mesh: a static prop. Every mesh of the scene, its node's world
+/// transform baked in, becomes one character of one bone (at the origin, weight 1), which
+/// simplifies and draws like any other; it has no clips.
+fn build_rigid(
+    name: &str,
+    doc: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    images: &[gltf::image::Data],
+    warnings: &mut Vec<String>,
+) -> Result<Model, String> {
+    let lower_lods = msft_lod_lower_levels(doc);
+    let bound: Vec<(gltf::Node, Binding)> = mesh_nodes_in_scene(doc)
+        .into_iter()
+        .filter(|(n, _)| !lower_lods.contains(&n.index()))
+        .map(|(n, world)| (n, Binding::Rigid(world)))
+        .collect();
+    if bound.is_empty() {
+        return Err("has no mesh in its scene".into());
+    }
+    if bound
+        .iter()
+        .any(|(_, b)| matches!(b, Binding::Rigid(w) if !w.is_finite()))
+    {
+        return Err("a mesh node has a non-finite transform".into());
+    }
+    let (mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
+    if doc.animations().len() > 0 {
+        warnings.push("its animations move nodes of an unskinned mesh: it is drawn still".into());
+    }
+    let mut skeleton = Skeleton {
+        nodes: vec![Node {
+            name: "root".into(),
+            parent: None,
+            rest: Trs::IDENTITY,
+        }],
+        joints: vec![0],
+        inverse_bind: vec![Mat4::IDENTITY],
+        root_transform: Affine3A::IDENTITY,
+    };
+    let mut clips = Vec::new();
     place_in_scene(&mesh, &mut skeleton, &mut clips)?;
     Ok(Model {
         name: name.to_string(),
@@ -300,8 +403,6 @@ fn read_inverse_bind(
     Ok(inverse_bind)
 }
 
-/// Every mesh bound to `skin`, each once, all its primitives merged into one mesh (normals
-/// computed where a primitive has none), and the materials they use.
 /// `KHR_texture_transform` baked into texture coordinates: uv′ = T·R·S·uv, T the offset, R
 /// the rotation (counter-clockwise, in radians), S the scale, as the extension defines them.
 /// gltfpack writes quantised texture coordinates with the transform that maps them back.
@@ -332,12 +433,22 @@ fn msft_lod_lower_levels(doc: &gltf::Document) -> Vec<usize> {
         .collect()
 }
 
-fn read_skinned_meshes(
-    doc: &gltf::Document,
-    skin: &gltf::Skin,
+/// How the vertices of one mesh node are bound: to the skin whose joints `joints` maps into
+/// the model's bones (joint j of the skin is bone `joints[j]`), or rigidly to bone 0 with the
+/// node's world transform baked in (an unskinned prop).
+enum Binding<'m> {
+    Skin(&'m [u32]),
+    Rigid(Mat4),
+}
+
+/// The meshes of `nodes` (each mesh once), all their primitives merged into one mesh (normals
+/// computed where a primitive has none), and the materials they use. Morph targets are left
+/// out with a warning in `warnings`: the base shape is drawn.
+fn read_meshes(
+    nodes: &[(gltf::Node, Binding)],
     buffers: &[gltf::buffer::Data],
     images: &[gltf::image::Data],
-    joints: usize,
+    warnings: &mut Vec<String>,
 ) -> Result<(SkinnedMesh, Vec<Material>), String> {
     let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
     let mut material_slots: BTreeMap<Option<usize>, u16> = BTreeMap::new();
@@ -345,20 +456,20 @@ fn read_skinned_meshes(
     let mut mesh = SkinnedMesh::default();
     let mut needs_normals: Vec<bool> = Vec::new();
     let mut seen_meshes = Vec::new();
-    let lower_lods = msft_lod_lower_levels(doc);
-    for node in doc.nodes() {
-        let (Some(m), Some(s)) = (node.mesh(), node.skin()) else {
-            continue;
-        };
-        if s.index() != skin.index()
-            || seen_meshes.contains(&m.index())
-            || lower_lods.contains(&node.index())
-        {
+    for (node, binding) in nodes {
+        let Some(m) = node.mesh() else { continue };
+        if seen_meshes.contains(&m.index()) {
             continue;
         }
         seen_meshes.push(m.index());
         for prim in m.primitives() {
             let label = format!("mesh {} primitive {}", m.index(), prim.index());
+            if prim.morph_targets().len() > 0 {
+                warnings.push(format!(
+                    "{label}: its {} morph targets are left out (the base shape is drawn)",
+                    prim.morph_targets().len()
+                ));
+            }
             let material = prim.material();
             let slot = match material_slots.get(&material.index()) {
                 Some(&s) => s,
@@ -377,9 +488,33 @@ fn read_skinned_meshes(
                 .and_then(|t| t.tex_coord())
                 .or(base_colour.as_ref().map(|t| t.tex_coord()))
                 .unwrap_or(0);
+            let joints = match binding {
+                Binding::Skin(map) => Some(map.len()),
+                Binding::Rigid(_) => None,
+            };
             let mut raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
             if let Some(t) = transform {
                 apply_texture_transform(&mut raw.uvs, t.offset(), t.rotation(), t.scale());
+            }
+            match binding {
+                Binding::Skin(map) => {
+                    for inf in raw.influences.iter_mut().flatten() {
+                        inf.bone = map[inf.bone as usize];
+                    }
+                }
+                Binding::Rigid(world) => {
+                    let normal_matrix = glam::Mat3::from_mat4(*world).inverse().transpose();
+                    for p in &mut raw.positions {
+                        *p = world.transform_point3(*p);
+                    }
+                    for n in raw.normals.iter_mut().flatten() {
+                        *n = (normal_matrix * *n).normalize_or(Vec3::Y);
+                    }
+                    if world.determinant() < 0.0 {
+                        // A mirroring transform turns the triangles inside out.
+                        raw.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+                    }
+                }
             }
             append_primitive(&mut mesh, &mut needs_normals, raw, slot);
         }
@@ -392,6 +527,37 @@ fn read_skinned_meshes(
     }
 
     Ok((mesh, materials))
+}
+
+/// Every node with a mesh in the scene (the default one, else the first, else every root),
+/// with its world transform. Each node is visited once, however the hierarchy loops.
+fn mesh_nodes_in_scene(doc: &gltf::Document) -> Vec<(gltf::Node<'_>, Mat4)> {
+    let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                n.children().for_each(|c| child[c.index()] = true);
+            }
+            doc.nodes().filter(|n| !child[n.index()]).collect()
+        }
+    };
+    let mut visited = vec![false; doc.nodes().len()];
+    let mut stack: Vec<(gltf::Node, Mat4)> =
+        roots.into_iter().map(|n| (n, Mat4::IDENTITY)).collect();
+    let mut out = Vec::new();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            continue;
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if node.mesh().is_some() {
+            out.push((node.clone(), world));
+        }
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    out.sort_by_key(|(n, _)| n.index());
+    out
 }
 
 /// Scene units: metres, standing on the ground, centred. A model of implausible height (in
@@ -482,15 +648,12 @@ fn read_primitive<'a, 's, F>(
     prim: &'a gltf::Primitive<'a>,
     buffer: F,
     uv_set: u32,
-    joint_count: usize,
+    joint_count: Option<usize>,
     label: &str,
 ) -> Result<RawPrimitive, String>
 where
     F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
 {
-    if prim.morph_targets().len() > 0 {
-        return Err(format!("{label}: morph targets are not supported"));
-    }
     let reader = prim.reader(buffer.clone());
     let attribute = |s: gltf::Semantic| prim.get(&s);
     let positions: Vec<Vec3> = attribute(gltf::Semantic::Positions)
@@ -535,7 +698,18 @@ where
         ));
     }
 
-    // Skin influences from every JOINTS_n / WEIGHTS_n pair.
+    // Skin influences from every JOINTS_n / WEIGHTS_n pair; a rigid mesh (no skin) follows
+    // bone 0 alone.
+    let Some(joint_count) = joint_count else {
+        let influences = vec![
+            vec![Influence {
+                bone: 0,
+                weight: 1.0
+            }];
+            n
+        ];
+        return finish_primitive(prim, &reader, positions, normals, uvs, influences, label);
+    };
     let mut influences: Vec<Vec<Influence>> = vec![Vec::new(); n];
     let mut set = 0;
     loop {
@@ -598,7 +772,23 @@ where
         }
         inf.sort_by_key(|i| i.bone);
     }
+    finish_primitive(prim, &reader, positions, normals, uvs, influences, label)
+}
 
+/// A primitive's triangles (from its indices and mode) with its vertices read so far.
+fn finish_primitive<'a, 's, F>(
+    prim: &'a gltf::Primitive<'a>,
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Vec<Vec2>,
+    influences: Vec<Vec<Influence>>,
+    label: &str,
+) -> Result<RawPrimitive, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let n = positions.len();
     let indices: Option<Vec<u32>> = reader.read_indices().map(|i| i.into_u32().collect());
     let indexed = indices.is_some();
     let index_list: Vec<u32> = indices.unwrap_or_else(|| (0..n as u32).collect());

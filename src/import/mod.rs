@@ -16,7 +16,23 @@ pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
             m.name = asset.name.to_string();
             m
         }),
-        None => gltf::load(Path::new(name_or_path)),
+        None => {
+            let path = Path::new(name_or_path);
+            // A bare name that is neither a file nor a built-in: most likely a misspelt
+            // built-in, so say which there are.
+            let bare = path.components().count() == 1 && path.extension().is_none();
+            if bare && !path.exists() {
+                let names: Vec<&str> = crate::assets::BUILTINS.iter().map(|b| b.name).collect();
+                return Err(InputError::new(
+                    path,
+                    format!(
+                        "no such file, and no built-in model of that name (built-in: {})",
+                        names.join(", ")
+                    ),
+                ));
+            }
+            gltf::load(path)
+        }
     }
 }
 
