@@ -278,7 +278,8 @@ fn prop_glb() -> Vec<u8> {
             .iter_mut()
             .find(|n| n.get("mesh").is_some())
             .unwrap();
-        mesh_node["rotation"] = serde_json::json!([0.0, 0.7071068, 0.0, 0.7071068]);
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        mesh_node["rotation"] = serde_json::json!([0.0, h, 0.0, h]);
     })
 }
 
