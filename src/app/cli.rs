@@ -404,6 +404,9 @@ pub struct PolicyArgs {
     /// Hysteresis: the fraction of the tolerance a coarser level must undercut (0 to 0.9).
     #[arg(long, default_value_t = 0.2, value_parser = parse_hysteresis)]
     pub hysteresis: f32,
+    /// Show level N of every character (its coarsest if it has fewer), whatever the distance.
+    #[arg(long, value_name = "N")]
+    pub force_level: Option<u8>,
 }
 
 impl PolicyArgs {
@@ -415,6 +418,7 @@ impl PolicyArgs {
             drive: self.drive,
             duration: self.duration,
             zone_width: self.zone_width,
+            force_level: self.force_level,
         }
     }
 }

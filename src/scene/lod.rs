@@ -142,6 +142,10 @@ pub struct LodPolicy {
     pub duration: f32,
     /// Width of a morph zone as a fraction of its threshold distance.
     pub zone_width: f32,
+    /// Every instance shows this level (or its model's coarsest, if it has fewer), whatever its
+    /// projected error: for looking at one level close up. A change of it still runs the
+    /// transition.
+    pub force_level: Option<u8>,
 }
 
 impl Default for LodPolicy {
@@ -153,6 +157,7 @@ impl Default for LodPolicy {
             drive: Drive::Time,
             duration: 0.5,
             zone_width: 0.25,
+            force_level: None,
         }
     }
 }
@@ -360,8 +365,12 @@ impl LodTracker {
             let d = screen.sphere_distance(t.transform_point3(model.center), model.radius * scale);
             // An error of e scene units is within `px` pixels here when e · scale ≤ limit(px).
             let limit = |px: f32| px * d / (screen.pixels_per_unit * scale.max(1e-6));
-            let within = coarsest_within(&model.errors, limit(tol)) as u8;
-            let draw = if policy.transition != Transition::Pop && policy.drive == Drive::Zone {
+            let forced = policy.force_level.map(|f| f.min(last));
+            let within = forced.unwrap_or_else(|| coarsest_within(&model.errors, limit(tol)) as u8);
+            let draw = if forced.is_none()
+                && policy.transition != Transition::Pop
+                && policy.drive == Drive::Zone
+            {
                 *agent = AgentLod {
                     level: within,
                     active: None,
@@ -371,7 +380,7 @@ impl LodTracker {
             } else {
                 agent.level = agent.level.min(last);
                 let current = agent.active.map_or(agent.level, |a| a.to).min(last);
-                let desired = if within < current {
+                let desired = if forced.is_some() || within < current {
                     within
                 } else {
                     (coarsest_within(&model.errors, limit(tol * (1.0 - h))) as u8).max(current)
@@ -508,6 +517,35 @@ mod tests {
 
     fn screen() -> ScreenProjection {
         ScreenProjection::new(Vec3::ZERO, 60f32.to_radians(), 1000.0, 0.01)
+    }
+
+    #[test]
+    fn a_forced_level_holds_at_every_distance_and_still_transitions() {
+        let s = screen();
+        let m = model();
+        let mut tracker = LodTracker::default();
+        let mut out = Vec::new();
+        let mut run = |policy: &LodPolicy, z: f32, dt: f32, out: &mut Vec<LodDraw>| {
+            tracker.update(policy, std::slice::from_ref(&m), &[at(z)], &s, dt, out);
+            out[0]
+        };
+        let forced = |k, transition| LodPolicy {
+            force_level: Some(k),
+            transition,
+            ..Default::default()
+        };
+        // Near and far alike; a level past the coarsest is the coarsest.
+        for z in [0.1f32, 5.0, 500.0] {
+            let draw = run(&forced(2, Transition::Pop), z, 0.0, &mut out);
+            assert_eq!(draw, LodDraw::Level(2));
+        }
+        let draw = run(&forced(9, Transition::Pop), 0.1, 0.0, &mut out);
+        assert_eq!(draw, LodDraw::Level(4));
+        // Going from the coarsest back to level 1 morphs over the duration.
+        let draw = run(&forced(1, Transition::Morph), 0.1, 0.1, &mut out);
+        assert!(draw.in_transition(), "{draw:?}");
+        let draw = run(&forced(1, Transition::Morph), 0.1, 1.0, &mut out);
+        assert_eq!(draw, LodDraw::Level(1));
     }
 
     #[test]

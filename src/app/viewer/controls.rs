@@ -1,5 +1,6 @@
 //! Camera controls: orbit with the left mouse button, pan with the right (or middle), zoom with
-//! the wheel, fly with WASD (Q/E down/up, Shift faster).
+//! the wheel over the 3D view, fly with WASD (Q/E down/up, Shift faster); and the keys that act
+//! once (see [`KeyAction`]), F11, F12, Esc and Ctrl+Q among them.
 
 use crate::scene::Camera;
 use std::collections::HashSet;
@@ -14,6 +15,7 @@ pub struct Controls {
     held: HashSet<KeyCode>,
     drag: Option<MouseButton>,
     cursor: Option<(f64, f64)>,
+    ctrl: bool,
 }
 
 /// Keys that do something once, rather than while held.
@@ -29,6 +31,43 @@ pub enum KeyAction {
     NextDebugView,
     /// C: split screen on or off.
     ToggleCompare,
+    /// Esc (where no text field has the keyboard) or Ctrl+Q: quit.
+    Quit,
+    /// F11: fullscreen on or off.
+    ToggleFullscreen,
+    /// F12: save a screenshot.
+    Screenshot,
+}
+
+/// What a key pressed does wherever the keyboard is (a text field of the panel included).
+pub fn window_key(code: KeyCode, ctrl: bool) -> Option<KeyAction> {
+    match code {
+        KeyCode::F11 => Some(KeyAction::ToggleFullscreen),
+        KeyCode::F12 => Some(KeyAction::Screenshot),
+        KeyCode::KeyQ if ctrl => Some(KeyAction::Quit),
+        _ => None,
+    }
+}
+
+/// What a key pressed does when the panel does not have the keyboard.
+pub fn view_key(code: KeyCode) -> Option<KeyAction> {
+    match code {
+        KeyCode::Space => Some(KeyAction::TogglePlay),
+        KeyCode::KeyR => Some(KeyAction::ResetCamera),
+        KeyCode::KeyM => Some(KeyAction::NextMethod),
+        KeyCode::KeyT => Some(KeyAction::NextTransition),
+        KeyCode::KeyV => Some(KeyAction::NextDebugView),
+        KeyCode::KeyC => Some(KeyAction::ToggleCompare),
+        KeyCode::Escape => Some(KeyAction::Quit),
+        _ => None,
+    }
+}
+
+/// Whether the cursor at `cursor` (physical pixels) is over the 3D view `view` (x, y,
+/// width, height): the camera takes the wheel and drags there only.
+pub fn over_view(cursor: Option<(f64, f64)>, view: [u32; 4]) -> bool {
+    let [x, y, w, h] = view.map(f64::from);
+    cursor.is_some_and(|(cx, cy)| cx >= x && cy >= y && cx < x + w && cy < y + h)
 }
 
 impl Controls {
@@ -43,6 +82,19 @@ impl Controls {
         keyboard_free: bool,
     ) -> Option<KeyAction> {
         match event {
+            WindowEvent::ModifiersChanged(m) => self.ctrl = m.state().control_key(),
+            // The window's own keys (F11, F12, Ctrl+Q) work whoever has the keyboard.
+            WindowEvent::KeyboardInput { event, .. }
+                if event.state == ElementState::Pressed
+                    && !event.repeat
+                    && matches!(event.physical_key, PhysicalKey::Code(code)
+                        if window_key(code, self.ctrl).is_some()) =>
+            {
+                let PhysicalKey::Code(code) = event.physical_key else {
+                    return None;
+                };
+                return window_key(code, self.ctrl);
+            }
             WindowEvent::KeyboardInput { event, .. } if keyboard_free => {
                 let PhysicalKey::Code(code) = event.physical_key else {
                     return None;
@@ -51,15 +103,7 @@ impl Controls {
                     ElementState::Pressed => {
                         let first = self.held.insert(code);
                         if first {
-                            match code {
-                                KeyCode::Space => return Some(KeyAction::TogglePlay),
-                                KeyCode::KeyR => return Some(KeyAction::ResetCamera),
-                                KeyCode::KeyM => return Some(KeyAction::NextMethod),
-                                KeyCode::KeyT => return Some(KeyAction::NextTransition),
-                                KeyCode::KeyV => return Some(KeyAction::NextDebugView),
-                                KeyCode::KeyC => return Some(KeyAction::ToggleCompare),
-                                _ => {}
-                            }
+                            return view_key(code);
                         }
                     }
                     ElementState::Released => {
@@ -111,6 +155,11 @@ impl Controls {
         None
     }
 
+    /// Where the cursor is in the window, physical pixels, if it is in it.
+    pub fn cursor(&self) -> Option<(f64, f64)> {
+        self.cursor
+    }
+
     /// Moves the camera for held fly keys over `dt` seconds; speed grows with the distance to
     /// the target so flying feels the same close up and far away.
     pub fn fly(&self, camera: &mut Camera, dt: f32) {
@@ -134,5 +183,38 @@ impl Controls {
 
     pub fn is_dragging(&self) -> bool {
         self.drag.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_do_what_the_readme_says() {
+        assert_eq!(window_key(KeyCode::F12, false), Some(KeyAction::Screenshot));
+        assert_eq!(
+            window_key(KeyCode::F11, false),
+            Some(KeyAction::ToggleFullscreen)
+        );
+        assert_eq!(window_key(KeyCode::KeyQ, true), Some(KeyAction::Quit));
+        // Q alone flies down.
+        assert_eq!(window_key(KeyCode::KeyQ, false), None);
+        assert_eq!(view_key(KeyCode::KeyQ), None);
+        assert_eq!(view_key(KeyCode::Escape), Some(KeyAction::Quit));
+        assert_eq!(view_key(KeyCode::Space), Some(KeyAction::TogglePlay));
+    }
+
+    #[test]
+    fn the_wheel_is_the_cameras_over_the_view_only() {
+        // A 1280-wide window whose panel takes the left 250 pixels.
+        let view = [250, 0, 1030, 720];
+        assert!(over_view(Some((600.0, 300.0)), view));
+        assert!(!over_view(Some((100.0, 300.0)), view), "over the panel");
+        assert!(
+            !over_view(Some((1280.0, 300.0)), view),
+            "past the right edge"
+        );
+        assert!(!over_view(None, view), "outside the window");
     }
 }

@@ -201,6 +201,10 @@ struct Viewer {
     /// When the foliage settings last changed: a new chain is baked once they have been still
     /// for [`SETTLE_BEFORE_BAKE`] (not for every step of a slider's drag).
     foliage_changed: Instant,
+    /// F12 asked for a screenshot of the next frame.
+    screenshot_requested: bool,
+    /// A line for the panel: where the last screenshot went, or why a model did not open.
+    notice: Option<String>,
 }
 
 /// How long the foliage settings must stay put before their chains are baked.
@@ -286,7 +290,64 @@ impl Viewer {
             bake: None,
             bake_error: None,
             foliage_changed: Instant::now() - SETTLE_BEFORE_BAKE,
+            screenshot_requested: false,
+            notice: None,
         })
+    }
+
+    /// Opens the model at `path` (dropped on the window, or picked by "Open…") in place of the
+    /// scene's characters: the same scene, settings and camera, its levels baked in the
+    /// background as at start-up. A file that does not load leaves everything as it was and
+    /// says why in the panel.
+    fn open_model(&mut self, path: &std::path::Path) {
+        let spec = SceneSpec {
+            models: vec![path.to_string_lossy().into_owned()],
+            ..self.world.spec.clone()
+        };
+        let opened = Loaded::new(spec).and_then(|loaded| {
+            World::new(
+                &self.win.gpu,
+                loaded,
+                self.win.config.format,
+                self.targets.sample_count,
+            )
+        });
+        match opened {
+            Ok(mut world) => {
+                world.camera = self.world.camera;
+                world.renderer.debug = self.world.renderer.debug;
+                world.renderer.normal_maps = self.world.renderer.normal_maps;
+                world.renderer.shadows = self.world.renderer.shadows;
+                self.model_names = world.bakes.iter().map(|b| b.name.clone()).collect();
+                self.clip_names = world.bakes.iter().map(|b| b.clip_names()).collect();
+                self.world = world;
+                self.bake = None;
+                self.bake_error = None;
+                self.settings.model = None;
+                self.settings.clip = None;
+                self.settings.count = self.world.spec.count;
+                self.world.lod.method = self.settings.method;
+                self.world.lod.compare = self.settings.compare;
+                self.world.lod.policy = self.settings.policy;
+                self.world.apply_foliage(&self.settings.foliage);
+                self.world.reset_camera();
+                self.notice = Some(format!("opened {}", path.display()));
+                eprintln!("lodlab: opened {}", path.display());
+            }
+            Err(e) => {
+                let line = format!("{e:#}");
+                eprintln!("lodlab: {line}");
+                self.notice = Some(line);
+            }
+        }
+    }
+
+    /// The first `lodlab-screenshot-N.png` in the working folder that is not there yet.
+    fn screenshot_path() -> PathBuf {
+        (1..)
+            .map(|n| PathBuf::from(format!("lodlab-screenshot-{n}.png")))
+            .find(|p| !p.exists())
+            .expect("some number is free")
     }
 
     /// Takes a finished background bake in, and starts the next one a side needs.
@@ -341,9 +402,13 @@ impl Viewer {
             WindowEvent::CloseRequested => return Ok(false),
             WindowEvent::Resized(size) => self.resize(size.width, size.height),
             WindowEvent::RedrawRequested => return self.redraw(options),
+            WindowEvent::DroppedFile(path) => self.open_model(path),
             _ => {
                 let ctx = self.egui.egui_ctx();
+                // The pointer is the camera's over the 3D view only: the wheel over the panel
+                // scrolls the panel, whatever egui made of the last frame.
                 let pointer_free = !response.consumed
+                    && controls::over_view(self.controls.cursor(), self.view)
                     && (!ctx.egui_wants_pointer_input() || self.controls.is_dragging());
                 let keyboard_free = !ctx.egui_wants_keyboard_input();
                 let action = self.controls.on_event(
@@ -371,6 +436,15 @@ impl Viewer {
                         s.debug = next(&views, s.debug);
                     }
                     Some(KeyAction::ToggleCompare) => s.compare = panel::toggle_compare(s),
+                    Some(KeyAction::Quit) => return Ok(false),
+                    Some(KeyAction::ToggleFullscreen) => {
+                        let window = &self.win.window;
+                        window.set_fullscreen(match window.fullscreen() {
+                            Some(_) => None,
+                            None => Some(winit::window::Fullscreen::Borderless(None)),
+                        });
+                    }
+                    Some(KeyAction::Screenshot) => self.screenshot_requested = true,
                     None => {}
                 }
             }
@@ -465,7 +539,7 @@ impl Viewer {
 
         // The screenshot: the same frame once more into a texture that can be read back.
         let last = options.screenshot.is_some() && self.frames + 1 >= options.frames.max(1);
-        let capture = last.then(|| {
+        let capture = (last || self.screenshot_requested).then(|| {
             let shot = Offscreen::with_format(
                 &self.win.gpu,
                 w,
@@ -500,9 +574,18 @@ impl Viewer {
         self.frames += 1;
         self.report_start_up();
 
-        if let (Some(shot), Some(path)) = (capture, &options.screenshot) {
-            self.write_screenshot(&shot, path)?;
-            return Ok(false);
+        if let Some(shot) = capture {
+            if last && let Some(path) = &options.screenshot {
+                self.write_screenshot(&shot, path)?;
+                return Ok(false);
+            }
+            self.screenshot_requested = false;
+            let path = Self::screenshot_path();
+            let where_ = std::env::current_dir().map_or(path.clone(), |d| d.join(&path));
+            self.notice = Some(match self.write_screenshot(&shot, &path) {
+                Ok(()) => format!("screenshot: {}", where_.display()),
+                Err(e) => format!("screenshot failed: {e:#}"),
+            });
         }
         Ok(true)
     }
@@ -577,6 +660,7 @@ impl Viewer {
             chains: self.world.shown_chains(),
             impostors: self.world.impostor_summary(),
             normal_maps: self.world.normal_map_summary(),
+            notice: self.notice.as_deref(),
         };
         let (settings, history) = (&mut self.settings, &self.history);
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
@@ -607,6 +691,19 @@ impl Viewer {
         }
         if requests.reset_camera {
             self.world.reset_camera();
+        }
+        if requests.open {
+            // The platform's file dialog (XDG portal or GTK); none where there is no desktop
+            // to ask, and then the panel says to drop a file instead.
+            match rfd::FileDialog::new()
+                .add_filter("glTF", &["glb", "gltf"])
+                .pick_file()
+            {
+                Some(path) => self.open_model(&path),
+                None => {
+                    self.notice = Some("no file picked: drop a .glb or .gltf on the window".into())
+                }
+            }
         }
         self.world.renderer.shadows = self.settings.shadows;
         self.apply_lod_settings();

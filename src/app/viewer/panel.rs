@@ -208,6 +208,8 @@ pub struct Info<'a> {
     pub impostors: String,
     /// The characters' normal maps, in a line (see `World::normal_map_summary`).
     pub normal_maps: String,
+    /// Where the last screenshot went, or why a model did not open.
+    pub notice: Option<&'a str>,
     /// The chain each tree shows: its name, whether it is cut as the panel says, its levels.
     pub chains: Vec<(String, bool, &'a [LevelSummary])>,
 }
@@ -217,12 +219,24 @@ pub struct Info<'a> {
 pub struct Requests {
     pub relayout: bool,
     pub reset_camera: bool,
+    /// "Open…": pick a model file to show instead.
+    pub open: bool,
 }
 
 pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &Info) -> Requests {
     let mut req = Requests::default();
-    ui.heading("lodlab");
+    ui.horizontal(|ui| {
+        ui.heading("lodlab");
+        req.open = ui
+            .button("Open…")
+            .on_hover_text("Show a .glb or .gltf model instead of the scene's characters (or drop one on the window)")
+            .clicked();
+    });
     ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
+    ui.label(egui::RichText::new("F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit").small());
+    if let Some(notice) = info.notice {
+        ui.label(egui::RichText::new(notice).small().strong());
+    }
     ui.separator();
 
     statistics(ui, history, &info.stats);
@@ -506,6 +520,14 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
             .suffix(" px")
             .text("tolerance"),
     );
+    ui.horizontal(|ui| {
+        let mut on = p.force_level.is_some();
+        let mut level = p.force_level.unwrap_or(0);
+        ui.checkbox(&mut on, "force level")
+            .on_hover_text("Every character shows this level (its coarsest if it has fewer), whatever its distance: to look at one level close up (--force-level)");
+        ui.add_enabled(on, egui::DragValue::new(&mut level).range(0..=15));
+        p.force_level = on.then_some(level);
+    });
     ui.checkbox(&mut s.impostors, "far characters as impostors")
         .on_hover_text("Below its coarsest mesh a character becomes one quad showing it baked from the nearest of a grid of views at the frames round its time, under every simplified method (--impostors)");
     ui.label(egui::RichText::new(&info.impostors).small());
