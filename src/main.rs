@@ -56,20 +56,27 @@ fn gen_assets(a: GenAssetsArgs) -> anyhow::Result<ExitCode> {
 
 /// `lodlab bake`: levels of detail baked or fetched from the cache, as a table.
 fn bake(a: BakeArgs) -> anyhow::Result<ExitCode> {
-    if !(a.tolerance.is_finite() && a.tolerance > 0.0) {
-        anyhow::bail!("--tolerance must be a positive number of pixels");
+    if !(a.first_error.is_finite() && a.first_error > 0.0) {
+        anyhow::bail!("--first-error must be a positive number of pixels");
     }
     let results = lodlab::app::bake::run(&lodlab::app::bake::BakeOptions {
         models: a.models.into_iter().chain(a.model_flags).collect(),
         methods: dedup(a.methods),
-        tolerance_px: a.tolerance,
+        tolerance_px: a.first_error,
         budgets: a.triangles,
         cache_dir: a.cache,
     })?;
     for warning in lodlab::app::bake::budget_warnings(&results) {
         eprintln!("warning: {warning}");
     }
-    print!("{}", lodlab::app::bake::table(&results));
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&lodlab::app::bake::summary(&results))?
+        );
+    } else {
+        print!("{}", lodlab::app::bake::table(&results));
+    }
     Ok(ExitCode::SUCCESS)
 }
 

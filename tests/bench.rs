@@ -63,6 +63,10 @@ fn bench_writes_json_and_a_table_of_every_method() {
     assert_eq!(r["scene"], "crowd");
     assert_eq!(r["instances"], 12);
     assert_eq!(r["frames_per_method"], 3);
+    assert_eq!(r["schema_version"], 2);
+    assert!(r["measured_seconds"].as_f64().unwrap() > 0.0);
+    assert!(r["warmup_seconds"].as_f64().unwrap() >= 0.0);
+    assert!(stdout.contains("measured for"), "{stdout}");
     assert!(r["calibration"]["triangles_per_second"].as_f64().unwrap() > 0.0);
     assert_eq!(r["calibration"]["method"], "none");
     let methods = r["methods"].as_object().unwrap();
@@ -74,6 +78,15 @@ fn bench_writes_json_and_a_table_of_every_method() {
         assert!(f("p5_ms") > 0.0 && f("p5_ms") <= f("median_ms"), "{name}");
         assert!(f("median_ms") <= f("p95_ms"), "{name}");
         assert!((f("fps") * f("median_ms") - 1000.0).abs() < 1e-6, "{name}");
+        // Every frame's own time, the median among them.
+        let frames: Vec<f64> = m["frame_ms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(frames.len(), 3, "{name}");
+        assert!(frames.contains(&f("median_ms")), "{name}: {frames:?}");
         assert!(f("efficiency") > 0.0 && f("calibration_ms") > 0.0, "{name}");
         let triangles = m["triangles"].as_u64().unwrap();
         assert!(

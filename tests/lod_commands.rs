@@ -410,3 +410,48 @@ fn report_survives_a_baseline_that_prunes_everything() {
     let coarsest = levels.last().unwrap()["triangles"].as_u64().unwrap();
     assert!(coarsest < 240, "as keeps {coarsest} of 240 triangles");
 }
+
+/// `bake --json` prints the table's figures as JSON, and `--first-error` (e₁) cuts finer
+/// levels when smaller; `--tolerance` is the run-time commands' and is refused here.
+#[test]
+fn bake_prints_json_and_names_its_first_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = cylinder_glb(dir.path());
+    let cache = dir.path().join("cache");
+    let run = |e1: &str| {
+        let out = lodlab(&[
+            "bake",
+            model.to_str().unwrap(),
+            "--methods",
+            "as",
+            "--first-error",
+            e1,
+            "--cache",
+            cache.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        json
+    };
+    let fine = run("0.25");
+    let c = &fine["characters"][0];
+    assert_eq!(c["model"], "cylinder");
+    assert_eq!(c["method"], "as");
+    let levels = c["levels"].as_array().unwrap();
+    assert_eq!(levels[0]["triangles"], c["source_triangles"]);
+    assert!(levels[1]["error_mm"].as_f64().unwrap() > 0.0);
+    let coarse = run("4");
+    let e1 = |j: &serde_json::Value| {
+        j["characters"][0]["levels"][1]["error_mm"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(e1(&coarse) > e1(&fine), "{} vs {}", e1(&coarse), e1(&fine));
+    let out = lodlab(&["bake", model.to_str().unwrap(), "--tolerance", "1"]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -204,6 +204,102 @@ pub fn bar_style() -> ProgressStyle {
         .progress_chars("=> ")
 }
 
+/// What `lodlab bake --json` prints: the table's figures.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Summary {
+    pub characters: Vec<CharacterSummary>,
+    pub trees: Vec<TreeSummary>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CharacterSummary {
+    pub model: String,
+    pub method: String,
+    pub source_triangles: usize,
+    pub bones: usize,
+    /// Seconds the bake took; `None` when it came from the cache.
+    pub bake_seconds: Option<f64>,
+    pub levels: Vec<LevelSummary>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct LevelSummary {
+    pub triangles: usize,
+    pub vertices: usize,
+    pub influences: usize,
+    /// The level's error bound, millimetres (scene units are metres).
+    pub error_mm: f32,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TreeSummary {
+    pub model: String,
+    pub source_triangles: usize,
+    pub bones: usize,
+    pub bake_seconds: Option<f64>,
+    pub levels: Vec<CloudSummary>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CloudSummary {
+    /// ε as a share of the tree's height.
+    pub epsilon: f32,
+    pub kind: String,
+    pub billboards: usize,
+    pub triangles: usize,
+    pub atlas_bytes: usize,
+}
+
+/// The figures of `results`, as `bake --json` prints them.
+pub fn summary(results: &BakeResults) -> Summary {
+    Summary {
+        characters: results
+            .characters
+            .iter()
+            .map(|b| CharacterSummary {
+                model: b.model.clone(),
+                method: b.lods.method.name().to_string(),
+                source_triangles: b.source_triangles,
+                bones: b.bones,
+                bake_seconds: (!b.from_cache).then_some(b.lods.bake_seconds),
+                levels: b
+                    .lods
+                    .levels
+                    .iter()
+                    .map(|l| LevelSummary {
+                        triangles: l.triangles(),
+                        vertices: l.vertices(),
+                        influences: l.influences(),
+                        error_mm: l.error * 1000.0,
+                    })
+                    .collect(),
+            })
+            .collect(),
+        trees: results
+            .trees
+            .iter()
+            .map(|t| TreeSummary {
+                model: t.model.clone(),
+                source_triangles: t.source_triangles,
+                bones: t.bones,
+                bake_seconds: (!t.from_cache).then_some(t.seconds),
+                levels: t
+                    .levels
+                    .iter()
+                    .map(|l| CloudSummary {
+                        epsilon: l.epsilon / t.height,
+                        kind: crate::bake::billboard::chain::CloudKind::name(l.kind.as_ref())
+                            .to_string(),
+                        billboards: l.cloud.billboards,
+                        triangles: l.cloud.model.mesh.triangle_count(),
+                        atlas_bytes: l.cloud.texture_bytes,
+                    })
+                    .collect(),
+            })
+            .collect(),
+    }
+}
+
 /// The table `lodlab bake` prints: one block per model, one row per level and method (per
 /// level for a tree).
 pub fn table(results: &BakeResults) -> String {

@@ -70,9 +70,22 @@ pub struct BenchOptions {
     pub progress: bool,
 }
 
+/// The version of [`BenchReport`]'s JSON: bumped whenever a field changes meaning or goes.
+/// 2: `schema_version`, `warmup_seconds`, `measured_seconds` and each method's `frame_ms`.
+pub const BENCH_SCHEMA_VERSION: u32 = 2;
+
 /// What `--json` writes.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BenchReport {
+    /// [`BENCH_SCHEMA_VERSION`] of the writer (absent, so 0, before version 2).
+    #[serde(default)]
+    pub schema_version: u32,
+    /// Wall seconds the warm-up took, and the measuring after it (every method and its
+    /// calibration): what the run really cost, whatever `--seconds` asked.
+    #[serde(default)]
+    pub warmup_seconds: f64,
+    #[serde(default)]
+    pub measured_seconds: f64,
     pub adapter: String,
     pub driver: String,
     pub backend: String,
@@ -132,6 +145,10 @@ pub struct MethodFigures {
     /// Median fragments shaded per pixel over all passes, where the adapter counts them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub overdraw: Option<f64>,
+    /// Every frame's time, milliseconds, in the order measured (blocks of frames along the
+    /// path, interleaved with the other methods').
+    #[serde(default)]
+    pub frame_ms: Vec<f64>,
 }
 
 /// The frame times and statistics of one method.
@@ -271,6 +288,8 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     } else {
         ProgressBar::hidden()
     };
+    let warmup_seconds = warm.elapsed().as_secs_f64();
+    let measuring = Instant::now();
     let mut samples: Vec<Samples> = o.methods.iter().map(|_| Samples::default()).collect();
     for start in (0..n).step_by(block) {
         for (s, &m) in samples.iter_mut().zip(&o.methods) {
@@ -295,6 +314,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         }
     }
     bar.finish_and_clear();
+    let measured_seconds = measuring.elapsed().as_secs_f64();
 
     let mut methods = BTreeMap::new();
     for (s, m) in samples.iter().zip(&o.methods) {
@@ -312,6 +332,9 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     };
     let gpu = &bench.gpu;
     Ok(BenchReport {
+        schema_version: BENCH_SCHEMA_VERSION,
+        warmup_seconds,
+        measured_seconds,
         adapter: gpu.info.name.clone(),
         driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info)
             .trim()
@@ -363,6 +386,7 @@ fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
         in_transition: s.in_transition as f64 / n as f64,
         passes: pass_medians(&s.passes),
         overdraw: overdraw_median(&s.passes, width, height),
+        frame_ms: s.skinned.clone(),
     }
 }
 
@@ -385,7 +409,8 @@ pub fn markdown(r: &BenchReport) -> String {
     let _ = writeln!(
         out,
         "lodlab bench: {} scene, {} instances, {}x{}, MSAA {}, {} transitions ({}-driven), \
-         tolerance {} px; {} frames per method along the {} path ({} s); {}.",
+         tolerance {} px; {} frames per method along the {} path ({} s), measured for {:.1} s \
+         after {:.1} s of warm-up; {}.",
         r.scene,
         r.instances,
         r.size[0],
@@ -397,6 +422,8 @@ pub fn markdown(r: &BenchReport) -> String {
         r.frames_per_method,
         r.path,
         r.path_seconds,
+        r.measured_seconds,
+        r.warmup_seconds,
         if r.timing == "gpu timestamps" {
             "GPU time from timestamp queries"
         } else {

@@ -244,16 +244,21 @@ pub struct BakeArgs {
         default_value = "rest-pose,as,as+is"
     )]
     pub methods: Vec<crate::bake::simplify::Method>,
-    /// Error bound of LOD 1 in pixels, for the model filling 1000 pixels of screen height;
-    /// each further level doubles it.
-    #[arg(long, default_value_t = 0.5)]
-    pub tolerance: f32,
+    /// e₁, the error bound of LOD 1 in pixels for the model filling 1000 pixels of screen
+    /// height; each further level doubles it. (Not the run-time --tolerance of view, shot and
+    /// bench: the projected error a level may show.)
+    #[arg(long, default_value_t = 0.5, value_name = "PX")]
+    pub first_error: f32,
     /// Cut levels by triangle budgets instead of errors, e.g. 4000,2000,1000.
     #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
     pub triangles: Option<Vec<u32>>,
     /// Cache folder (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
+    /// Print the table as JSON: per character and method its levels (triangles, vertices,
+    /// influences, error), per tree its billboard-cloud levels.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]

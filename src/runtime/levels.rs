@@ -34,11 +34,11 @@ pub struct LevelSource {
 /// The level options the front ends bake with: the defaults of `lodlab bake`, so that a
 /// `lodlab bake MODEL` beforehand fills the same cache entries.
 pub fn runtime_options(model: &Model) -> crate::bake::lod::LodOptions {
-    crate::bake::lod::lod_options(model, DEFAULT_BAKE_TOLERANCE_PX, None)
+    crate::bake::lod::lod_options(model, DEFAULT_FIRST_ERROR_PX, None)
 }
 
-/// `lodlab bake --tolerance` default: the error bound of LOD 1 in pixels.
-pub const DEFAULT_BAKE_TOLERANCE_PX: f32 = 0.5;
+/// `lodlab bake --first-error` default: e₁, the error bound of LOD 1 in pixels.
+pub const DEFAULT_FIRST_ERROR_PX: f32 = 0.5;
 
 /// A model's levels as baked.
 pub enum Levels {
