@@ -134,3 +134,38 @@ fn the_bake_never_names_the_gpu() {
         }
     }
 }
+
+/// The packages of the first `apt-get install` in `text` (continuation lines joined), the
+/// options and redirections left out.
+fn apt_packages(text: &str) -> Vec<String> {
+    let joined = text.replace("\\\n", " ");
+    let line = joined
+        .lines()
+        .find(|l| l.contains("apt-get install"))
+        .expect("an apt-get install line");
+    let after = &line[line.find("install").unwrap() + "install".len()..];
+    let mut packages: Vec<String> = after
+        .split_whitespace()
+        .take_while(|w| !w.starts_with('>'))
+        .filter(|w| !w.starts_with('-'))
+        .map(String::from)
+        .collect();
+    packages.sort();
+    packages
+}
+
+/// The README's prerequisites line is what CI installs: a fresh machine set up by the README
+/// is set up as CI's.
+#[test]
+fn ci_installs_the_readmes_prerequisites() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let prerequisites = &readme[readme.find("## Prerequisites").unwrap()..];
+    let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
+    let wanted = apt_packages(prerequisites);
+    assert!(
+        wanted.contains(&"libxkbcommon-x11-0".to_string()),
+        "{wanted:?}"
+    );
+    assert_eq!(apt_packages(&ci), wanted);
+}

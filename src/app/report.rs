@@ -88,7 +88,7 @@ pub struct LevelReport {
     pub silhouette_resolution_px: Vec<f32>,
 }
 
-/// How the methods compare at equal influence counts (the acceptance figures).
+/// How the methods compare at equal influence counts (Merry et al.'s Figure 7 read at equal influences).
 #[derive(Clone, Debug, Serialize)]
 pub struct Comparison {
     /// Fraction of the AS curve (where the rest-pose curve covers it) with AS ≤ rest-pose.

@@ -104,3 +104,50 @@ pub enum Acquired {
     /// The surface no longer fits the window: resize, and draw next time.
     Reconfigure,
 }
+
+/// The Debian package of each windowing library winit loads at run time, by a part of its
+/// file name, most specific first.
+const RUNTIME_LIBRARIES: &[(&str, &str)] = &[
+    ("libxkbcommon-x11", "libxkbcommon-x11-0"),
+    ("libxkbcommon", "libxkbcommon0"),
+    ("libX11-xcb", "libx11-xcb1"),
+    ("libXcursor", "libxcursor1"),
+    ("libXrandr", "libxrandr2"),
+    ("libXi.", "libxi6"),
+    ("libX11.", "libx11-6"),
+    ("libwayland-client", "libwayland-client0"),
+    ("libvulkan", "libvulkan1"),
+];
+
+/// One line naming the package to install, where `message` (winit's error or panic) says a
+/// windowing library could not be loaded; `None` for anything else.
+pub fn missing_library(message: &str) -> Option<String> {
+    RUNTIME_LIBRARIES
+        .iter()
+        .find(|(file, _)| message.contains(file))
+        .map(|(file, package)| {
+            format!(
+                "cannot open a window: the {file}* library is missing (install it: sudo apt-get install {package})"
+            )
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::missing_library;
+
+    #[test]
+    fn a_missing_library_names_its_package() {
+        let line =
+            missing_library("Failed to load libxkbcommon-x11.so.0: cannot open shared object file")
+                .unwrap();
+        assert!(
+            line.contains("apt-get install libxkbcommon-x11-0"),
+            "{line}"
+        );
+        let line = missing_library("failed to open library libXcursor.so.1").unwrap();
+        assert!(line.ends_with("libxcursor1)"), "{line}");
+        assert!(!line.contains('\n'));
+        assert_eq!(missing_library("the display went away"), None);
+    }
+}

@@ -76,11 +76,31 @@ pub fn run(options: ViewOptions) -> Result<ExitCode> {
     let launched = Instant::now();
     let loaded = Loaded::new(options.spec.clone())?;
     let models_seconds = launched.elapsed().as_secs_f32();
-    let event_loop = match EventLoop::new() {
-        Ok(el) => el,
-        Err(e) => {
+    // winit loads the windowing system's libraries at run time, and panics where one it
+    // needs is missing: say which package holds it, in one line.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let created = std::panic::catch_unwind(EventLoop::new);
+    std::panic::set_hook(hook);
+    let event_loop = match created {
+        Ok(Ok(el)) => el,
+        Ok(Err(e)) => {
+            if let Some(line) = super::window::missing_library(&e.to_string()) {
+                anyhow::bail!(line);
+            }
             eprintln!("{NO_DISPLAY} ({e})");
             return Ok(ExitCode::from(2));
+        }
+        Err(panic) => {
+            let message = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            match super::window::missing_library(&message) {
+                Some(line) => anyhow::bail!(line),
+                None => anyhow::bail!("cannot open a window: {message}"),
+            }
         }
     };
     let mut app = App {

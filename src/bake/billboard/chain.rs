@@ -183,7 +183,7 @@ pub fn cloud_level(
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ChainStyle {
     /// Skeleton clouds all the way: per bone with alike siblings merged, then coarser
-    /// branch subtrees (issue 5's chain).
+    /// branch subtrees (the chain before spectral clouds existed).
     Skeleton,
     /// Spectral clouds from level 1 on.
     Spectral,
@@ -445,7 +445,7 @@ pub trait MeasureColour {
     ) -> Result<Vec<f32>>;
 }
 
-/// The impostor after a chain's clouds (issue 19): the tree's octahedral impostor, and the
+/// The impostor after a chain's clouds: the tree's octahedral impostor, and the
 /// level it takes over from. It comes in where a cloud level would have, at that level's ε,
 /// and stands for it and every coarser level: at the finest level k (from the coarse end on,
 /// never level 1) where the impostor's colour error, measured at the size where ε_k projects

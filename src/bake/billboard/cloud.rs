@@ -14,7 +14,7 @@
 //! view-penalty factor is `1 − |φv − φn| / (π/2)` (the literal formula penalises the favoured
 //! tilt), floored so a round always has a winner.
 //!
-//! One addition (the brief's recommendation to §3.4): the winning plane is refitted, by area-
+//! One addition to the thesis (§3.4): the winning plane is refitted, by area-
 //! weighted least squares, to the leaves it took, and the pool is searched again with the new
 //! plane, for as long as that raises the density. A random plane through a small seed leaf
 //! moved by up to ε is tilted by up to about 2ε over the leaf's size; the refit levels it, so a

@@ -5,8 +5,8 @@
 //! - [`leaf_trajectories`] samples every leaf's centroid over one loop of the wind.
 //! - [`dft`] turns each coordinate of a trajectory into a spectrum of whole-cycle cosines.
 //! - [`description`] holds the thesis's three description types (naive, dominating axis,
-//!   axis-phase), each with `describe`, `deviation`, `average` and `apply`, with the errata of
-//!   the brief (`notes/thesis-spectral-animation.md`) applied: NEP instead of bare products,
+//!   axis-phase), each with `describe`, `deviation`, `average` and `apply`, corrected where the
+//!   thesis's printed formulas do not work as written: NEP instead of bare products,
 //!   dominating axes sign-aligned before their phases are averaged, cosine phases, normalised
 //!   amplitudes.
 //! - [`bins`] reduces a spectrum to K lines per axis (§6.3.3), the record a billboard's vertex
@@ -31,7 +31,7 @@ use rayon::prelude::*;
 /// Position samples per loop: a power of two for the FFT, and twice the fastest sway of the
 /// demo trees (whole cycles per loop) with room to spare.
 pub const DEFAULT_SAMPLES: usize = 64;
-/// Lines per axis a billboard keeps (§6.3.3; the default).
+/// Lines per axis a billboard keeps (§6.3.3).
 pub const DEFAULT_BINS: usize = 4;
 
 /// Normalised error (thesis App. A): [0, ∞) onto [0, 1).

@@ -1,7 +1,7 @@
 //! The spectra texture: the K lines per axis of every billboard of a spectral cloud, for the vertex
 //! shader to evaluate (Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds
 //! for Foliage Simplification" (2007) §6.2.1: "a simple vertex program" reading per-billboard
-//! descriptions from a texture; the layout is the brief's §11.3).
+//! descriptions from a texture).
 //!
 //! Layout: `Rgba32Float`, `3K` texels wide and one row per billboard. Texel `axis · K + j` of
 //! row `r` holds line j of that axis as `(cycles m, amplitude a, phase φ, 0)`. The shader
