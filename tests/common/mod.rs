@@ -158,3 +158,22 @@ pub fn gltf_tools() -> Option<PathBuf> {
     eprintln!("skipped: the glTF tools are not installed (npm ci --prefix tools/gltf)");
     None
 }
+
+/// `../shared/models/NAME` (the models from elsewhere beside the checkout), or `None`, with one
+/// line saying so, where it is absent and CI does not require it
+/// (`LODLAB_REQUIRE_SHARED_MODELS`, which `.ci/run` sets).
+pub fn shared_model(name: &str) -> Option<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/models")
+        .join(name);
+    if path.is_file() {
+        return Some(path);
+    }
+    assert!(
+        std::env::var_os("LODLAB_REQUIRE_SHARED_MODELS").is_none(),
+        "LODLAB_REQUIRE_SHARED_MODELS is set but {} is absent",
+        path.display()
+    );
+    eprintln!("skipped: {} is absent", path.display());
+    None
+}

@@ -125,10 +125,20 @@ pub const ANSWERS: &str = "answers.csv";
 pub const SESSIONS: &str = "sessions";
 pub const CLIPS: &str = "clips";
 
+/// The example plan (docs/study-plan.toml), compiled in: `--plan example` works from any
+/// folder.
+pub const EXAMPLE_PLAN: &str = include_str!("../../../docs/study-plan.toml");
+
 impl Plan {
+    /// The plan in the file `path`, or the example plan for `example` (where no such file
+    /// is in the working folder).
     pub fn read(path: &Path) -> Result<Plan> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let text = if path == Path::new("example") && !path.exists() {
+            EXAMPLE_PLAN.to_string()
+        } else {
+            std::fs::read_to_string(path)
+                .with_context(|| format!("{}: cannot read", path.display()))?
+        };
         let plan: Plan = toml::from_str(&text).map_err(|e| {
             let msg = e.message().replace('\n', " ");
             anyhow::anyhow!("{}: not a study plan: {}", path.display(), msg.trim())
