@@ -27,6 +27,14 @@ fn gpu() -> &'static Gpu {
     GPU.get_or_init(|| Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
 }
 
+/// Held by every test that draws: they share one device, and lavapipe (Mesa 22.3) crashed in
+/// a rasteriser thread, about one run in six, with several of them drawing on it at once.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// The walker's impostor, baked once for the file.
 fn walker_impostor() -> &'static AnimatedImpostor {
     static IMPOSTOR: OnceLock<AnimatedImpostor> = OnceLock::new();
@@ -39,6 +47,7 @@ fn walker_impostor() -> &'static AnimatedImpostor {
 
 #[test]
 fn the_bake_lays_every_frame_of_every_clip_in_two_sheets() {
+    let _serial = serial();
     let walker = load_model("walker").unwrap();
     let imp = walker_impostor();
     let options = imp.options;
@@ -100,6 +109,7 @@ fn the_bake_lays_every_frame_of_every_clip_in_two_sheets() {
 /// is a quarter of a stride later (so it plays the clip in step, not a frame of its own).
 #[test]
 fn an_impostor_plays_its_characters_clip_where_it_stands() {
+    let _serial = serial();
     let walker = load_model("walker").unwrap();
     let full = CharacterBake::new(&walker).unwrap();
     let imp = walker_impostor();
@@ -119,6 +129,7 @@ fn an_impostor_plays_its_characters_clip_where_it_stands() {
 /// close to the one of meshes, and turning impostors off brings the meshes back.
 #[test]
 fn far_characters_become_their_impostors() {
+    let _serial = serial();
     let gpu = gpu();
     let dir = tempfile::tempdir().unwrap();
     let spec = SceneSpec {
@@ -192,6 +203,7 @@ fn far_characters_become_their_impostors() {
 
 #[test]
 fn a_bad_impostor_option_is_one_line() {
+    let _serial = serial();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
         .args(["shot", "--impostors", "1x12x24", "--out", "never.png"])
         .output()
@@ -207,6 +219,7 @@ fn a_bad_impostor_option_is_one_line() {
 /// cache.
 #[test]
 fn the_background_bake_hands_over_levels_then_the_impostor() {
+    let _serial = serial();
     use lodlab::bake::cache::{LodCache, source_hash};
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Poll};
     let dir = tempfile::tempdir().unwrap();

@@ -23,6 +23,14 @@ fn gpu() -> &'static Gpu {
     GPU.get_or_init(|| Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
 }
 
+/// Held by every test that draws: they share one device, and lavapipe (Mesa 22.3) crashed in
+/// a rasteriser thread, about one run in six, with several of them drawing on it at once.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 fn levels(model: &Model) -> SkinnedLods {
     bake_lods(
         model,
@@ -34,6 +42,7 @@ fn levels(model: &Model) -> SkinnedLods {
 
 #[test]
 fn coarse_levels_are_lit_closer_to_full_detail_through_their_maps() {
+    let _serial = serial();
     let walker = load_model("walker").unwrap();
     let lods = levels(&walker);
     let full = CharacterBake::new(&walker).unwrap();
@@ -56,6 +65,7 @@ fn coarse_levels_are_lit_closer_to_full_detail_through_their_maps() {
 
 #[test]
 fn a_model_without_texture_coordinates_keeps_its_vertex_normals() {
+    let _serial = serial();
     let mut walker = load_model("walker").unwrap();
     walker
         .mesh
@@ -88,6 +98,7 @@ fn a_model_without_texture_coordinates_keeps_its_vertex_normals() {
 /// toggle but draws the same triangles, and off, the line says so.
 #[test]
 fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
+    let _serial = serial();
     let gpu = gpu();
     let dir = tempfile::tempdir().unwrap();
     let spec = SceneSpec {
