@@ -436,3 +436,50 @@ fn several_skins_load_with_their_joints_merged() {
         }
     }
 }
+
+/// A part without a skin hanging from a joint (a helmet on the head bone) follows that joint
+/// rigidly: one influence, weight 1, on the joint's bone, placed where the joint carries it.
+#[test]
+fn an_unskinned_part_below_a_joint_follows_it() {
+    let original = tiny_model();
+    let glb = edit_glb(&to_glb(&original), |j| {
+        let joint = j["skins"][0]["joints"][1].as_u64().unwrap() as usize;
+        let mut mesh = j["meshes"][0].clone();
+        for p in mesh["primitives"].as_array_mut().unwrap() {
+            let a = p["attributes"].as_object_mut().unwrap();
+            a.retain(|k, _| !k.starts_with("JOINTS_") && !k.starts_with("WEIGHTS_"));
+        }
+        j["meshes"].as_array_mut().unwrap().push(mesh);
+        let mesh_index = j["meshes"].as_array().unwrap().len() - 1;
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        nodes.push(serde_json::json!({ "name": "helmet", "mesh": mesh_index, "translation": [0.0, 0.5, 0.0] }));
+        let part = nodes.len() - 1;
+        let children = nodes[joint]
+            .as_object_mut()
+            .unwrap()
+            .entry("children")
+            .or_insert(serde_json::json!([]));
+        children.as_array_mut().unwrap().push(part.into());
+    });
+    let (_dir, path) = write(&glb, "helmet.glb");
+    let m = load(&path).unwrap();
+    let n = original.mesh.vertex_count();
+    assert_eq!(m.mesh.triangle_count(), 2 * original.mesh.triangle_count());
+    assert_eq!(m.skeleton.bone_count(), original.skeleton.bone_count());
+    let bone = m.mesh.influences_of(n)[0].bone;
+    for v in n..2 * n {
+        let inf = m.mesh.influences_of(v);
+        assert_eq!(inf.len(), 1);
+        assert_eq!((inf[0].bone, inf[0].weight), (bone, 1.0));
+    }
+    // The joint's node, as the file's skin names it.
+    assert_eq!(bone, 1);
+    // Carried rigidly: every vertex of the part is its original's position moved by one
+    // offset (the joints only translate), half a metre (scaled) above the joint.
+    let offset = m.mesh.positions[n] - m.mesh.positions[0];
+    assert!(offset.length() > 0.1, "{offset}");
+    for v in 0..n {
+        let d = m.mesh.positions[n + v] - m.mesh.positions[v];
+        assert!(d.distance(offset) < 1e-4, "{d} vs {offset}");
+    }
+}

@@ -225,13 +225,40 @@ fn build(
             (n.clone(), Binding::Skin(&maps[k]))
         })
         .collect();
-    let unskinned = doc
-        .nodes()
-        .filter(|n| shown(n) && n.skin().is_none())
-        .count();
-    if unskinned > 0 {
+    // Unskinned parts below a joint follow that joint rigidly; any other is left out.
+    let parents = node_parents(doc);
+    let bone_of_node = |n: usize| bone_nodes.iter().position(|&b| b == n);
+    let mut bound = bound;
+    let mut left_out = 0;
+    for (node, world) in mesh_nodes_in_scene(doc) {
+        if node.skin().is_some() || lower_lods.contains(&node.index()) {
+            continue;
+        }
+        let mut up = parents[node.index()];
+        let mut steps = 0;
+        while let Some(p) = up.filter(|&p| bone_of_node(p).is_none()) {
+            up = parents[p];
+            steps += 1;
+            if steps > parents.len() {
+                up = None;
+            }
+        }
+        match up.and_then(|p| bone_of_node(p).map(|b| (p, b))) {
+            Some((joint, bone)) => {
+                // Into the bone's bind space: G_b · IBM_b · v̂ then puts the part where the
+                // joint carries it, whatever the bind matrices say.
+                let joint_world = world_of(doc, &parents, joint);
+                let bind = skeleton.inverse_bind[bone].inverse();
+                let to_bind = bind * joint_world.inverse() * world;
+                bound.push((node, Binding::Rigid(to_bind, bone as u32)));
+            }
+            None => left_out += 1,
+        }
+    }
+    if left_out > 0 {
         warnings.push(format!(
-            "{unskinned} mesh node(s) without a skin left out: only the skinned character is loaded"
+            "{left_out} mesh node(s) without a skin and not below a joint left out: only the \
+             skinned character is loaded"
         ));
     }
     let (mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
@@ -265,14 +292,14 @@ fn build_rigid(
     let bound: Vec<(gltf::Node, Binding)> = mesh_nodes_in_scene(doc)
         .into_iter()
         .filter(|(n, _)| !lower_lods.contains(&n.index()))
-        .map(|(n, world)| (n, Binding::Rigid(world)))
+        .map(|(n, world)| (n, Binding::Rigid(world, 0)))
         .collect();
     if bound.is_empty() {
         return Err("has no mesh in its scene".into());
     }
     if bound
         .iter()
-        .any(|(_, b)| matches!(b, Binding::Rigid(w) if !w.is_finite()))
+        .any(|(_, b)| matches!(b, Binding::Rigid(w, _) if !w.is_finite()))
     {
         return Err("a mesh node has a non-finite transform".into());
     }
@@ -434,11 +461,13 @@ fn msft_lod_lower_levels(doc: &gltf::Document) -> Vec<usize> {
 }
 
 /// How the vertices of one mesh node are bound: to the skin whose joints `joints` maps into
-/// the model's bones (joint j of the skin is bone `joints[j]`), or rigidly to bone 0 with the
-/// node's world transform baked in (an unskinned prop).
+/// the model's bones (joint j of the skin is bone `joints[j]`), or rigidly to one bone with a
+/// transform baked in: bone 0 and the node's world transform for an unskinned prop; the
+/// nearest joint above the node, and the transform into that bone's bind space, for a part
+/// hanging from a skeleton (a helmet on the head bone).
 enum Binding<'m> {
     Skin(&'m [u32]),
-    Rigid(Mat4),
+    Rigid(Mat4, u32),
 }
 
 /// The meshes of `nodes` (each mesh once), all their primitives merged into one mesh (normals
@@ -490,7 +519,7 @@ fn read_meshes(
                 .unwrap_or(0);
             let joints = match binding {
                 Binding::Skin(map) => Some(map.len()),
-                Binding::Rigid(_) => None,
+                Binding::Rigid(..) => None,
             };
             let mut raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
             if let Some(t) = transform {
@@ -502,7 +531,10 @@ fn read_meshes(
                         inf.bone = map[inf.bone as usize];
                     }
                 }
-                Binding::Rigid(world) => {
+                Binding::Rigid(world, bone) => {
+                    for inf in raw.influences.iter_mut().flatten() {
+                        inf.bone = *bone;
+                    }
                     let normal_matrix = glam::Mat3::from_mat4(*world).inverse().transpose();
                     for p in &mut raw.positions {
                         *p = world.transform_point3(*p);
@@ -527,6 +559,34 @@ fn read_meshes(
     }
 
     Ok((mesh, materials))
+}
+
+/// Every node's parent, `None` for roots (the first parent where a file gives two).
+fn node_parents(doc: &gltf::Document) -> Vec<Option<usize>> {
+    let mut parent = vec![None; doc.nodes().len()];
+    for n in doc.nodes() {
+        for c in n.children() {
+            parent[c.index()].get_or_insert(n.index());
+        }
+    }
+    parent
+}
+
+/// Node `n`'s world transform in its rest pose (a looping hierarchy stops after every node).
+fn world_of(doc: &gltf::Document, parents: &[Option<usize>], n: usize) -> Mat4 {
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut world = Mat4::IDENTITY;
+    let mut at = Some(n);
+    let mut steps = 0;
+    while let Some(i) = at {
+        world = Mat4::from_cols_array_2d(&nodes[i].transform().matrix()) * world;
+        at = parents[i];
+        steps += 1;
+        if steps > nodes.len() {
+            break;
+        }
+    }
+    world
 }
 
 /// Every node with a mesh in the scene (the default one, else the first, else every root),
