@@ -74,11 +74,8 @@ fn vs_main_mapped(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
 
 @vertex
 fn vs_morph_mapped(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
-    var out = morphed(vi, inst);
-    var coarse_vi = vi;
-    for (var h = 0u; h < u32(inst.lod.y); h = h + 1u) {
-        coarse_vi = geomorph_target(coarse_vi);
-    }
+    let coarse_vi = morph_target(vi, inst);
+    var out = morphed_to(vi, coarse_vi, inst);
     out.normal_layer = vec2<f32>(normal_layer(vi), normal_layer(coarse_vi));
     return out;
 }
@@ -88,14 +85,23 @@ fn skinned(vi: u32, inst: Instance) -> VsOut {
     return finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
 }
 
-fn morphed(vi: u32, inst: Instance) -> VsOut {
-    let frames = instance_frames(inst);
-    let t = clamp(inst.lod.x, 0.0, 1.0);
-    let u = 1.0 - t;
+// The vertex `vi` morphs into `lod.y` levels coarser, following the geomorph targets hop by hop.
+fn morph_target(vi: u32, inst: Instance) -> u32 {
     var coarse_vi = vi;
     for (var h = 0u; h < u32(inst.lod.y); h = h + 1u) {
         coarse_vi = geomorph_target(coarse_vi);
     }
+    return coarse_vi;
+}
+
+fn morphed(vi: u32, inst: Instance) -> VsOut {
+    return morphed_to(vi, morph_target(vi, inst), inst);
+}
+
+fn morphed_to(vi: u32, coarse_vi: u32, inst: Instance) -> VsOut {
+    let frames = instance_frames(inst);
+    let t = clamp(inst.lod.x, 0.0, 1.0);
+    let u = 1.0 - t;
     let fine = skin_vertex(vi, frames);
     let coarse = skin_vertex(coarse_vi, frames);
     let material = select(fine.material, coarse.material, t >= 0.5);

@@ -845,6 +845,7 @@ impl SceneRenderer {
             }
             let c = &self.characters[key.model()];
             let (impostor, animated) = (c.impostor, c.animated_impostor);
+            let mapped = self.mapped(&key, debug);
             let (pipeline, id) = match (key.pass(), wire, foliage) {
                 // An impostor's mesh is only where its rows sway (or, animated, four
                 // corners): it is always drawn as the quad its shader makes.
@@ -856,17 +857,15 @@ impl SceneRenderer {
                 (PASS_FADE, None, _) => continue,
                 (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
                 (_, None, true) => (&self.pipelines.foliage.0, 3),
-                (PASS_MORPH, None, false) if self.mapped(&key, debug) => {
-                    (&self.pipelines.mapped.morph, 9)
-                }
+                (PASS_MORPH, None, false) if mapped => (&self.pipelines.mapped.morph, 9),
                 (PASS_MORPH, None, false) => (self.pipelines.morph.get(debug), 4),
-                (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) if self.mapped(&key, debug) => {
+                (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) if mapped => {
                     (&self.pipelines.mapped.dither, 10)
                 }
                 (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) => {
                     (self.pipelines.dither.get(debug), 7)
                 }
-                _ if self.mapped(&key, debug) => (&self.pipelines.mapped.skinned, 11),
+                _ if mapped => (&self.pipelines.mapped.skinned, 11),
                 _ => (self.pipelines.skinned.get(debug), 5),
             };
             if current != Some(id) {
