@@ -63,7 +63,7 @@ impl WindowGpu {
     /// egui's input state for this window and its renderer for this surface.
     pub fn egui(&self) -> (egui_winit::State, egui_wgpu::Renderer) {
         let state = egui_winit::State::new(
-            egui::Context::default(),
+            egui_context(),
             egui::ViewportId::ROOT,
             &self.window,
             Some(self.window.scale_factor() as f32),
@@ -130,6 +130,23 @@ pub fn missing_library(message: &str) -> Option<String> {
                 "cannot open a window: the {file}* library is missing (install it: sudo apt-get install {package})"
             )
         })
+}
+
+/// The egui context of a window's panel (the viewer's and the study's).
+///
+/// A press and its release make a click however far apart they are, as in desktop toolkits.
+/// egui's default limit (0.8 s) is measured between the frames that saw them, so on lavapipe,
+/// where a big crowd takes a second or more a frame, a click that straddled two frames was lost
+/// and a checkbox or combo box needed several tries.
+pub fn egui_context() -> egui::Context {
+    let ctx = egui::Context::default();
+    configure_egui(&ctx);
+    ctx
+}
+
+/// Sets up `ctx` as [`egui_context`] does.
+pub fn configure_egui(ctx: &egui::Context) {
+    ctx.options_mut(|o| o.input_options.max_click_duration = f64::INFINITY);
 }
 
 #[cfg(test)]

@@ -35,9 +35,6 @@ fn next<T: Copy + PartialEq>(all: &[T], current: T) -> T {
     all[i % all.len()]
 }
 
-/// Width of the side panel in points.
-const PANEL_WIDTH: f32 = 270.0;
-
 /// Printed, with exit code 2, where no window can be opened.
 pub const NO_DISPLAY: &str = "lodlab: no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset); \
      to render without one use `lodlab shot --out FILE.png`";
@@ -651,8 +648,6 @@ impl Viewer {
     /// the rectangle it leaves to the 3D view (in points).
     fn run_panel(&mut self) -> Result<(egui::FullOutput, egui::Rect)> {
         let raw = self.egui.take_egui_input(&self.win.window);
-        let mut requests = panel::Requests::default();
-        let mut central = egui::Rect::NOTHING;
         self.update_levels()?;
         // Where memory goes, once a second (it reads /proc).
         if self
@@ -683,19 +678,10 @@ impl Viewer {
             notice: self.notice.as_deref(),
         };
         let (settings, history) = (&mut self.settings, &self.history);
+        let mut requests = panel::Requests::default();
+        let mut central = egui::Rect::NOTHING;
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
-            egui::Panel::left("lodlab panel")
-                .resizable(false)
-                .exact_size(PANEL_WIDTH)
-                .show(ui, |ui| {
-                    egui::ScrollArea::vertical().show(ui, |ui| {
-                        requests = panel::show(ui, settings, history, &info);
-                    });
-                });
-            central = ui.available_rect_before_wrap();
-            if let Some(right) = settings.compare {
-                panel::compare_overlay(ui, central, settings.method, right);
-            }
+            (requests, central) = panel::frame(ui, settings, history, &info);
         });
         self.egui.handle_platform_output(
             &self.win.window,

@@ -223,6 +223,34 @@ pub struct Requests {
     pub open: bool,
 }
 
+/// Width of the side panel in points.
+pub const PANEL_WIDTH: f32 = 270.0;
+
+/// One frame of the viewer's interface: the panel on the left and, over the 3D view, the
+/// split-screen labels. Returns what the panel asked for and the rectangle left to the 3D view
+/// (in points).
+pub fn frame(
+    ui: &mut egui::Ui,
+    s: &mut Settings,
+    history: &FrameHistory,
+    info: &Info,
+) -> (Requests, egui::Rect) {
+    let mut requests = Requests::default();
+    egui::Panel::left("lodlab panel")
+        .resizable(false)
+        .exact_size(PANEL_WIDTH)
+        .show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                requests = show(ui, s, history, info);
+            });
+        });
+    let central = ui.available_rect_before_wrap();
+    if let Some(right) = s.compare {
+        compare_overlay(ui, central, s.method, right);
+    }
+    (requests, central)
+}
+
 pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &Info) -> Requests {
     let mut req = Requests::default();
     ui.horizontal(|ui| {
@@ -523,9 +551,10 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.horizontal(|ui| {
         let mut on = p.force_level.is_some();
         let mut level = p.force_level.unwrap_or(0);
-        ui.checkbox(&mut on, "force level")
+        let label = ui.checkbox(&mut on, "force level")
             .on_hover_text("Every character shows this level (its coarsest if it has fewer), whatever its distance: to look at one level close up (--force-level)");
-        ui.add_enabled(on, egui::DragValue::new(&mut level).range(0..=15));
+        ui.add_enabled(on, egui::DragValue::new(&mut level).range(0..=15))
+            .labelled_by(label.id);
         p.force_level = on.then_some(level);
     });
     ui.checkbox(&mut s.impostors, "far characters as impostors")
@@ -787,5 +816,146 @@ mod tests {
         assert_eq!(thousands(0), "0");
         assert_eq!(thousands(1234567), "1,234,567");
         assert_eq!(thousands(999), "999");
+    }
+}
+
+/// The panel under a pointer, as the viewer runs it, at lavapipe's frame rates.
+#[cfg(test)]
+mod clicks {
+    use super::*;
+    use egui_kittest::Harness;
+    use egui_kittest::kittest::{Queryable, by};
+
+    /// The panel drawn once a frame, each frame `frame_seconds` long, with the viewer's input
+    /// options; the state is what the user changed and what the panel last asked for.
+    fn panel(frame_seconds: f32) -> Harness<'static, (Settings, Requests)> {
+        let settings = Settings {
+            count: 100,
+            model: None,
+            clip: None,
+            cross_fade: 0.0,
+            playing: true,
+            speed: 1.0,
+            shadows: true,
+            method: LodMethod::ALL[3],
+            compare: None,
+            policy: LodPolicy::default(),
+            debug: DebugView::Shaded,
+            foliage: FoliageView::default(),
+            impostors: true,
+            normal_maps: true,
+        };
+        Harness::builder()
+            .with_size([PANEL_WIDTH + 300.0, 2000.0])
+            .with_step_dt(frame_seconds)
+            .with_context_setup(crate::app::window::configure_egui)
+            .build_ui_state(
+                |ui, (s, requests): &mut (Settings, Requests)| {
+                    let models = ["walker".to_string()];
+                    let clips = [vec!["walk".to_string()]];
+                    let info = Info {
+                        adapter: "test",
+                        backend: "none",
+                        models: &models,
+                        clips: &clips,
+                        stats: FrameStats::default(),
+                        passes: None,
+                        view_pixels: 0,
+                        memory: &[],
+                        time: 0.0,
+                        baking: None,
+                        bake_error: None,
+                        wireframe: false,
+                        ready: [true; 4],
+                        trees: false,
+                        impostors: String::new(),
+                        normal_maps: String::new(),
+                        notice: None,
+                        chains: Vec::new(),
+                    };
+                    let (asked, _) = frame(ui, s, &FrameHistory::default(), &info);
+                    if asked != Requests::default() {
+                        *requests = asked;
+                    }
+                },
+                (settings, Requests::default()),
+            )
+    }
+
+    /// Presses and releases the primary button at the centre of `rect`, with `frames` frames
+    /// between (0: both inside one frame).
+    fn click(
+        harness: &mut Harness<'static, (Settings, Requests)>,
+        rect: egui::Rect,
+        frames: usize,
+    ) {
+        let pos = rect.center();
+        let button = |pressed| egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::default(),
+        };
+        harness
+            .input_mut()
+            .events
+            .push(egui::Event::PointerMoved(pos));
+        harness.step();
+        harness.input_mut().events.push(button(true));
+        for _ in 0..frames {
+            harness.step();
+        }
+        harness.input_mut().events.push(button(false));
+        harness.step();
+        harness.step();
+    }
+
+    #[test]
+    fn a_checkbox_takes_one_slow_click() {
+        // Two seconds a frame, the press in one frame and the release in the next; then both
+        // inside one frame.
+        for frames in [1, 0] {
+            let mut h = panel(2.0);
+            h.run_steps(2);
+            // The checkbox, not the level box it labels.
+            let rect = h
+                .get(
+                    by().label("force level")
+                        .include_labels()
+                        .role(egui::accesskit::Role::CheckBox),
+                )
+                .rect();
+            click(&mut h, rect, frames);
+            assert_eq!(h.state().0.policy.force_level, Some(0), "{frames} frames");
+            click(&mut h, rect, frames);
+            assert_eq!(h.state().0.policy.force_level, None, "{frames} frames");
+        }
+    }
+
+    #[test]
+    fn a_combo_box_takes_one_slow_click_to_open_and_one_to_pick() {
+        for frames in [1, 0] {
+            let mut h = panel(2.0);
+            h.run_steps(2);
+            assert_eq!(h.state().0.policy.transition, Transition::Morph);
+            let combo = h.get_by_label("transition").rect();
+            click(&mut h, combo, frames);
+            let pop = h.get_by_label(Transition::Pop.name()).rect();
+            click(&mut h, pop, frames);
+            assert_eq!(
+                h.state().0.policy.transition,
+                Transition::Pop,
+                "{frames} frames"
+            );
+        }
+    }
+
+    #[test]
+    fn a_button_takes_one_slow_click() {
+        let mut h = panel(2.0);
+        h.run_steps(2);
+        let open = h.get_by_label("Open…").rect();
+        click(&mut h, open, 1);
+        assert!(h.state().1.open);
     }
 }
