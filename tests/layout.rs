@@ -169,3 +169,76 @@ fn ci_installs_the_readmes_prerequisites() {
     );
     assert_eq!(apt_packages(&ci), wanted);
 }
+
+/// The README's inline commands (`lodlab …`, and the `bench …`/`shot …` shorthands of its
+/// tables), with their placeholders (`DIR`, `M`, `MODEL`, `T`, `FILE`, `N`, `PX`) filled in; templates with
+/// alternatives (`[…]`, `|`, `…`) are left out.
+fn readme_commands(readme: &str) -> Vec<Vec<String>> {
+    // Fenced blocks hold the synopsis, a template; drop them.
+    let mut prose = String::new();
+    let mut fenced = false;
+    for line in readme.lines() {
+        if line.starts_with("```") {
+            fenced = !fenced;
+        } else if !fenced {
+            prose.push_str(line);
+            prose.push('\n');
+        }
+    }
+    let shorthands = [
+        "bench ", "shot ", "record ", "report ", "export ", "bake ", "view ",
+    ];
+    prose
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(|span| span.split_whitespace().collect::<Vec<_>>().join(" "))
+        .filter_map(|span| {
+            let span = if span.starts_with("lodlab ") || span == "lodlab" {
+                span
+            } else if shorthands.iter().any(|s| span.starts_with(s)) {
+                format!("lodlab {span}")
+            } else {
+                return None;
+            };
+            if span.contains(['[', '|', '…']) {
+                return None;
+            }
+            Some(
+                span.split(' ')
+                    .map(|w| match w {
+                        "DIR" => "out-dir",
+                        "M" => "as",
+                        "MODEL" => "horse",
+                        "T" => "alpha",
+                        "FILE" => "out.png",
+                        "N" => "30",
+                        "PX" => "2",
+                        w => w,
+                    })
+                    .map(String::from)
+                    .collect(),
+            )
+        })
+        .collect()
+}
+
+/// Every command the README shows parses as lodlab's command line does: no renamed or
+/// removed option lingers in the prose.
+#[test]
+fn the_readmes_commands_parse() {
+    use clap::Parser;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let commands = readme_commands(&readme);
+    assert!(commands.len() >= 25, "{} commands found", commands.len());
+    let failures: Vec<String> = commands
+        .iter()
+        .filter_map(|words| {
+            lodlab::app::cli::Cli::try_parse_from(words)
+                .err()
+                .map(|e| format!("{}: {}", words.join(" "), e.kind()))
+        })
+        .collect();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
