@@ -295,6 +295,7 @@ fn main() -> ExitCode {
         .format_timestamp(None)
         .init();
     let cli = Cli::parse();
+    lodlab::import::validate::set_limits(cli.import_limits());
     match run(cli) {
         Ok(code) => code,
         Err(e) => {

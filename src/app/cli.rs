@@ -29,6 +29,29 @@ pub struct Cli {
     /// The viewer's options, for `lodlab` without a subcommand.
     #[command(flatten)]
     pub view: ViewArgs,
+    /// Raise (or lower) a bound on what one model file may ask for, NAME=VALUE, repeatable:
+    /// file-mb (1024: the file and each file it refers to, MiB), nodes (100000), joints
+    /// (1024 in a skin), clip-seconds (600), materials (256), texture-side (8192 texels).
+    /// Each keeps a small hostile file from taking the machine; a model past one is refused
+    /// in one line naming the option.
+    #[arg(long = "limit", value_name = "NAME=VALUE", global = true, value_parser = parse_limit)]
+    pub limits: Vec<String>,
+}
+
+impl Cli {
+    /// The import limits the command line asks for.
+    pub fn import_limits(&self) -> crate::import::validate::Limits {
+        let mut limits = crate::import::validate::Limits::default();
+        for l in &self.limits {
+            limits.set(l).expect("checked by parse_limit");
+        }
+        limits
+    }
+}
+
+fn parse_limit(s: &str) -> Result<String, String> {
+    crate::import::validate::Limits::default().set(s)?;
+    Ok(s.to_string())
 }
 
 #[derive(Subcommand, Debug)]

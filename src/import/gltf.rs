@@ -8,6 +8,7 @@
 //! material. Everything the renderer and the bakes rely on is validated here, so that a bad file
 //! stops with one line naming the file and the problem instead of a panic further down.
 
+use super::validate;
 use super::weld::{compute_normals, weld_map};
 use crate::error::InputError;
 use crate::model::{
@@ -30,31 +31,21 @@ const DEFAULT_HEIGHT: f32 = 1.0;
 /// Loads a skinned model from a `.glb` or `.gltf` file.
 pub fn load(path: &Path) -> Result<Model, InputError> {
     let fail = |p: String| InputError::new(path, p);
+    let limits = validate::limits();
     let meta = std::fs::metadata(path).map_err(|e| fail(io_problem(&e)))?;
-    if meta.is_dir() {
-        return Err(fail("is a directory, not a glTF file".into()));
-    }
-    if meta.len() == 0 {
-        return Err(fail("is empty, not a glTF file".into()));
-    }
-    let imported = match unpacked(path).map_err(fail)? {
-        Some(glb) => {
-            let base = path.parent().unwrap_or(Path::new("."));
-            gltf::Gltf::from_slice(&glb).and_then(|g| {
-                let buffers = gltf::import_buffers(&g.document, Some(base), g.blob)?;
-                let images = gltf::import_images(&g.document, Some(base), &buffers)?;
-                Ok((g.document, buffers, images))
-            })
-        }
-        None => gltf::import(path),
-    };
-    let (doc, buffers, images) = imported.map_err(|e| match e {
-        gltf::Error::Io(_) => match missing_reference(path) {
-            Some(missing) => fail(format!("refers to {missing}, which cannot be read")),
-            None => fail(gltf_problem(&e)),
-        },
-        e => fail(gltf_problem(&e)),
-    })?;
+    validate::check_file(&meta, &limits).map_err(fail)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
+    let bytes = unpacked(&read, base).map_err(fail)?.unwrap_or(read);
+    let gltf::Gltf {
+        document: doc,
+        blob,
+    } = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(gltf_problem(&e)))?;
+    validate::check_sources(&doc, base, &limits).map_err(fail)?;
+    let buffers =
+        gltf::import_buffers(&doc, Some(base), blob).map_err(|e| fail(gltf_problem(&e)))?;
+    validate::check_document(&doc, &buffers, &limits).map_err(fail)?;
+    let images = validate::import_images(&doc, base, &buffers, &limits).map_err(fail)?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -69,47 +60,27 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
 
 /// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or
 /// `KHR_mesh_quantization` (what gltfpack writes), else `None`: the gltf crate reads it as it is.
-fn unpacked(path: &Path) -> Result<Option<Vec<u8>>, String> {
-    let bytes = std::fs::read(path).map_err(|e| io_problem(&e))?;
+fn unpacked(bytes: &[u8], base: &Path) -> Result<Option<Vec<u8>>, String> {
     // The extensions are named in the JSON: a `.glb`'s first chunk, or the whole `.gltf`.
     let json_part = match bytes.get(12..16) {
         Some(len) if bytes.starts_with(b"glTF") => {
             let n = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
             &bytes[20.min(bytes.len())..(20 + n).min(bytes.len())]
         }
-        _ => &bytes[..],
+        _ => bytes,
     };
     let mentions = |name: &[u8]| json_part.windows(name.len()).any(|w| w == name);
     if !(mentions(b"EXT_meshopt_compression") || mentions(b"KHR_mesh_quantization")) {
         return Ok(None);
     }
-    let Ok((json, _)) = super::gltfpack::split(&bytes) else {
+    let Ok((json, _)) = super::gltfpack::split(bytes) else {
         // Not glTF at all: the gltf crate says what is wrong with it.
         return Ok(None);
     };
     if !super::gltfpack::needs_unpacking(&json) {
         return Ok(None);
     }
-    let base = path.parent().unwrap_or(Path::new("."));
-    super::gltfpack::unpack(&bytes, base).map(Some)
-}
-
-/// The first external buffer or image a `.gltf` names that is not there to read.
-fn missing_reference(path: &Path) -> Option<String> {
-    let doc = gltf::Gltf::open(path).ok()?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    let buffer_uris = doc.buffers().filter_map(|b| match b.source() {
-        gltf::buffer::Source::Uri(u) => Some(u.to_string()),
-        gltf::buffer::Source::Bin => None,
-    });
-    let image_uris = doc.images().filter_map(|i| match i.source() {
-        gltf::image::Source::Uri { uri, .. } => Some(uri.to_string()),
-        gltf::image::Source::View { .. } => None,
-    });
-    buffer_uris
-        .chain(image_uris)
-        .filter(|u| !u.starts_with("data:"))
-        .find(|u| std::fs::metadata(base.join(u)).is_err())
+    super::gltfpack::unpack(bytes, base).map(Some)
 }
 
 fn io_problem(e: &std::io::Error) -> String {
@@ -141,6 +112,7 @@ fn gltf_problem(e: &gltf::Error) -> String {
             expected,
             actual,
         } => format!("buffer {buffer} is truncated: expected {expected} bytes, found {actual}"),
+        gltf::Error::Base64(b) => format!("a data: URI is not valid base64: {b}"),
         gltf::Error::MissingBlob => "refers to a binary chunk that is missing".into(),
         gltf::Error::Image(i) => format!("cannot decode an image: {i}"),
         other => format!("cannot load: {other}"),
@@ -341,37 +313,40 @@ fn read_hierarchy(doc: &gltf::Document, joints: &[usize]) -> Result<(Vec<Node>, 
             parent[c.index()] = Some(n.index());
         }
     }
-    let depth_of = |mut n: usize| -> Result<usize, String> {
-        let mut d = 0;
-        while let Some(p) = parent[n] {
-            n = p;
-            d += 1;
-            if d > node_count {
-                return Err("the node hierarchy has a cycle".to_string());
-            }
-        }
-        Ok(d)
-    };
+    // The joints and their ancestors; a walk up stops at a node already kept, so this is
+    // linear in the nodes (the validator has ruled out cycles).
     let mut keep = vec![false; node_count];
     for &j in joints {
         let mut n = Some(j);
-        while let Some(i) = n {
+        while let Some(i) = n.filter(|&i| !keep[i]) {
             keep[i] = true;
             n = parent[i];
         }
     }
+    // Depths, each from its parent's: parents first by walking down from the roots.
+    let mut depth = vec![0usize; node_count];
+    let mut stack: Vec<usize> = (0..node_count)
+        .filter(|&i| keep[i] && parent[i].is_none())
+        .collect();
+    let gltf_nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut order: Vec<(usize, usize)> = Vec::new();
-    for (i, &k) in keep.iter().enumerate() {
-        if k {
-            order.push((depth_of(i)?, i));
+    while let Some(i) = stack.pop() {
+        order.push((depth[i], i));
+        for c in gltf_nodes[i].children() {
+            if keep[c.index()] {
+                depth[c.index()] = depth[i] + 1;
+                stack.push(c.index());
+            }
         }
+    }
+    if order.len() != keep.iter().filter(|&&k| k).count() {
+        return Err("the node hierarchy has a cycle".to_string());
     }
     order.sort();
     let mut remap = vec![u32::MAX; node_count];
     for (new, &(_, old)) in order.iter().enumerate() {
         remap[old] = new as u32;
     }
-    let gltf_nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut nodes = Vec::with_capacity(order.len());
     for &(_, old) in &order {
         let n = &gltf_nodes[old];
@@ -810,7 +785,10 @@ where
                     ));
                 }
                 match influences[v].iter_mut().find(|i| i.bone == bone) {
-                    Some(i) => i.weight += weight,
+                    // Summed in f64 so that two huge weights of one joint stay finite.
+                    Some(i) => {
+                        i.weight = (i.weight as f64 + weight as f64).min(f32::MAX as f64) as f32
+                    }
                     None => influences[v].push(Influence { bone, weight }),
                 }
             }
@@ -823,12 +801,14 @@ where
         ));
     }
     for (v, inf) in influences.iter_mut().enumerate() {
-        let total: f32 = inf.iter().map(|i| i.weight).sum();
+        // In f64: weights near f32::MAX (3e38 + 3e38) would overflow an f32 sum to infinity and
+        // every weight to zero.
+        let total: f64 = inf.iter().map(|i| i.weight as f64).sum();
         if total <= 0.0 {
             return Err(format!("{label}: vertex {v} has all-zero skin weights"));
         }
         for i in inf.iter_mut() {
-            i.weight /= total;
+            i.weight = (i.weight as f64 / total) as f32;
         }
         inf.sort_by_key(|i| i.bone);
     }
@@ -1122,6 +1102,14 @@ where
         .iter()
         .map(|c| *c.times.last().expect("non-empty"))
         .fold(0.0f32, f32::max);
+    // The animation texture holds every frame of every clip: a key at t = 10⁶ s in a 3 KB file
+    // would ask for gigabytes of it.
+    let limit = validate::limits().clip_seconds;
+    if duration > limit {
+        return Err(format!(
+            "clip '{name}' is {duration} s long; the limit is {limit} s (--limit clip-seconds=N raises it)"
+        ));
+    }
     // `-1` marks "not given in the file": the caller guesses once the model's size is known.
     let ground_speed = anim
         .extras()

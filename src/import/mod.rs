@@ -2,6 +2,7 @@
 
 pub mod gltf;
 pub mod gltfpack;
+pub mod validate;
 pub mod weld;
 
 use crate::error::InputError;
