@@ -276,3 +276,38 @@ fn an_unknown_builtin_lists_the_builtins() {
         .to_string();
     assert!(!err.contains("built-in"), "{err}");
 }
+
+/// Non-finite and absurd option values are refused by the parser, naming the value, before
+/// anything is loaded or drawn (`--time nan` drew an empty picture and claimed full draws).
+#[test]
+fn non_finite_and_absurd_options_are_refused() {
+    let cases: [&[&str]; 9] = [
+        &["shot", "--time", "nan"],
+        &["shot", "--time", "inf"],
+        &["shot", "--tolerance", "NaN"],
+        &["shot", "--wind=-inf"],
+        &["shot", "--frames", "100000000"],
+        &["bake", "horse", "--first-error", "nan"],
+        &["bench", "--seconds", "inf"],
+        &["record", "--seconds", "nan", "--out", "x.mp4"],
+        &["view", "--cross-fade", "nan"],
+    ];
+    for args in cases {
+        let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+            .args(args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        let last = args[args.len() - 1 - usize::from(args.contains(&"--out")) * 2];
+        let value = last.rsplit('=').next().unwrap();
+        assert!(
+            stderr
+                .lines()
+                .next()
+                .unwrap_or("")
+                .contains(&format!("'{value}'")),
+            "{args:?}: {stderr}"
+        );
+    }
+}

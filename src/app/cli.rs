@@ -270,7 +270,7 @@ pub struct BakeArgs {
     /// e₁, the error bound of LOD 1 in pixels for the model filling 1000 pixels of screen
     /// height; each further level doubles it. (Not the run-time --tolerance of view, shot and
     /// bench: the projected error a level may show.)
-    #[arg(long, default_value_t = 0.5, value_name = "PX")]
+    #[arg(long, default_value_t = 0.5, value_name = "PX", value_parser = parse_number)]
     pub first_error: f32,
     /// Cut levels by triangle budgets instead of errors, e.g. 4000,2000,1000.
     #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
@@ -568,6 +568,15 @@ fn parse_number(s: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("'{s}' is not a number"))
 }
 
+/// A frame count: at least one, at most 100,000 (an hour at 30 frames a second).
+fn parse_frames(s: &str) -> Result<usize, String> {
+    s.trim()
+        .parse::<usize>()
+        .ok()
+        .filter(|n| (1..=100_000).contains(n))
+        .ok_or_else(|| format!("'{s}' is not a frame count from 1 to 100000"))
+}
+
 fn parse_non_negative(s: &str) -> Result<f32, String> {
     parse_number(s).and_then(|x| {
         if x >= 0.0 {
@@ -616,7 +625,7 @@ pub struct ViewArgs {
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
     /// Frames to render before the screenshot.
-    #[arg(long, default_value_t = 30, requires = "screenshot")]
+    #[arg(long, default_value_t = 30, requires = "screenshot", value_parser = parse_frames)]
     pub frames: usize,
 }
 
@@ -633,7 +642,7 @@ pub struct ShotArgs {
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
     /// Scene time in seconds.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_number)]
     pub time: f32,
     /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
     #[arg(long, value_parser = parse_samples)]
@@ -642,7 +651,7 @@ pub struct ShotArgs {
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<Camera>,
     /// Frames to time after one warm-up frame; frame_ms is their median.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = parse_frames)]
     pub frames: usize,
     /// Also time the same triangles drawn by a trivial unskinned shader.
     #[arg(long)]
