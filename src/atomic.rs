@@ -4,8 +4,10 @@
 //! rename stays on one file system; they are synced to disk and replace the target in one
 //! rename. A reader never sees half a file, and two runs writing the same output never trip
 //! over one temporary name. A run stopped by Ctrl-C or SIGTERM removes its temporary files on
-//! the way out. A target that is not a plain file (a FIFO, a socket, a device, a symbolic link
-//! or a folder) is refused: renaming over it would replace something the user made.
+//! the way out. A run killed outright (SIGKILL, a crash) cannot: its temporary files carry its
+//! process id, and the next writer of the same target removes those whose process is gone. A
+//! target that is not a plain file (a FIFO, a socket, a device, a symbolic link or a folder) is
+//! refused: renaming over it would replace something the user made.
 
 use anyhow::{Context, Result, anyhow, bail};
 use std::fs::File;
@@ -87,8 +89,9 @@ impl AtomicFile {
         let name = target
             .file_name()
             .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+        remove_stale(folder(target), &name);
         let temp = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
+            .prefix(&format!(".{name}.{}.", std::process::id()))
             .suffix(".tmp")
             .tempfile_in(folder(target))
             .with_context(|| format!("{}: cannot write", target.display()))?;
@@ -151,6 +154,50 @@ impl Drop for AtomicFile {
             let path = temp.path().to_path_buf();
             drop(temp);
             forget_pending(&path);
+        }
+    }
+}
+
+/// Is process `pid` still running? Where that cannot be known, a file older than a day
+/// counts as abandoned instead.
+fn alive(pid: u32, modified: Option<std::time::SystemTime>) -> bool {
+    let proc = Path::new("/proc");
+    if proc.join("self").exists() {
+        return proc.join(pid.to_string()).exists();
+    }
+    modified
+        .and_then(|m| m.elapsed().ok())
+        .is_none_or(|age| age.as_secs() < 24 * 3600)
+}
+
+/// Removes the temporary files of `name` in `folder` left by runs that were killed before they
+/// could (`.NAME.PID.XXXXXX.tmp` whose process is gone). Another live run's are kept.
+fn remove_stale(folder: &Path, name: &str) {
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return;
+    };
+    let prefix = format!(".{name}.");
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let Some(rest) = file
+            .to_str()
+            .and_then(|f| f.strip_prefix(&prefix))
+            .filter(|r| r.ends_with(".tmp"))
+        else {
+            continue;
+        };
+        let Some(pid) = rest.split('.').next().and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        let modified = entry.metadata().ok().and_then(|m| m.modified().ok());
+        if pid != std::process::id() && !alive(pid, modified) {
+            match std::fs::remove_file(entry.path()) {
+                Ok(()) => log::info!(
+                    "removed {}, left by a run that was killed",
+                    entry.path().display()
+                ),
+                Err(e) => log::debug!("could not remove {}: {e}", entry.path().display()),
+            }
         }
     }
 }
@@ -229,6 +276,28 @@ mod tests {
         a.commit().unwrap();
         b.commit().unwrap();
         assert_eq!(std::fs::read(&out).unwrap(), b"b");
+    }
+
+    #[test]
+    fn a_killed_runs_temporary_files_go_at_the_next_write() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("clip.mp4");
+        // A process id no system hands out (Linux stops at 2²²), and this process's own.
+        let stale = dir.path().join(".clip.mp4.999999999.a1b2c3.tmp");
+        let live = dir
+            .path()
+            .join(format!(".clip.mp4.{}.d4e5f6.tmp", std::process::id()));
+        let other = dir.path().join(".other.png.999999999.a1b2c3.tmp");
+        for p in [&stale, &live, &other] {
+            std::fs::write(p, b"half").unwrap();
+        }
+        write(&out, b"whole").unwrap();
+        if Path::new("/proc/self").exists() {
+            assert!(!stale.exists(), "the dead run's file is removed");
+        }
+        assert!(live.exists(), "a live run's file is kept");
+        assert!(other.exists(), "another target's files are left alone");
+        assert_eq!(std::fs::read(&out).unwrap(), b"whole");
     }
 
     #[cfg(unix)]
