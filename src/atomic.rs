@@ -163,7 +163,14 @@ impl Drop for AtomicFile {
 fn alive(pid: u32, modified: Option<std::time::SystemTime>) -> bool {
     let proc = Path::new("/proc");
     if proc.join("self").exists() {
-        return proc.join(pid.to_string()).exists();
+        // A killed process not yet reaped by its parent is a zombie: gone for this purpose.
+        return std::fs::read_to_string(proc.join(pid.to_string()).join("stat"))
+            .ok()
+            .and_then(|stat| {
+                let state = stat.rsplit_once(')')?.1.trim_start().chars().next()?;
+                Some(!matches!(state, 'Z' | 'X'))
+            })
+            .unwrap_or(false);
     }
     modified
         .and_then(|m| m.elapsed().ok())
