@@ -92,36 +92,7 @@ impl LodCache {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Lookup::Miss,
             Err(e) => return Lookup::Unusable(format!("cannot read it ({e})")),
         };
-        if bytes.len() < HEADER || &bytes[..8] != MAGIC {
-            return Lookup::Unusable("not a lodlab cache file".into());
-        }
-        let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-        if version != FORMAT_VERSION {
-            return Lookup::Unusable(format!(
-                "written in cache format {version}, this lodlab uses {FORMAT_VERSION}"
-            ));
-        }
-        if &bytes[12..44] != key {
-            return Lookup::Unusable("made from another source or other parameters".into());
-        }
-        let len = u64::from_le_bytes(bytes[76..84].try_into().expect("8 bytes")) as usize;
-        let payload = &bytes[HEADER..];
-        if payload.len() != len {
-            return Lookup::Unusable(format!(
-                "truncated: {} of {len} payload bytes",
-                payload.len()
-            ));
-        }
-        if blake3::hash(payload).as_bytes() != &bytes[44..76] {
-            return Lookup::Unusable("corrupt: its checksum does not match".into());
-        }
-        let Ok(payload) = lz4_flex::decompress_size_prepended(payload) else {
-            return Lookup::Unusable("cannot decompress it".into());
-        };
-        match postcard::from_bytes::<T>(&payload) {
-            Ok(value) => Lookup::Hit(Box::new(value)),
-            Err(e) => Lookup::Unusable(format!("cannot decode it ({e})")),
-        }
+        decode(&bytes, key)
     }
 
     /// Writes a bake atomically (see [`crate::atomic`]).
@@ -136,15 +107,67 @@ impl LodCache {
         let payload = postcard::to_stdvec(value)
             .map_err(|e| anyhow::anyhow!("{}: cannot encode: {e}", path.display()))?;
         let payload = lz4_flex::compress_prepend_size(&payload);
-        let mut bytes = Vec::with_capacity(HEADER + payload.len());
-        bytes.extend_from_slice(MAGIC);
-        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        bytes.extend_from_slice(key);
-        bytes.extend_from_slice(blake3::hash(&payload).as_bytes());
-        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        bytes.extend_from_slice(&payload);
-        crate::atomic::write(path, &bytes)
+        crate::atomic::write(path, &encode(key, &payload))
     }
+}
+
+/// The most a cache file's payload may unpack to: its own length prefix is not trusted with
+/// more (a damaged one would ask for gigabytes).
+const MAX_UNPACKED: usize = 1 << 31;
+
+/// A cache file's bytes decoded: its magic, version, key, length and checksum checked before
+/// the payload is unpacked and decoded. What a fuzzer feeds (see `fuzz/`).
+pub fn decode<T: DeserializeOwned>(bytes: &[u8], key: &[u8; 32]) -> Lookup<T> {
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+        return Lookup::Unusable("not a lodlab cache file".into());
+    }
+    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if version != FORMAT_VERSION {
+        return Lookup::Unusable(format!(
+            "written in cache format {version}, this lodlab uses {FORMAT_VERSION}"
+        ));
+    }
+    if &bytes[12..44] != key {
+        return Lookup::Unusable("made from another source or other parameters".into());
+    }
+    let len = u64::from_le_bytes(bytes[76..84].try_into().expect("8 bytes"));
+    let payload = &bytes[HEADER..];
+    if payload.len() as u64 != len {
+        return Lookup::Unusable(format!(
+            "truncated: {} of {len} payload bytes",
+            payload.len()
+        ));
+    }
+    if blake3::hash(payload).as_bytes() != &bytes[44..76] {
+        return Lookup::Unusable("corrupt: its checksum does not match".into());
+    }
+    let unpacked = payload
+        .get(..4)
+        .map(|n| u32::from_le_bytes(n.try_into().expect("4 bytes")) as usize);
+    // LZ4 expands at most 255 times.
+    if unpacked.is_none_or(|n| n > MAX_UNPACKED || n > payload.len().saturating_mul(255)) {
+        return Lookup::Unusable("corrupt: its unpacked size is impossible".into());
+    }
+    let Ok(payload) = lz4_flex::decompress_size_prepended(payload) else {
+        return Lookup::Unusable("cannot decompress it".into());
+    };
+    match postcard::from_bytes::<T>(&payload) {
+        Ok(value) => Lookup::Hit(Box::new(value)),
+        Err(e) => Lookup::Unusable(format!("cannot decode it ({e})")),
+    }
+}
+
+/// A cache file's bytes around `payload` (already compressed), as [`LodCache::store`] writes
+/// them.
+pub fn encode(key: &[u8; 32], payload: &[u8]) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(HEADER + payload.len());
+    bytes.extend_from_slice(MAGIC);
+    bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    bytes.extend_from_slice(key);
+    bytes.extend_from_slice(blake3::hash(payload).as_bytes());
+    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(payload);
+    bytes
 }
 
 /// The cache key of a bake: the source's hash, the method, the parameters and the format.
@@ -253,5 +276,29 @@ impl LodCache {
             });
         }
         Ok((value, Origin::Baked { warning }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_payload_claiming_gigabytes_is_refused_before_it_is_unpacked() {
+        let key = [7u8; 32];
+        // A valid envelope (the checksum matches) around LZ4 data whose size prefix says 2 GiB.
+        let mut payload = (u32::MAX / 2).to_le_bytes().to_vec();
+        payload.extend_from_slice(&[0x10, b'a']);
+        match decode::<Vec<u8>>(&encode(&key, &payload), &key) {
+            Lookup::Unusable(why) => assert!(why.contains("impossible"), "{why}"),
+            other => panic!("{other:?}"),
+        }
+        // A round trip still reads back.
+        let value = vec![1u32, 2, 3];
+        let packed = lz4_flex::compress_prepend_size(&postcard::to_stdvec(&value).unwrap());
+        match decode::<Vec<u32>>(&encode(&key, &packed), &key) {
+            Lookup::Hit(v) => assert_eq!(*v, value),
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -36,26 +36,38 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
     validate::check_file(&meta, &limits).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
-    let bytes = unpacked(&read, base).map_err(fail)?.unwrap_or(read);
-    let gltf::Gltf {
-        document: doc,
-        blob,
-    } = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(gltf_problem(&e)))?;
-    validate::check_sources(&doc, base, &limits).map_err(fail)?;
-    let buffers =
-        gltf::import_buffers(&doc, Some(base), blob).map_err(|e| fail(gltf_problem(&e)))?;
-    validate::check_document(&doc, &buffers, &limits).map_err(fail)?;
-    let images = validate::import_images(&doc, base, &buffers, &limits).map_err(fail)?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "model".into());
-    let mut warnings = Vec::new();
-    let model = build(&name, &doc, &buffers, &images, &mut warnings).map_err(fail)?;
+    let (model, warnings) = from_bytes(&name, read, base, &limits).map_err(fail)?;
     for w in warnings {
         log::warn!("{}: {w}", path.display());
     }
     Ok(model)
+}
+
+/// A model from the bytes of a `.glb` or `.gltf` whose external files lie in `base`, and the
+/// warnings to show with it; the error is the problem, without the file's name. What [`load`]
+/// runs once it has read the file, and what the fuzzer feeds (see `fuzz/`).
+pub fn from_bytes(
+    name: &str,
+    read: Vec<u8>,
+    base: &Path,
+    limits: &validate::Limits,
+) -> Result<(Model, Vec<String>), String> {
+    let bytes = unpacked(&read, base)?.unwrap_or(read);
+    let gltf::Gltf {
+        document: doc,
+        blob,
+    } = gltf::Gltf::from_slice(&bytes).map_err(|e| gltf_problem(&e))?;
+    validate::check_sources(&doc, base, limits)?;
+    let buffers = gltf::import_buffers(&doc, Some(base), blob).map_err(|e| gltf_problem(&e))?;
+    validate::check_document(&doc, &buffers, limits)?;
+    let images = validate::import_images(&doc, base, &buffers, limits)?;
+    let mut warnings = Vec::new();
+    let model = build(name, &doc, &buffers, &images, &mut warnings)?;
+    Ok((model, warnings))
 }
 
 /// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or
@@ -1102,14 +1114,6 @@ where
         .iter()
         .map(|c| *c.times.last().expect("non-empty"))
         .fold(0.0f32, f32::max);
-    // The animation texture holds every frame of every clip: a key at t = 10⁶ s in a 3 KB file
-    // would ask for gigabytes of it.
-    let limit = validate::limits().clip_seconds;
-    if duration > limit {
-        return Err(format!(
-            "clip '{name}' is {duration} s long; the limit is {limit} s (--limit clip-seconds=N raises it)"
-        ));
-    }
     // `-1` marks "not given in the file": the caller guesses once the model's size is known.
     let ground_speed = anim
         .extras()

@@ -454,8 +454,12 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
     Ok(())
 }
 
-/// Skins within the joint limit and materials within theirs.
-fn check_sizes(doc: &gltf::Document, limits: &Limits) -> Result<(), String> {
+/// Skins, clips and materials within their limits.
+fn check_sizes(
+    doc: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    limits: &Limits,
+) -> Result<(), String> {
     for s in doc.skins() {
         let joints = s.joints().len();
         if joints > limits.joints {
@@ -463,6 +467,26 @@ fn check_sizes(doc: &gltf::Document, limits: &Limits) -> Result<(), String> {
                 format!("skin {} has {joints} joints", s.index()),
                 limits.joints,
                 "joints",
+            ));
+        }
+    }
+    // The animation texture holds every frame of every clip: a key at t = 10⁶ s in a 3 KB file
+    // would ask for gigabytes of it. (Accessors are checked by now, so reading is safe.)
+    let data = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+    for anim in doc.animations() {
+        let last = anim
+            .channels()
+            .filter_map(|ch| ch.reader(data).read_inputs())
+            .map(|times| times.filter(|t| t.is_finite()).fold(0.0f32, f32::max))
+            .fold(0.0f32, f32::max);
+        if last > limits.clip_seconds {
+            let name = anim
+                .name()
+                .map_or_else(|| format!("clip{}", anim.index()), str::to_string);
+            return Err(over(
+                format!("clip '{name}' is {last} s long"),
+                format!("{} s", limits.clip_seconds),
+                "clip-seconds",
             ));
         }
     }
@@ -488,7 +512,7 @@ pub fn check_document(
     check_views(doc, buffers)?;
     check_accessors(doc, buffers)?;
     check_types(doc)?;
-    check_sizes(doc, limits)
+    check_sizes(doc, buffers, limits)
 }
 
 /// The images decoded, each checked against the texture limit from its header before its
