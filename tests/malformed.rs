@@ -142,6 +142,16 @@ fn corpus() -> Vec<Case> {
         b,
         Expect::Error("truncated or corrupt"),
     );
+    // The fuzzer's first find: a header length under the header's own 12 bytes overflowed a
+    // subtraction in the gltf crate (a panic in debug builds).
+    let mut b = b"glTF".to_vec();
+    b.extend_from_slice(&2u32.to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
+    case(
+        "header-length-zero.glb",
+        b,
+        Expect::Error("truncated or corrupt"),
+    );
     let mut b = base.clone();
     b[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
     case(

@@ -56,6 +56,7 @@ pub fn from_bytes(
     base: &Path,
     limits: &validate::Limits,
 ) -> Result<(Model, Vec<String>), String> {
+    validate::check_glb_header(&read)?;
     let bytes = unpacked(&read, base)?.unwrap_or(read);
     let gltf::Gltf {
         document: doc,

@@ -130,6 +130,29 @@ pub fn check_file(meta: &std::fs::Metadata, limits: &Limits) -> Result<(), Strin
     Ok(())
 }
 
+/// A binary glTF's header gives a length the file can hold: at least the header's own 12
+/// bytes and no more than there are. (The gltf crate subtracts 12 from it unchecked: a length
+/// under 12 overflows, which a debug build reports as a panic. Found by the fuzzer.)
+pub fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let Some(field) = bytes.get(8..12) else {
+        return Err(
+            "not a valid binary glTF (truncated or corrupt: its header is cut short)".into(),
+        );
+    };
+    let declared = u32::from_le_bytes(field.try_into().expect("4 bytes")) as u64;
+    if declared < 12 || declared > bytes.len() as u64 {
+        return Err(format!(
+            "not a valid binary glTF (truncated or corrupt: its header gives a length of \
+             {declared} bytes, the file has {})",
+            bytes.len()
+        ));
+    }
+    Ok(())
+}
+
 /// `%XX` escapes of a relative URI decoded, as glTF asks; `None` where they do not make UTF-8.
 fn percent_decoded(uri: &str) -> Option<String> {
     let bytes = uri.as_bytes();
