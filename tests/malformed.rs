@@ -759,3 +759,26 @@ fn the_command_line_refuses_each_in_one_line_with_exit_code_1() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Inputs on which the fuzzer (`fuzz/`) found the importer panicking, kept as found: each is
+/// refused in one line. (A POSITION accessor index past the accessors, read by the gltf
+/// crate's own validation; a channel animating an unknown property; see `validate.rs`.)
+#[test]
+fn the_fuzzers_crashers_are_refused_in_one_line() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-crashers");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        match load_within(&path, Duration::from_secs(30)) {
+            Ok(Err(line)) => {
+                assert!(line.starts_with(&path.display().to_string()), "{line}");
+                assert!(!line.contains('\n'), "{line}");
+                eprintln!("{line}");
+            }
+            Ok(Ok(n)) => eprintln!("{}: loads, {n} vertices", path.display()),
+            Err(broke) => panic!("{}: {broke}", path.display()),
+        }
+        seen += 1;
+    }
+    assert!(seen >= 6, "{seen} crashers");
+}

@@ -57,6 +57,7 @@ pub fn from_bytes(
     limits: &validate::Limits,
 ) -> Result<(Model, Vec<String>), String> {
     validate::check_glb_header(&read)?;
+    validate::check_raw(&read)?;
     let bytes = unpacked(&read, base)?.unwrap_or(read);
     let gltf::Gltf {
         document: doc,

@@ -153,6 +153,42 @@ pub fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// What the gltf crate's own validation reads unchecked, checked first on the raw JSON: a
+/// POSITION attribute's accessor index, which its min/max hook looks up before the index
+/// checks run (an out-of-range one panicked; found by the fuzzer).
+pub fn check_raw(bytes: &[u8]) -> Result<(), String> {
+    use gltf::json::validation::Checked;
+    let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        match gltf::binary::Glb::from_slice(bytes) {
+            Ok(glb) => glb.json,
+            // The gltf crate says what is wrong with it.
+            Err(_) => return Ok(()),
+        }
+    } else {
+        bytes.into()
+    };
+    let Ok(root) = gltf::json::Root::from_slice(&json) else {
+        return Ok(());
+    };
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (k, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim
+                .attributes
+                .get(&Checked::Valid(gltf::json::mesh::Semantic::Positions));
+            if let Some(i) = position
+                && i.value() >= root.accessors.len()
+            {
+                return Err(format!(
+                    "invalid glTF (mesh {m} primitive {k}: POSITION refers to accessor {}, of {})",
+                    i.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// `%XX` escapes of a relative URI decoded, as glTF asks; `None` where they do not make UTF-8.
 fn percent_decoded(uri: &str) -> Option<String> {
     let bytes = uri.as_bytes();
@@ -455,8 +491,17 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
         }
         for ch in anim.channels() {
             use gltf::animation::Property as P;
+            // The gltf crate lets an unknown path through and panics on reading it.
+            let json = &doc.as_json().animations[anim.index()].channels[ch.index()];
+            let gltf::json::validation::Checked::Valid(property) = json.target.path else {
+                return Err(format!(
+                    "animation {} channel {} animates a property glTF does not know",
+                    anim.index(),
+                    ch.index()
+                ));
+            };
             let out = ch.sampler().output();
-            let ok = match ch.target().property() {
+            let ok = match property {
                 P::Translation | P::Scale => allowed(&out, &[D::Vec3], &with_float(&ints)),
                 P::Rotation => allowed(&out, &[D::Vec4], &with_float(&ints)),
                 P::MorphTargetWeights => allowed(&out, &[D::Scalar], &with_float(&ints)),
@@ -466,7 +511,7 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
                     "animation {} channel {}: its {:?} keys are {:?} of {:?} (accessor {})",
                     anim.index(),
                     ch.index(),
-                    ch.target().property(),
+                    property,
                     out.dimensions(),
                     out.data_type(),
                     out.index()
