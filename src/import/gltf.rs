@@ -815,14 +815,21 @@ where
         ));
     }
     for (v, inf) in influences.iter_mut().enumerate() {
-        // In f64: weights near f32::MAX (3e38 + 3e38) would overflow an f32 sum to infinity and
-        // every weight to zero.
-        let total: f64 = inf.iter().map(|i| i.weight as f64).sum();
+        let total: f32 = inf.iter().map(|i| i.weight).sum();
         if total <= 0.0 {
             return Err(format!("{label}: vertex {v} has all-zero skin weights"));
         }
-        for i in inf.iter_mut() {
-            i.weight = (i.weight as f64 / total) as f32;
+        if total.is_finite() {
+            for i in inf.iter_mut() {
+                i.weight /= total;
+            }
+        } else {
+            // Weights near f32::MAX (3e38 + 3e38) overflow an f32 sum to infinity, which would
+            // turn every weight to zero: normalise those in f64.
+            let total: f64 = inf.iter().map(|i| i.weight as f64).sum();
+            for i in inf.iter_mut() {
+                i.weight = (i.weight as f64 / total) as f32;
+            }
         }
         inf.sort_by_key(|i| i.bone);
     }

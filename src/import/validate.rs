@@ -153,9 +153,9 @@ pub fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-/// What the gltf crate's own validation reads unchecked, checked first on the raw JSON: a
-/// POSITION attribute's accessor index, which its min/max hook looks up before the index
-/// checks run (an out-of-range one panicked; found by the fuzzer).
+/// What the gltf crate reads unchecked, checked first on the raw JSON (each found by the
+/// fuzzer as a panic): a POSITION attribute's accessor index, which its own validation looks up
+/// before the index checks run, and an image's source, which it unwraps.
 pub fn check_raw(bytes: &[u8]) -> Result<(), String> {
     use gltf::json::validation::Checked;
     let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
@@ -170,6 +170,22 @@ pub fn check_raw(bytes: &[u8]) -> Result<(), String> {
     let Ok(root) = gltf::json::Root::from_slice(&json) else {
         return Ok(());
     };
+    // The gltf crate unwraps these when asked for an image's source.
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (Some(_), _, None) => {
+                return Err(format!(
+                    "invalid glTF (image {i} lies in a buffer view but has no mimeType)"
+                ));
+            }
+            (None, None, _) => {
+                return Err(format!(
+                    "invalid glTF (image {i} has neither a uri nor a bufferView)"
+                ));
+            }
+            _ => {}
+        }
+    }
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (k, prim) in mesh.primitives.iter().enumerate() {
             let position = prim
