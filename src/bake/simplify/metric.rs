@@ -49,9 +49,9 @@ impl Metric<'_> {
                 // P is symmetric: each pair of bones once, off-diagonal pairs twice.
                 let mut sum = 0.0;
                 for (i, (j, sj)) in gathered.iter().enumerate() {
-                    sum += quadratic(pm.block(*j, *j), sj, sj);
+                    sum += quadratic(&pm.block(*j, *j), sj, sj);
                     for (k, sk) in &gathered[i + 1..] {
-                        sum += 2.0 * quadratic(pm.block(*j, *k), sj, sk);
+                        sum += 2.0 * quadratic(&pm.block(*j, *k), sj, sk);
                     }
                 }
                 sum.max(0.0)
@@ -78,17 +78,6 @@ pub fn influences64(am: &AnimationSpaceMesh) -> Vec<Vec<Influence64>> {
             list
         })
         .collect()
-}
-
-/// `aᵀ P b` for two vertices' influences.
-pub(super) fn inner(pm: &ExpectationMatrix, a: &[Influence64], b: &[Influence64]) -> f64 {
-    let mut sum = 0.0;
-    for x in a {
-        for y in b {
-            sum += quadratic(pm.block(x.bone, y.bone), &x.p, &y.p);
-        }
-    }
-    sum
 }
 
 /// The rest-pose position of a vertex: `Σ Ĝ_i p_i`.

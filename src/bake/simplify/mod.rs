@@ -31,7 +31,7 @@ mod metric;
 mod sequence;
 
 pub use metric::influences64;
-use metric::{Metric, inner, rest_position};
+use metric::{Metric, rest_position};
 pub use sequence::{Sequence, Stats, Step, StepKind};
 
 use crate::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
@@ -656,28 +656,16 @@ impl Simplifier<'_> {
                     .fold(0.0, f64::max)
             }
             Metric::AnimationSpace { pm, .. } => {
-                let mut centre: Vec<Influence64> = Vec::new();
-                for &u in &alive {
-                    for i in &self.infl[u as usize] {
-                        let p = i.p.map(|x| x * weight);
-                        match centre.iter_mut().find(|c| c.bone == i.bone) {
-                            Some(c) => (0..4).for_each(|k| c.p[k] += p[k]),
-                            None => centre.push(Influence64 {
-                                p,
-                                n: [0.0; 3],
-                                ..*i
-                            }),
-                        }
-                    }
-                }
-                let cc = inner(pm, &centre, &centre);
-                alive
+                let points: Vec<Vec<(u32, [f64; 4])>> = alive
                     .iter()
                     .map(|&u| {
-                        let x = &self.infl[u as usize];
-                        inner(pm, x, x) - 2.0 * inner(pm, x, &centre) + cc
+                        self.infl[u as usize]
+                            .iter()
+                            .map(|i| (i.bone, i.p))
+                            .collect()
                     })
-                    .fold(0.0, f64::max)
+                    .collect();
+                pm.max_spread2(&points)
             }
         };
         Some(2.0 * radius2.max(0.0).sqrt())
