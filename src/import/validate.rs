@@ -518,7 +518,9 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
             };
             let out = ch.sampler().output();
             let ok = match property {
-                P::Translation | P::Scale => allowed(&out, &[D::Vec3], &with_float(&ints)),
+                // Integer translations and scales (KHR_mesh_quantization) are read by the gltf
+                // crate as floats, which panics: only floats are taken.
+                P::Translation | P::Scale => allowed(&out, &[D::Vec3], &[T::F32]),
                 P::Rotation => allowed(&out, &[D::Vec4], &with_float(&ints)),
                 P::MorphTargetWeights => allowed(&out, &[D::Scalar], &with_float(&ints)),
             };
