@@ -77,7 +77,9 @@ fn main() -> Result<()> {
             region: Region::Full,
         }],
     );
-    renderer.render_to(&gpu, &target.targets, &target.view);
+    renderer
+        .render_to(&gpu, &target.targets, &target.view)
+        .expect("rendered");
     target.read_rgba(&gpu)?.save(out)?;
     Ok(())
 }

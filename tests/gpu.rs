@@ -400,3 +400,49 @@ fn gpu_clip_cross_fade_matches_the_cpu_reference() {
         assert!(moved > 0.01 * size, "{}: the clips pose alike", bake.name);
     }
 }
+
+/// What the GPU refuses is an error to report, never a panic: sizes past the device's limits
+/// are refused before anything is made, work that fails validation inside
+/// [`Gpu::checked`] fails it, and an error outside any scope waits in [`Gpu::take_error`].
+#[test]
+fn gpu_errors_are_errors_not_panics() {
+    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let limits = gpu.device.limits();
+    let layers = gpu
+        .texture_fits("300 materials", 64, 64, limits.max_texture_array_layers + 1)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        layers.contains("300 materials") && layers.contains("texture layers"),
+        "{layers}"
+    );
+    let side = limits.max_texture_dimension_2d + 1;
+    assert!(gpu.texture_fits("a target", side, 4, 1).is_err());
+    assert!(gpu.texture_fits("a target", 64, 64, 1).is_ok());
+    assert!(
+        gpu.buffer_fits("instances", limits.max_buffer_size + 1)
+            .is_err()
+    );
+
+    // Mapped for reading and writing at once: invalid on every backend.
+    let invalid = wgpu::BufferDescriptor {
+        label: Some("invalid"),
+        size: 16,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::MAP_WRITE,
+        mapped_at_creation: false,
+    };
+    let refused = gpu
+        .checked("a test buffer", || gpu.device.create_buffer(&invalid))
+        .expect_err("refused");
+    let line = refused.to_string();
+    assert!(
+        line.starts_with("a test buffer: the GPU refused it"),
+        "{line}"
+    );
+    assert!(!line.contains('\n'), "{line}");
+    assert!(gpu.take_error().is_ok(), "a scoped error is not left over");
+
+    let _ = gpu.device.create_buffer(&invalid);
+    assert!(gpu.take_error().is_err(), "the unscoped error is kept");
+    assert!(gpu.take_error().is_ok(), "and taken once");
+}

@@ -151,7 +151,10 @@ fn far_characters_become_their_impostors() {
         world.lod.reset();
         world.settle(h, 2.0, 0.0);
         let stats = world.upload(gpu, w as f32 / h as f32, 2.0);
-        world.renderer.render_to(gpu, &target.targets, &target.view);
+        world
+            .renderer
+            .render_to(gpu, &target.targets, &target.view)
+            .expect("rendered");
         (stats, target.read_rgba(gpu).unwrap())
     };
     let (meshes, mesh_image) = frame(&mut world);

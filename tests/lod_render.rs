@@ -83,7 +83,8 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
         );
         world
             .renderer
-            .render_to(&gpu, &target.targets, &target.view);
+            .render_to(&gpu, &target.targets, &target.view)
+            .expect("rendered");
         target.read_rgba(&gpu).unwrap()
     };
     let first = (1..levels - 2)

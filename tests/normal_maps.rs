@@ -124,7 +124,10 @@ fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
         world.lod.reset();
         world.settle(h, 2.0, 0.0);
         let stats = world.upload(gpu, w as f32 / h as f32, 2.0);
-        world.renderer.render_to(gpu, &target.targets, &target.view);
+        world
+            .renderer
+            .render_to(gpu, &target.targets, &target.view)
+            .expect("rendered");
         (stats, target.read_rgba(gpu).unwrap())
     };
     let (on, lit) = frame(&mut world);

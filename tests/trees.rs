@@ -420,7 +420,8 @@ fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
             );
             world
                 .renderer
-                .render_to(&gpu, &target.targets, &target.view);
+                .render_to(&gpu, &target.targets, &target.view)
+                .expect("rendered");
             (stats, target.read_rgba(&gpu).unwrap())
         };
         let (_, from) = render(&pair[..1], &[LodDraw::Level(0)]);
@@ -682,7 +683,8 @@ fn the_foliage_policy_decides_what_trees_become() {
         let stats = world.prepare(&gpu, [w, h], 1.0, 0.0);
         world
             .renderer
-            .render_to(&gpu, &target.targets, &target.view);
+            .render_to(&gpu, &target.targets, &target.view)
+            .expect("rendered");
         (stats, target.read_rgba(&gpu).unwrap())
     };
     let kinds = |world: &World| -> Vec<&'static str> {

@@ -201,7 +201,7 @@ impl Bench {
             &self.target.targets,
             &self.target.view,
             self.timer.as_mut(),
-        );
+        )?;
         let timed = match &mut self.timer {
             Some(timer) => {
                 let t = timer.read(&self.gpu)?;

@@ -143,7 +143,7 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
         influences += stats.influences;
         world
             .renderer
-            .render_to(&gpu, &target.targets, &target.view);
+            .render_to(&gpu, &target.targets, &target.view)?;
         let image = target.read_rgba(&gpu)?;
         video.push(image.as_raw())?;
         if let Some(dir) = &o.frames_dir {

@@ -615,7 +615,9 @@ fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Pat
             height * 1.45,
         );
         world.prepare(gpu, [tw, th], 1.0, 0.0);
-        world.renderer.render_to(gpu, &target.targets, &target.view);
+        world
+            .renderer
+            .render_to(gpu, &target.targets, &target.view)?;
         let tile = image::DynamicImage::ImageRgba8(target.read_rgba(gpu)?).to_rgb8();
         let (x, y) = ((k as u32 % columns) * tw, (k as u32 / columns) * th);
         image::imageops::replace(&mut sheet, &tile, x as i64, y as i64);

@@ -269,7 +269,8 @@ impl LodCache {
             start.elapsed().as_secs_f64()
         );
         if let Err(e) = self.store(path, key, &value) {
-            let w = format!("{}: cannot write the cache ({e})", path.display());
+            // The error names the file and the system's reason (a full disk, say).
+            let w = format!("cannot write the cache: {e:#}");
             warning = Some(match warning {
                 Some(first) => format!("{first}; {w}"),
                 None => w,

@@ -174,6 +174,7 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
             }
         }
         gpu.queue.submit([enc.finish()]);
+        gpu.take_error()?;
         let mut pixels = read_texture(gpu, &target)?;
         crate::bake::billboard::atlas::unpremultiply(&mut pixels);
         Ok(Rgba8Image {
@@ -255,6 +256,7 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
             }
         }
         gpu.queue.submit([enc.finish()]);
+        gpu.take_error()?;
         let image = |texture: &wgpu::Texture| -> Result<Rgba8Image> {
             Ok(Rgba8Image {
                 width: request.size,

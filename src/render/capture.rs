@@ -196,6 +196,7 @@ fn capture(
         pass.draw(0..n, 0..1);
     }
     gpu.queue.submit([enc.finish()]);
+    gpu.take_error()?;
     let bytes = target.read_bytes(gpu)?;
     let texels: &[Vec4] = bytemuck::cast_slice(&bytes);
     Ok(texels[..n as usize].to_vec())

@@ -1,6 +1,8 @@
 //! GPU set-up: instance, adapter and device, honouring `WGPU_BACKEND` and `WGPU_ADAPTER_NAME`.
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// The device and everything needed to use it. A clone is another handle on the same device
 /// (for work on another thread).
@@ -11,6 +13,12 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Errors wgpu reported outside any error scope, oldest first, until taken by
+    /// [`Gpu::take_error`]. wgpu's own default handler panics on them.
+    errors: Arc<Mutex<Vec<String>>>,
+    /// Set when the device is lost (a driver reset, or [`wgpu::Device::destroy`]); everything
+    /// made on it is gone, and a window recovers by opening another.
+    lost: Arc<AtomicBool>,
 }
 
 impl Gpu {
@@ -47,17 +55,96 @@ impl Gpu {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lodlab"),
             required_features,
-            required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
+            // The adapter's own texture sizes and layer counts: models with many materials
+            // need more layers than the portable default of 256.
+            required_limits: wgpu::Limits {
+                max_texture_array_layers: adapter.limits().max_texture_array_layers,
+                ..wgpu::Limits::default().using_resolution(adapter.limits())
+            },
             ..Default::default()
         }))
         .with_context(|| format!("cannot open a device on {}", info.name))?;
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            log::error!("GPU: {e}");
+            sink.lock().unwrap().push(one_line(&e));
+        }));
+        let lost = Arc::new(AtomicBool::new(false));
+        let flag = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            log::warn!("GPU device lost ({reason:?}): {message}");
+            flag.store(true, Ordering::SeqCst);
+        });
         Ok(Gpu {
             instance,
             adapter,
             device,
             queue,
             info,
+            errors,
+            lost,
         })
+    }
+
+    /// Whether the device has been lost: nothing more can be done with it.
+    pub fn is_lost(&self) -> bool {
+        self.lost.load(Ordering::SeqCst)
+    }
+
+    /// The first error wgpu reported since the last call, as an error, or `Ok` if none.
+    pub fn take_error(&self) -> Result<()> {
+        let mut errors = self.errors.lock().unwrap();
+        let first = errors.first().cloned();
+        errors.clear();
+        match first {
+            Some(e) => bail!("the GPU refused a command: {e}"),
+            None => Ok(()),
+        }
+    }
+
+    /// Runs `f`, which creates resources or records work, and fails with what the GPU said if
+    /// any of it was invalid or out of memory (rather than leaving the error to the handler).
+    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let invalid = pollster::block_on(validation.pop());
+        let oom = pollster::block_on(memory.pop());
+        match invalid.or(oom) {
+            Some(e) => bail!("{what}: the GPU refused it: {}", one_line(&e)),
+            None => Ok(out),
+        }
+    }
+
+    /// Fails, naming `what`, unless a `width`×`height` texture of `layers` layers fits this
+    /// device's limits.
+    pub fn texture_fits(&self, what: &str, width: u32, height: u32, layers: u32) -> Result<()> {
+        let l = self.device.limits();
+        let side = l.max_texture_dimension_2d;
+        if width > side || height > side {
+            bail!("{what} need a {width}×{height} texture; this GPU allows {side}×{side}");
+        }
+        if layers > l.max_texture_array_layers {
+            bail!(
+                "{what} need {layers} texture layers; this GPU allows {}",
+                l.max_texture_array_layers
+            );
+        }
+        Ok(())
+    }
+
+    /// Fails, naming `what`, unless a buffer of `bytes` fits this device's limits.
+    pub fn buffer_fits(&self, what: &str, bytes: u64) -> Result<()> {
+        let max = self.device.limits().max_buffer_size;
+        if bytes > max {
+            bail!(
+                "{what} need a {} MiB buffer; this GPU allows {} MiB",
+                bytes >> 20,
+                max >> 20
+            );
+        }
+        Ok(())
     }
 
     /// `"llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)"`.
@@ -103,6 +190,22 @@ impl Gpu {
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| anyhow!("GPU wait failed: {e}"))
+    }
+}
+
+/// A wgpu error on one line: its text ("Validation Error", then "Caused by:" and the chain of
+/// causes, one a line) without the headings, the causes joined by colons.
+fn one_line(e: &wgpu::Error) -> String {
+    let text = e.to_string();
+    let parts: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && *l != "Caused by:" && *l != "Validation Error")
+        .collect();
+    if parts.is_empty() {
+        text.trim().to_string()
+    } else {
+        parts.join(": ").replace(":: ", ": ")
     }
 }
 

@@ -372,14 +372,22 @@ impl SceneRenderer {
 
     /// Uploads a baked character at full detail; returns its index for [`Instance::model`].
     pub fn add_character(&mut self, gpu: &Gpu, bake: &CharacterBake) -> Result<usize> {
-        let limit = gpu.device.limits().max_texture_dimension_2d;
-        if bake.animation.grid.height > limit || bake.vertices.grid.height > limit {
-            bail!(
-                "{}: animation or vertex data exceed this GPU's {limit}-texel texture limit",
-                bake.name
-            );
-        }
-        let c = GpuCharacter::upload(gpu, &self.character_layout, &self.sampler, bake);
+        let name = &bake.name;
+        let grid = |what: &str, g: &crate::bake::texels::TexelGrid| {
+            gpu.texture_fits(&format!("{name}: {what}"), g.width, g.height, 1)
+        };
+        grid("the animation", &bake.animation.grid)?;
+        grid("the vertices", &bake.vertices.grid)?;
+        let m = &bake.materials;
+        gpu.texture_fits(
+            &format!("{name}: {} materials", m.layer_count),
+            m.width,
+            m.height,
+            m.layer_count,
+        )?;
+        let c = gpu.checked(&format!("uploading {name}"), || {
+            GpuCharacter::upload(gpu, &self.character_layout, &self.sampler, bake)
+        })?;
         self.characters.push(c);
         Ok(self.characters.len() - 1)
     }
@@ -410,15 +418,27 @@ impl SceneRenderer {
         slot: usize,
         pack: &LodPack,
     ) -> Result<()> {
-        let limit = gpu.device.limits().max_texture_dimension_2d;
-        if pack.vertices.grid.height > limit {
-            bail!("levels of detail exceed this GPU's {limit}-texel texture limit");
-        }
         let Some(c) = self.characters.get_mut(model) else {
             bail!("no character {model}");
         };
-        c.add_set(gpu, &self.character_layout, &self.sampler, slot, pack);
-        Ok(())
+        let g = &pack.vertices.grid;
+        gpu.texture_fits("the levels of detail' vertices", g.width, g.height, 1)?;
+        if let Some(n) = &pack.normal_maps {
+            gpu.texture_fits(
+                &format!("{} normal maps", n.layer_count),
+                n.size,
+                n.size,
+                n.layer_count,
+            )?;
+        }
+        gpu.buffer_fits(
+            "the levels of detail's indices",
+            std::mem::size_of_val(pack.indices.as_slice()) as u64,
+        )?;
+        let (layout, sampler) = (&self.character_layout, &self.sampler);
+        gpu.checked("uploading levels of detail", || {
+            c.add_set(gpu, layout, sampler, slot, pack)
+        })
     }
 
     pub fn characters(&self) -> &[GpuCharacter] {
@@ -944,7 +964,7 @@ impl SceneRenderer {
         gpu: &Gpu,
         targets: &super::targets::RenderTargets,
         target: &wgpu::TextureView,
-    ) -> wgpu::SubmissionIndex {
+    ) -> Result<wgpu::SubmissionIndex> {
         self.render_timed(gpu, targets, target, None)
     }
 
@@ -956,7 +976,7 @@ impl SceneRenderer {
         targets: &super::targets::RenderTargets,
         target: &wgpu::TextureView,
         mut timer: Option<&mut FrameTimer>,
-    ) -> wgpu::SubmissionIndex {
+    ) -> Result<wgpu::SubmissionIndex> {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         self.encode(&mut enc, targets, target, None, timer.as_deref());
         if let Some(t) = timer.as_deref_mut() {
@@ -966,6 +986,7 @@ impl SceneRenderer {
         if let Some(t) = timer {
             t.submitted();
         }
-        index
+        gpu.take_error()?;
+        Ok(index)
     }
 }

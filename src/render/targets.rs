@@ -203,6 +203,7 @@ pub fn read_texture(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<u8>> {
         texture.size(),
     );
     gpu.queue.submit([enc.finish()]);
+    gpu.take_error()?;
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);

@@ -196,7 +196,7 @@ pub(crate) fn picture(
         t,
         0.0,
     );
-    w.renderer.render_to(gpu, &target.targets, &target.view);
+    w.renderer.render_to(gpu, &target.targets, &target.view)?;
     let img = target.read_rgba(gpu);
     if empty {
         w.relayout(None, 1, None);

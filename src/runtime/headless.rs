@@ -113,7 +113,7 @@ pub fn time_renderer(
     let mut passes = Vec::new();
     for _ in 0..frames.max(1) {
         let start = Instant::now();
-        renderer.render_timed(gpu, &target.targets, &target.view, timer.as_deref_mut());
+        renderer.render_timed(gpu, &target.targets, &target.view, timer.as_deref_mut())?;
         match timer.as_deref_mut() {
             Some(t) => passes.push(t.read(gpu)?),
             None => gpu.wait()?,
