@@ -395,16 +395,20 @@ fn foliage_view() -> u32 {
 // The colour debug view `view` (see `DebugView` in src/render/renderer.rs) paints a surface
 // with (a = 1), or a = 0 where it keeps the material's.
 fn debug_color(lod: vec4<f32>, influences: f32, view: u32) -> vec4<f32> {
-    if (view == 1u) {
-        return vec4<f32>(level_color(lod.x), 1.0);
-    } else if (view == 2u) {
-        return vec4<f32>(select(vec3<f32>(0.55), heat(lod.y), lod.y >= 0.0), 1.0);
-    } else if (view == 3u) {
-        // One influence is cold, eight or more hot.
-        return vec4<f32>(heat((influences - 1.0) / 7.0), 1.0);
-    }
-    return vec4<f32>(0.0);
+    // Without branches: the foliage and impostor vertex shaders call this, and llvmpipe (Mesa
+    // 22.3) leaked about half a megabyte a draw of a vertex shader that returned from inside
+    // this if/else chain (found by `lodlab soak`).
+    let level = level_color(lod.x);
+    let transition = select(vec3<f32>(0.55), heat(lod.y), lod.y >= 0.0);
+    // One influence is cold, eight or more hot.
+    let spread = heat((influences - 1.0) / 7.0);
+    var c = vec3<f32>(0.0);
+    c = select(c, level, view == 1u);
+    c = select(c, transition, view == 2u);
+    c = select(c, spread, view == 3u);
+    return vec4<f32>(c, select(0.0, 1.0, view >= 1u && view <= 3u));
 }
+
 
 // The character's colour from its base colour (material or debug view): sun and sky light,
 // rim, fog.

@@ -4,7 +4,7 @@
 use clap::Parser;
 use lodlab::app::cli::{
     BakeArgs, BenchArgs, Cli, Command, ExportArgs, GenAssetsArgs, RecordArgs, ReportArgs, ShotArgs,
-    StudyCommand, ViewArgs,
+    SoakArgs, StudyCommand, ViewArgs,
 };
 use lodlab::app::shot::{self, ShotOptions};
 use lodlab::atomic::write as write_atomic;
@@ -21,6 +21,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Export(a)) => export(a),
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Record(a)) => record(a),
+        Some(Command::Soak(a)) => soak(a),
         Some(Command::Study(a)) => study(a.command),
         Some(Command::View(a)) => view(a),
         None => view(cli.view),
@@ -42,6 +43,44 @@ fn shot(a: ShotArgs) -> anyhow::Result<ExitCode> {
         lod: a.lod.shot_lod(LodMethod::None),
     })?;
     println!("{}", serde_json::to_string(&report)?);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `lodlab soak`: frames through every setting, memory read as they go; exit 1 on growth.
+fn soak(a: SoakArgs) -> anyhow::Result<ExitCode> {
+    let o = lodlab::app::soak::SoakOptions {
+        vary: a.vary,
+        spec: a.scene.spec(),
+        frames: a.frames,
+        phase_frames: a.phase_frames,
+        every: a.every,
+        width: a.size.0,
+        height: a.size.1,
+        samples: a.msaa,
+        max_growth_mb: a.max_growth_mb as f64,
+        csv: a.csv,
+    };
+    let r = lodlab::app::soak::run(&o)?;
+    let growth = r.growth_mb.map_or(
+        "not measured (fewer than two readings after the first cycle)".into(),
+        |g| format!("{g:+.1} MB"),
+    );
+    let gpu = match r.gpu_steady {
+        Some(true) => "the same at every reading after the first cycle",
+        Some(false) => "NOT the same at every reading after the first cycle",
+        None => "not compared (readings not aligned with the cycle, or no figures)",
+    };
+    println!(
+        "lodlab soak: {} frames in {:.0} s; resident growth after the first cycle {growth}; GPU memory {gpu}",
+        a.frames, r.seconds
+    );
+    if r.growth_mb.is_some_and(|g| g > o.max_growth_mb) || r.gpu_steady == Some(false) {
+        eprintln!(
+            "error: memory grew (limit {} MB resident, GPU figures must repeat)",
+            o.max_growth_mb
+        );
+        return Ok(ExitCode::FAILURE);
+    }
     Ok(ExitCode::SUCCESS)
 }
 

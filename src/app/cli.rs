@@ -81,6 +81,11 @@ pub enum Command {
     /// Record a clip for a perceptual study: offline at a fixed time step along a camera path
     /// (by default an inward spiral round 100 copies of one model), as H.264 MP4.
     Record(RecordArgs),
+    /// Run many frames headless through every method, transition, foliage policy, character
+    /// count and frame size (0×0: a minimised window) in a fixed cycle, print memory every
+    /// --every frames (resident set, and what wgpu's allocator holds), and fail on a GPU error
+    /// or on resident growth past --max-growth-mb after the first cycle.
+    Soak(SoakArgs),
     /// A perceptual study (Merry et al. §6.2): make its clips and sessions from a plan, run a
     /// participant's session in a window, analyze the answers.
     Study(StudyArgs),
@@ -153,8 +158,9 @@ pub struct RecordArgs {
     pub debug_view: DebugView,
     #[command(flatten)]
     pub foliage: FoliageArgs,
-    /// Video size (even sides).
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
+    /// Video size: even sides, at least 16×16, at most 3840×2160 (or 2160×3840), what H.264's
+    /// encoder takes.
+    #[arg(long, default_value = "1280x720", value_parser = parse_video_size)]
     pub size: (u32, u32),
     /// Multisampling: 1 (off) or 4.
     #[arg(long, default_value_t = 4, value_parser = parse_samples)]
@@ -658,6 +664,42 @@ pub struct ShotArgs {
     pub calibrate: bool,
 }
 
+#[derive(Args, Debug)]
+pub struct SoakArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Frames to run.
+    #[arg(long, default_value_t = 10_000, value_parser = parse_frames)]
+    pub frames: usize,
+    /// Frames each phase of the cycle of settings lasts (the cycle has 20 phases).
+    #[arg(long, default_value_t = 25, value_parser = parse_frames)]
+    pub phase_frames: usize,
+    /// Read memory every this many frames (a multiple of the cycle's frames puts every
+    /// reading at the same point of the cycle, so the GPU's figures must repeat).
+    #[arg(long, default_value_t = 500, value_parser = parse_frames)]
+    pub every: usize,
+    /// Largest frame size of the cycle (it also takes half, three quarters, 1×1 and 0×0).
+    #[arg(long, default_value = "320x180", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
+    #[arg(long, value_parser = parse_samples)]
+    pub msaa: Option<u32>,
+    /// Resident growth allowed after the first cycle, in MB.
+    #[arg(long, default_value_t = 5.0, value_parser = parse_number)]
+    pub max_growth_mb: f32,
+    /// Also write the readings to this CSV file.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// The settings the cycle changes, comma separated (to find which one leaks).
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "method,transition,foliage,count,size"
+    )]
+    pub vary: Vec<crate::app::soak::Setting>,
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -672,6 +714,23 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         .map_err(|_| format!("bad height in '{s}'"))?;
     if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
         return Err(format!("size '{s}' must be between 1x1 and 8192x8192"));
+    }
+    Ok((w, h))
+}
+
+/// A [`parse_size`] that H.264 (OpenH264) can encode, refused before anything is rendered.
+fn parse_video_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = parse_size(s)?;
+    if !w.is_multiple_of(2) || !h.is_multiple_of(2) || w < 16 || h < 16 {
+        return Err(format!(
+            "video size '{s}': H.264 needs even sides of at least 16 pixels"
+        ));
+    }
+    let (long, short) = (w.max(h), w.min(h));
+    if long > 3840 || short > 2160 {
+        return Err(format!(
+            "video size '{s}': the H.264 encoder takes at most 3840x2160 (or 2160x3840)"
+        ));
     }
     Ok((w, h))
 }

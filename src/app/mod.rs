@@ -8,6 +8,7 @@ pub mod gen_assets;
 pub mod record;
 pub mod report;
 pub mod shot;
+pub mod soak;
 pub mod study;
 pub mod tree_report;
 pub mod video;

@@ -31,20 +31,25 @@ pub const LEVEL_COLORS: [[f32; 3]; 12] = [
     [0.55, 0.55, 0.55],
 ];
 
-/// [`LEVEL_COLORS`] as WGSL: `LEVEL_COUNT` and `level_palette(i)`.
+/// [`LEVEL_COLORS`] as WGSL: `LEVEL_COUNT` and `level_palette(i)`, a chain of `select`s
+/// (vertex shaders call it; see `debug_color` in shaders/character.wgsl for why without
+/// branches).
 fn level_palette_wgsl() -> String {
-    let colours: Vec<String> = LEVEL_COLORS
+    let colour = |[r, g, b]: &[f32; 3]| format!("vec3<f32>({r:?}, {g:?}, {b:?})");
+    let steps: Vec<String> = LEVEL_COLORS
         .iter()
-        .map(|[r, g, b]| format!("vec3<f32>({r:?}, {g:?}, {b:?})"))
+        .enumerate()
+        .skip(1)
+        .map(|(i, c)| format!("    c = select(c, {}, i >= {i}u);\n", colour(c)))
         .collect();
     format!(
         "const LEVEL_COUNT: u32 = {n}u;\n\
          fn level_palette(i: u32) -> vec3<f32> {{\n\
-         \x20   var p = array<vec3<f32>, {n}>({list});\n\
-         \x20   return p[min(i, LEVEL_COUNT - 1u)];\n\
+         \x20   var c = {first};\n{steps}    return c;\n\
          }}\n",
         n = LEVEL_COLORS.len(),
-        list = colours.join(", ")
+        first = colour(&LEVEL_COLORS[0]),
+        steps = steps.concat()
     )
 }
 
