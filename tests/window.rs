@@ -74,6 +74,17 @@ fn viewer_compares_two_methods_side_by_side() {
 /// Runs the viewer under Xvfb (or on the display there is) until it writes `shot`, with the
 /// level-of-detail cache in `cache`.
 fn run_viewer(args: &[&str], cache: &Path, shot: &Path) -> std::process::Output {
+    run_viewer_with(args, cache, shot, 3, &[])
+}
+
+/// [`run_viewer`] for `frames` frames, with environment variables `env`.
+fn run_viewer_with(
+    args: &[&str],
+    cache: &Path,
+    shot: &Path,
+    frames: usize,
+    env: &[(&str, &str)],
+) -> std::process::Output {
     let exe = env!("CARGO_BIN_EXE_lodlab");
     let mut cmd = if on_path("xvfb-run") {
         let mut c = Command::new("xvfb-run");
@@ -85,13 +96,43 @@ fn run_viewer(args: &[&str], cache: &Path, shot: &Path) -> std::process::Output 
     } else {
         panic!("this test needs xvfb-run (apt-get install xvfb) or a display");
     };
-    cmd.args(args)
-        .args(["--size", "960x540", "--frames", "3", "--cache"])
+    cmd.envs(env.iter().copied())
+        .args(args)
+        .args([
+            "--size",
+            "960x540",
+            "--frames",
+            &frames.to_string(),
+            "--cache",
+        ])
         .arg(cache)
         .arg("--screenshot")
         .arg(shot)
         .output()
         .unwrap()
+}
+
+/// A device lost mid-run (here destroyed before frame 3, as a driver reset would lose it) is
+/// replaced: the viewer opens another, puts the scene back on it and goes on drawing.
+#[test]
+fn viewer_recovers_from_a_lost_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("recovered.png");
+    let out = run_viewer_with(
+        &["view", "--scene", "crowd", "--count", "12"],
+        dir.path(),
+        &shot,
+        8,
+        &[("LODLAB_LOSE_DEVICE_AT_FRAME", "3")],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "viewer failed: {stderr}");
+    assert!(stderr.contains("destroying the GPU device"), "{stderr}");
+    assert!(
+        stderr.contains("the scene is back on a new device"),
+        "{stderr}"
+    );
+    check_screenshot(&shot);
 }
 
 fn check_screenshot(path: &Path) {

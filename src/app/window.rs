@@ -53,6 +53,27 @@ impl WindowGpu {
         })
     }
 
+    /// Opens a new device on the same adapter for this window's surface, after the old one
+    /// was lost, and configures the surface for it. Everything made on the old device must be
+    /// made again on [`Self::gpu`].
+    pub fn reopen_device(&mut self) -> Result<()> {
+        self.gpu = Gpu::with_instance(self.gpu.instance.clone(), Some(&self.surface))?;
+        self.surface.configure(&self.gpu.device, &self.config);
+        Ok(())
+    }
+
+    /// Makes the window's surface again (it was lost: the platform took it away) and
+    /// configures it.
+    pub fn recreate_surface(&mut self) -> Result<()> {
+        self.surface = self
+            .gpu
+            .instance
+            .create_surface(self.window.clone())
+            .context("cannot draw into the window again")?;
+        self.surface.configure(&self.gpu.device, &self.config);
+        Ok(())
+    }
+
     /// Reconfigures the surface for a new size.
     pub fn resize(&mut self, width: u32, height: u32) {
         self.config.width = width.max(1);
@@ -80,18 +101,24 @@ impl WindowGpu {
 
     /// The texture to draw this frame into, if there is one.
     pub fn acquire(&self) -> Result<Acquired> {
-        match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => Ok(Acquired::Frame(f)),
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                Ok(Acquired::Skip)
-            }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                Ok(Acquired::Reconfigure)
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                Err(anyhow!("the window's surface failed validation"))
-            }
+        acquired(self.surface.get_current_texture())
+    }
+}
+
+/// What to do about the surface's answer: draw, skip this frame, reconfigure it (outdated:
+/// the window changed size or format), make it again (lost), or give up (validation: a bug).
+fn acquired(status: wgpu::CurrentSurfaceTexture) -> Result<Acquired> {
+    match status {
+        wgpu::CurrentSurfaceTexture::Success(f) | wgpu::CurrentSurfaceTexture::Suboptimal(f) => {
+            Ok(Acquired::Frame(f))
+        }
+        wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+            Ok(Acquired::Skip)
+        }
+        wgpu::CurrentSurfaceTexture::Outdated => Ok(Acquired::Reconfigure),
+        wgpu::CurrentSurfaceTexture::Lost => Ok(Acquired::Recreate),
+        wgpu::CurrentSurfaceTexture::Validation => {
+            Err(anyhow!("the window's surface failed validation"))
         }
     }
 }
@@ -103,6 +130,8 @@ pub enum Acquired {
     Skip,
     /// The surface no longer fits the window: resize, and draw next time.
     Reconfigure,
+    /// The surface is gone: make it again ([`WindowGpu::recreate_surface`]), draw next time.
+    Recreate,
 }
 
 /// The Debian package of each windowing library winit loads at run time, by a part of its
@@ -151,7 +180,7 @@ pub fn configure_egui(ctx: &egui::Context) {
 
 #[cfg(test)]
 mod tests {
-    use super::missing_library;
+    use super::*;
 
     #[test]
     fn a_missing_library_names_its_package() {
@@ -166,5 +195,24 @@ mod tests {
         assert!(line.ends_with("libxcursor1)"), "{line}");
         assert!(!line.contains('\n'));
         assert_eq!(missing_library("the display went away"), None);
+    }
+
+    /// Every surface answer without a frame has its remedy: skip, reconfigure, recreate, or
+    /// an error (validation: a bug, not a state to wait out).
+    #[test]
+    fn each_surface_state_has_its_remedy() {
+        use wgpu::CurrentSurfaceTexture as S;
+        let remedy = |s| match acquired(s) {
+            Ok(Acquired::Skip) => "skip",
+            Ok(Acquired::Reconfigure) => "reconfigure",
+            Ok(Acquired::Recreate) => "recreate",
+            Ok(Acquired::Frame(_)) => "frame",
+            Err(_) => "error",
+        };
+        assert_eq!(remedy(S::Timeout), "skip");
+        assert_eq!(remedy(S::Occluded), "skip");
+        assert_eq!(remedy(S::Outdated), "reconfigure");
+        assert_eq!(remedy(S::Lost), "recreate");
+        assert_eq!(remedy(S::Validation), "error");
     }
 }

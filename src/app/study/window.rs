@@ -355,6 +355,10 @@ impl StudyWindow {
                 self.win.resize(w, h);
                 return Ok(());
             }
+            Acquired::Recreate => {
+                self.win.recreate_surface()?;
+                return Ok(());
+            }
         };
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [self.win.config.width, self.win.config.height],
@@ -393,6 +397,7 @@ impl StudyWindow {
         }
         buffers.push(encoder.finish());
         self.win.gpu.queue.submit(buffers);
+        self.win.gpu.take_error()?;
         self.win.window.pre_present_notify();
         self.win.gpu.queue.present(surface_frame);
         for id in &output.textures_delta.free {

@@ -222,7 +222,13 @@ struct Viewer {
     screenshot_requested: bool,
     /// A line for the panel: where the last screenshot went, or why a model did not open.
     notice: Option<String>,
+    /// The frame at which to destroy the device, to try recovery ([`LOSE_DEVICE_ENV`]).
+    lose_device_at: Option<usize>,
 }
+
+/// `LODLAB_LOSE_DEVICE_AT_FRAME=N` destroys the GPU device before frame N, as a driver reset
+/// would lose it: how the recovery is tested.
+const LOSE_DEVICE_ENV: &str = "LODLAB_LOSE_DEVICE_AT_FRAME";
 
 /// How long the foliage settings must stay put before their chains are baked.
 const SETTLE_BEFORE_BAKE: std::time::Duration = std::time::Duration::from_millis(400);
@@ -309,6 +315,9 @@ impl Viewer {
             foliage_changed: Instant::now() - SETTLE_BEFORE_BAKE,
             screenshot_requested: false,
             notice: None,
+            lose_device_at: std::env::var(LOSE_DEVICE_ENV)
+                .ok()
+                .and_then(|v| v.parse().ok()),
         })
     }
 
@@ -469,6 +478,53 @@ impl Viewer {
         Ok(true)
     }
 
+    /// Opens another device after the old one was lost (a driver reset, a GPU removed) and
+    /// puts the scene back on it: the characters, the levels of detail from the cache (or
+    /// baked again in the background), the panel's textures. The settings, the camera and the
+    /// scene's time carry on.
+    fn recover_device(&mut self) -> Result<()> {
+        eprintln!("lodlab: the GPU device was lost; opening another and uploading the scene again");
+        // A bake in flight may hold the old device; it starts again for what is missing.
+        self.bake = None;
+        self.bake_error = None;
+        self.win.reopen_device()?;
+        let gpu = &self.win.gpu;
+        let old = &self.world;
+        let loaded = Loaded {
+            spec: old.spec.clone(),
+            bakes: old.bakes.clone(),
+            sources: old.sources.clone(),
+        };
+        let mut world = World::new(
+            gpu,
+            loaded,
+            self.win.config.format,
+            self.targets.sample_count,
+        )?;
+        // The same walkers where they were, the camera where it was.
+        world.camera = old.camera;
+        world.crowd = old.crowd.clone();
+        self.world = world;
+        self.apply_lod_settings();
+        if self.world.levels_cached() {
+            self.world.ensure_levels(&self.win.gpu)?;
+        }
+        self.targets = RenderTargets::new(
+            &self.win.gpu.device,
+            self.win.config.width,
+            self.win.config.height,
+            self.win.config.format,
+            self.targets.sample_count,
+        );
+        // A new egui context sends its whole font atlas again, to the new renderer.
+        (self.egui, self.egui_renderer) = self.win.egui();
+        self.timer = FrameTimer::new(&self.win.gpu);
+        self.passes = None;
+        self.notice = Some("the GPU device was lost and has been reopened".into());
+        eprintln!("lodlab: the scene is back on a new device");
+        Ok(())
+    }
+
     fn resize(&mut self, width: u32, height: u32) {
         self.win.resize(width, height);
         self.targets = RenderTargets::new(
@@ -481,6 +537,16 @@ impl Viewer {
     }
 
     fn redraw(&mut self, options: &ViewOptions) -> Result<bool> {
+        if self.lose_device_at == Some(self.frames) {
+            self.lose_device_at = None;
+            eprintln!("lodlab: destroying the GPU device ({LOSE_DEVICE_ENV})");
+            self.win.gpu.device.destroy();
+        }
+        // A lost device says so (its callback runs) once it is polled.
+        let _ = self.win.gpu.device.poll(wgpu::PollType::Poll);
+        if self.win.gpu.is_lost() {
+            self.recover_device()?;
+        }
         let dt = self.tick();
         let (mut output, central) = self.run_panel()?;
         let ppp = output.pixels_per_point;
@@ -513,7 +579,19 @@ impl Viewer {
             }
         }
         let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
-        let frame = match self.win.acquire()? {
+        let acquired = match self.win.acquire() {
+            Ok(a) => a,
+            Err(e) => {
+                // The surface of a device lost since this frame began fails validation.
+                let _ = self.win.gpu.device.poll(wgpu::PollType::Poll);
+                if self.win.gpu.is_lost() {
+                    self.free_egui_textures(&frees);
+                    return Ok(true);
+                }
+                return Err(e);
+            }
+        };
+        let frame = match acquired {
             Acquired::Frame(f) => f,
             Acquired::Skip => {
                 self.free_egui_textures(&frees);
@@ -522,6 +600,11 @@ impl Viewer {
             Acquired::Reconfigure => {
                 self.free_egui_textures(&frees);
                 self.resize(w, h);
+                return Ok(true);
+            }
+            Acquired::Recreate => {
+                self.free_egui_textures(&frees);
+                self.win.recreate_surface()?;
                 return Ok(true);
             }
         };
@@ -576,6 +659,14 @@ impl Viewer {
         });
         buffers.push(encoder.finish());
         self.win.gpu.queue.submit(buffers);
+        if let Err(e) = self.win.gpu.take_error() {
+            // A lost device says so once its queue is looked at; the next frame recovers.
+            let _ = self.win.gpu.device.poll(wgpu::PollType::Poll);
+            if self.win.gpu.is_lost() {
+                return Ok(true);
+            }
+            return Err(e);
+        }
         if let Some(t) = &mut self.timer {
             t.submitted();
             if let Some(new) = t.try_read(&self.win.gpu)? {
