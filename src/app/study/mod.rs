@@ -14,6 +14,7 @@
 
 pub mod analyze;
 pub mod session;
+pub mod ssim;
 pub mod window;
 
 use super::record::{self, RecordOptions, RecordReport};
