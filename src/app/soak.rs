@@ -98,6 +98,8 @@ pub struct Reading {
 }
 
 fn read_memory(gpu: &Gpu, frame: usize) -> Reading {
+    // Freed heap goes back to the system first (as the viewer does after loading levels), so
+    // the resident set follows what is live rather than what glibc keeps for reuse.
     return_freed_memory();
     let report = gpu.device.generate_allocator_report();
     Reading {

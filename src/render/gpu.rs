@@ -87,8 +87,12 @@ impl Gpu {
         })
     }
 
-    /// Whether the device has been lost: nothing more can be done with it.
+    /// Whether the device has been lost: nothing more can be done with it. The device is
+    /// polled first: a lost device says so (its callback runs) only when polled.
     pub fn is_lost(&self) -> bool {
+        if !self.lost.load(Ordering::SeqCst) {
+            let _ = self.device.poll(wgpu::PollType::Poll);
+        }
         self.lost.load(Ordering::SeqCst)
     }
 

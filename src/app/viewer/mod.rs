@@ -509,13 +509,7 @@ impl Viewer {
         if self.world.levels_cached() {
             self.world.ensure_levels(&self.win.gpu)?;
         }
-        self.targets = RenderTargets::new(
-            &self.win.gpu.device,
-            self.win.config.width,
-            self.win.config.height,
-            self.win.config.format,
-            self.targets.sample_count,
-        );
+        self.remake_targets();
         // A new egui context sends its whole font atlas again, to the new renderer.
         (self.egui, self.egui_renderer) = self.win.egui();
         self.timer = FrameTimer::new(&self.win.gpu);
@@ -527,6 +521,11 @@ impl Viewer {
 
     fn resize(&mut self, width: u32, height: u32) {
         self.win.resize(width, height);
+        self.remake_targets();
+    }
+
+    /// The render targets again, for the surface's size on the current device.
+    fn remake_targets(&mut self) {
         self.targets = RenderTargets::new(
             &self.win.gpu.device,
             self.win.config.width,
@@ -542,8 +541,6 @@ impl Viewer {
             eprintln!("lodlab: destroying the GPU device ({LOSE_DEVICE_ENV})");
             self.win.gpu.device.destroy();
         }
-        // A lost device says so (its callback runs) once it is polled.
-        let _ = self.win.gpu.device.poll(wgpu::PollType::Poll);
         if self.win.gpu.is_lost() {
             self.recover_device()?;
         }
@@ -583,7 +580,6 @@ impl Viewer {
             Ok(a) => a,
             Err(e) => {
                 // The surface of a device lost since this frame began fails validation.
-                let _ = self.win.gpu.device.poll(wgpu::PollType::Poll);
                 if self.win.gpu.is_lost() {
                     self.free_egui_textures(&frees);
                     return Ok(true);
@@ -660,8 +656,7 @@ impl Viewer {
         buffers.push(encoder.finish());
         self.win.gpu.queue.submit(buffers);
         if let Err(e) = self.win.gpu.take_error() {
-            // A lost device says so once its queue is looked at; the next frame recovers.
-            let _ = self.win.gpu.device.poll(wgpu::PollType::Poll);
+            // The next frame recovers a lost device.
             if self.win.gpu.is_lost() {
                 return Ok(true);
             }
