@@ -335,44 +335,105 @@ fn wood(m: &Model) -> usize {
 }
 
 /// The simplified wood is made of the tree's own vertices, influences and all (half-edge
-/// collapses move no vertex), fewer of them as ε grows; thin branches go, the trunk stays.
+/// collapses move no vertex), fewer of them as ε grows; pieces thinner than ε become
+/// generalised cylinders whose vertices take their skin from one of the piece's own; the
+/// trunk stays.
 #[test]
 fn simplified_wood_keeps_its_vertices() {
     use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
     let tree = load_model("conifer").unwrap();
     let chain = WoodChain::new(&tree);
     let h = tree_height(&tree);
+    let key = |p: glam::Vec3| p.to_array().map(f32::to_bits);
+    let skin = |m: &lodlab::model::SkinnedMesh, v: usize| -> Vec<(u32, u32)> {
+        m.influences_of(v)
+            .iter()
+            .map(|i| (i.bone, i.weight.to_bits()))
+            .collect()
+    };
     let original: std::collections::HashMap<[u32; 3], Vec<(u32, u32)>> =
         (0..tree.mesh.vertex_count())
-            .map(|v| {
-                (
-                    tree.mesh.positions[v].to_array().map(f32::to_bits),
-                    tree.mesh
-                        .influences_of(v)
-                        .iter()
-                        .map(|i| (i.bone, i.weight.to_bits()))
-                        .collect(),
-                )
-            })
+            .map(|v| (key(tree.mesh.positions[v]), skin(&tree.mesh, v)))
             .collect();
+    let skins: std::collections::HashSet<Vec<(u32, u32)>> = original.values().cloned().collect();
     let mut last = usize::MAX;
+    let mut moved_at_fine = 0;
     for e in [0.002, 0.01, 0.05, 0.2] {
         let w = without_foliage(&chain.tree_at(&tree, e * h));
         let n = w.mesh.triangle_count();
         assert!(n <= last && n > 0, "ε {e}: {n} triangles after {last}");
         last = n;
         for v in 0..w.mesh.vertex_count() {
-            let key = w.mesh.positions[v].to_array().map(f32::to_bits);
-            let infl: Vec<(u32, u32)> = w
-                .mesh
-                .influences_of(v)
-                .iter()
-                .map(|i| (i.bone, i.weight.to_bits()))
-                .collect();
-            assert_eq!(original.get(&key), Some(&infl), "ε {e}: vertex {v} is new");
+            let infl = skin(&w.mesh, v);
+            match original.get(&key(w.mesh.positions[v])) {
+                Some(o) => assert_eq!(o, &infl, "ε {e}: vertex {v} kept its place, not its skin"),
+                None => {
+                    assert!(
+                        skins.contains(&infl),
+                        "ε {e}: vertex {v} has a skin of its own"
+                    );
+                    moved_at_fine += (e == 0.002) as usize;
+                }
+            }
         }
     }
     assert!(last * 10 < wood(&tree));
+    // At the finest ε most of the wood is thicker than ε: collapsed, its vertices in place.
+    let fine = without_foliage(&chain.tree_at(&tree, 0.002 * h))
+        .mesh
+        .vertex_count();
+    assert!(
+        moved_at_fine * 2 < fine,
+        "{moved_at_fine} of {fine} vertices moved"
+    );
+}
+
+/// Coarse levels keep the wood that carries the crown (issue 23): the limbs and branches
+/// become cylinders about as wide as they were, rather than slivers or nothing, so the
+/// wood's surface, and with it (Cauchy) its average screen area, stays close to the
+/// original's, while its triangles fall far below it.
+#[test]
+fn coarse_wood_holds_the_crown() {
+    use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
+    for name in ["broadleaf", "sapling"] {
+        let tree = load_model(name).unwrap();
+        let chain = WoodChain::new(&tree);
+        let h = tree_height(&tree);
+        let full = without_foliage(&tree);
+        let (full_area, full_box) = surface(&full.mesh);
+        for e in [0.04, 0.16, 0.32] {
+            let w = without_foliage(&chain.tree_at(&tree, e * h));
+            let (area, bounds) = surface(&w.mesh);
+            assert!(
+                area > 0.5 * full_area,
+                "{name} ε {e} h: the wood's surface fell to {area:.2} of {full_area:.2}"
+            );
+            // It still reaches out to where the crown is.
+            let reach = |b: &lodlab::model::Bounds| b.size().x.max(b.size().z);
+            assert!(
+                reach(&bounds) > 0.6 * reach(&full_box),
+                "{name} ε {e} h: the wood spans {:.2} across, the tree's {:.2}",
+                reach(&bounds),
+                reach(&full_box)
+            );
+            assert!(w.mesh.triangle_count() * 4 < full.mesh.triangle_count());
+        }
+    }
+}
+
+/// Total triangle area and the bounds of a mesh.
+fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
+    let area = m
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            let p = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+            0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+        })
+        .sum();
+    let bounds = lodlab::model::Bounds::of(m.indices.iter().map(|&i| m.positions[i as usize]))
+        .expect("wood");
+    (area, bounds)
 }
 
 /// A tree's chain is cached: the second load reads the file, and a damaged file is reported in
