@@ -157,8 +157,9 @@ pub(crate) fn metric_world(gpu: &Gpu, loaded: Loaded) -> Result<World> {
 pub(crate) const FRAMING: f32 = 1.25;
 
 /// `w`'s one model (`centre` and `height` its bounds') seen from `yaw` round it and `pitch`
-/// above, `distance` heights off, the field of view narrowed to frame it as from
-/// [`FRAMING`] heights.
+/// above, looking at its centre (a crown's, where only the foliage is drawn, not the point
+/// half its height above the ground), `distance` heights off, the field of view narrowed to
+/// frame it as from [`FRAMING`] heights.
 pub(crate) fn metric_camera(
     centre: glam::Vec3,
     height: f32,
@@ -166,12 +167,7 @@ pub(crate) fn metric_camera(
     pitch: f32,
     distance: f32,
 ) -> crate::scene::Camera {
-    let mut camera = crate::scene::Camera::new(
-        glam::Vec3::new(centre.x, height * 0.5, centre.z),
-        yaw,
-        pitch,
-        height * distance,
-    );
+    let mut camera = crate::scene::Camera::new(centre, yaw, pitch, height * distance);
     camera.fov_y = 2.0 * ((camera.fov_y * 0.5).tan() * FRAMING / distance).atan();
     camera
 }
@@ -218,7 +214,14 @@ fn disagreement(
 ) -> Result<f32> {
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
-    let height = bounds.size().y.max(1e-3);
+    // The whole tree in every view: its height, or its widest span across (seen from any
+    // side, at most the diagonal of its bounds' footprint) if that fills the width sooner.
+    let span = glam::Vec2::new(bounds.size().x, bounds.size().z).length();
+    let height = bounds
+        .size()
+        .y
+        .max(span * size[1] as f32 / size[0] as f32)
+        .max(1e-3);
     let duration = original.clips.first().map_or(1.0, |c| c.duration);
     let (mut wrong, mut covered) = (0u64, 0u64);
     let shoot = |w: &mut World, camera, t, empty| picture(gpu, w, &target, camera, t, empty);

