@@ -265,8 +265,10 @@ fn static_clouds(
     let still = at_rest(tree);
     let mut static_clouds = Vec::new();
     for l in &chain[1..] {
+        // The thesis's algorithm: no crossed billboards.
         let params = CloudParams {
             epsilon: l.epsilon,
+            crossing: false,
             ..Default::default()
         };
         let density =

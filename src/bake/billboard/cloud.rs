@@ -96,6 +96,9 @@ pub struct CloudParams {
     /// Bake into each billboard every leaf valid for its plane, not only its own (thesis
     /// §3.7): denser textures, same planes and cost.
     pub increased_density: bool,
+    /// Cross a billboard whose leaves make a thick clump (see [`crossing`]) with an upright
+    /// one at right angles: no view then sees only its edge.
+    pub crossing: bool,
     pub seed: u64,
 }
 
@@ -106,6 +109,7 @@ impl Default for CloudParams {
             samples: 100,
             view_angle: Some(0.0),
             increased_density: false,
+            crossing: true,
             seed: 1,
         }
     }
@@ -236,8 +240,33 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
         pool = rest;
         out.push((plane, taken));
     }
+    // Crossed pairs draw all their leaves on both planes, and size both to them.
+    let mut shared: Vec<Option<Vec<u32>>> = vec![None; out.len()];
+    if params.crossing {
+        for k in 0..out.len() {
+            let (plane, taken) = &out[k];
+            let Some((cross, stay, go)) = crossing(plane, taken, leaves, &valid) else {
+                continue;
+            };
+            let all = taken.clone();
+            out[k].1 = stay;
+            shared[k] = Some(all.clone());
+            out.push((cross, go));
+            shared.push(Some(all));
+        }
+    }
     out.into_iter()
-        .map(|(plane, taken)| {
+        .zip(shared)
+        .map(|((plane, taken), shared)| {
+            if let Some(all) = shared {
+                let corners = rectangle(&plane, all.iter().map(|&i| &leaves[i as usize]));
+                return Billboard {
+                    plane,
+                    corners,
+                    leaves: taken,
+                    drawn: all,
+                };
+            }
             let drawn = if params.increased_density {
                 (0..leaves.len() as u32)
                     .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i))
@@ -254,6 +283,60 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
             }
         })
         .collect()
+}
+
+/// The billboard crossing one on `plane` that took the leaves `taken`, where one pays, and
+/// how the leaves split between the two (each to the one it faces more squarely; both keep
+/// some).
+///
+/// An addition to the thesis for the coarse end of a chain. A billboard shows its leaves as
+/// they look along its normal; seen edge-on it shows nothing, while a clump of leaves looks
+/// much the same from every side. Where ε exceeds a clump's depth one plane takes it whole,
+/// and each of the metric's views round the tree (§5.1.3) then sees only |cos| of it. An
+/// upright plane at right angles through the clump's centre, drawing the same leaves, keeps
+/// at least half of it in every view (|cos θ| + |sin θ| ≥ 1).
+///
+/// It pays where the clump is thick: its leaves spread along the plane's normal at least half
+/// as far as across the crossing plane (a flat layer looks like a line from the side, and a
+/// crossing plane would show it as one), and the plane is not lying down (its normal's
+/// horizontal part sets the crossing plane's facing). Every leaf must be within ε of it.
+fn crossing(
+    plane: &Plane,
+    taken: &[u32],
+    leaves: &[Leaf],
+    valid: &dyn Fn(&Plane, u32) -> bool,
+) -> Option<(Plane, Vec<u32>, Vec<u32>)> {
+    let flat = Vec3::new(plane.normal.x, 0.0, plane.normal.z);
+    if taken.len() < 2 || flat.length() < 0.5 {
+        return None;
+    }
+    let normal = Vec3::Y.cross(flat).normalize();
+    let area: f32 = taken.iter().map(|&i| leaves[i as usize].area).sum();
+    let centre = taken
+        .iter()
+        .map(|&i| leaves[i as usize].centre() * leaves[i as usize].area)
+        .sum::<Vec3>()
+        / area.max(f32::MIN_POSITIVE);
+    let cross = Plane {
+        normal,
+        offset: normal.dot(centre),
+    };
+    let spread = |n: Vec3| {
+        let w = taken.iter().map(|&i| {
+            let l = &leaves[i as usize];
+            (l.area, n.dot(l.centre() - centre))
+        });
+        let (sum, sq) = w.fold((0.0, 0.0), |(s, q), (a, d)| (s + a, q + a * d * d));
+        (sq / sum.max(f32::MIN_POSITIVE)).sqrt()
+    };
+    if spread(plane.normal) < 0.5 * spread(normal) || !taken.iter().all(|&i| valid(&cross, i)) {
+        return None;
+    }
+    let (go, stay): (Vec<u32>, Vec<u32>) = taken.iter().partition(|&&i| {
+        let n = leaves[i as usize].normal;
+        n.dot(normal).abs() > n.dot(plane.normal).abs()
+    });
+    (!stay.is_empty() && !go.is_empty()).then_some((cross, stay, go))
 }
 
 /// The area-weighted least-squares plane of the leaves' corners: through their weighted
