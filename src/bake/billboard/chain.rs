@@ -13,7 +13,7 @@ use crate::anim::skinning_over_loop;
 use crate::bake::CharacterBake;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::materials::{MaterialLayers, dilate};
-use crate::bake::spectral::cloud::{SpectralParams, spectral_cloud};
+use crate::bake::spectral::cloud::{SpectralParams, lines_per_axis, spectral_cloud};
 use crate::bake::spectral::description::DescriptionType;
 use crate::bake::spectral::metrics::{AnimationError, animation_error, traced_leaves};
 use crate::bake::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
@@ -113,7 +113,12 @@ pub fn cloud_level(
         }
         CloudKind::Spectral(sp) => {
             let s = spectral_cloud(tree, foliage, params, sp);
-            (foliage, s.cloud, Some((s.lines, sp.bins)), s.clusters)
+            (
+                foliage,
+                s.cloud,
+                Some((s.lines, lines_per_axis(sp))),
+                s.clusters,
+            )
         }
         CloudKind::Impostor { .. } => {
             return Err(anyhow!(
@@ -529,7 +534,7 @@ pub fn impostor_level(
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 10;
+const CHAIN_VERSION: u32 = 11;
 
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
 /// key inside it.

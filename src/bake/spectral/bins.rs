@@ -24,6 +24,22 @@ pub struct Line {
     pub phase: f32,
 }
 
+impl Line {
+    /// A constant offset `value` (the mean pose): 0 cycles, the sign in the phase (0 or π),
+    /// as `a cos(2π·0·τ + φ)` evaluates it.
+    pub fn constant(value: f32) -> Line {
+        Line {
+            cycles: 0,
+            amplitude: value.abs(),
+            phase: if value < 0.0 {
+                std::f32::consts::PI
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
 /// The K lines per axis of a motion given as axis spectra (bin 0, the mean, is left out).
 /// Empty bins give lines of amplitude 0, so every billboard has exactly `k` per axis.
 pub fn reduce(axes: &[Spectrum; 3], k: usize) -> [Vec<Line>; 3] {

@@ -13,9 +13,11 @@
 //!    shader adds those lines' offset in the bone's space before skinning (brief §8:
 //!    `v' = G_i (p + Δ(τ))`), so the offset turns with the branch.
 //!
-//! The offset oscillates about the rest pose (the DC bin is left out): the billboards are
-//! built where the leaves rest, and the residual's mean differs from that by the second-order
-//! sag of a swaying branch only.
+//! The offset oscillates about the leaves' mean pose (the thesis's "average pose", §6.2 step 2),
+//! not their rest pose: the billboards are built where the leaves rest, and the residual's mean
+//! (the DFT's DC bin) differs from that by how far the wind holds the branches over, and by
+//! the sag of a swaying branch. Every row's first line per axis is that mean, a line of 0
+//! cycles.
 
 use super::bins::{Line, reduce};
 use super::cluster::{ClusterParams, cluster};
@@ -64,13 +66,19 @@ impl Default for SpectralParams {
 }
 
 /// A spectral billboard cloud: the billboards (each bound to its leaves' shared bone) and the
-/// K lines per axis of every billboard's residual motion, in its bone's space.
+/// lines per axis of every billboard's residual motion, in its bone's space: the mean first
+/// (a line of 0 cycles), then K ([`lines_per_axis`] in all).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectralCloud {
     pub cloud: SkeletonCloud,
     pub lines: Vec<[Vec<Line>; 3]>,
     /// The clusters actually made (fewer than asked where there are fewer zones).
     pub clusters: usize,
+}
+
+/// Lines per axis of every row of a spectral cloud made with `params`: the mean pose, then K.
+pub fn lines_per_axis(params: &SpectralParams) -> usize {
+    params.bins.max(1) + 1
 }
 
 /// The spectral cloud of `model`'s `foliage` (see the module comment).
@@ -152,6 +160,9 @@ pub fn spectral_cloud(
                 .get(bone as usize)
                 .copied()
                 .unwrap_or(Affine3A::IDENTITY);
+            // The mean pose (the DC bin): how far the leaves' mean position over the loop
+            // lies from their rest position, in the bone's space, weighted like the spectra.
+            let mut mean = Vec3::ZERO;
             let members: Vec<(Description, f32)> = count
                 .iter()
                 .map(|(&z, &w)| {
@@ -167,13 +178,21 @@ pub fn spectral_cloud(
                             to_bone.transform_point3(still)
                         })
                         .collect();
+                    let at_rest = to_bone.transform_point3(c);
+                    mean += w
+                        * (residual.iter().sum::<Vec3>() / residual.len().max(1) as f32 - at_rest);
                     (kind.describe(&dft, &residual), w)
                 })
                 .collect();
+            mean /= count.values().sum::<f32>().max(f32::MIN_POSITIVE);
             let refs: Vec<(&Description, f32)> = members.iter().map(|(d, w)| (d, *w)).collect();
             let average = kind.average(&refs);
             let seed = params.seed ^ (b as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-            reduce(&average.axis_spectra(seed), params.bins.max(1))
+            let mut lines = reduce(&average.axis_spectra(seed), params.bins.max(1));
+            for (axis, lines) in lines.iter_mut().enumerate() {
+                lines.insert(0, Line::constant(mean[axis]));
+            }
+            lines
         })
         .collect();
     SpectralCloud {
@@ -244,7 +263,8 @@ mod tests {
             c.lines.len()
         );
         for l in c.lines.iter().flatten() {
-            assert_eq!(l.len(), params.bins);
+            assert_eq!(l.len(), lines_per_axis(&params));
+            assert_eq!(l[0].cycles, 0, "the mean pose first");
         }
     }
 
@@ -280,6 +300,7 @@ mod tests {
                 .iter()
                 .flatten()
                 .flatten()
+                .filter(|l| l.cycles > 0)
                 .map(|l| l.amplitude)
                 .sum::<f32>()
                 / c.lines.len().max(1) as f32
@@ -289,6 +310,58 @@ mod tests {
             "plain SCA sways {} per billboard, shared bone {}",
             sway(&b),
             sway(&a)
+        );
+    }
+
+    /// A tree the wind holds over (every joint's rotation turned 6° further the same way)
+    /// has a mean pose away from its rest pose. Billboards built at rest then swing about
+    /// the wrong place unless their rows carry the mean (the DC line): with it their motion
+    /// follows the leaves' more closely than with the mean taken out.
+    #[test]
+    fn billboards_swing_about_the_mean_pose() {
+        use crate::bake::spectral::metrics::{animation_error, traced_leaves};
+        use crate::model::ChannelTarget;
+        let mut tree = crate::generate::tree::sapling();
+        let lean = glam::Quat::from_rotation_z(6f32.to_radians());
+        for clip in &mut tree.clips {
+            for ch in &mut clip.channels {
+                if ch.target == ChannelTarget::Rotation {
+                    for v in &mut ch.values {
+                        *v = glam::Vec4::from(lean * glam::Quat::from_vec4(*v));
+                    }
+                }
+            }
+        }
+        let f = foliage(&tree).unwrap();
+        let h = tree_height(&tree);
+        let cloud = CloudParams {
+            epsilon: 0.04 * h,
+            ..Default::default()
+        };
+        let params = SpectralParams {
+            clusters: 8,
+            ..Default::default()
+        };
+        let c = spectral_cloud(&tree, &f, &cloud, &params);
+        let without: Vec<[Vec<Line>; 3]> = c
+            .lines
+            .iter()
+            .map(|l| {
+                l.clone().map(|mut axis| {
+                    axis.retain(|line| line.cycles > 0);
+                    axis
+                })
+            })
+            .collect();
+        let frames = skinning_over_loop(&tree, params.samples);
+        let traced = traced_leaves(&f);
+        let error = |lines: &[[Vec<Line>; 3]]| {
+            animation_error(&tree, &f, &c.cloud, Some(lines), &frames, &traced).rms
+        };
+        let (with, without) = (error(&c.lines), error(&without));
+        assert!(
+            with < 0.8 * without,
+            "RMS {with:.4} h with the mean pose, {without:.4} h without"
         );
     }
 }
