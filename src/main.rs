@@ -306,6 +306,16 @@ fn study(command: StudyCommand) -> anyhow::Result<ExitCode> {
                 },
             )
         }
+        StudyCommand::Proxy { dir, cache, msaa } => {
+            let p = study::proxy::run(&study::proxy::ProxyOptions {
+                dir,
+                cache_dir: cache,
+                samples: msaa,
+                progress: true,
+            })?;
+            print!("{}", study::proxy::markdown(&p));
+            Ok(ExitCode::SUCCESS)
+        }
         StudyCommand::Analyze { dir } => {
             let a = study::analyze::run(&dir)?;
             print!("{}", study::analyze::markdown(&a));

@@ -250,3 +250,119 @@ fn a_study_is_made_run_and_analyzed() {
         .count();
     assert!(bars > 500, "{bars}");
 }
+
+/// `study proxy` scores every clip against a full-detail clip of its model recorded the same
+/// way: the study's own full-detail clip matches it frame for frame (SSIM 1), simplified ones
+/// score no higher; `analyze` then sets the scores against the answers.
+#[test]
+fn a_study_proxy_scores_clips_against_full_detail() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("cylinder.glb");
+    std::fs::write(&model, to_glb(&bent_cylinder(24, 16))).unwrap();
+    let pairs = [("none", "as"), ("rest-pose", "as")];
+    let plan = tmp.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "models = [\"{}\"]\npairs = [[\"none\", \"as\"], [\"rest-pose\", \"as\"]]\n\
+             tolerances = [8.0]\nparticipants = 1\ncount = 6\nseconds = 0.5\nfps = 10\n\
+             size = \"64x48\"\nseed = 3\ntraining = false\n",
+            model.display()
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("study");
+    let d = dir.display().to_string();
+    let cache = tmp.path().join("cache").display().to_string();
+    ok(&lodlab(&[
+        "study",
+        "make",
+        "--plan",
+        &plan.display().to_string(),
+        "--out",
+        &d,
+        "--cache",
+        &cache,
+        "--msaa",
+        "1",
+    ]));
+    let o = lodlab(&["study", "proxy", &d, "--cache", &cache, "--msaa", "1"]);
+    ok(&o);
+    assert!(dir.join("clips/cylinder-reference.mp4").exists());
+    let proxy: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("proxy.json")).unwrap()).unwrap();
+    let clips = proxy["clips"].as_array().unwrap();
+    assert_eq!(clips.len(), 3);
+    let mean = |method: &str| {
+        clips
+            .iter()
+            .find(|c| c["method"] == method)
+            .map(|c| {
+                assert_eq!(c["ssim"].as_array().unwrap().len(), 5, "a score per frame");
+                c["mean"].as_f64().unwrap()
+            })
+            .unwrap()
+    };
+    assert!(mean("none") > 0.9999, "{}", mean("none"));
+    for m in ["as", "rest-pose"] {
+        assert!(
+            (-1.0..=mean("none") + 1e-9).contains(&mean(m)),
+            "{m}: {}",
+            mean(m)
+        );
+    }
+    // ꟻLIP: no error where the frames are the same, some at most where they are not.
+    let flip = |method: &str| {
+        clips.iter().find(|c| c["method"] == method).unwrap()["flip_mean"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(flip("none") < 1e-6, "{}", flip("none"));
+    for m in ["as", "rest-pose"] {
+        assert!((0.0..=1.0).contains(&flip(m)), "{m}: {}", flip(m));
+    }
+    let md = std::fs::read_to_string(dir.join("proxy.md")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stdout), md);
+    assert!(
+        md.contains("| none vs as | 8 |") && md.contains("| rest-pose vs as | 8 |"),
+        "{md}"
+    );
+    let frames = std::fs::read_to_string(dir.join("proxy-frames.csv")).unwrap();
+    assert_eq!(frames.lines().count(), 1 + 3 * 5);
+    assert!(image::open(dir.join("proxy.png")).is_ok());
+    // Scoring again keeps the reference and gives the same scores.
+    ok(&lodlab(&[
+        "study", "proxy", &d, "--cache", &cache, "--msaa", "1",
+    ]));
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("proxy.json")).unwrap()).unwrap();
+    assert_eq!(again, proxy);
+
+    // The participant prefers B each time; analyze reports the proxy beside the answers.
+    let trials = session(&dir, "P01");
+    ok(&lodlab(&[
+        "study",
+        "run",
+        &d,
+        "--participant",
+        "P01",
+        "--script",
+        &prefer_b(&trials, &pairs),
+    ]));
+    ok(&lodlab(&["study", "analyze", &d]));
+    let a: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("analysis.json")).unwrap()).unwrap();
+    let metrics = a["proxy"].as_array().unwrap();
+    assert_eq!(metrics.len(), 2, "SSIM and ꟻLIP");
+    let p = &metrics[0];
+    assert_eq!(p["differences"].as_array().unwrap().len(), 2);
+    let diff0 = p["differences"][0].as_f64().unwrap();
+    assert!((diff0 - (mean("as") - mean("none"))).abs() < 1e-12);
+    for p in metrics {
+        assert_eq!(p["decided"], 2);
+        // Two conditions: too few for a rank correlation.
+        assert!(p["rho"].is_null());
+    }
+    let md = std::fs::read_to_string(dir.join("analysis.md")).unwrap();
+    assert!(md.contains("Image-metric proxy"), "{md}");
+}

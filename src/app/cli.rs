@@ -136,6 +136,22 @@ pub enum StudyCommand {
         #[arg(long, value_name = "1,2,...")]
         script: Option<String>,
     },
+    /// Score every clip of a study against a full-detail clip of its model, frame by frame
+    /// (SSIM on luma), as a stand-in for participants: a pilot with no one. Records the
+    /// full-detail clips (clips/MODEL-reference.mp4) where missing; writes proxy.md, proxy.csv,
+    /// proxy-frames.csv, proxy.json and proxy.png; `analyze` then reports how well the scores
+    /// predict the answers.
+    Proxy {
+        /// Folder of the study.
+        dir: PathBuf,
+        /// Cache folder of baked levels of detail.
+        #[arg(long, value_name = "DIR")]
+        cache: Option<PathBuf>,
+        /// Multisampling of the full-detail clips: as the study's were made (`make`'s
+        /// default is 4).
+        #[arg(long, default_value_t = 4, value_parser = parse_samples)]
+        msaa: u32,
+    },
     /// Per condition: preference counts and share, two-sided binomial (sign) test, training
     /// answers left out; writes analysis.md, analysis.json and preferences.png into the folder.
     Analyze {

@@ -30,6 +30,100 @@ pub struct Analysis {
     pub participants: usize,
     pub training_answers_left_out: usize,
     pub conditions: Vec<ConditionResult>,
+    /// How well each metric of the image-metric proxy (`study proxy`) predicted the answers,
+    /// where it ran (empty where not).
+    pub proxy: Vec<ProxyAgreement>,
+}
+
+/// One metric of the proxy against the participants: over the conditions that have answers,
+/// the rank correlation (Spearman's ρ) between how much the metric favours B (SSIM B − A, or
+/// ꟻLIP A − B) and the share of answers preferring B; and how often the metric's choice was
+/// the majority's.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ProxyAgreement {
+    pub metric: String,
+    /// How much the metric favours B in every condition, in the order of `conditions`.
+    pub differences: Vec<f64>,
+    /// Over all conditions with answers (None: fewer than three, or no spread).
+    pub rho: Option<f64>,
+    /// Conditions with a majority (share B ≠ ½) and where the metric chose as it did.
+    pub decided: usize,
+    pub agreed: usize,
+    /// ρ within each method pair, over its models and tolerances.
+    pub per_pair: Vec<PairAgreement>,
+}
+
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct PairAgreement {
+    pub method_a: crate::scene::LodMethod,
+    pub method_b: crate::scene::LodMethod,
+    pub conditions: usize,
+    pub rho: Option<f64>,
+}
+
+/// Metric `m` of the proxy against `conditions` (see [`ProxyAgreement`]).
+fn agreement(
+    proxy: &super::proxy::Proxy,
+    m: usize,
+    conditions: &[ConditionResult],
+) -> ProxyAgreement {
+    let differences: Vec<f64> = conditions
+        .iter()
+        .map(|r| {
+            proxy
+                .conditions
+                .iter()
+                .find(|p| p.condition == r.condition)
+                .map_or(0.0, |p| p.favour_b()[m])
+        })
+        .collect();
+    let answered: Vec<(usize, &ConditionResult)> = conditions
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.answers > 0)
+        .collect();
+    let rho_of = |rows: &[(usize, &ConditionResult)]| {
+        let d: Vec<f64> = rows.iter().map(|(i, _)| differences[*i]).collect();
+        let share: Vec<f64> = rows.iter().map(|(_, r)| r.share_b).collect();
+        super::proxy::spearman(&d, &share)
+    };
+    let decided: Vec<&(usize, &ConditionResult)> =
+        answered.iter().filter(|(_, r)| r.share_b != 0.5).collect();
+    let agreed = decided
+        .iter()
+        .filter(|(i, r)| (differences[*i] > 0.0) == (r.share_b > 0.5) && differences[*i] != 0.0)
+        .count();
+    let mut pairs: Vec<(crate::scene::LodMethod, crate::scene::LodMethod)> = Vec::new();
+    for (_, r) in &answered {
+        let key = (r.condition.method_a, r.condition.method_b);
+        if !pairs.contains(&key) {
+            pairs.push(key);
+        }
+    }
+    let per_pair = pairs
+        .into_iter()
+        .map(|(a, b)| {
+            let rows: Vec<(usize, &ConditionResult)> = answered
+                .iter()
+                .filter(|(_, r)| r.condition.method_a == a && r.condition.method_b == b)
+                .copied()
+                .collect();
+            PairAgreement {
+                method_a: a,
+                method_b: b,
+                conditions: rows.len(),
+                rho: rho_of(&rows),
+            }
+        })
+        .collect();
+    ProxyAgreement {
+        metric: proxy.metrics[m].clone(),
+        rho: rho_of(&answered),
+        decided: decided.len(),
+        agreed,
+        differences,
+        per_pair,
+    }
 }
 
 /// ln n!
@@ -67,7 +161,7 @@ pub fn analyze(dir: &Path) -> Result<Analysis> {
         );
     }
     let training = answers.iter().filter(|a| a.block != TEST).count();
-    let conditions = manifest
+    let conditions: Vec<ConditionResult> = manifest
         .conditions
         .iter()
         .map(|c| {
@@ -104,10 +198,17 @@ pub fn analyze(dir: &Path) -> Result<Analysis> {
         ids.dedup();
         ids.len()
     };
+    let proxy = match super::proxy::read(dir)? {
+        Some(p) => (0..p.metrics.len())
+            .map(|m| agreement(&p, m, &conditions))
+            .collect(),
+        None => Vec::new(),
+    };
     Ok(Analysis {
         participants,
         training_answers_left_out: training,
         conditions,
+        proxy,
     })
 }
 
@@ -139,6 +240,49 @@ pub fn markdown(a: &Analysis) -> String {
             r.share_b * 100.0,
             format_p(r.p_value)
         );
+    }
+    for p in &a.proxy {
+        let rho = |r: Option<f64>| {
+            r.map_or("n/a (fewer than 3 conditions, or no spread)".into(), |r| {
+                format!("{r:+.3}")
+            })
+        };
+        let _ = writeln!(
+            out,
+            "\nImage-metric proxy, {}: Spearman's ρ between how much it favours B and the \
+             share preferring B, over the conditions with answers: {}. It chose as the \
+             majority did in {} of {} conditions with a majority.\n",
+            p.metric,
+            rho(p.rho),
+            p.agreed,
+            p.decided
+        );
+        out.push_str("| A vs B | conditions | ρ |\n|---|---:|---:|\n");
+        for q in &p.per_pair {
+            let _ = writeln!(
+                out,
+                "| {} vs {} | {} | {} |",
+                q.method_a,
+                q.method_b,
+                q.conditions,
+                q.rho.map_or("n/a".into(), |r| format!("{r:+.3}"))
+            );
+        }
+        out.push_str(
+            "\n| model | A vs B | tolerance px | share B | favours B by |\n|---|---|---:|---:|---:|\n",
+        );
+        for (r, d) in a.conditions.iter().zip(&p.differences) {
+            let c = &r.condition;
+            let _ = writeln!(
+                out,
+                "| {} | {} vs {} | {} | {:.0}% | {d:+.4} |",
+                c.model,
+                c.method_a,
+                c.method_b,
+                c.tolerance_px,
+                r.share_b * 100.0
+            );
+        }
     }
     out
 }

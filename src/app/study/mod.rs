@@ -13,6 +13,7 @@
 //!   test, training answers excluded; a Markdown table and a bar chart.
 
 pub mod analyze;
+pub mod proxy;
 pub mod session;
 pub mod ssim;
 pub mod window;
@@ -294,8 +295,6 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     }
     std::fs::create_dir_all(o.out.join(CLIPS))
         .with_context(|| format!("{}: cannot create", o.out.display()))?;
-    let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
-    let transition = plan.transition;
     let mut clips = plan.clips();
     let total = clips.len();
     for (k, clip) in clips.iter_mut().enumerate() {
@@ -309,33 +308,16 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
             continue;
         }
         eprintln!("clip {}/{total}: {}", k + 1, clip.file);
-        let report = record::run(&RecordOptions {
-            spec: SceneSpec {
-                scene: crate::scene::SceneKind::Study,
-                models: vec![clip.model.clone()],
-                count: plan.count,
-                cache_dir: o.cache_dir.clone(),
-                ..Default::default()
-            },
-            lod: ShotLod {
-                method: clip.method,
-                policy: LodPolicy {
-                    tolerance_px: clip.tolerance_px,
-                    transition,
-                    ..Default::default()
-                },
-                ..Default::default()
-            },
-            width,
-            height,
-            samples: o.samples,
-            fps: plan.fps,
-            seconds: plan.seconds,
-            path: plan.path,
-            out: file,
-            frames_dir: None,
-            progress: o.progress,
-        })?;
+        let report = record::run(&clip_options(
+            &plan,
+            &clip.model,
+            clip.method,
+            clip.tolerance_px,
+            file,
+            o.cache_dir.clone(),
+            o.samples,
+            o.progress,
+        )?)?;
         clip.record = Some(report);
     }
     let manifest = Manifest {
@@ -359,6 +341,50 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
         serde_json::to_string_pretty(&manifest)?.as_bytes(),
     )?;
     Ok(manifest)
+}
+
+/// How a plan's clip of `model` drawn by `method` at `tolerance` is recorded into `out`: the
+/// plan's crowd, size, frame rate, length, camera path and transition. `make` records the
+/// study's clips with it, `proxy` the full-detail references, so the two match frame by frame.
+#[allow(clippy::too_many_arguments)]
+pub fn clip_options(
+    plan: &Plan,
+    model: &str,
+    method: LodMethod,
+    tolerance: f32,
+    out: PathBuf,
+    cache_dir: Option<PathBuf>,
+    samples: u32,
+    progress: bool,
+) -> Result<RecordOptions> {
+    let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
+    Ok(RecordOptions {
+        spec: SceneSpec {
+            scene: crate::scene::SceneKind::Study,
+            models: vec![model.to_string()],
+            count: plan.count,
+            cache_dir,
+            ..Default::default()
+        },
+        lod: ShotLod {
+            method,
+            policy: LodPolicy {
+                tolerance_px: tolerance,
+                transition: plan.transition,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        width,
+        height,
+        samples,
+        fps: plan.fps,
+        seconds: plan.seconds,
+        path: plan.path,
+        out,
+        frames_dir: None,
+        progress,
+    })
 }
 
 pub fn read_manifest(dir: &Path) -> Result<Manifest> {
