@@ -3,7 +3,8 @@
 //! Simplification" (2007), (§5.1.3 §5.1.4 §8.4): per level ε, billboards, area, texture memory,
 //! colour error, animation errors and bake time (`report.json`), colour error and billboard count
 //! against ε (`colour-error.png`), every level side by side from one view (`levels.png`), and a few
-//! leaves' trajectories against their billboards' (`motion.png`).
+//! leaves' trajectories against their billboards' (`motion.png`), and the thesis's figures
+//! beside this tree's at the same billboard counts (`against-thesis.md`).
 //!
 //! Besides the chain (skeleton clouds, then spectral ones), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
@@ -21,7 +22,7 @@ use crate::bake::spectral::cloud::SpectralParams;
 use crate::bake::spectral::description::DescriptionType;
 use crate::model::Model;
 use crate::render::Gpu;
-use crate::runtime::colour_error::{colour_error, colour_error_over};
+use crate::runtime::colour_error::{colour_error, colour_error_at, colour_error_over};
 use anyhow::{Context, Result, anyhow};
 use plotters::prelude::*;
 use serde::Serialize;
@@ -43,6 +44,11 @@ pub struct LevelReport {
     pub area: f32,
     pub texture_bytes: usize,
     pub colour_error: f32,
+    /// The tree's height on screen where the level comes in (ε projects to the chain's
+    /// tolerance), pixels (0 for the full tree).
+    pub switch_px: f32,
+    /// The colour error with the tree drawn that high (0 for the full tree).
+    pub colour_error_at_switch: f32,
     /// Mean RMS distance over the loop between a leaf and its projection on its billboard,
     /// in tree heights (see [`crate::bake::spectral::metrics`]).
     pub anim_rms: f32,
@@ -94,6 +100,72 @@ pub struct TreeReport {
     pub skeleton_levels: Vec<LevelReport>,
     /// The chain's spectral levels with each description type, and as plain SCA.
     pub description_types: Vec<DescriptionReport>,
+    /// The thesis's figures (§8.4.1) beside this tree's at the same billboard counts.
+    pub against_thesis: Vec<ThesisRow>,
+}
+
+/// One of the thesis's results (§8.4.1, its 692-quad tree, one static cloud, view penalty
+/// on, 800×600) and this tree's colour error at the same billboard count, read off its
+/// levels (linear in log billboards between the two levels either side; None where no level
+/// is that coarse or that fine).
+#[derive(Clone, Debug, Serialize)]
+pub struct ThesisRow {
+    pub billboards: f32,
+    pub thesis: f32,
+    /// The chain, animated, at 800×600.
+    pub chain: Option<f32>,
+    /// The chain, animated, each level at its switch size.
+    pub chain_at_switch: Option<f32>,
+    /// One static cloud at rest, the thesis's own set-up.
+    pub static_cloud: Option<f32>,
+}
+
+/// The thesis's results to compare with: (billboards, colour error), §8.4.1: ε 4 gave 36.2
+/// billboards and 0.310, ε 10 gave 5.73 and 0.440 (20 runs each).
+pub const THESIS: [(f32, f32); 2] = [(36.2, 0.310), (5.73, 0.440)];
+
+/// The error at `billboards` read off `(billboards, error)` points (see [`ThesisRow`]).
+pub fn at_billboards(points: &[(usize, f32)], billboards: f32) -> Option<f32> {
+    let mut p: Vec<(f32, f32)> = points
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|&(n, e)| ((n as f32).ln(), e))
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let x = billboards.ln();
+    p.windows(2).find(|w| w[0].0 <= x && x <= w[1].0).map(|w| {
+        let t = if w[1].0 > w[0].0 {
+            (x - w[0].0) / (w[1].0 - w[0].0)
+        } else {
+            0.0
+        };
+        w[0].1 + t * (w[1].1 - w[0].1)
+    })
+}
+
+/// The table against the thesis, in Markdown.
+pub fn thesis_table(report: &TreeReport) -> String {
+    use std::fmt::Write as _;
+    let cell = |e: Option<f32>| e.map_or("not reached".into(), |e| format!("{e:.3}"));
+    let mut out = format!(
+        "{}: colour error against the thesis (§8.4.1: its 692-quad tree, one static cloud, \
+         800×600). This tree's errors are read off its levels at the thesis's billboard counts.\n\n\
+         | billboards | thesis | chain, animated, 800×600 | chain, animated, at switch size | one static cloud at rest, 800×600 |\n\
+         |---:|---:|---:|---:|---:|\n",
+        report.model
+    );
+    for r in &report.against_thesis {
+        let _ = writeln!(
+            out,
+            "| {:.1} | {:.3} | {} | {} | {} |",
+            r.billboards,
+            r.thesis,
+            cell(r.chain),
+            cell(r.chain_at_switch),
+            cell(r.static_cloud)
+        );
+    }
+    out
 }
 
 /// Builds the chain of `tree`, measures it and writes the three files into `out`.
@@ -126,6 +198,23 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     }
     let description_types = description_types(&raster, tree, &f, &chain, &opts)?;
     let static_clouds = static_clouds(&gpu, &raster, tree, &f, &chain)?;
+    let points = |f: &dyn Fn(&LevelReport) -> f32| -> Vec<(usize, f32)> {
+        levels[1..].iter().map(|l| (l.billboards, f(l))).collect()
+    };
+    let still: Vec<(usize, f32)> = static_clouds
+        .iter()
+        .map(|s| (s.billboards, s.colour_error))
+        .collect();
+    let against_thesis = THESIS
+        .iter()
+        .map(|&(billboards, thesis)| ThesisRow {
+            billboards,
+            thesis,
+            chain: at_billboards(&points(&|l| l.colour_error), billboards),
+            chain_at_switch: at_billboards(&points(&|l| l.colour_error_at_switch), billboards),
+            static_cloud: at_billboards(&still, billboards),
+        })
+        .collect();
     let report = TreeReport {
         model: tree.name.clone(),
         leaves: f.leaves.len(),
@@ -143,10 +232,15 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         static_clouds,
         skeleton_levels,
         description_types,
+        against_thesis,
     };
     write_atomic(
         &out.join("report.json"),
         serde_json::to_string_pretty(&report)?.as_bytes(),
+    )?;
+    write_atomic(
+        &out.join("against-thesis.md"),
+        thesis_table(&report).as_bytes(),
     )?;
     plot(&report, &out.join("colour-error.png"))?;
     contact_sheet(&gpu, &chain, &report, &out.join("levels.png"))?;
@@ -177,13 +271,25 @@ fn measure_level(
 ) -> Result<LevelReport> {
     let h = tree_height(tree);
     let error = colour_error(gpu, tree, &l.cloud, METRIC_SIZE)?;
+    let switch_px = if l.epsilon > 0.0 {
+        ChainOptions::default().tolerance_px * h / l.epsilon
+    } else {
+        0.0
+    };
+    let at_switch = if l.epsilon > 0.0 {
+        colour_error_at(gpu, tree, &l.cloud, switch_px)?
+    } else {
+        0.0
+    };
     let anim = &l.cloud.animation;
     eprintln!(
-        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3}, animation error {:.4} h / {:.3}",
+        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3} ({:.3} at {:.0} px), animation error {:.4} h / {:.3}",
         tree.name,
         l.epsilon / h,
         l.cloud.billboards,
         error,
+        at_switch,
+        switch_px,
         anim.rms,
         anim.spectral
     );
@@ -196,6 +302,8 @@ fn measure_level(
         area: l.cloud.area,
         texture_bytes: l.cloud.texture_bytes,
         colour_error: error,
+        switch_px,
+        colour_error_at_switch: at_switch,
         anim_rms: anim.rms,
         anim_spectral: anim.spectral,
         bake_seconds: l.bake_seconds,
@@ -265,10 +373,12 @@ fn static_clouds(
     let still = at_rest(tree);
     let mut static_clouds = Vec::new();
     for l in &chain[1..] {
-        // The thesis's algorithm: no crossed billboards.
+        // The thesis's algorithm as its stability runs set it (§8.4.1): view penalty on, no
+        // increased density, and no crossed billboards.
         let params = CloudParams {
             epsilon: l.epsilon,
             crossing: false,
+            increased_density: false,
             ..Default::default()
         };
         let density =
@@ -650,4 +760,20 @@ fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Pat
         root.present().map_err(plot_error)?;
     }
     write_plot(path, w, h, buf)
+}
+
+#[cfg(test)]
+mod thesis_tests {
+    use super::*;
+
+    #[test]
+    fn errors_are_read_off_the_levels_in_log_billboards() {
+        let levels = [(100, 0.2), (10, 0.4), (1, 0.8)];
+        assert!((at_billboards(&levels, 100.0).unwrap() - 0.2).abs() < 1e-6);
+        // √1000 ≈ 31.6 lies halfway between 100 and 10 in log billboards.
+        assert!((at_billboards(&levels, 1000f32.sqrt()).unwrap() - 0.3).abs() < 1e-5);
+        assert!((at_billboards(&levels, 1.0).unwrap() - 0.8).abs() < 1e-6);
+        assert_eq!(at_billboards(&levels, 200.0), None);
+        assert_eq!(at_billboards(&levels[..1], 100.0), None);
+    }
 }

@@ -33,13 +33,37 @@ pub fn colour_error_over(
     size: [u32; 2],
     frames: usize,
 ) -> Result<f32> {
+    foliage_disagreement(gpu, original, lod, size, frames, FRAMING)
+}
+
+/// [`colour_error`] with the tree drawn `height_px` pixels high, seen from as far off as a
+/// tree that high is (see [`framing`]): a level judged at the size where it comes in, its
+/// switch size.
+pub fn colour_error_at(
+    gpu: &Gpu,
+    original: &Model,
+    lod: &CloudLevel,
+    height_px: f32,
+) -> Result<f32> {
+    let (size, distance) = framing(height_px);
+    foliage_disagreement(gpu, original, lod, size, METRIC_FRAMES, distance)
+}
+
+fn foliage_disagreement(
+    gpu: &Gpu,
+    original: &Model,
+    lod: &CloudLevel,
+    size: [u32; 2],
+    frames: usize,
+    distance: f32,
+) -> Result<f32> {
     let (lod_foliage, lod_motion) = lod.foliage();
     let mut a = metric_world(gpu, Loaded::forest_of(&only_foliage(original), None, 1)?)?;
     let mut b = metric_world(
         gpu,
         Loaded::forest_of(&lod_foliage, lod_motion.as_ref(), 1)?,
     )?;
-    disagreement(gpu, &mut a, &mut b, original, size, frames, FRAMING)
+    disagreement(gpu, &mut a, &mut b, original, size, frames, distance)
 }
 
 /// The colour error of `level` against the whole of `tree`, wood and all, both drawn about

@@ -94,7 +94,9 @@ pub struct CloudParams {
     /// vertical billboards, for trees seen from the ground). `None`: no penalty.
     pub view_angle: Option<f32>,
     /// Bake into each billboard every leaf valid for its plane, not only its own (thesis
-    /// §3.7): denser textures, same planes and cost.
+    /// §3.6.2): denser textures, same planes and cost. On by default: on the project's trees
+    /// it lowers the chain's colour error a little at every level (sapling, 22 billboards:
+    /// 0.548 to 0.510).
     pub increased_density: bool,
     /// Cross a billboard whose leaves make a thick clump (see [`crossing`]) with an upright
     /// one at right angles: no view then sees only its edge.
@@ -108,7 +110,7 @@ impl Default for CloudParams {
             epsilon: 0.1,
             samples: 100,
             view_angle: Some(0.0),
-            increased_density: false,
+            increased_density: true,
             crossing: true,
             seed: 1,
         }
@@ -267,14 +269,30 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
                     drawn: all,
                 };
             }
+            let corners = rectangle(&plane, taken.iter().map(|&i| &leaves[i as usize]));
+            // Other leaves valid for the plane are drawn where they fall inside its rectangle
+            // whole: its texture holds nothing outside it.
+            let inside = |i: u32| {
+                let (o, eu, ev) = (corners[0], corners[1] - corners[0], corners[3] - corners[0]);
+                let slack = 1e-4;
+                leaves[i as usize].corners.iter().all(|&c| {
+                    let s = (c - o).dot(eu) / eu.length_squared().max(f32::MIN_POSITIVE);
+                    let t = (c - o).dot(ev) / ev.length_squared().max(f32::MIN_POSITIVE);
+                    (-slack..=1.0 + slack).contains(&s) && (-slack..=1.0 + slack).contains(&t)
+                })
+            };
             let drawn = if params.increased_density {
-                (0..leaves.len() as u32)
-                    .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i))
-                    .collect()
+                let mut drawn: Vec<u32> = (0..leaves.len() as u32)
+                    .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i) && inside(i))
+                    .collect();
+                // Its own leaves always, rounding at the rectangle's edge notwithstanding.
+                drawn.extend_from_slice(&taken);
+                drawn.sort_unstable();
+                drawn.dedup();
+                drawn
             } else {
                 taken.clone()
             };
-            let corners = rectangle(&plane, taken.iter().map(|&i| &leaves[i as usize]));
             Billboard {
                 plane,
                 corners,
