@@ -13,7 +13,8 @@
 //! | piece | at ε |
 //! |---|---|
 //! | `d > ε` | collapsed with the rest (its shape holds within ε) |
-//! | `d ≤ ε/2`, and it and all it holds reach no farther than ε from its base, and all it holds is dropped | dropped: the foliage it carried stays within ε of wood, and it is narrower than half the screen tolerance where the level comes in |
+//! | a twig (holds no other wood), `d ≤ ε/2` | dropped: narrower than half the screen tolerance where the level comes in, its leaves close to the branch it grew from |
+//! | holds other wood, `d ≤ ε/2`, all it holds dropped, and it and all it held reach no farther than ε/2 from its base | dropped: the foliage it carried stays within ε/2 of wood |
 //! | otherwise | a generalised cylinder: three sides, as few rings as keep its axis within ε/2, a point at the tip |
 //!
 //! so wood and foliage share the level's error bound, and no level shows leaves far from the
@@ -139,10 +140,12 @@ impl WoodChain {
         let mut dropped = vec![false; self.pieces.len()];
         for &p in &self.holders_last {
             let piece = &self.pieces[p];
+            // A twig (holding no wood) goes when thin; a branch holding others only when they
+            // all went and none of it reaches far.
             dropped[p] = !piece.trunk
                 && piece.thickness <= error * 0.5
-                && piece.reach <= error * 0.5
-                && piece.holds.iter().all(|&q| dropped[q]);
+                && (piece.holds.is_empty()
+                    || (piece.reach <= error * 0.5 && piece.holds.iter().all(|&q| dropped[q])));
         }
         dropped
     }
