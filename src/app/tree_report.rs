@@ -271,15 +271,12 @@ fn measure_level(
 ) -> Result<LevelReport> {
     let h = tree_height(tree);
     let error = colour_error(gpu, tree, &l.cloud, METRIC_SIZE)?;
-    let switch_px = if l.epsilon > 0.0 {
-        ChainOptions::default().tolerance_px * h / l.epsilon
+    // Where the level comes in, and its error there (none for the full tree, level 0).
+    let (switch_px, at_switch) = if l.epsilon > 0.0 {
+        let px = ChainOptions::default().tolerance_px * h / l.epsilon;
+        (px, colour_error_at(gpu, tree, &l.cloud, px)?)
     } else {
-        0.0
-    };
-    let at_switch = if l.epsilon > 0.0 {
-        colour_error_at(gpu, tree, &l.cloud, switch_px)?
-    } else {
-        0.0
+        (0.0, 0.0)
     };
     let anim = &l.cloud.animation;
     eprintln!(

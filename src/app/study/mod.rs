@@ -233,27 +233,34 @@ impl Plan {
 
 /// `clips/horse-as-is-1.5px.mp4`: the model's file stem, the method with '+' spelled out.
 fn clip_file(model: &str, method: LodMethod, tolerance: f32) -> String {
+    format!(
+        "{CLIPS}/{}-{}-{}px.mp4",
+        model_stem(model),
+        file_safe(method.name()),
+        tolerance
+    )
+}
+
+/// A model's name as clip files start with it: its file stem, made [`file_safe`].
+fn model_stem(model: &str) -> String {
     let stem = Path::new(model)
         .file_stem()
         .map_or_else(|| model.to_string(), |s| s.to_string_lossy().into_owned());
-    let safe = |s: &str| {
-        s.replace('+', "-")
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect::<String>()
-    };
-    format!(
-        "{CLIPS}/{}-{}-{}px.mp4",
-        safe(&stem),
-        safe(method.name()),
-        tolerance
-    )
+    file_safe(&stem)
+}
+
+/// `s` with '+' spelled '-' and anything but ASCII letters, digits, '-' and '.' made '_'.
+fn file_safe(s: &str) -> String {
+    s.replace('+', "-")
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// Options of `study make` beyond the plan.

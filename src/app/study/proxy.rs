@@ -98,10 +98,7 @@ pub struct ProxyOptions {
 
 /// `clips/horse-reference.mp4`: the full-detail clip of a model.
 pub fn reference_file(model: &str) -> String {
-    let stem = super::clip_file(model, LodMethod::None, 0.0);
-    let stem = stem.trim_start_matches(&format!("{CLIPS}/"));
-    let model_part = stem.rsplit_once("-none-").map_or(stem, |(m, _)| m);
-    format!("{CLIPS}/{model_part}-reference.mp4")
+    format!("{CLIPS}/{}-reference.mp4", super::model_stem(model))
 }
 
 /// Records the missing full-detail clips, scores every clip of the study in `o.dir`, and
@@ -394,7 +391,8 @@ fn plot(p: &Proxy, path: &Path) -> Result<()> {
                 ))
                 .map_err(plot_error)?
                 .label(format!(
-                    "{} {} {} px: SSIM {:.3}, ꟻLIP {:.3}",
+                    // FLIP spelt plainly: the plot's font has no ꟻ.
+                    "{} {} {} px: SSIM {:.3}, FLIP {:.3}",
                     c.model, c.method, c.tolerance_px, c.mean, c.flip_mean
                 ))
                 .legend(move |(x, y)| {

@@ -260,16 +260,9 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
     out.into_iter()
         .zip(shared)
         .map(|((plane, taken), shared)| {
-            if let Some(all) = shared {
-                let corners = rectangle(&plane, all.iter().map(|&i| &leaves[i as usize]));
-                return Billboard {
-                    plane,
-                    corners,
-                    leaves: taken,
-                    drawn: all,
-                };
-            }
-            let corners = rectangle(&plane, taken.iter().map(|&i| &leaves[i as usize]));
+            // A crossed pair is sized to, and draws, all the leaves of its clump.
+            let sized = shared.as_deref().unwrap_or(&taken);
+            let corners = rectangle(&plane, sized.iter().map(|&i| &leaves[i as usize]));
             // Other leaves valid for the plane are drawn where they fall inside its rectangle
             // whole: its texture holds nothing outside it.
             let inside = |i: u32| {
@@ -281,17 +274,19 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
                     (-slack..=1.0 + slack).contains(&s) && (-slack..=1.0 + slack).contains(&t)
                 })
             };
-            let drawn = if params.increased_density {
-                let mut drawn: Vec<u32> = (0..leaves.len() as u32)
-                    .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i) && inside(i))
-                    .collect();
-                // Its own leaves always, rounding at the rectangle's edge notwithstanding.
-                drawn.extend_from_slice(&taken);
-                drawn.sort_unstable();
-                drawn.dedup();
-                drawn
-            } else {
-                taken.clone()
+            let drawn = match shared {
+                Some(all) => all,
+                None if params.increased_density => {
+                    let mut drawn: Vec<u32> = (0..leaves.len() as u32)
+                        .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i) && inside(i))
+                        .collect();
+                    // Its own leaves always, rounding at the rectangle's edge notwithstanding.
+                    drawn.extend_from_slice(&taken);
+                    drawn.sort_unstable();
+                    drawn.dedup();
+                    drawn
+                }
+                None => taken.clone(),
             };
             Billboard {
                 plane,

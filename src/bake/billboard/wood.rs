@@ -131,9 +131,7 @@ impl WoodChain {
             ..tree.clone()
         }
     }
-}
 
-impl WoodChain {
     /// Which pieces are dropped at `error` (see the module's table): pieces that hold others
     /// are decided after them.
     fn dropped(&self, error: f32) -> Vec<bool> {
