@@ -421,6 +421,32 @@ fn coarse_wood_holds_the_crown() {
     }
 }
 
+/// A tree whose file split every triangle's corners apart (hard normals everywhere, as some
+/// exporters write flat-shaded wood): its wood is still found branch by branch, by position,
+/// and holds the crown as the welded tree's does.
+#[test]
+fn wood_split_at_every_seam_still_holds_the_crown() {
+    use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
+    let tree = load_model("broadleaf").unwrap();
+    let mut split = tree.clone();
+    let mut mesh = lodlab::model::SkinnedMesh::empty();
+    for &v in &tree.mesh.indices {
+        let k = mesh.copy_vertex_from(&tree.mesh, v as usize);
+        mesh.indices.push(k);
+    }
+    split.mesh = mesh;
+    let h = tree_height(&tree);
+    let (welded, unwelded) = (WoodChain::new(&tree), WoodChain::new(&split));
+    for e in [0.04, 0.16] {
+        let (a, _) = surface(&without_foliage(&welded.tree_at(&tree, e * h)).mesh);
+        let (b, _) = surface(&without_foliage(&unwelded.tree_at(&split, e * h)).mesh);
+        assert!(
+            b > 0.7 * a && b < 1.5 * a,
+            "ε {e} h: split wood's surface {b:.2}, welded {a:.2}"
+        );
+    }
+}
+
 /// Total triangle area and the bounds of a mesh.
 fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
     let area = m

@@ -149,18 +149,28 @@ impl WoodChain {
     }
 }
 
-/// The connected pieces of `mesh`: the piece of every vertex, and the pieces.
+/// The connected pieces of `mesh` (vertices at one position joined): the piece of every
+/// vertex, and the pieces.
 ///
 /// A piece holds another when the other's root bone (its bone nearest the skeleton's root) is the
 /// piece's own or below one of its own, a piece owning the bones that most of its vertices
 /// follow.
 fn pieces(mesh: &SkinnedMesh, bones: &BoneTree) -> (Vec<usize>, Vec<Piece>) {
     let n = mesh.vertex_count();
-    let roots = super::connected_pieces(n, mesh.indices.chunks_exact(3));
+    // Connected through positions, not vertex indices: a file split along UV or normal seams
+    // (or at every corner, flat-shaded) still has one piece per branch.
+    let at = crate::import::weld::position_groups(
+        &mesh.positions,
+        crate::import::weld::tolerance_for(&mesh.positions),
+    );
+    let welded: Vec<u32> = mesh.indices.iter().map(|&v| at[v as usize]).collect();
+    let positions = at.iter().max().map_or(0, |&g| g as usize + 1);
+    let roots = super::connected_pieces(positions, welded.chunks_exact(3));
     let mut piece_of_root = std::collections::HashMap::new();
-    let piece: Vec<usize> = roots
+    let piece: Vec<usize> = at
         .iter()
-        .map(|&r| {
+        .map(|&g| roots[g as usize])
+        .map(|r| {
             let next = piece_of_root.len();
             *piece_of_root.entry(r).or_insert(next)
         })
