@@ -304,11 +304,14 @@ fn dissolved(in: FoliageOut) -> bool {
     return screened_out(in.clip.xy, in.coverage);
 }
 
-// Foliage is lit per vertex: leaves and billboards are flat, so sun, sky and rim light are the
-// same at every pixel of one; branches are thin. A forest is drawn as millions of small
-// alpha-tested triangles, and on a software rasterizer the per-pixel lighting was about two
-// fifths of the frame. Both faces are lit (foliage is two-sided) and the fragment picks the
-// one it sees; the debug view's colour and the fog factor come along.
+// Foliage is lit per vertex: leaves are flat, so sun, sky and rim light are the same at every
+// pixel of one; branches are thin. A forest is drawn as millions of small alpha-tested
+// triangles, and on a software rasterizer the per-pixel lighting was about two fifths of the
+// frame. Both faces are lit (foliage is two-sided) and the fragment picks the one it sees; the
+// debug view's colour and the fog factor come along. All light is scaled by the crown's
+// occlusion at the vertex (src/bake/billboard/occlusion.rs; 0 for everything but trees).
+// Billboards lit through their atlas (a normal per texel) have a pipeline of their own,
+// `vs_foliage_lit` below.
 struct FoliageOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
@@ -329,7 +332,12 @@ fn side_light(n: vec3<f32>, v: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(shade(vec3<f32>(1.0), n), pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12);
 }
 
-fn foliage_out(o: VsOut) -> FoliageOut {
+// The light the crown leaves vertex `vi`: 1 − its occlusion (see src/bake/vertex_texture.rs).
+fn crown_light(vi: u32) -> f32 {
+    return 1.0 - texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u).w;
+}
+
+fn foliage_out(o: VsOut, crown: f32) -> FoliageOut {
     let n = normalize(o.normal);
     let v = normalize(frame.camera_pos.xyz - o.world);
     var out: FoliageOut;
@@ -337,8 +345,8 @@ fn foliage_out(o: VsOut) -> FoliageOut {
     out.uv = o.uv;
     out.material = o.material;
     out.tint = o.tint.rgb;
-    out.front = side_light(n, v);
-    out.back = side_light(-n, v);
+    out.front = side_light(n, v) * crown;
+    out.back = side_light(-n, v) * crown;
     out.debug = debug_color(o.lod, o.influences, foliage_view());
     out.fog = fog_factor(o.world);
     out.coverage = o.lod.z;
@@ -347,12 +355,12 @@ fn foliage_out(o: VsOut) -> FoliageOut {
 
 @vertex
 fn vs_foliage(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
-    return foliage_out(skinned(vi, inst));
+    return foliage_out(skinned(vi, inst), crown_light(vi));
 }
 
 @vertex
 fn vs_foliage_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
-    return foliage_out(morphed(vi, inst));
+    return foliage_out(morphed(vi, inst), crown_light(vi));
 }
 
 // The lit colour of a foliage fragment of texture colour `texel` (see `lit`, per vertex).
@@ -384,6 +392,113 @@ fn fs_foliage_coverage(in: FoliageOut, @builtin(front_facing) front: bool) -> @l
         discard;
     }
     return vec4<f32>(foliage_color(in, texel.rgb, front), a);
+}
+
+// A billboard cloud lit through its atlas (src/bake/billboard/atlas.rs): the billboards'
+// texels hold the normal m the leaf drawn there is lit by, in the billboard's frame (t, b, n),
+// in the material layer after the atlas's (the crown's occlusion is in the atlas's colour);
+// each pixel is lit by it, as the leaves it stands for were lit per vertex, under whatever sun. The frame is
+// rebuilt per vertex from the skinned normal, as `billboard_frame` built it, and the sun and
+// the up axis go to the fragment in it, so that the pixel's lighting is a few dot products
+// (shade() of common.wgsl with n = m). The wood drawn with it takes m = (0, 0, 1): lit by its
+// vertex normal. Both faces as for all foliage: the back face sees −m.
+struct LitFoliageOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) @interpolate(flat) material: u32,
+    @location(2) tint: vec3<f32>,
+    // The unit vector towards the sun and the up axis in the frame (t, b, n).
+    @location(3) sun: vec3<f32>,
+    @location(4) up: vec3<f32>,
+    // x: the crown's light at the vertex; y: 1 on a billboard lit through its atlas, else 0;
+    // z, w: the rim light's scale on the front and on the back face.
+    @location(5) light: vec4<f32>,
+    @location(6) debug: vec4<f32>,
+    @location(7) fog: f32,
+    @location(8) @interpolate(flat) coverage: f32,
+};
+
+@vertex
+fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageOut {
+    let s = skin_vertex(vi, instance_frames(inst));
+    let o = finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+    // The frame in model space (mirror of `billboard_frame`), then in the world.
+    let nm = normalize(s.normal);
+    let reference = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(nm.y) < 0.99);
+    let tm = normalize(cross(reference, nm));
+    let t = normalize(instance_vector(inst, tm));
+    let b = normalize(instance_vector(inst, cross(nm, tm)));
+    let n = normalize(o.normal);
+    let v = normalize(frame.camera_pos.xyz - o.world);
+    let sun = frame.sun_dir.xyz;
+    var out: LitFoliageOut;
+    out.clip = o.clip;
+    out.uv = o.uv;
+    out.material = o.material;
+    out.tint = o.tint.rgb;
+    out.sun = vec3<f32>(dot(sun, t), dot(sun, b), dot(sun, n));
+    out.up = vec3<f32>(t.y, b.y, n.y);
+    out.light = vec4<f32>(
+        1.0 - header.w,
+        select(0.0, 1.0, header.z > 0.5),
+        pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12,
+        pow(1.0 - max(dot(-n, v), 0.0), 3.0) * 0.12,
+    );
+    out.debug = debug_color(o.lod, o.influences, foliage_view());
+    out.fog = fog_factor(o.world);
+    out.coverage = o.lod.z;
+    return out;
+}
+
+struct LitTexels {
+    colour: vec4<f32>,
+    lit: vec3<f32>,
+};
+
+// The texture colour of a lit foliage fragment and its lit colour; both texture reads come
+// before any discard.
+fn lit_foliage(in: LitFoliageOut, front: bool) -> LitTexels {
+    let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
+    // A billboard's lighting is the layer after its atlas; elsewhere the same texel again.
+    let lighting = textureSample(material_tex, material_sampler, in.uv, in.material + u32(in.light.y + 0.5));
+    let atlas = in.light.y > 0.5;
+    // Filtered over leaves facing several ways the stored normal is their mean, shorter than
+    // one: its length is how alike they face. The sun term takes it as that share facing the
+    // mean way and the rest spread evenly over all directions (each lit a quarter on average);
+    // the sky term is linear in the normal, so the mean is exact there.
+    let m = select(vec3<f32>(0.0, 0.0, 1.0), lighting.xyz * 2.0 - 1.0, atlas);
+    let face = select(-m, m, front);
+    let spread = 0.25 * (1.0 - min(length(m), 1.0));
+    let sun = (max(dot(face, in.sun), 0.0) + spread) * frame.sun_dir.w;
+    let hemi = mix(frame.ground_bounce.rgb, frame.sky_zenith.rgb * 0.9 + vec3<f32>(0.08), dot(face, in.up) * 0.5 + 0.5);
+    let crown = in.light.x;
+    let base = select(texel.rgb * in.tint, in.debug.rgb, in.debug.a > 0.5);
+    let rim = select(in.light.w, in.light.z, front);
+    let c = (base * (frame.sun_color.rgb * sun + hemi) + frame.sky_horizon.rgb * rim) * crown;
+    var out: LitTexels;
+    out.colour = texel;
+    out.lit = mix(c, frame.sky_horizon.rgb, in.fog);
+    return out;
+}
+
+@fragment
+fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let t = lit_foliage(in, front);
+    if (t.colour.a < 0.5 || screened_out(in.clip.xy, in.coverage)) {
+        discard;
+    }
+    return vec4<f32>(t.lit, 1.0);
+}
+
+@fragment
+fn fs_foliage_lit_coverage(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let t = lit_foliage(in, front);
+    let a = clamp((t.colour.a - 0.5) / max(fwidth(t.colour.a), 1e-4) + 0.5, 0.0, 1.0);
+    if (screened_out(in.clip.xy, in.coverage)) {
+        discard;
+    }
+    return vec4<f32>(t.lit, a);
 }
 
 // The debug view of foliage: the foliage tint (frame.views.y, the level tint or 0) where it is

@@ -1,6 +1,8 @@
 // Impostor views (src/bake/billboard/impostor.rs): the tree at rest drawn orthographically
 // from every view of the grid into that view's cell of one target, depth-tested. Instance i is
-// view i. The colour target takes the unlit material colour (its alpha marks what is covered),
+// view i. The colour target takes the unlit material colour darkened by the crown's occlusion
+// (src/bake/billboard/occlusion.rs: the tree's own leaves are darkened by it when drawn, and
+// it scales all their light) (its alpha marks what is covered),
 // the second target the model-space normal turned towards the eye, as n / 2 + 1/2, and in its
 // alpha the point's height towards the eye (mirror of `encode_height`).
 
@@ -22,6 +24,7 @@ struct VsOut {
     @location(2) @interpolate(flat) cut_out: u32,
     @location(3) normal: vec3<f32>,
     @location(4) @interpolate(flat) toward: vec3<f32>,
+    @location(5) light: f32,
 };
 
 @vertex
@@ -36,6 +39,7 @@ fn vs_view(
     @location(6) right: vec4<f32>,
     @location(7) up: vec4<f32>,
     @location(8) toward: vec4<f32>,
+    @location(9) light: f32,
 ) -> VsOut {
     let q = position - bake.centre.xyz;
     // The square [−radius, radius]² about the centre fills the cell; nearer the eye is nearer.
@@ -53,6 +57,7 @@ fn vs_view(
     out.cut_out = cut_out;
     out.normal = normal;
     out.toward = toward.xyz;
+    out.light = light;
     return out;
 }
 
@@ -73,7 +78,7 @@ fn fs_view(in: VsOut) -> Views {
         n = -n;
     }
     var out: Views;
-    out.colour = vec4<f32>(texel.rgb, 1.0);
+    out.colour = vec4<f32>(texel.rgb * in.light, 1.0);
     // Depth 0 is a radius in front of the centre, 1 a radius behind it.
     let height = 1.0 - in.clip.z;
     out.normal = vec4<f32>(n * 0.5 + vec3<f32>(0.5), (128.0 + round(127.0 * height)) / 255.0);

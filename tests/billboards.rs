@@ -241,6 +241,7 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             &CloudKind::Skeleton(Grouping::PerBone),
             800.0 / h,
             &tree,
+            None,
         )
         .unwrap();
         assert_eq!(level.billboards, f.leaves.len());
@@ -262,6 +263,7 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
             &CloudKind::Skeleton(Grouping::PerBone),
             800.0 / h,
             &tree,
+            None,
         )
         .unwrap();
         assert!(level.billboards * 10 < f.leaves.len());
@@ -298,19 +300,19 @@ fn the_chain_falls_to_a_handful_of_billboards() {
     }
     assert!(chain.last().unwrap().cloud.billboards <= 10);
     for l in &chain[1..] {
-        let atlas = l
-            .cloud
-            .model
-            .materials
-            .last()
-            .unwrap()
-            .texture
-            .as_ref()
-            .unwrap();
+        let materials = &l.cloud.model.materials;
+        let a = lodlab::bake::billboard::atlas::lit_atlas_material(materials).unwrap();
+        let atlas = materials[a].texture.as_ref().unwrap();
+        let lighting = materials[a + 1].texture.as_ref().unwrap();
         assert!(atlas.width <= 2048 && atlas.height <= 2048);
         assert_eq!(
+            (lighting.width, lighting.height),
+            (atlas.width, atlas.height)
+        );
+        // Colour and lighting, RGBA8 each.
+        assert_eq!(
             l.cloud.texture_bytes,
-            (atlas.width * atlas.height * 4) as usize
+            (2 * atlas.width * atlas.height * 4) as usize
         );
         // The foliage is billboards, two triangles each; the wood is simplified, never grown.
         let w = wood(&l.cloud.model);
@@ -701,4 +703,121 @@ fn an_impostor_stands_where_its_tree_is_drawn() {
         error < 0.3,
         "the conifer's impostor disagrees on {error:.3} of its pixels at 37.5 px"
     );
+}
+
+/// Lighting in the atlas: every billboard texel keeps the normal the leaf drawn there is lit
+/// by, and lit by them a coarse cloud is shaded more like the full tree than
+/// lit by its planes, under the scene's sun and under a low sun from the other side.
+#[test]
+fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
+    use lodlab::bake::CharacterBake;
+    use lodlab::bake::billboard::atlas::{BILLBOARD_LIGHTING, lit_atlas_material};
+    use lodlab::bake::billboard::chain::{CloudKind, cloud_level};
+    use lodlab::bake::billboard::occlusion::CrownDensity;
+    use lodlab::runtime::foliage_lighting::foliage_lighting;
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    // Every other leaf wound the other way, its normal kept: files put normals and winding
+    // each their own way, and the renderer lights a back face by the negated normal.
+    let mut tree = load_model("sapling").unwrap();
+    let leaves = foliage(&tree).unwrap();
+    for (k, tris) in leaves.triangles.iter().enumerate() {
+        if k % 2 == 0 {
+            for &t in tris {
+                tree.mesh
+                    .indices
+                    .swap(3 * t as usize + 1, 3 * t as usize + 2);
+            }
+        }
+    }
+    let f = foliage(&tree).unwrap();
+    let h = tree_height(&tree);
+    let crown = CrownDensity::of(&tree).unwrap();
+    let level = cloud_level(
+        &AtlasRasterizer::new(&gpu),
+        &tree,
+        &f,
+        &CloudParams {
+            epsilon: 0.08 * h,
+            ..Default::default()
+        },
+        &CloudKind::Skeleton(Grouping::Siblings),
+        200.0 / h,
+        &tree,
+        Some(&crown),
+    )
+    .unwrap();
+    let atlas = lit_atlas_material(&level.model.materials).expect("a lit atlas");
+    assert!(
+        CharacterBake::tree_level(&level.model, None, &level.occlusion)
+            .unwrap()
+            .atlas_lit
+    );
+    let colour = level.model.materials[atlas].texture.as_ref().unwrap();
+    let lighting = &level.model.materials[atlas + 1];
+    assert_eq!(lighting.name, BILLBOARD_LIGHTING);
+    let lighting = lighting.texture.as_ref().unwrap();
+    // Where a leaf is, a unit normal (mostly). The re-wound leaves' normals point against
+    // their winding, so where a billboard's front sees one's front face it is lit by a normal
+    // turned away from the billboard: the texels face both ways.
+    let linear = |c: u8| (c as f32 / 255.0).powf(2.2) * 2.0 - 1.0;
+    let (mut towards, mut away, mut short) = (0, 0, 0);
+    for (c, l) in colour
+        .pixels
+        .chunks_exact(4)
+        .zip(lighting.pixels.chunks_exact(4))
+    {
+        if c[3] < 128 {
+            continue;
+        }
+        let m = glam::Vec3::new(linear(l[0]), linear(l[1]), linear(l[2]));
+        // Where leaves facing different ways overlap (at their soft edges) the blend of their
+        // normals is shorter.
+        assert!(m.length() < 1.1, "normal {m}");
+        short += (m.length() < 0.7) as usize;
+        if m.z > 0.2 {
+            towards += 1;
+        } else if m.z < -0.2 {
+            away += 1;
+        }
+    }
+    assert!(
+        towards > 500 && away > 100,
+        "{towards} texels face the front, {away} away"
+    );
+    assert!(
+        short * 4 < towards + away,
+        "{short} texels of {} blend opposite normals",
+        towards + away
+    );
+    // Lit per texel against lit by its plane, each beside the full tree.
+    let measured = foliage_lighting(&gpu, &tree, &[(1, &level)], 160.0).unwrap();
+    assert_eq!(measured.len(), 2);
+    for m in &measured {
+        assert!(
+            m.atlas.shading < m.flat.shading,
+            "sun {}: shading {:.4} lit through the atlas, {:.4} by the plane",
+            m.sun,
+            m.atlas.shading,
+            m.flat.shading
+        );
+    }
+}
+
+/// The full tree is darkened inside its crown by the same term, per vertex; characters are not.
+#[test]
+fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
+    use lodlab::bake::CharacterBake;
+    let tree = CharacterBake::new(&load_model("broadleaf").unwrap()).unwrap();
+    let o = &tree.animation_space.crown_occlusion;
+    assert_eq!(o.len(), tree.animation_space.vertex_count());
+    let most = o.iter().copied().fold(0.0f32, f32::max);
+    let open = o.iter().filter(|&&x| x < 0.05).count();
+    assert!(most > 0.3, "the deepest leaf loses {most} of its light");
+    assert!(
+        open * 10 > o.len(),
+        "{open} of {} vertices in the open",
+        o.len()
+    );
+    let walker = CharacterBake::new(&load_model("walker").unwrap()).unwrap();
+    assert!(walker.animation_space.crown_occlusion.is_empty());
 }

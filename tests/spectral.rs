@@ -36,6 +36,7 @@ fn spectral_level(gpu: &Gpu) -> CloudLevel {
         &kind,
         64.0 / h,
         &tree,
+        None,
     )
     .unwrap()
 }

@@ -506,6 +506,10 @@ pub struct FoliageArgs {
     /// Colour trees by level of detail (characters keep their colours).
     #[arg(long)]
     pub foliage_tint: bool,
+    /// Light billboards by their planes alone, as the thesis did, not per texel through
+    /// their atlases by each leaf's normal (the crown's occlusion stays in their colour).
+    #[arg(long)]
+    pub flat_billboards: bool,
 }
 
 impl FoliageArgs {
@@ -523,6 +527,7 @@ impl FoliageArgs {
             wind: self.wind,
             outlines: self.outlines,
             tint: self.foliage_tint,
+            atlas_lighting: !self.flat_billboards,
         }
     }
 }

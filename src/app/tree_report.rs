@@ -4,7 +4,9 @@
 //! colour error, animation errors and bake time (`report.json`), colour error and billboard count
 //! against ε (`colour-error.png`), every level side by side from one view (`levels.png`), and a few
 //! leaves' trajectories against their billboards' (`motion.png`), and the thesis's figures
-//! beside this tree's at the same billboard counts (`against-thesis.md`).
+//! beside this tree's at the same billboard counts (`against-thesis.md`), and how each level
+//! is lit beside the full tree under two suns, its billboards lit by their planes and per
+//! texel through their atlases (`lighting.md`).
 //!
 //! Besides the chain (skeleton clouds, then spectral ones), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
@@ -102,7 +104,13 @@ pub struct TreeReport {
     pub description_types: Vec<DescriptionReport>,
     /// The thesis's figures (§8.4.1) beside this tree's at the same billboard counts.
     pub against_thesis: Vec<ThesisRow>,
+    /// Each cloud level's lighting against the full tree's under two suns, billboards lit
+    /// by their planes and through their atlases, the tree [`LIGHTING_PX`] pixels high.
+    pub lighting: Vec<crate::runtime::foliage_lighting::LevelLighting>,
 }
+
+/// How high the lighting comparison draws the tree, pixels.
+pub const LIGHTING_PX: f32 = 240.0;
 
 /// One of the thesis's results (§8.4.1, its 692-quad tree, one static cloud, view penalty
 /// on, 800×600) and this tree's colour error at the same billboard count, read off its
@@ -168,6 +176,30 @@ pub fn thesis_table(report: &TreeReport) -> String {
     out
 }
 
+/// `lighting.md`: every cloud level's lighting against the full tree's, per sun.
+pub fn lighting_table(report: &TreeReport) -> String {
+    use std::fmt::Write;
+    let mut out = format!(
+        "{}: each cloud level beside the full tree, {LIGHTING_PX:.0} px high, under two suns; \
+         billboards lit by their planes (flat, as the thesis did) and per texel through their \
+         atlases by the leaves' normals (both darkened by the crown's occlusion). Shading: the mean colour difference \
+         over the pixels both cover; tone: the difference of the mean colours. Both 0..1, \
+         lower is closer.\n\n\
+         | level | billboards | sun | shading, flat | shading, atlas | tone, flat | tone, atlas |\n\
+         |---:|---:|---|---:|---:|---:|---:|\n",
+        report.model
+    );
+    for l in &report.lighting {
+        let billboards = report.levels.get(l.level).map_or(0, |r| r.billboards);
+        let _ = writeln!(
+            out,
+            "| L{} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            l.level, billboards, l.sun, l.flat.shading, l.atlas.shading, l.flat.tone, l.atlas.tone
+        );
+    }
+    out
+}
+
 /// Builds the chain of `tree`, measures it and writes the three files into `out`.
 pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let f = foliage(tree).map_err(|e| anyhow!("{}: {e}", tree.name))?;
@@ -198,6 +230,14 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     }
     let description_types = description_types(&raster, tree, &f, &chain, &opts)?;
     let static_clouds = static_clouds(&gpu, &raster, tree, &f, &chain)?;
+    let clouds: Vec<(usize, &crate::bake::billboard::chain::CloudLevel)> = chain
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.cloud.billboards > 0 && l.cloud.impostor.is_none())
+        .map(|(k, l)| (k, &l.cloud))
+        .collect();
+    let lighting =
+        crate::runtime::foliage_lighting::foliage_lighting(&gpu, tree, &clouds, LIGHTING_PX)?;
     let points = |f: &dyn Fn(&LevelReport) -> f32| -> Vec<(usize, f32)> {
         levels[1..].iter().map(|l| (l.billboards, f(l))).collect()
     };
@@ -233,6 +273,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         skeleton_levels,
         description_types,
         against_thesis,
+        lighting,
     };
     write_atomic(
         &out.join("report.json"),
@@ -242,6 +283,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         &out.join("against-thesis.md"),
         thesis_table(&report).as_bytes(),
     )?;
+    write_atomic(&out.join("lighting.md"), lighting_table(&report).as_bytes())?;
     plot(&report, &out.join("colour-error.png"))?;
     contact_sheet(&gpu, &chain, &report, &out.join("levels.png"))?;
     // The finest spectral level against the skeleton-only level at the same ε.
@@ -340,7 +382,8 @@ fn description_types(
                 shared_bone,
                 ..sp
             });
-            let cloud = cloud_level(raster, tree, f, &params, &kind, density, tree)?;
+            // Only the motion is scored here: no occlusion needed.
+            let cloud = cloud_level(raster, tree, f, &params, &kind, density, tree, None)?;
             description_types.push(DescriptionReport {
                 level: k,
                 description: description.name().into(),
@@ -368,6 +411,7 @@ fn static_clouds(
 ) -> Result<Vec<StaticCloudReport>> {
     let h = tree_height(tree);
     let still = at_rest(tree);
+    let crown = crate::bake::billboard::occlusion::CrownDensity::of(&still);
     let mut static_clouds = Vec::new();
     for l in &chain[1..] {
         // The thesis's algorithm as its stability runs set it (§8.4.1): view penalty on, no
@@ -381,7 +425,16 @@ fn static_clouds(
         let density =
             (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
         let whole = CloudKind::Skeleton(Grouping::Subtree { forks: 0 });
-        let cloud = cloud_level(raster, &still, f, &params, &whole, density, &still)?;
+        let cloud = cloud_level(
+            raster,
+            &still,
+            f,
+            &params,
+            &whole,
+            density,
+            &still,
+            crown.as_ref(),
+        )?;
         let error = colour_error_over(gpu, &still, &cloud, METRIC_SIZE, 1)?;
         eprintln!(
             "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",

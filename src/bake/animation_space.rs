@@ -35,6 +35,11 @@ pub struct AnimationSpaceMesh {
     /// ([`crate::bake::spectral::texture::NO_ROW`]: none); empty where nothing moves by
     /// spectra (every character, and every level but a spectral cloud's).
     pub spectral_rows: Vec<u32>,
+    /// Per vertex, the light the crown takes from it (see
+    /// [`crate::bake::billboard::occlusion`]); empty where nothing is occluded (every
+    /// character).
+    #[serde(default)]
+    pub crown_occlusion: Vec<f32>,
 }
 
 impl AnimationSpaceMesh {
@@ -63,6 +68,7 @@ impl AnimationSpaceMesh {
             materials: mesh.materials.clone(),
             indices: mesh.indices.clone(),
             spectral_rows: Vec::new(),
+            crown_occlusion: Vec::new(),
         }
     }
 
@@ -161,6 +167,11 @@ impl AnimationSpaceMesh {
                 Vec::new()
             } else {
                 order.iter().map(|&v| self.spectral_rows[v]).collect()
+            },
+            crown_occlusion: if self.crown_occlusion.is_empty() {
+                Vec::new()
+            } else {
+                order.iter().map(|&v| self.crown_occlusion[v]).collect()
             },
         };
         out.offsets.push(0);

@@ -301,6 +301,7 @@ impl<'a> Replay<'a> {
                 .collect(),
             indices,
             spectral_rows: Vec::new(),
+            crown_occlusion: Vec::new(),
         };
         for &r in &used {
             compact.influences.extend_from_slice(self.influences_of(r));

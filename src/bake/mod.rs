@@ -63,6 +63,9 @@ pub struct CharacterBake {
     /// A character's animated impostor (its last level): the renderer draws it as one quad
     /// facing the eye, showing the view and frames it stands in (see [`crowd_impostor`]).
     pub animated_impostor: Option<crowd_impostor::AnimatedFrame>,
+    /// A billboard cloud whose billboards are lit through their atlas (a normal and an
+    /// occlusion per texel, [`billboard::atlas`]): drawn with the per-pixel foliage shader.
+    pub atlas_lit: bool,
 }
 
 impl CharacterBake {
@@ -74,7 +77,8 @@ impl CharacterBake {
             + std::mem::size_of_val(am.uvs.as_slice())
             + std::mem::size_of_val(am.materials.as_slice())
             + std::mem::size_of_val(am.indices.as_slice())
-            + std::mem::size_of_val(am.spectral_rows.as_slice());
+            + std::mem::size_of_val(am.spectral_rows.as_slice())
+            + std::mem::size_of_val(am.crown_occlusion.as_slice());
         let textures = self.animation.grid.texels.len() * 16
             + self.vertices.grid.texels.len() * 16
             + self.materials.mips.iter().map(Vec::len).sum::<usize>()
@@ -87,20 +91,41 @@ impl CharacterBake {
     }
 
     /// [`Self::new`] for a level whose billboards also move by `motion` (a spectral cloud).
+    /// A tree (a model with leaves, not billboards) is darkened inside its crown (see
+    /// [`billboard::occlusion`]).
     pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
-        Self::build(model, motion, true)
+        let billboards = model
+            .materials
+            .iter()
+            .any(|m| m.name == billboard::BILLBOARD_MATERIAL);
+        let occlusion = match billboard::occlusion::CrownDensity::of(model) {
+            Some(crown) if !billboards => crown.occlusions(&model.mesh.positions),
+            _ => Vec::new(),
+        };
+        Self::build(model, motion, true, &occlusion)
+    }
+
+    /// [`Self::with_motion`] for a level of a tree, every vertex darkened by the crown by
+    /// `occlusion` (one per vertex of `model`, see [`billboard::occlusion`]; empty: none).
+    pub fn tree_level(
+        model: &Model,
+        motion: Option<&SpectralMotion>,
+        occlusion: &[f32],
+    ) -> Result<Self, String> {
+        Self::build(model, motion, true, occlusion)
     }
 
     /// [`Self::new`] with the vertices in the model's order, not reordered for the GPU's
     /// caches: for a mesh whose shader finds vertices by index (an impostor's quad).
     pub fn in_order(model: &Model) -> Result<Self, String> {
-        Self::build(model, None, false)
+        Self::build(model, None, false, &[])
     }
 
     fn build(
         model: &Model,
         motion: Option<&SpectralMotion>,
         optimize: bool,
+        occlusion: &[f32],
     ) -> Result<Self, String> {
         let mut am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
         if let Some(m) = motion {
@@ -113,9 +138,29 @@ impl CharacterBake {
             }
             am.spectral_rows = m.vertex_rows.clone();
         }
+        if !occlusion.is_empty() {
+            if occlusion.len() != am.vertex_count() {
+                return Err("crown occlusion does not fit the model's vertices".into());
+            }
+            am.crown_occlusion = occlusion.iter().map(|o| o.clamp(0.0, 1.0)).collect();
+        }
         let am = if optimize { am.optimized_for_gpu() } else { am };
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
-        let vertices = VertexTexture::pack(&[&am], &[], &[])?;
+        // A cloud's billboards lit through their atlas point at "layer 0" (see
+        // `vertex_texture`): the lighting is the material layer after the atlas's.
+        let atlas = billboard::atlas::lit_atlas_material(&model.materials);
+        let lit_layers: Vec<Option<u32>> = (0..model.materials.len())
+            .map(|m| (Some(m) == atlas).then_some(0))
+            .collect();
+        let vertices = VertexTexture::pack(
+            &[&am],
+            &[],
+            if atlas.is_some() {
+                std::slice::from_ref(&lit_layers)
+            } else {
+                &[]
+            },
+        )?;
         let materials = MaterialLayers::bake(&model.materials);
 
         // Bounds over a few frames of every clip: enough for framing, shadows and culling.
@@ -149,6 +194,7 @@ impl CharacterBake {
             spectra: motion.map(|m| m.spectra.clone()),
             impostor: None,
             animated_impostor: None,
+            atlas_lit: atlas.is_some(),
         })
     }
 

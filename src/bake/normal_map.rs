@@ -419,6 +419,7 @@ mod tests {
             materials: vec![0; vertices.len()],
             indices,
             spectral_rows: Vec::new(),
+            crown_occlusion: Vec::new(),
         }
     }
 

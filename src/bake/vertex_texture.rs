@@ -4,11 +4,14 @@
 //!
 //! Layout, by linear texel index (see [`super::texels`]):
 //! - texel `2v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
-//! - texel `2v + 1`: `(geomorph target, spectral row + 1, normal-map layer + 1, 0)`: the vertex
-//!   (index into this texture) that `v` morphs into at the next coarser level (Houle & Poulin
-//!   §5.1), itself on the coarsest level; the row of the spectra texture whose offset moves it,
-//!   0 for none (see [`crate::bake::spectral::texture`]); and the layer of the normal maps that
-//!   lights it, 0 for none (see [`crate::bake::normal_map`]);
+//! - texel `2v + 1`: `(geomorph target, spectral row + 1, normal-map layer + 1, occlusion)`:
+//!   the vertex (index into this texture) that `v` morphs into at the next coarser level
+//!   (Houle & Poulin §5.1), itself on the coarsest level; the row of the spectra texture whose
+//!   offset moves it, 0 for none (see [`crate::bake::spectral::texture`]); the layer of the
+//!   normal maps that lights it, 0 for none (see [`crate::bake::normal_map`]; on a billboard of
+//!   a cloud, 1: lit through its atlas, whose lighting is the next material layer, see
+//!   [`crate::bake::billboard::atlas`]); and the light the crown takes from it, 0 for none
+//!   (see [`crate::bake::billboard::occlusion`]);
 //! - each influence two texels: `p_i` as `(x, y, z, w)`, then `(n_i.x, n_i.y, n_i.z, bone)`.
 //!
 //! Integers are stored as floats, exact up to 2^24 texels. The levels of detail of a model share
@@ -101,7 +104,8 @@ impl VertexTexture {
                     .get(k)
                     .and_then(|l| l.get(mesh.materials[v] as usize).copied().flatten())
                     .map_or(0.0, |l| l as f32 + 1.0);
-                headers.push([target as f32, row, layer, 0.0]);
+                let occlusion = mesh.crown_occlusion.get(v).copied().unwrap_or(0.0);
+                headers.push([target as f32, row, layer, occlusion]);
                 for inf in infs {
                     body.push(inf.p.to_array());
                     body.push([inf.n.x, inf.n.y, inf.n.z, inf.bone as f32]);
@@ -181,6 +185,7 @@ mod tests {
             materials: vec![0, 3],
             indices: vec![],
             spectral_rows: vec![crate::bake::spectral::texture::NO_ROW, 7],
+            crown_occlusion: vec![0.0, 0.25],
         };
         let t = VertexTexture::pack(
             &[&mesh, &mesh],
@@ -200,6 +205,8 @@ mod tests {
         // Only level 1's vertex of material 3 has a normal-map layer (stored plus one).
         let layers: Vec<f32> = (0..4).map(|v| t.grid.get(2 * v + 1)[2]).collect();
         assert_eq!(layers, vec![0.0, 0.0, 0.0, 6.0]);
+        let occlusion: Vec<f32> = (0..4).map(|v| t.grid.get(2 * v + 1)[3]).collect();
+        assert_eq!(occlusion, vec![0.0, 0.25, 0.0, 0.25]);
         // A map that does not fit the next level is refused.
         assert!(VertexTexture::pack(&[&mesh, &mesh], &[&[0, 2]], &[]).is_err());
         let h = t.grid.get(2 * 3);

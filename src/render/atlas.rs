@@ -1,5 +1,6 @@
 //! Bakes a billboard cloud's atlas on the GPU: the leaf triangles of every billboard (laid out
-//! by [`crate::bake::billboard::atlas`]) rasterised into one texture and read back; and an
+//! by [`crate::bake::billboard::atlas`]) rasterised into two textures, colour and lighting,
+//! and read back; and an
 //! octahedral impostor's views ([`crate::bake::billboard::impostor`]), the whole tree drawn
 //! from every view into its cell, colour and normal. The results are plain image data; the
 //! bake's caller cleans them up and caches them.
@@ -7,7 +8,7 @@
 use super::gpu::Gpu;
 use super::shaders;
 use super::targets::read_texture;
-use crate::bake::billboard::atlas::{AtlasLayout, AtlasVertex, RasterizeAtlas};
+use crate::bake::billboard::atlas::{AtlasImages, AtlasLayout, AtlasVertex, RasterizeAtlas};
 use crate::bake::billboard::impostor::{ViewCamera, ViewImages, ViewRequest, ViewVertex};
 use crate::bake::materials::MaterialLayers;
 use crate::model::Rgba8Image;
@@ -45,7 +46,9 @@ impl<'g> AtlasRasterizer<'g> {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
-        let attributes = wgpu::vertex_attr_array![0 => Float32x2, 1 => Float32, 2 => Float32x2];
+        let attributes = wgpu::vertex_attr_array![
+            0 => Float32x2, 1 => Float32, 2 => Float32x2, 3 => Float32x3, 4 => Float32
+        ];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("atlas"),
             layout: Some(&pipeline_layout),
@@ -72,19 +75,9 @@ impl<'g> AtlasRasterizer<'g> {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                // Colour over, alpha accumulated: C = Cs·As + Cd·(1 − As), A = As + Ad·(1 − As).
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: FORMAT,
-                    blend: Some(wgpu::BlendState {
-                        color: wgpu::BlendComponent {
-                            src_factor: wgpu::BlendFactor::SrcAlpha,
-                            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                            operation: wgpu::BlendOperation::Add,
-                        },
-                        alpha: wgpu::BlendComponent::OVER,
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                // Colour over, alpha accumulated: C = Cs·As + Cd·(1 − As), A = As + Ad·(1 − As);
+                // the lighting blended the same way, by the leaf's alpha.
+                targets: &[over(FORMAT), over(NORMAL_FORMAT)],
             }),
             multiview_mask: None,
             cache: None,
@@ -107,7 +100,7 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
         layout: &AtlasLayout,
         vertices: &[AtlasVertex],
         leaf: &MaterialLayers,
-    ) -> Result<Rgba8Image> {
+    ) -> Result<AtlasImages> {
         let gpu = self.gpu;
         let device = &gpu.device;
         let size = wgpu::Extent3d {
@@ -116,6 +109,7 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
             depth_or_array_layers: 1,
         };
         let target = render_target(device, "billboard atlas", size, FORMAT);
+        let lighting = render_target(device, "billboard lighting", size, NORMAL_FORMAT);
         let depth = render_target(
             device,
             "billboard atlas depth",
@@ -154,10 +148,11 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
         let mut enc = device.create_command_encoder(&Default::default());
         {
             let view = target.create_view(&Default::default());
+            let lighting_view = lighting.create_view(&Default::default());
             let depth_view = depth.create_view(&Default::default());
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("atlas"),
-                color_attachments: &[cleared(&view)],
+                color_attachments: &[cleared(&view), cleared(&lighting_view)],
                 depth_stencil_attachment: Some(cleared_depth(&depth_view)),
                 ..Default::default()
             });
@@ -177,10 +172,16 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
         gpu.take_error()?;
         let mut pixels = read_texture(gpu, &target)?;
         crate::bake::billboard::atlas::unpremultiply(&mut pixels);
-        Ok(Rgba8Image {
+        let mut light = read_texture(gpu, &lighting)?;
+        crate::bake::billboard::atlas::unpremultiply_linear(&mut light);
+        let image = |pixels| Rgba8Image {
             width: layout.width,
             height: layout.height,
             pixels,
+        };
+        Ok(AtlasImages {
+            colour: image(pixels),
+            lighting: image(light),
         })
     }
 
@@ -286,7 +287,7 @@ fn views_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Render
         immediate_size: 0,
     });
     let vertex = wgpu::vertex_attr_array![
-        0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32, 4 => Float32x2
+        0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32, 4 => Float32x2, 9 => Float32
     ];
     let camera = wgpu::vertex_attr_array![
         5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4
@@ -462,4 +463,13 @@ fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttach
         }),
         stencil_ops: None,
     }
+}
+
+/// A colour target that blends over: C = Cs·As + Cd·(1 − As), A = As + Ad·(1 − As).
+fn over(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+        write_mask: wgpu::ColorWrites::ALL,
+    })
 }

@@ -27,6 +27,8 @@ pub struct GpuCharacter {
     pub sphere: (glam::Vec3, f32),
     /// Foliage: drawn two-sided with its alpha as a cut-out.
     pub two_sided: bool,
+    /// A billboard cloud lit per texel through its atlas (see `CharacterBake::atlas_lit`).
+    pub atlas_lit: bool,
     /// An octahedral impostor: drawn by the impostor shader, one quad facing the eye.
     pub impostor: bool,
     /// A character's animated impostor: drawn by its own shader, one quad facing the eye.
@@ -292,6 +294,7 @@ impl GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
             two_sided: bake.alpha_tested,
+            atlas_lit: bake.atlas_lit,
             impostor: bake.impostor.is_some(),
             animated_impostor: bake.animated_impostor.is_some(),
             clip_rows: (0..bake.animation.clips.len())

@@ -156,6 +156,8 @@ pub(super) struct Pipelines {
     pub wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
     /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
     pub foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
+    /// Foliage lit per pixel: billboard clouds lit through their atlases.
+    pub foliage_lit: wgpu::RenderPipeline,
     /// Octahedral impostors: one quad a tree facing the eye, cut out like foliage.
     pub impostor: wgpu::RenderPipeline,
     /// Characters' animated impostors: one quad a character facing the eye, cut out at half
@@ -250,14 +252,7 @@ impl Pipelines {
         );
         let fade_color_spec = |label, vs| PipelineSpec {
             depth: Depth::Equal,
-            blend: Some(wgpu::BlendState {
-                color: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::SrcAlpha,
-                    dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                alpha: wgpu::BlendComponent::OVER,
-            }),
+            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
             ..character(label, vs)
         };
         let fade_color = shading(fade_color_spec("faded level colour", "vs_main"));
@@ -303,6 +298,17 @@ impl Pipelines {
                 &with_characters,
                 foliage_spec("geomorphed foliage", "vs_foliage_morph"),
             ),
+        );
+        let foliage_lit = build(
+            &with_characters,
+            PipelineSpec {
+                fs: if s > 1 {
+                    "fs_foliage_lit_coverage"
+                } else {
+                    "fs_foliage_lit"
+                },
+                ..foliage_spec("atlas-lit foliage", "vs_foliage_lit")
+            },
         );
         let impostor = build(
             &with_characters,
@@ -400,6 +406,7 @@ impl Pipelines {
             mapped,
             wireframe,
             foliage,
+            foliage_lit,
             impostor,
             animated_impostor,
             outline,

@@ -235,6 +235,9 @@ pub struct SceneRenderer {
     /// Tint foliage (trees) by level whatever the debug view, so that a tree's level shows
     /// while the characters keep their colours.
     pub foliage_tint: bool,
+    /// Light billboard clouds per texel through their atlases (see `bake::billboard::atlas`);
+    /// off, by their planes' normals.
+    pub atlas_lighting: bool,
     frame_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
     pub(crate) frame_layout: wgpu::BindGroupLayout,
@@ -333,6 +336,7 @@ impl SceneRenderer {
             wind: 1.0,
             outlines: false,
             foliage_tint: false,
+            atlas_lighting: true,
             frame_buffer,
             frame_bind_group,
             frame_layout,
@@ -876,6 +880,9 @@ impl SceneRenderer {
                 (_, Some((l, _)), _) => (l, 1),
                 (PASS_FADE, None, _) => continue,
                 (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
+                (_, None, true) if c.atlas_lit && self.atlas_lighting => {
+                    (&self.pipelines.foliage_lit, 12)
+                }
                 (_, None, true) => (&self.pipelines.foliage.0, 3),
                 (PASS_MORPH, None, false) if mapped => (&self.pipelines.mapped.morph, 9),
                 (PASS_MORPH, None, false) => (self.pipelines.morph.get(debug), 4),

@@ -6,6 +6,7 @@
 //! front end.
 
 pub mod colour_error;
+pub mod foliage_lighting;
 pub mod headless;
 pub mod impostor_placement;
 pub mod levels;

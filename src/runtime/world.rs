@@ -355,6 +355,7 @@ impl World {
         self.renderer.wind = foliage.wind;
         self.renderer.outlines = foliage.outlines;
         self.renderer.foliage_tint = foliage.tint;
+        self.renderer.atlas_lighting = foliage.atlas_lighting;
     }
 
     /// Uploads the levels of `method` for every model (`packs` in model order, trees' chains

@@ -76,6 +76,9 @@ pub struct FoliageView {
     pub outlines: bool,
     /// Colour trees by level (the characters keep their colours).
     pub tint: bool,
+    /// Light billboards per texel through their atlases by the leaves' normals; off, by their
+    /// planes, as the thesis did (the crown's occlusion is in their colour either way).
+    pub atlas_lighting: bool,
 }
 
 impl Default for FoliageView {
@@ -86,6 +89,7 @@ impl Default for FoliageView {
             wind: 1.0,
             outlines: false,
             tint: false,
+            atlas_lighting: true,
         }
     }
 }

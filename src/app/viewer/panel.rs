@@ -677,6 +677,11 @@ fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.add(egui::Slider::new(&mut f.wind, 0.0..=3.0).text("wind strength"));
     ui.checkbox(&mut f.outlines, "billboard outlines");
     ui.checkbox(&mut f.tint, "tint trees by level");
+    ui.checkbox(&mut f.atlas_lighting, "light billboards per texel")
+        .on_hover_text(
+            "each billboard texel lit by the normal of the leaf drawn there; off: one \
+             shade per billboard, by its plane (the thesis)",
+        );
     for (name, current, levels) in &info.chains {
         let title = if *current {
             format!("{name}: {} levels", levels.len())

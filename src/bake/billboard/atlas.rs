@@ -3,6 +3,13 @@
 //! rectangle, as triangles in atlas pixels for the GPU to rasterise), and the clean-up after
 //! the render (colour dilated into transparent texels, so filtering never pulls in black).
 //!
+//! Besides the colour, every texel keeps how the leaf drawn there is lit: its normal in the
+//! billboard's frame, and the crown's occlusion at it ([`super::occlusion`]) darkens its
+//! colour. The thesis lit a
+//! billboard by its plane, so that a coarse cloud showed one shade per billboard; lit per texel,
+//! a billboard shades like the leaves it replaces under any sun. The lighting is a second
+//! image, stored as the material after the atlas ([`BILLBOARD_LIGHTING`]).
+//!
 //! The Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
 //! Simplification" (2007), recommended an atlas but did not build one (§3.5); its textures came out
 //! dark and blurred. Here every billboard gets `texels_per_unit` texels per scene unit, a gutter
@@ -16,6 +23,34 @@ pub const GUTTER: u32 = 2;
 /// The atlas never grows beyond this on a side: the largest material layer the renderer keeps
 /// ([`crate::bake::materials::MAX_LAYER_SIZE`]).
 pub const MAX_ATLAS: u32 = crate::bake::materials::MAX_LAYER_SIZE;
+
+/// The name of the material after a cloud's atlas that holds its lighting: per texel, the
+/// normal the leaf drawn there is lit by when seen from the billboard's front, in its
+/// billboard's [`billboard_frame`] (r, g, b along t, b and n, as x/2 + 1/2). The crown's
+/// occlusion, which scales all of a leaf's light, is multiplied into the atlas's colour.
+/// Stored sRGB-encoded, so that the renderer's sRGB material texture hands the shader these
+/// values in linear form.
+pub const BILLBOARD_LIGHTING: &str = "billboard lighting";
+
+/// The frame a billboard's texels keep their leaves' normals in: t, b across the billboard,
+/// made from its normal `n` alone, so that the vertex shader rebuilds it from the skinned
+/// normal (`vs_foliage_lit` in shaders/character.wgsl mirrors this): t = (ref × n) / |ref × n|
+/// with ref the model's up (+x for billboards lying within about 8° of flat), b = n × t. A
+/// billboard turned about the up axis turns its frame with it exactly; a branch's sway tilts
+/// it a little, and the frame follows to within that tilt.
+pub fn billboard_frame(n: Vec3) -> (Vec3, Vec3) {
+    let reference = if n.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
+    let t = reference.cross(n).normalize_or(Vec3::X);
+    (t, n.cross(t))
+}
+
+/// The index of `materials`' billboard atlas where the material after it holds its lighting.
+pub fn lit_atlas_material(materials: &[crate::model::Material]) -> Option<usize> {
+    let atlas = materials
+        .iter()
+        .position(|m| m.name == super::BILLBOARD_MATERIAL)?;
+    (materials.get(atlas + 1)?.name == BILLBOARD_LIGHTING).then_some(atlas)
+}
 
 /// Where every billboard's texture lies in the atlas.
 #[derive(Clone, Debug, PartialEq)]
@@ -133,15 +168,31 @@ pub struct AtlasVertex {
     pub depth: f32,
     /// The leaf texture coordinate.
     pub uv: [f32; 2],
+    /// The normal the leaf is lit by seen from the billboard's front, in the billboard's
+    /// [`billboard_frame`] (t, b, n): its vertex normal, negated where the billboard's front
+    /// sees the leaf's back face (the renderer lights a back face by the negated normal).
+    pub normal: [f32; 3],
+    /// The light the crown leaves the leaf here, 1 − occlusion.
+    pub light: f32,
+}
+
+/// One corner of a leaf triangle as the atlas draws it: where it is, its leaf-texture
+/// coordinate, its normal and the crown's occlusion there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafCorner {
+    pub position: Vec3,
+    pub uv: Vec2,
+    pub normal: Vec3,
+    pub occlusion: f32,
 }
 
 /// Every drawn leaf of every billboard as triangles in atlas pixels. `triangles_of(leaf)`
-/// gives the leaf's triangles as (position, uv) corners.
+/// gives the leaf's triangles.
 pub fn atlas_triangles(
     billboards: &[Billboard],
     layout: &AtlasLayout,
     epsilon: f32,
-    triangles_of: impl Fn(u32) -> Vec<[(Vec3, Vec2); 3]>,
+    triangles_of: impl Fn(u32) -> Vec<[LeafCorner; 3]>,
 ) -> Vec<AtlasVertex> {
     let mut out = Vec::new();
     for (b, bb) in billboards.iter().enumerate() {
@@ -151,9 +202,20 @@ pub fn atlas_triangles(
         let ev = bb.corners[3] - bb.corners[0];
         let (lu, lv) = (eu.length().max(1e-9), ev.length().max(1e-9));
         let (eu, ev) = (eu / lu, ev / lv);
+        let n = bb.plane.normal;
+        let (ft, fb) = billboard_frame(n);
         for &leaf in &bb.drawn {
             for tri in triangles_of(leaf) {
-                for (p, uv) in tri {
+                // Foliage is two-sided, each face lit by the normal on its side: the billboard's
+                // front shows the leaf's face turned towards it (found by the triangle's
+                // winding, as the renderer finds it, not by its vertex normals, which a model
+                // may point anywhere), and its back the other face, by the negated normal.
+                let geometric =
+                    (tri[1].position - tri[0].position).cross(tri[2].position - tri[0].position);
+                let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
+                for c in tri {
+                    let (p, uv) = (c.position, c.uv);
+                    let m = (c.normal * turn).normalize_or(n);
                     let q = p - origin;
                     // Corner 0 is at the bottom-left of the atlas rectangle (v grows up the
                     // billboard, y grows down the atlas).
@@ -164,12 +226,49 @@ pub fn atlas_triangles(
                         pixel: [x as f32 + s * w as f32, y as f32 + (1.0 - t) * h as f32],
                         depth: (0.5 - 0.49 * d / epsilon.max(1e-6)).clamp(0.0, 1.0),
                         uv: uv.to_array(),
+                        normal: [m.dot(ft), m.dot(fb), m.dot(n)],
+                        light: 1.0 - c.occlusion.clamp(0.0, 1.0),
                     });
                 }
             }
         }
     }
     out
+}
+
+/// What an atlas's render gives: the colour darkened by the crown (sRGB, straight alpha) and
+/// the lighting (linear bytes: rgb the normal in the billboard's frame as x/2 + 1/2; alpha
+/// the coverage),
+/// both transparent where no leaf is.
+#[derive(Clone, Debug)]
+pub struct AtlasImages {
+    pub colour: crate::model::Rgba8Image,
+    pub lighting: crate::model::Rgba8Image,
+}
+
+/// The lighting image as the material after the atlas stores it: sRGB-encoded (the renderer
+/// reads material layers as sRGB, and so gets the linear values back), opaque.
+pub fn lighting_material(mut lighting: crate::model::Rgba8Image) -> crate::model::Material {
+    use crate::model::linear_to_srgb;
+    for p in lighting.pixels.chunks_exact_mut(4) {
+        for c in &mut p[..3] {
+            *c = linear_to_srgb(*c as f32 / 255.0);
+        }
+        p[3] = 255;
+    }
+    crate::model::Material::opaque(BILLBOARD_LIGHTING, [1.0; 4], Some(lighting))
+}
+
+/// Divides alpha out of linear bytes that were blended over transparent black.
+pub fn unpremultiply_linear(pixels: &mut [u8]) {
+    for p in pixels.chunks_exact_mut(4) {
+        let a = p[3] as f32 / 255.0;
+        if a > 0.0 && a < 1.0 {
+            for c in &mut p[..3] {
+                *c = (*c as f32 / a).round().min(255.0) as u8;
+            }
+        }
+    }
 }
 
 /// Divides alpha out of sRGB colour that was blended over transparent black (in linear light).
@@ -190,14 +289,15 @@ pub fn unpremultiply(pixels: &mut [u8]) {
 /// the CPU).
 pub trait RasterizeAtlas {
     /// `vertices` (triangles in atlas pixels, see [`atlas_triangles`]) textured by layer 0 of
-    /// `leaf`, mipmapped, into a `layout`-sized image, straight (not premultiplied) alpha,
-    /// transparent where no leaf is.
+    /// `leaf`, mipmapped, into two `layout`-sized images (see [`AtlasImages`]), straight (not
+    /// premultiplied) alpha, transparent where no leaf is; each leaf blended over what is
+    /// there by its texture's alpha in both.
     fn rasterize(
         &self,
         layout: &AtlasLayout,
         vertices: &[AtlasVertex],
         leaf: &crate::bake::materials::MaterialLayers,
-    ) -> anyhow::Result<crate::model::Rgba8Image>;
+    ) -> anyhow::Result<AtlasImages>;
 
     /// The views of an octahedral impostor ([`super::impostor::view_request`]): every
     /// triangle drawn from every view into its cell, textured by its layer of `materials`,
@@ -214,6 +314,113 @@ pub trait RasterizeAtlas {
 mod tests {
     use super::*;
     use crate::bake::billboard::cloud::{CloudParams, Leaf, stochastic_cloud};
+
+    #[test]
+    fn the_billboard_frame_is_orthonormal_and_turns_with_the_tree() {
+        let mut rng = fastrand::Rng::with_seed(9);
+        for _ in 0..200 {
+            let n = Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5).normalize();
+            let (t, b) = billboard_frame(n);
+            assert!((t.length() - 1.0).abs() < 1e-4 && (b.length() - 1.0).abs() < 1e-4);
+            assert!(t.dot(n).abs() < 1e-4 && b.dot(n).abs() < 1e-4 && t.dot(b).abs() < 1e-4);
+            // Right-handed: t × b = n.
+            assert!(t.cross(b).distance(n) < 1e-4);
+            // A tree turned about its up axis turns every billboard's frame with it, so the
+            // shader's frame of the turned normal is the turned frame.
+            let r = glam::Quat::from_rotation_y(rng.f32() * std::f32::consts::TAU);
+            let (t2, b2) = billboard_frame(r * n);
+            assert!(
+                t2.distance(r * t) < 1e-3 && b2.distance(r * b) < 1e-3,
+                "{n}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_atlas_keeps_each_leaf_normal_in_the_billboard_frame_facing_its_front() {
+        let billboard = Billboard {
+            plane: crate::bake::billboard::cloud::Plane {
+                normal: Vec3::Z,
+                offset: 0.0,
+            },
+            corners: [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            leaves: vec![0, 1],
+            drawn: vec![0, 1],
+        };
+        let layout = AtlasLayout {
+            width: 64,
+            height: 64,
+            texels_per_unit: 32.0,
+            rects: vec![[2, 2, 32, 32]],
+        };
+        // Leaf 0 tilted 30° about x, towards +y, wound to face the billboard's front; leaf 1
+        // wound the other way (the billboard's front sees its back face) with the same vertex
+        // normal, in the crown's heart.
+        let tilted = Vec3::new(0.0, 0.5, 0.75f32.sqrt());
+        let corner = |position, normal, occlusion| LeafCorner {
+            position,
+            uv: Vec2::ZERO,
+            normal,
+            occlusion,
+        };
+        let vertices = atlas_triangles(&[billboard], &layout, 0.1, |leaf| {
+            let o = if leaf == 0 { 0.0 } else { 0.5 };
+            let a = corner(Vec3::new(0.2, 0.2, 0.0), tilted, o);
+            let b = corner(Vec3::new(0.8, 0.2, 0.0), tilted, o);
+            let c = corner(Vec3::new(0.5, 0.8, 0.0), tilted, o);
+            vec![if leaf == 0 { [a, b, c] } else { [b, a, c] }]
+        });
+        assert_eq!(vertices.len(), 6);
+        let (t, b) = billboard_frame(Vec3::Z);
+        for (i, v) in vertices.iter().enumerate() {
+            // Leaf 1's face towards the front is its back: lit by the negated normal.
+            let m = if i < 3 { tilted } else { -tilted };
+            let expected = [m.dot(t), m.dot(b), m.z];
+            assert!(
+                (0..3).all(|k| (v.normal[k] - expected[k]).abs() < 1e-5),
+                "{:?} against {expected:?}",
+                v.normal
+            );
+            assert_eq!(v.light, if i < 3 { 1.0 } else { 0.5 });
+        }
+        // A corner at (0.5, 0.8) of a billboard 32 texels across at texel (2, 2).
+        assert_eq!(vertices[2].pixel, [2.0 + 16.0, 2.0 + 0.2 * 32.0]);
+    }
+
+    #[test]
+    fn the_lighting_is_stored_so_that_the_renderer_reads_it_back() {
+        use crate::model::srgb_to_linear;
+        let lighting = crate::model::Rgba8Image {
+            width: 2,
+            height: 1,
+            pixels: vec![128, 200, 77, 255, 0, 255, 255, 0],
+        };
+        let m = lighting_material(lighting);
+        assert_eq!(m.name, BILLBOARD_LIGHTING);
+        assert!(!m.cuts_out());
+        let t = m.texture.clone().unwrap();
+        // The sRGB material texture decodes each byte back to what was written, to within
+        // the sRGB code's step.
+        let written = [128u8, 200, 77, 0, 255, 255];
+        let stored = [0, 1, 2, 4, 5, 6].map(|i| t.pixels[i]);
+        for (s, w) in stored.into_iter().zip(written) {
+            let back = srgb_to_linear(s);
+            assert!((back - w as f32 / 255.0).abs() < 0.01, "{s} for {w}");
+        }
+        // Opaque: the colour layer's alpha cuts the billboard out, not this one's.
+        assert_eq!([t.pixels[3], t.pixels[7]], [255, 255]);
+        let materials = vec![
+            crate::model::Material::opaque("bark", [1.0; 4], None),
+            crate::model::Material::cut_out(
+                crate::bake::billboard::BILLBOARD_MATERIAL,
+                [1.0; 4],
+                None,
+            ),
+            m,
+        ];
+        assert_eq!(lit_atlas_material(&materials), Some(1));
+        assert_eq!(lit_atlas_material(&materials[..2]), None);
+    }
 
     #[test]
     fn packed_rectangles_do_not_overlap_and_fit() {

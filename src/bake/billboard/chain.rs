@@ -3,9 +3,10 @@
 //! foliage as billboard clouds of growing ε, end to end: the cloud, its atlas (drawn through
 //! [`RasterizeAtlas`], then dilated), and the tree model that draws it; and the chain cached.
 
-use super::atlas::{RasterizeAtlas, atlas_triangles, layout};
+use super::atlas::{LeafCorner, RasterizeAtlas, atlas_triangles, layout, lighting_material};
 use super::cloud::CloudParams;
 use super::impostor::{self, ImpostorFrame, ViewGrid};
+use super::occlusion::CrownDensity;
 use super::siblings::merge_siblings;
 use super::wood::{WoodChain, only_foliage};
 use super::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
@@ -76,16 +77,23 @@ pub struct CloudLevel {
     pub billboards: usize,
     /// Total billboard area, scene units².
     pub area: f32,
-    /// Bytes of its atlas (RGBA8, base level).
+    /// Bytes of its atlas and its lighting (RGBA8 each, base level).
     pub texture_bytes: usize,
     /// An impostor's frame: how its quad is placed and its views are laid out (None for
     /// meshes and clouds).
     pub impostor: Option<ImpostorFrame>,
+    /// A cloud's crown occlusion per vertex of `model` (0 on the billboards, whose atlas
+    /// carries it per texel); empty for the full tree (its bake works it out) and impostors
+    /// (their views carry it).
+    #[serde(default)]
+    pub occlusion: Vec<f32>,
 }
 
 /// The tree drawn with a billboard cloud of its foliage at `params`, made as `kind`, with
 /// `texels_per_unit` texels per scene unit in the atlas. The wood is that of `wood` (the tree
-/// itself, or the tree with its wood simplified).
+/// itself, or the tree with its wood simplified). `crown` (the full tree's, where it has
+/// leaves) darkens the wood and the atlas's texels inside the crown.
+#[allow(clippy::too_many_arguments)]
 pub fn cloud_level(
     raster: &dyn RasterizeAtlas,
     tree: &Model,
@@ -94,6 +102,7 @@ pub fn cloud_level(
     kind: &CloudKind,
     texels_per_unit: f32,
     wood: &Model,
+    crown: Option<&CrownDensity>,
 ) -> Result<CloudLevel> {
     let merged;
     let original = foliage;
@@ -128,14 +137,22 @@ pub fn cloud_level(
     };
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
+    let occlusion_at = |p: glam::Vec3| crown.map_or(0.0, |c| c.occlusion(p));
     let triangles = atlas_triangles(&cloud.billboards, &atlas_layout, params.epsilon, |leaf| {
+        // One occlusion a leaf, at its centre: leaves are small beside the crown's voxels.
+        let occlusion = occlusion_at(foliage.leaves[leaf as usize].centre());
         foliage.triangles[leaf as usize]
             .iter()
             .map(|&t| {
                 let i = &mesh.indices[3 * t as usize..3 * t as usize + 3];
                 [0, 1, 2].map(|k| {
                     let v = i[k] as usize;
-                    (mesh.positions[v], mesh.uvs[v])
+                    LeafCorner {
+                        position: mesh.positions[v],
+                        uv: mesh.uvs[v],
+                        normal: mesh.normals[v],
+                        occlusion,
+                    }
                 })
             })
             .collect()
@@ -146,9 +163,16 @@ pub fn cloud_level(
         .find(|m| is_cut_out(m))
         .ok_or_else(|| anyhow!("{}: no foliage material", tree.name))?;
     let leaf = MaterialLayers::bake(std::slice::from_ref(leaf_material));
-    let mut atlas = raster.rasterize(&atlas_layout, &triangles, &leaf)?;
+    let images = raster.rasterize(&atlas_layout, &triangles, &leaf)?;
+    let (mut atlas, mut lighting) = (images.colour, images.lighting);
     dilate(&mut atlas.pixels, atlas.width, atlas.height, DILATE_RINGS);
-    let texture_bytes = atlas.pixels.len();
+    dilate(
+        &mut lighting.pixels,
+        lighting.width,
+        lighting.height,
+        DILATE_RINGS,
+    );
+    let texture_bytes = atlas.pixels.len() + lighting.pixels.len();
     let animation = animation_error(
         tree,
         original,
@@ -157,7 +181,22 @@ pub fn cloud_level(
         &skinning_over_loop(tree, crate::bake::spectral::DEFAULT_SAMPLES),
         &traced_leaves(original),
     );
-    let model = cloud_model(wood, &cloud, &atlas_layout, atlas);
+    let mut model = cloud_model(wood, &cloud, &atlas_layout, atlas);
+    model.materials.push(lighting_material(lighting));
+    let billboard_material = (model.materials.len() - 2) as u16;
+    let occlusion = model
+        .mesh
+        .positions
+        .iter()
+        .zip(&model.mesh.materials)
+        .map(|(&p, &m)| {
+            if m == billboard_material {
+                0.0
+            } else {
+                occlusion_at(p)
+            }
+        })
+        .collect();
     // The billboards' corners are the model's last vertices, four per billboard in order.
     let motion = match lines {
         Some((lines, bins)) => {
@@ -181,6 +220,7 @@ pub fn cloud_level(
         texture_bytes,
         model,
         motion,
+        occlusion,
     })
 }
 
@@ -302,6 +342,7 @@ pub fn tree_chain(
     let h = crate::bake::billboard::tree_height(tree);
     let mut levels = vec![full_tree(tree)];
     let wood = WoodChain::new(tree);
+    let crown = CrownDensity::of(tree);
     let mut eps = opts.first_epsilon.max(1e-4) * h;
     let mut g = 0usize;
     // Motion clusters, once the chain has turned spectral.
@@ -329,7 +370,16 @@ pub fn tree_chain(
         // About two texels per screen pixel where this level comes in.
         let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
         let base = wood.tree_at(tree, eps);
-        let cloud = cloud_level(raster, tree, foliage, &params, &kind, density, &base)?;
+        let cloud = cloud_level(
+            raster,
+            tree,
+            foliage,
+            &params,
+            &kind,
+            density,
+            &base,
+            crown.as_ref(),
+        )?;
         let count = cloud.billboards;
         // A level that hardly improves on the last: group coarser at the same ε instead.
         if count as f32 > 0.8 * previous as f32 {
@@ -411,6 +461,7 @@ impl CloudLevel {
             area: 0.0,
             texture_bytes: 0,
             impostor: None,
+            occlusion: Vec::new(),
         }
     }
 
@@ -432,7 +483,10 @@ impl CloudLevel {
                 bake.impostor = Some(frame);
                 Ok(bake)
             }
-            None => CharacterBake::with_motion(&self.model, self.motion.as_ref()),
+            None if self.billboards == 0 => {
+                CharacterBake::with_motion(&self.model, self.motion.as_ref())
+            }
+            None => CharacterBake::tree_level(&self.model, self.motion.as_ref(), &self.occlusion),
         }
     }
 }
@@ -492,6 +546,7 @@ pub fn impostor_level(
         area: 4.0 * frame.radius * frame.radius,
         texture_bytes,
         impostor: Some(frame),
+        occlusion: Vec::new(),
     };
     let h = crate::bake::billboard::tree_height(tree);
     let switch_px = |eps: f32| opts.tolerance_px * h / eps.max(1e-6);
@@ -534,7 +589,7 @@ pub fn impostor_level(
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 13;
+const CHAIN_VERSION: u32 = 16;
 
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
 /// key inside it.

@@ -47,7 +47,8 @@ impl Leaf {
         }
     }
 
-    fn centre(&self) -> Vec3 {
+    /// The mean of its corners.
+    pub fn centre(&self) -> Vec3 {
         self.corners.iter().sum::<Vec3>() / self.corners.len().max(1) as f32
     }
 }

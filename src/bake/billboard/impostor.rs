@@ -143,6 +143,9 @@ pub struct ViewVertex {
     /// 1 where the material cuts its shape out with alpha (foliage).
     pub cut_out: u32,
     pub uv: [f32; 2],
+    /// The light the crown leaves it, 1 − occlusion ([`super::occlusion`]): the views' colour
+    /// is darkened by it, as the tree's own leaves are when drawn.
+    pub light: f32,
 }
 
 /// One view of the bake: its cell's corner in the target (pixels), the cell's size, and the
@@ -205,6 +208,9 @@ pub fn views_about(
 ) -> ViewRequest {
     let (tree, mesh) = (model, &model.mesh);
     let cut_out: Vec<bool> = tree.materials.iter().map(super::is_cut_out).collect();
+    let occlusion = super::occlusion::CrownDensity::of(model)
+        .map(|c| c.occlusions(&mesh.positions))
+        .unwrap_or_default();
     let vertices = mesh
         .indices
         .iter()
@@ -217,6 +223,7 @@ pub fn views_about(
                 normal: mesh.normals[v].to_array(),
                 cut_out: cut_out.get(layer).copied().unwrap_or(false) as u32,
                 uv: mesh.uvs[v].to_array(),
+                light: 1.0 - occlusion.get(v).copied().unwrap_or(0.0),
             }
         })
         .collect();

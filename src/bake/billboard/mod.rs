@@ -13,6 +13,7 @@ pub mod atlas;
 pub mod chain;
 pub mod cloud;
 pub mod impostor;
+pub mod occlusion;
 pub mod rect;
 pub mod siblings;
 pub mod wood;
