@@ -506,10 +506,18 @@ pub struct FoliageArgs {
     /// Colour trees by level of detail (characters keep their colours).
     #[arg(long)]
     pub foliage_tint: bool,
-    /// Light billboards by their planes alone, as the thesis did, not per texel through
-    /// their atlases by each leaf's normal (the crown's occlusion stays in their colour).
-    #[arg(long)]
-    pub flat_billboards: bool,
+    /// How billboards are lit: atlas (per texel through their atlases, by each leaf's normal)
+    /// or flat (by their planes, as the thesis did); the crown's occlusion is in their colour
+    /// either way [default: flat on a CPU adapter such as lavapipe, else atlas].
+    #[arg(long, value_enum)]
+    pub billboard_lighting: Option<BillboardLighting>,
+}
+
+/// How billboards are lit (see `FoliageArgs::billboard_lighting`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BillboardLighting {
+    Atlas,
+    Flat,
 }
 
 impl FoliageArgs {
@@ -527,7 +535,9 @@ impl FoliageArgs {
             wind: self.wind,
             outlines: self.outlines,
             tint: self.foliage_tint,
-            atlas_lighting: !self.flat_billboards,
+            atlas_lighting: self
+                .billboard_lighting
+                .map(|l| l == BillboardLighting::Atlas),
         }
     }
 }

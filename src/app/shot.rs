@@ -58,6 +58,8 @@ pub struct ShotReport {
     pub debug_view: String,
     /// What trees become under a simplified method (the foliage level policy).
     pub foliage: String,
+    /// How billboards are lit: "atlas" (per texel) or "flat" (by their planes).
+    pub billboard_lighting: String,
     /// Instances by level of detail, finest first (the last bin holds coarser ones too).
     pub levels: Vec<u32>,
     pub in_transition: u64,
@@ -157,6 +159,12 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         tolerance_px: lod.policy.tolerance_px,
         debug_view: lod.debug.name().into(),
         foliage: lod.foliage.policy.name().into(),
+        billboard_lighting: if world.renderer.atlas_lighting {
+            "atlas"
+        } else {
+            "flat"
+        }
+        .into(),
         levels: histogram(&stats.levels),
         in_transition: stats.in_transition,
         frame_ms,

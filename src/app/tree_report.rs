@@ -769,6 +769,8 @@ fn contact_sheet(gpu: &Gpu, chain: &[TreeLevel], report: &TreeReport, path: &Pat
     for (k, l) in chain.iter().enumerate() {
         let loaded = Loaded::forest_of(&l.cloud.model, l.cloud.motion.as_ref(), 1)?;
         let mut world = World::new(gpu, loaded, OFFSCREEN_FORMAT, 4)?;
+        // The billboards as their atlases light them, whatever the adapter's default.
+        world.renderer.atlas_lighting = true;
         let height = world.bakes[0].bounds.size().y;
         world.camera = crate::scene::Camera::new(
             glam::Vec3::new(0.0, height * 0.5, 0.0),

@@ -184,6 +184,31 @@ impl Gpu {
         samples
     }
 
+    /// Whether billboards are lit per texel through their atlases: `asked`, or else by
+    /// adapter, off on a CPU adapter (the per-pixel lighting's second texture read costs lavapipe
+    /// about a fifth of the default scene's frame, and the crown's occlusion, which is most of
+    /// what the atlas's lighting buys, is in the atlas's colour either way) and on elsewhere.
+    /// A default is said on stderr, with how to change it.
+    pub fn atlas_lighting(&self, asked: Option<bool>) -> bool {
+        if let Some(on) = asked {
+            return on;
+        }
+        let (on, why, other) = if self.is_cpu() {
+            (false, "a CPU adapter", "atlas")
+        } else {
+            (true, "a GPU", "flat")
+        };
+        eprintln!(
+            "lodlab: billboards lit {} (the default on {why}; --billboard-lighting {other} for the other)",
+            if on {
+                "per texel through their atlases"
+            } else {
+                "by their planes"
+            }
+        );
+        on
+    }
+
     pub fn backend_name(&self) -> String {
         format!("{:?}", self.info.backend)
     }

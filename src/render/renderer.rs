@@ -236,7 +236,7 @@ pub struct SceneRenderer {
     /// while the characters keep their colours.
     pub foliage_tint: bool,
     /// Light billboard clouds per texel through their atlases (see `bake::billboard::atlas`);
-    /// off, by their planes' normals.
+    /// off, by their planes' normals. By adapter at first (`Gpu::atlas_lighting`).
     pub atlas_lighting: bool,
     frame_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
@@ -336,7 +336,7 @@ impl SceneRenderer {
             wind: 1.0,
             outlines: false,
             foliage_tint: false,
-            atlas_lighting: true,
+            atlas_lighting: !gpu.is_cpu(),
             frame_buffer,
             frame_bind_group,
             frame_layout,

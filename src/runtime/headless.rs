@@ -89,7 +89,9 @@ impl Headless {
         world.lod.policy = lod.policy;
         world.renderer.debug = lod.debug;
         world.renderer.normal_maps = lod.normal_maps;
-        world.apply_foliage(&lod.foliage);
+        let mut foliage = lod.foliage;
+        foliage.atlas_lighting = Some(self.gpu.atlas_lighting(foliage.atlas_lighting));
+        world.apply_foliage(&foliage);
         if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
             anyhow::bail!(
                 "--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)"

@@ -355,7 +355,9 @@ impl World {
         self.renderer.wind = foliage.wind;
         self.renderer.outlines = foliage.outlines;
         self.renderer.foliage_tint = foliage.tint;
-        self.renderer.atlas_lighting = foliage.atlas_lighting;
+        if let Some(on) = foliage.atlas_lighting {
+            self.renderer.atlas_lighting = on;
+        }
     }
 
     /// Uploads the levels of `method` for every model (`packs` in model order, trees' chains

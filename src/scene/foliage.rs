@@ -77,8 +77,9 @@ pub struct FoliageView {
     /// Colour trees by level (the characters keep their colours).
     pub tint: bool,
     /// Light billboards per texel through their atlases by the leaves' normals; off, by their
-    /// planes, as the thesis did (the crown's occlusion is in their colour either way).
-    pub atlas_lighting: bool,
+    /// planes, as the thesis did (the crown's occlusion is in their colour either way). None:
+    /// by adapter (see `Gpu::atlas_lighting`).
+    pub atlas_lighting: Option<bool>,
 }
 
 impl Default for FoliageView {
@@ -89,7 +90,7 @@ impl Default for FoliageView {
             wind: 1.0,
             outlines: false,
             tint: false,
-            atlas_lighting: true,
+            atlas_lighting: None,
         }
     }
 }

@@ -252,7 +252,9 @@ impl Viewer {
         world.lod.policy = options.lod.policy;
         world.renderer.debug = options.lod.debug;
         world.renderer.normal_maps = options.lod.normal_maps;
-        world.apply_foliage(&options.lod.foliage);
+        let mut foliage = options.lod.foliage;
+        foliage.atlas_lighting = Some(gpu.atlas_lighting(foliage.atlas_lighting));
+        world.apply_foliage(&foliage);
         if options.screenshot.is_some() || world.levels_cached() {
             // A screenshot shows the levels asked for, so it waits for them; and levels all in
             // the cache load faster than a first frame at full detail draws, so the viewer
@@ -281,7 +283,7 @@ impl Viewer {
             policy: world.lod.policy,
             debug: world.renderer.debug,
             normal_maps: world.renderer.normal_maps,
-            foliage: options.lod.foliage,
+            foliage,
             impostors: world.lod.impostors_shown(),
         };
         Ok(Viewer {

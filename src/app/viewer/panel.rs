@@ -677,11 +677,18 @@ fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.add(egui::Slider::new(&mut f.wind, 0.0..=3.0).text("wind strength"));
     ui.checkbox(&mut f.outlines, "billboard outlines");
     ui.checkbox(&mut f.tint, "tint trees by level");
-    ui.checkbox(&mut f.atlas_lighting, "light billboards per texel")
+    let mut lit = f.atlas_lighting.unwrap_or(true);
+    if ui
+        .checkbox(&mut lit, "light billboards per texel")
         .on_hover_text(
             "each billboard texel lit by the normal of the leaf drawn there; off: one \
-             shade per billboard, by its plane (the thesis)",
-        );
+             shade per billboard, by its plane (the thesis); off by default on a CPU \
+             adapter, where it costs about a fifth of the frame",
+        )
+        .changed()
+    {
+        f.atlas_lighting = Some(lit);
+    }
     for (name, current, levels) in &info.chains {
         let title = if *current {
             format!("{name}: {} levels", levels.len())
