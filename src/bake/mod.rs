@@ -63,8 +63,8 @@ pub struct CharacterBake {
     /// A character's animated impostor (its last level): the renderer draws it as one quad
     /// facing the eye, showing the view and frames it stands in (see [`crowd_impostor`]).
     pub animated_impostor: Option<crowd_impostor::AnimatedFrame>,
-    /// A billboard cloud whose billboards are lit through their atlas (a normal and an
-    /// occlusion per texel, [`billboard::atlas`]): drawn with the per-pixel foliage shader.
+    /// A billboard cloud whose billboards are lit through their atlas (a normal per texel,
+    /// [`billboard::atlas`]): drawn with the per-pixel foliage shader.
     pub atlas_lit: bool,
 }
 
@@ -98,10 +98,10 @@ impl CharacterBake {
             .materials
             .iter()
             .any(|m| m.name == billboard::BILLBOARD_MATERIAL);
-        let occlusion = match billboard::occlusion::CrownDensity::of(model) {
-            Some(crown) if !billboards => crown.occlusions(&model.mesh.positions),
-            _ => Vec::new(),
-        };
+        let crown = (!billboards)
+            .then(|| billboard::occlusion::CrownDensity::of(model))
+            .flatten();
+        let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
         Self::build(model, motion, true, &occlusion)
     }
 
