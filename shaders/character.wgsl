@@ -329,7 +329,7 @@ struct FoliageOut {
 };
 
 fn side_light(n: vec3<f32>, v: vec3<f32>) -> vec4<f32> {
-    return vec4<f32>(shade(vec3<f32>(1.0), n), pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12);
+    return vec4<f32>(shade(vec3<f32>(1.0), n), rim(n, v));
 }
 
 // The light the crown leaves vertex `vi`: 1 − its occlusion (see src/bake/vertex_texture.rs).
@@ -397,11 +397,12 @@ fn fs_foliage_coverage(in: FoliageOut, @builtin(front_facing) front: bool) -> @l
 // A billboard cloud lit through its atlas (src/bake/billboard/atlas.rs): the billboards'
 // texels hold the normal m the leaf drawn there is lit by, in the billboard's frame (t, b, n),
 // in the material layer after the atlas's (the crown's occlusion is in the atlas's colour);
-// each pixel is lit by it, as the leaves it stands for were lit per vertex, under whatever sun. The frame is
-// rebuilt per vertex from the skinned normal, as `billboard_frame` built it, and the sun and
-// the up axis go to the fragment in it, so that the pixel's lighting is a few dot products
-// (shade() of common.wgsl with n = m). The wood drawn with it takes m = (0, 0, 1): lit by its
-// vertex normal. Both faces as for all foliage: the back face sees −m.
+// each pixel is lit by it, as the leaves it stands for were lit per vertex, under whatever
+// sun. The frame is rebuilt per vertex from the skinned normal, as `billboard_frame` built it,
+// and the sun and the up axis go to the fragment in it, so that the pixel's lighting is a few
+// dot products (`sun_and_sky` of common.wgsl with n = m). The wood drawn with it takes
+// m = (0, 0, 1): lit by its vertex normal. Both faces as for all foliage: the back face sees
+// −m.
 struct LitFoliageOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
@@ -442,8 +443,8 @@ fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageO
     out.light = vec4<f32>(
         1.0 - header.w,
         select(0.0, 1.0, header.z > 0.5),
-        pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12,
-        pow(1.0 - max(dot(-n, v), 0.0), 3.0) * 0.12,
+        rim(n, v),
+        rim(-n, v),
     );
     out.debug = debug_color(o.lod, o.influences, foliage_view());
     out.fog = fog_factor(o.world);
@@ -470,12 +471,11 @@ fn lit_foliage(in: LitFoliageOut, front: bool) -> LitTexels {
     let m = select(vec3<f32>(0.0, 0.0, 1.0), lighting.xyz * 2.0 - 1.0, atlas);
     let face = select(-m, m, front);
     let spread = 0.25 * (1.0 - min(length(m), 1.0));
-    let sun = (max(dot(face, in.sun), 0.0) + spread) * frame.sun_dir.w;
-    let hemi = mix(frame.ground_bounce.rgb, frame.sky_zenith.rgb * 0.9 + vec3<f32>(0.08), dot(face, in.up) * 0.5 + 0.5);
+    let light = sun_and_sky(max(dot(face, in.sun), 0.0) + spread, dot(face, in.up));
     let crown = in.light.x;
     let base = select(texel.rgb * in.tint, in.debug.rgb, in.debug.a > 0.5);
-    let rim = select(in.light.w, in.light.z, front);
-    let c = (base * (frame.sun_color.rgb * sun + hemi) + frame.sky_horizon.rgb * rim) * crown;
+    let rim_scale = select(in.light.w, in.light.z, front);
+    let c = (base * light + frame.sky_horizon.rgb * rim_scale) * crown;
     var out: LitTexels;
     out.colour = texel;
     out.lit = mix(c, frame.sky_horizon.rgb, in.fog);
@@ -529,8 +529,7 @@ fn debug_color(lod: vec4<f32>, influences: f32, view: u32) -> vec4<f32> {
 // rim, fog.
 fn lit(in: VsOut, base: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     var c = shade(base, n);
-    // A touch of rim light separates figures from the ground at a distance.
     let v = normalize(frame.camera_pos.xyz - in.world);
-    c += frame.sky_horizon.rgb * pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12;
+    c += frame.sky_horizon.rgb * rim(n, v);
     return apply_fog(c, in.world);
 }

@@ -26,9 +26,20 @@ struct Frame {
 
 // Lambert sun plus a sky/ground hemisphere ambient.
 fn shade(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let sun = max(dot(n, frame.sun_dir.xyz), 0.0) * frame.sun_dir.w;
-    let hemi = mix(frame.ground_bounce.rgb, frame.sky_zenith.rgb * 0.9 + vec3<f32>(0.08), n.y * 0.5 + 0.5);
-    return albedo * (frame.sun_color.rgb * sun + hemi);
+    return albedo * sun_and_sky(max(dot(n, frame.sun_dir.xyz), 0.0), n.y);
+}
+
+// The light on a surface whose normal has cosine `sun` (already clamped) with the sun and
+// cosine `up` with the up axis: the sun's share plus the hemisphere ambient.
+fn sun_and_sky(sun: f32, up: f32) -> vec3<f32> {
+    let hemi = mix(frame.ground_bounce.rgb, frame.sky_zenith.rgb * 0.9 + vec3<f32>(0.08), up * 0.5 + 0.5);
+    return frame.sun_color.rgb * sun * frame.sun_dir.w + hemi;
+}
+
+// The rim light's scale (times the horizon colour) on a surface of normal `n` seen along `v`
+// (towards the eye): a touch that separates figures from the ground at a distance.
+fn rim(n: vec3<f32>, v: vec3<f32>) -> f32 {
+    return pow(1.0 - max(dot(n, v), 0.0), 3.0) * 0.12;
 }
 
 // Exponential distance fog towards the horizon colour.

@@ -249,7 +249,7 @@ fn impostor_light(colour: vec3<f32>, tint: vec4<f32>, debug: vec4<f32>, world_no
     let nrm = normalize(world_normal + vec3<f32>(0.0, 1e-6, 0.0));
     let base = select(colour * tint.rgb, debug.rgb, debug.a > 0.5);
     var lit = shade(base, nrm);
-    lit += frame.sky_horizon.rgb * pow(1.0 - max(dot(nrm, to_eye), 0.0), 3.0) * 0.12;
+    lit += frame.sky_horizon.rgb * rim(nrm, to_eye);
     return mix(lit, frame.sky_horizon.rgb, tint.w);
 }
 

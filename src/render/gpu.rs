@@ -193,10 +193,11 @@ impl Gpu {
         if let Some(on) = asked {
             return on;
         }
-        let (on, why, other) = if self.is_cpu() {
-            (false, "a CPU adapter", "atlas")
+        let on = self.lights_atlases();
+        let (why, other) = if on {
+            ("a GPU", "flat")
         } else {
-            (true, "a GPU", "flat")
+            ("a CPU adapter", "atlas")
         };
         eprintln!(
             "lodlab: billboards lit {} (the default on {why}; --billboard-lighting {other} for the other)",
@@ -207,6 +208,11 @@ impl Gpu {
             }
         );
         on
+    }
+
+    /// The default of [`Self::atlas_lighting`], said nowhere: off on a CPU adapter.
+    pub fn lights_atlases(&self) -> bool {
+        !self.is_cpu()
     }
 
     pub fn backend_name(&self) -> String {

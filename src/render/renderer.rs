@@ -336,7 +336,7 @@ impl SceneRenderer {
             wind: 1.0,
             outlines: false,
             foliage_tint: false,
-            atlas_lighting: !gpu.is_cpu(),
+            atlas_lighting: gpu.lights_atlases(),
             frame_buffer,
             frame_bind_group,
             frame_layout,

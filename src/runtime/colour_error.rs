@@ -58,7 +58,12 @@ fn foliage_disagreement(
     distance: f32,
 ) -> Result<f32> {
     let (lod_foliage, lod_motion) = lod.foliage();
-    let mut a = metric_world(gpu, Loaded::forest_of(&only_foliage(original), None, 1)?)?;
+    // Masks only: the original's leaves are baked without the crown's occlusion, which would
+    // darken them and cost a crown's worth of rays a measurement.
+    let leaves = only_foliage(original);
+    let bake = crate::bake::CharacterBake::tree_level(&leaves, None, &[])
+        .map_err(|e| anyhow::anyhow!("{}: {e}", leaves.name))?;
+    let mut a = metric_world(gpu, Loaded::forest_of_bake(&leaves, bake, 1))?;
     let mut b = metric_world(
         gpu,
         Loaded::forest_of(&lod_foliage, lod_motion.as_ref(), 1)?,
@@ -168,6 +173,12 @@ pub(crate) fn framing(height_px: f32) -> ([u32; 2], f32) {
     ([side, side], distance)
 }
 
+/// Whether a metric's picture covers a pixel: its colour there `x` differs from the same
+/// view's empty picture `bg` by more than the renderer's noise in some channel.
+pub(crate) fn covers(x: &image::Rgba<u8>, bg: &image::Rgba<u8>) -> bool {
+    (0..3).any(|c| x[c].abs_diff(bg[c]) > 10)
+}
+
 /// A world of its own for one tree, as the metric draws it: no shadows, no fog (however far
 /// off the camera stands, the masks see the whole tree).
 pub(crate) fn metric_world(gpu: &Gpu, loaded: Loaded) -> Result<World> {
@@ -259,8 +270,7 @@ fn disagreement(
             let ia = shoot(a, camera, t, false)?;
             let ib = shoot(b, camera, t, false)?;
             for ((p, q), bg) in ia.pixels().zip(ib.pixels()).zip(background.pixels()) {
-                let on = |x: &image::Rgba<u8>| (0..3).any(|c| x[c].abs_diff(bg[c]) > 10);
-                let (ma, mb) = (on(p), on(q));
+                let (ma, mb) = (covers(p, bg), covers(q, bg));
                 covered += ma as u64;
                 wrong += (ma != mb) as u64;
             }

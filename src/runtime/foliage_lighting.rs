@@ -11,7 +11,7 @@
 //!
 //! Both from five views round the tree 15° above the ground at two times of its loop.
 
-use super::colour_error::{METRIC_VIEWS, framing, metric_camera, metric_world, picture};
+use super::colour_error::{METRIC_VIEWS, covers, framing, metric_camera, metric_world, picture};
 use super::impostor_placement::PITCH_DEG;
 use super::spec::Loaded;
 use crate::bake::billboard::chain::CloudLevel;
@@ -120,7 +120,8 @@ struct Sums {
 }
 
 impl Sums {
-    /// A pixel is covered where it differs from `background` (the same view, empty).
+    /// A pixel is covered where it differs from `background` (the same view, empty; see
+    /// [`covers`]).
     fn add(
         &mut self,
         full: &image::RgbaImage,
@@ -128,8 +129,7 @@ impl Sums {
         background: &image::RgbaImage,
     ) {
         for ((a, b), bg) in full.pixels().zip(other.pixels()).zip(background.pixels()) {
-            let on = |x: &image::Rgba<u8>| (0..3).any(|i| x[i].abs_diff(bg[i]) > 10);
-            let (ia, ib) = (on(a), on(b));
+            let (ia, ib) = (covers(a, bg), covers(b, bg));
             for (j, (p, covered)) in [(a, ia), (b, ib)].into_iter().enumerate() {
                 if covered {
                     self.covered[j] += 1;

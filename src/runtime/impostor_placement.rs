@@ -151,7 +151,7 @@ pub(crate) fn colour_off(
 ) -> (u64, f64) {
     let (mut covered, mut off) = (0u64, 0.0f64);
     for ((a, b), bg) in full.pixels().zip(other.pixels()).zip(background.pixels()) {
-        let on = |x: &image::Rgba<u8>| (0..3).any(|i| x[i].abs_diff(bg[i]) > 10);
+        let on = |x: &image::Rgba<u8>| super::colour_error::covers(x, bg);
         covered += on(a) as u64;
         if on(a) || on(b) {
             off += (0..3).map(|i| a[i].abs_diff(b[i]) as f64).sum::<f64>() / (3.0 * 255.0);
