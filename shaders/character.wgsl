@@ -20,7 +20,7 @@ struct VsOut {
     @location(3) @interpolate(flat) material: u32,
     @location(4) tint: vec4<f32>,
     // x: level coordinate (level + t · hops); y: transition t, or −1 outside transitions;
-    // z: opacity.
+    // z: opacity; w: a clump billboard's view coverage (see `view_coverage`), else 1.
     @location(5) @interpolate(flat) lod: vec4<f32>,
     @location(6) influences: f32,
     // The normal-map layers plus one (0: vertex normals) of the vertex drawn (x) and, in a
@@ -33,7 +33,7 @@ struct VsOut {
 
 fn lod_varying(inst: Instance) -> vec4<f32> {
     let t = inst.lod.x;
-    return vec4<f32>(inst.lod.w + max(t, 0.0) * inst.lod.y, t, inst.lod.z, 0.0);
+    return vec4<f32>(inst.lod.w + max(t, 0.0) * inst.lod.y, t, inst.lod.z, 1.0);
 }
 
 fn finish(inst: Instance, position: vec3<f32>, normal: vec3<f32>, uv: vec2<f32>, material: u32, influences: f32) -> VsOut {
@@ -115,6 +115,67 @@ fn morphed_to(vi: u32, coarse_vi: u32, inst: Instance) -> VsOut {
     );
 }
 
+// Clump billboards are drawn by view (src/bake/billboard/clumps.rs): a billboard whose header
+// holds a view window w ≠ 0 (where other billboards hold 0, and leaves and wood their crown
+// occlusion) is drawn only from views within |w| radians of its normal, horizontally, either
+// side, seen from the instance's origin, so that all four corners agree; the windows of one
+// clump tile the circle. In a band at the window's edge it cross-fades with its neighbour
+// through complementary halves of the screen door (odd planes, w < 0, take the other half).
+// The result is a coverage as `screened_out` takes it: 1 drawn whole, 0 (or −2 for an odd
+// plane) not at all; anything else goes to the fragment shader.
+const VIEW_FADE: f32 = 0.25;
+
+fn view_coverage(vi: u32, inst: Instance, normal: vec3<f32>) -> f32 {
+    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+    let w = select(0.0, header.w, header.z > 0.5);
+    let h = abs(w);
+    let v = frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
+    let n = normal.xz;
+    let lengths = length(n) * length(v);
+    // Straight above the tree every plane is as good: all are drawn.
+    let c = select(1.0, abs(dot(n, v)) / max(lengths, 1e-12), lengths > 1e-8);
+    let off = acos(clamp(c, 0.0, 1.0));
+    // The band is VIEW_FADE of the half window either side of its edge; a plane's share falls
+    // from 1 to 0 across it as its neighbour's rises from 0 to 1.
+    let band = max(VIEW_FADE * h, 1e-6);
+    let share = clamp((h + band - off) / (2.0 * band), 0.0, 1.0);
+    return select(select(share, share - 2.0, w < 0.0), 1.0, w == 0.0);
+}
+
+// Is a coverage from `view_coverage` nothing at all? The vertex is then moved out of the clip
+// volume, with the rest of its billboard, and costs no pixels.
+fn out_of_view(coverage: f32) -> bool {
+    return coverage == 0.0 || coverage == -2.0;
+}
+
+// A clump billboard lit by its plane would change its shade as the view hands the clump from
+// one plane to the next. Lit flat, it takes the normal of a plane facing the viewer square on
+// (horizontally, on the face the viewer sees): the same for every plane of every clump of a
+// tree, so that only the atlas's texels (the crown's occlusion) shade one clump apart from the
+// next. (The normal halfway between the view and the sun, which leaves facing every way
+// average to more nearly, made the tree's coarse levels far too bright beside the full tree:
+// tone error 0.12 against 0.03 in the report's lighting.md.)
+fn flat_normal(vi: u32, inst: Instance, o: VsOut) -> VsOut {
+    var out = o;
+    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+    let v = frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
+    let facing = vec3<f32>(v.x, 0.0, v.y) * select(1.0, -1.0, dot(o.normal.xz, v) < 0.0);
+    let windowed = header.z > 0.5 && header.w != 0.0 && dot(v, v) > 1e-12;
+    out.normal = select(o.normal, facing, windowed);
+    return out;
+}
+
+// `o` with its billboard's view coverage in lod.w (1 outside clump levels), and dropped where
+// it is out of view.
+fn in_view(vi: u32, inst: Instance, o: VsOut) -> VsOut {
+    var out = o;
+    out.lod.w = view_coverage(vi, inst, o.normal);
+    if (out_of_view(out.lod.w)) {
+        out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+    }
+    return out;
+}
+
 // Billboard outlines (the foliage panel's debug view): the billboards' sides as lines, skinned
 // like the billboards and pulled a little towards the eye so that they are not lost in the
 // billboard's own depth.
@@ -123,7 +184,7 @@ fn vs_outline(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
     var out = skinned(vi, inst);
     out.world = mix(out.world, frame.camera_pos.xyz, 0.004);
     out.clip = frame.view_proj * vec4<f32>(out.world, 1.0);
-    return out;
+    return in_view(vi, inst, out);
 }
 
 @fragment
@@ -299,9 +360,9 @@ fn screened_out(pixel: vec2<f32>, coverage: f32) -> bool {
     return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
 }
 
-// A tree changing level.
+// A tree changing level, or a clump billboard cross-fading with its neighbour.
 fn dissolved(in: FoliageOut) -> bool {
-    return screened_out(in.clip.xy, in.coverage);
+    return screened_out(in.clip.xy, in.coverage) || screened_out(in.clip.xy, in.view);
 }
 
 // Foliage is lit per vertex: leaves are flat, so sun, sky and rim light are the same at every
@@ -324,20 +385,25 @@ struct FoliageOut {
     // The debug view's colour (a = 1) in place of the texture's, or a = 0.
     @location(5) debug: vec4<f32>,
     @location(6) fog: f32,
-    // The dissolve's coverage (lod.z of the instance).
+    // The dissolve's coverage (lod.z of the instance), and a clump billboard's view coverage
+    // (see `view_coverage`; 1 for everything else).
     @location(7) @interpolate(flat) coverage: f32,
+    @location(8) @interpolate(flat) view: f32,
 };
 
 fn side_light(n: vec3<f32>, v: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(shade(vec3<f32>(1.0), n), rim(n, v));
 }
 
-// The light the crown leaves vertex `vi`: 1 − its occlusion (see src/bake/vertex_texture.rs).
+// The light the crown leaves vertex `vi`: 1 − its occlusion (see src/bake/vertex_texture.rs);
+// a billboard's is in its atlas (its slot holds its view window).
 fn crown_light(vi: u32) -> f32 {
-    return 1.0 - texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u).w;
+    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+    return select(1.0 - header.w, 1.0, header.z > 0.5);
 }
 
 fn foliage_out(o: VsOut, crown: f32) -> FoliageOut {
+    // `o` comes through `in_view`.
     let n = normalize(o.normal);
     let v = normalize(frame.camera_pos.xyz - o.world);
     var out: FoliageOut;
@@ -350,17 +416,18 @@ fn foliage_out(o: VsOut, crown: f32) -> FoliageOut {
     out.debug = debug_color(o.lod, o.influences, foliage_view());
     out.fog = fog_factor(o.world);
     out.coverage = o.lod.z;
+    out.view = o.lod.w;
     return out;
 }
 
 @vertex
 fn vs_foliage(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
-    return foliage_out(skinned(vi, inst), crown_light(vi));
+    return foliage_out(flat_normal(vi, inst, in_view(vi, inst, skinned(vi, inst))), crown_light(vi));
 }
 
 @vertex
 fn vs_foliage_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
-    return foliage_out(morphed(vi, inst), crown_light(vi));
+    return foliage_out(flat_normal(vi, inst, in_view(vi, inst, morphed(vi, inst))), crown_light(vi));
 }
 
 // The lit colour of a foliage fragment of texture colour `texel` (see `lit`, per vertex).
@@ -417,12 +484,13 @@ struct LitFoliageOut {
     @location(6) debug: vec4<f32>,
     @location(7) fog: f32,
     @location(8) @interpolate(flat) coverage: f32,
+    @location(9) @interpolate(flat) view: f32,
 };
 
 @vertex
 fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageOut {
     let s = skin_vertex(vi, instance_frames(inst));
-    let o = finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences));
+    let o = in_view(vi, inst, finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences)));
     let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
     // The frame in model space (mirror of `billboard_frame`), then in the world.
     let nm = normalize(s.normal);
@@ -441,7 +509,7 @@ fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageO
     out.sun = vec3<f32>(dot(sun, t), dot(sun, b), dot(sun, n));
     out.up = vec3<f32>(t.y, b.y, n.y);
     out.light = vec4<f32>(
-        1.0 - header.w,
+        crown_light(vi),
         select(0.0, 1.0, header.z > 0.5),
         rim(n, v),
         rim(-n, v),
@@ -449,6 +517,7 @@ fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageO
     out.debug = debug_color(o.lod, o.influences, foliage_view());
     out.fog = fog_factor(o.world);
     out.coverage = o.lod.z;
+    out.view = o.lod.w;
     return out;
 }
 
@@ -485,7 +554,7 @@ fn lit_foliage(in: LitFoliageOut, front: bool) -> LitTexels {
 @fragment
 fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let t = lit_foliage(in, front);
-    if (t.colour.a < 0.5 || screened_out(in.clip.xy, in.coverage)) {
+    if (t.colour.a < 0.5 || screened_out(in.clip.xy, in.coverage) || screened_out(in.clip.xy, in.view)) {
         discard;
     }
     return vec4<f32>(t.lit, 1.0);
@@ -495,7 +564,7 @@ fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @loc
 fn fs_foliage_lit_coverage(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let t = lit_foliage(in, front);
     let a = clamp((t.colour.a - 0.5) / max(fwidth(t.colour.a), 1e-4) + 0.5, 0.0, 1.0);
-    if (screened_out(in.clip.xy, in.coverage)) {
+    if (screened_out(in.clip.xy, in.coverage) || screened_out(in.clip.xy, in.view)) {
         discard;
     }
     return vec4<f32>(t.lit, a);

@@ -296,9 +296,48 @@ fn the_chain_falls_to_a_handful_of_billboards() {
     assert_eq!(chain[0].cloud.model, tree);
     for w in chain[1..].windows(2) {
         assert!(w[1].epsilon > w[0].epsilon);
-        assert!(w[1].cloud.billboards < w[0].cloud.billboards);
+        assert!(w[1].cloud.drawn_billboards() < w[0].cloud.drawn_billboards());
     }
-    assert!(chain.last().unwrap().cloud.billboards <= 10);
+    assert!(chain.last().unwrap().cloud.drawn_billboards() <= 10);
+    // The coarse end is made of view-selected clumps, as many as its cloud had billboards,
+    // each of whose leaves lie within the level's ε of every view's plane.
+    let opts = ChainOptions::default();
+    let clump_levels: Vec<_> = chain
+        .iter()
+        .filter_map(|l| match l.kind {
+            Some(lodlab::bake::billboard::chain::CloudKind::Clumps { clumps, views }) => {
+                Some((l, clumps, views))
+            }
+            _ => None,
+        })
+        .collect();
+    assert!(
+        clump_levels.len() >= 2,
+        "{} clump levels",
+        clump_levels.len()
+    );
+    for (l, clumps, views) in clump_levels {
+        assert!(clumps <= opts.clumps_from);
+        assert_eq!(views, opts.clump_views);
+        assert_eq!(l.cloud.billboards, clumps * views);
+        assert_eq!(l.cloud.drawn_billboards(), clumps);
+        assert_eq!(l.cloud.view_windows.len(), l.cloud.billboards);
+        assert!(l.cloud.view_windows.iter().all(|w| w.abs() > 0.1));
+        let c = lodlab::bake::billboard::clumps::clump_cloud(&tree, &f, clumps, views, opts.seed);
+        assert!(
+            c.epsilon() <= l.epsilon,
+            "{clumps} clumps: ε bound {:.3} m over the level's {:.3} m",
+            c.epsilon(),
+            l.epsilon
+        );
+        // Its view windows reach the GPU on the billboards' corners.
+        let bake = l.cloud.bake().unwrap();
+        let windows = &bake.animation_space.view_windows;
+        assert_eq!(
+            windows.iter().filter(|&&w| w != 0.0).count(),
+            4 * l.cloud.billboards
+        );
+    }
     for l in &chain[1..] {
         let materials = &l.cloud.model.materials;
         let a = lodlab::bake::billboard::atlas::lit_atlas_material(materials).unwrap();
@@ -475,7 +514,12 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let tree = load_model("sapling").unwrap();
     let hash = source_hash(&lodlab::import::source_path("sapling")).unwrap();
-    let opts = ChainOptions::default();
+    // Clouds all the way: the sapling's clump levels beat its impostor at every switch size,
+    // and the impostor is to be cached too (clump levels are cached below).
+    let opts = ChainOptions {
+        clumps_from: 0,
+        ..Default::default()
+    };
     let load = || {
         load_or_build_chain(
             &AtlasRasterizer::new(&gpu),
@@ -530,6 +574,36 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     }
     assert_eq!(rebuilt.len(), built.len());
     assert_eq!(load().1, Origin::Cache, "the rebuilt chain is stored again");
+    // A chain ending in clumps: their view windows come back from the cache.
+    let with_clumps = || {
+        load_or_build_chain(
+            &AtlasRasterizer::new(&gpu),
+            &lodlab::runtime::colour_error::GpuColourError::new(&gpu),
+            &cache,
+            &tree,
+            &hash,
+            &ChainOptions::default(),
+            &|_| {},
+        )
+        .unwrap()
+    };
+    let (built, _) = with_clumps();
+    let (cached, origin) = with_clumps();
+    assert_eq!(origin, Origin::Cache);
+    let last = cached.last().unwrap();
+    assert!(
+        matches!(
+            last.kind,
+            Some(lodlab::bake::billboard::chain::CloudKind::Clumps { .. })
+        ),
+        "{:?}",
+        last.kind
+    );
+    assert!(!last.cloud.view_windows.is_empty());
+    for (a, b) in cached.iter().zip(&built).skip(1) {
+        assert_eq!(a.cloud.view_windows, b.cloud.view_windows);
+        assert_eq!(a.cloud.views, b.cloud.views);
+    }
 }
 
 /// A cloud level's billboard outlines (the viewer's debug view) are the four sides of every
@@ -748,7 +822,7 @@ fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
     .unwrap();
     let atlas = lit_atlas_material(&level.model.materials).expect("a lit atlas");
     assert!(
-        CharacterBake::tree_level(&level.model, None, &level.occlusion)
+        CharacterBake::tree_level(&level.model, None, &level.occlusion, &[])
             .unwrap()
             .atlas_lit
     );
@@ -820,4 +894,64 @@ fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
     );
     let walker = CharacterBake::new(&load_model("walker").unwrap()).unwrap();
     assert!(walker.animation_space.crown_occlusion.is_empty());
+}
+
+/// View-selected clumps (src/bake/billboard/clumps.rs): drawn one plane a clump, chosen by the
+/// view, a clump level covers the sapling's leaves more closely than the same planes all drawn
+/// at once (the "star", which fills the crown's gaps) and than a cloud drawing as many
+/// billboards, from the colour metric's views round the tree and over its loop.
+#[test]
+fn clumps_drawn_by_view_cover_the_tree_better_than_all_their_planes_or_a_cloud() {
+    use lodlab::bake::billboard::chain::{CloudKind, cloud_level};
+    use lodlab::runtime::colour_error::colour_error;
+    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let raster = AtlasRasterizer::new(&gpu);
+    let tree = load_model("sapling").unwrap();
+    let f = foliage(&tree).unwrap();
+    let h = tree_height(&tree);
+    let size = [640, 480];
+    let level = |kind: &CloudKind, epsilon: f32| {
+        cloud_level(
+            &raster,
+            &tree,
+            &f,
+            &CloudParams {
+                epsilon,
+                ..Default::default()
+            },
+            kind,
+            200.0 / h,
+            &tree,
+            None,
+        )
+        .unwrap()
+    };
+    let cloud = level(
+        &CloudKind::Skeleton(Grouping::Subtree { forks: 1 }),
+        0.1 * h,
+    );
+    let n = cloud.billboards;
+    assert!((4..=40).contains(&n), "{n} billboards");
+    let clumps = level(
+        &CloudKind::Clumps {
+            clumps: n,
+            views: 4,
+        },
+        0.1 * h,
+    );
+    assert_eq!(clumps.drawn_billboards(), n);
+    let mut star = clumps.clone();
+    star.view_windows.clear();
+    let by_view = colour_error(&gpu, &tree, &clumps, size).unwrap();
+    let all_planes = colour_error(&gpu, &tree, &star, size).unwrap();
+    let as_cloud = colour_error(&gpu, &tree, &cloud, size).unwrap();
+    eprintln!("{n} clumps by view {by_view:.3}, all planes {all_planes:.3}, cloud {as_cloud:.3}");
+    assert!(
+        by_view < 0.95 * all_planes,
+        "by view {by_view:.3}, all planes {all_planes:.3}"
+    );
+    assert!(
+        by_view < 0.8 * as_cloud,
+        "by view {by_view:.3}, a cloud of {n} billboards {as_cloud:.3}"
+    );
 }

@@ -200,7 +200,7 @@ fn background_bakes_finish_and_fill_the_cache() {
         chain.len() - 1,
         "levels 1… are baked for the GPU"
     );
-    assert!(chain.last().unwrap().cloud.billboards <= 10);
+    assert!(chain.last().unwrap().cloud.drawn_billboards() <= 10);
     let mut files: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

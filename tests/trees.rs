@@ -506,10 +506,10 @@ fn the_tree_report_writes_its_three_files() {
     }
     for w in levels[1..].windows(2) {
         assert!(f(&w[1], "epsilon") > f(&w[0], "epsilon"));
-        assert!(f(&w[1], "billboards") < f(&w[0], "billboards"));
+        assert!(f(&w[1], "drawn_billboards") < f(&w[0], "drawn_billboards"));
     }
-    assert!(f(levels.last().unwrap(), "billboards") <= 10.0);
-    // Skeleton clouds near, spectral clouds far (the automatic chain).
+    assert!(f(levels.last().unwrap(), "drawn_billboards") <= 10.0);
+    // Skeleton clouds near, spectral clouds far, clumps farthest (the automatic chain).
     let kinds: Vec<&str> = levels
         .iter()
         .map(|l| l["grouping"].as_str().unwrap())
@@ -517,11 +517,21 @@ fn the_tree_report_writes_its_three_files() {
     assert!(kinds[1].starts_with("per bone"), "{kinds:?}");
     let first_spectral = kinds.iter().position(|k| k.starts_with("spectral"));
     let first_spectral = first_spectral.expect("spectral levels at the coarse end");
+    let first_clumps = kinds
+        .iter()
+        .position(|k| k.contains("clumps"))
+        .expect("clumps at the coarsest end");
+    assert!(first_clumps > first_spectral, "{kinds:?}");
     assert!(
-        kinds[first_spectral..]
+        kinds[first_spectral..first_clumps]
             .iter()
             .all(|k| k.starts_with("spectral"))
     );
+    assert!(kinds[first_clumps..].iter().all(|k| k.contains("clumps")));
+    for l in &levels[first_clumps..] {
+        assert_eq!(f(l, "billboards"), 4.0 * f(l, "drawn_billboards"), "{l}");
+    }
+    let spectral_levels = first_clumps - first_spectral;
     // Animation errors: none for the tree, some for every cloud, growing to the coarse end.
     assert_eq!(f(&levels[0], "anim_rms"), 0.0);
     for l in &levels[1..] {
@@ -541,7 +551,7 @@ fn the_tree_report_writes_its_three_files() {
     );
     let types = json["description_types"].as_array().unwrap();
     // Every description type with the shared bone, and the chain's own type as plain SCA.
-    assert_eq!(types.len(), 4 * (levels.len() - first_spectral));
+    assert_eq!(types.len(), 4 * spectral_levels);
     for name in ["naive", "dominating-axis", "axis-phase"] {
         assert!(types.iter().any(|t| t["description"] == name
             && t["shared_bone"] == true
@@ -549,7 +559,7 @@ fn the_tree_report_writes_its_three_files() {
     }
     assert_eq!(
         types.iter().filter(|t| t["shared_bone"] == false).count(),
-        levels.len() - first_spectral
+        spectral_levels
     );
     let motion = image::open(out_dir.join("motion.png")).unwrap().to_rgb8();
     let curve = |r: u8, g: u8, b: u8| {

@@ -476,8 +476,8 @@ impl PolicyArgs {
 /// Trees: what they become under a simplified method and how they look.
 #[derive(Args, Debug, Clone)]
 pub struct FoliageArgs {
-    /// Trees' level policy: automatic (skeleton clouds near, spectral clouds far), skeleton,
-    /// spectral, or full (every leaf at every distance).
+    /// Trees' level policy: automatic (skeleton clouds near, spectral clouds far, view-selected
+    /// clumps farthest), skeleton, spectral, or full (every leaf at every distance).
     #[arg(long, default_value = "automatic", value_enum)]
     pub foliage: FoliagePolicy,
     /// ε of a tree's first cloud level, as a fraction of its height.

@@ -40,6 +40,11 @@ pub struct AnimationSpaceMesh {
     /// character).
     #[serde(default)]
     pub crown_occlusion: Vec<f32>,
+    /// Per vertex, the view window of the billboard it is a corner of (see
+    /// [`crate::bake::billboard::clumps`]; 0: drawn from every view); empty where no billboard
+    /// has one.
+    #[serde(default)]
+    pub view_windows: Vec<f32>,
 }
 
 impl AnimationSpaceMesh {
@@ -69,6 +74,7 @@ impl AnimationSpaceMesh {
             indices: mesh.indices.clone(),
             spectral_rows: Vec::new(),
             crown_occlusion: Vec::new(),
+            view_windows: Vec::new(),
         }
     }
 
@@ -172,6 +178,11 @@ impl AnimationSpaceMesh {
                 Vec::new()
             } else {
                 order.iter().map(|&v| self.crown_occlusion[v]).collect()
+            },
+            view_windows: if self.view_windows.is_empty() {
+                Vec::new()
+            } else {
+                order.iter().map(|&v| self.view_windows[v]).collect()
             },
         };
         out.offsets.push(0);

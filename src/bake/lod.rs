@@ -302,6 +302,7 @@ impl<'a> Replay<'a> {
             indices,
             spectral_rows: Vec::new(),
             crown_occlusion: Vec::new(),
+            view_windows: Vec::new(),
         };
         for &r in &used {
             compact.influences.extend_from_slice(self.influences_of(r));

@@ -78,7 +78,8 @@ impl CharacterBake {
             + std::mem::size_of_val(am.materials.as_slice())
             + std::mem::size_of_val(am.indices.as_slice())
             + std::mem::size_of_val(am.spectral_rows.as_slice())
-            + std::mem::size_of_val(am.crown_occlusion.as_slice());
+            + std::mem::size_of_val(am.crown_occlusion.as_slice())
+            + std::mem::size_of_val(am.view_windows.as_slice());
         let textures = self.animation.grid.texels.len() * 16
             + self.vertices.grid.texels.len() * 16
             + self.materials.mips.iter().map(Vec::len).sum::<usize>()
@@ -102,23 +103,29 @@ impl CharacterBake {
             .then(|| billboard::occlusion::CrownDensity::of(model))
             .flatten();
         let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
-        Self::build(model, motion, true, &occlusion)
+        Self::build(model, motion, true, &occlusion, &[])
     }
 
     /// [`Self::with_motion`] for a level of a tree, every vertex darkened by the crown by
-    /// `occlusion` (one per vertex of `model`, see [`billboard::occlusion`]; empty: none).
+    /// `occlusion` (one per vertex of `model`, see [`billboard::occlusion`]; empty: none), and
+    /// its billboards drawn within their `view_windows` (one per vertex, see
+    /// [`billboard::clumps`]; empty: from every view).
     pub fn tree_level(
         model: &Model,
         motion: Option<&SpectralMotion>,
         occlusion: &[f32],
+        view_windows: &[f32],
     ) -> Result<Self, String> {
-        Self::build(model, motion, true, occlusion)
+        if !view_windows.is_empty() && view_windows.len() != model.mesh.vertex_count() {
+            return Err("view windows do not fit the model's vertices".into());
+        }
+        Self::build(model, motion, true, occlusion, view_windows)
     }
 
     /// [`Self::new`] with the vertices in the model's order, not reordered for the GPU's
     /// caches: for a mesh whose shader finds vertices by index (an impostor's quad).
     pub fn in_order(model: &Model) -> Result<Self, String> {
-        Self::build(model, None, false, &[])
+        Self::build(model, None, false, &[], &[])
     }
 
     fn build(
@@ -126,6 +133,7 @@ impl CharacterBake {
         motion: Option<&SpectralMotion>,
         optimize: bool,
         occlusion: &[f32],
+        view_windows: &[f32],
     ) -> Result<Self, String> {
         let mut am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
         if let Some(m) = motion {
@@ -143,6 +151,9 @@ impl CharacterBake {
                 return Err("crown occlusion does not fit the model's vertices".into());
             }
             am.crown_occlusion = occlusion.iter().map(|o| o.clamp(0.0, 1.0)).collect();
+        }
+        if view_windows.iter().any(|&w| w != 0.0) {
+            am.view_windows = view_windows.to_vec();
         }
         let am = if optimize { am.optimized_for_gpu() } else { am };
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);

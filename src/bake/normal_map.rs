@@ -420,6 +420,7 @@ mod tests {
             indices,
             spectral_rows: Vec::new(),
             crown_occlusion: Vec::new(),
+            view_windows: Vec::new(),
         }
     }
 

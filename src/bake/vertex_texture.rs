@@ -4,14 +4,17 @@
 //!
 //! Layout, by linear texel index (see [`super::texels`]):
 //! - texel `2v` for vertex `v`: `(first influence texel, count + 256 · material, u, v)`;
-//! - texel `2v + 1`: `(geomorph target, spectral row + 1, normal-map layer + 1, occlusion)`:
+//! - texel `2v + 1`: `(geomorph target, spectral row + 1, normal-map layer + 1, occlusion or
+//!   view window)`:
 //!   the vertex (index into this texture) that `v` morphs into at the next coarser level
 //!   (Houle & Poulin §5.1), itself on the coarsest level; the row of the spectra texture whose
 //!   offset moves it, 0 for none (see [`crate::bake::spectral::texture`]); the layer of the
 //!   normal maps that lights it, 0 for none (see [`crate::bake::normal_map`]; on a billboard of
 //!   a cloud, 1: lit through its atlas, whose lighting is the next material layer, see
 //!   [`crate::bake::billboard::atlas`]); and the light the crown takes from it, 0 for none
-//!   (see [`crate::bake::billboard::occlusion`]);
+//!   (see [`crate::bake::billboard::occlusion`]), or on a billboard (whose atlas carries the
+//!   occlusion per texel) its view window, 0 for drawn from every view (see
+//!   [`crate::bake::billboard::clumps`]);
 //! - each influence two texels: `p_i` as `(x, y, z, w)`, then `(n_i.x, n_i.y, n_i.z, bone)`.
 //!
 //! Integers are stored as floats, exact up to 2^24 texels. The levels of detail of a model share
@@ -104,8 +107,11 @@ impl VertexTexture {
                     .get(k)
                     .and_then(|l| l.get(mesh.materials[v] as usize).copied().flatten())
                     .map_or(0.0, |l| l as f32 + 1.0);
+                // A billboard's occlusion is in its atlas: the slot holds its view window.
+                let window = mesh.view_windows.get(v).copied().unwrap_or(0.0);
                 let occlusion = mesh.crown_occlusion.get(v).copied().unwrap_or(0.0);
-                headers.push([target as f32, row, layer, occlusion]);
+                let last = if window != 0.0 { window } else { occlusion };
+                headers.push([target as f32, row, layer, last]);
                 for inf in infs {
                     body.push(inf.p.to_array());
                     body.push([inf.n.x, inf.n.y, inf.n.z, inf.bone as f32]);
@@ -186,6 +192,7 @@ mod tests {
             indices: vec![],
             spectral_rows: vec![crate::bake::spectral::texture::NO_ROW, 7],
             crown_occlusion: vec![0.0, 0.25],
+            view_windows: Vec::new(),
         };
         let t = VertexTexture::pack(
             &[&mesh, &mesh],
@@ -207,6 +214,15 @@ mod tests {
         assert_eq!(layers, vec![0.0, 0.0, 0.0, 6.0]);
         let occlusion: Vec<f32> = (0..4).map(|v| t.grid.get(2 * v + 1)[3]).collect();
         assert_eq!(occlusion, vec![0.0, 0.25, 0.0, 0.25]);
+        // A billboard's view window takes the slot where it has one (its atlas carries its
+        // occlusion).
+        let windowed = AnimationSpaceMesh {
+            view_windows: vec![-0.4, 0.0],
+            ..mesh.clone()
+        };
+        let t2 = VertexTexture::pack(&[&windowed], &[], &[]).unwrap();
+        assert_eq!(t2.grid.get(1)[3], -0.4);
+        assert_eq!(t2.grid.get(3)[3], 0.25);
         // A map that does not fit the next level is refused.
         assert!(VertexTexture::pack(&[&mesh, &mesh], &[&[0, 2]], &[]).is_err());
         let h = t.grid.get(2 * 3);

@@ -61,13 +61,17 @@ fn foliage_disagreement(
     // Masks only: the original's leaves are baked without the crown's occlusion, which would
     // darken them and cost a crown's worth of rays a measurement.
     let leaves = only_foliage(original);
-    let bake = crate::bake::CharacterBake::tree_level(&leaves, None, &[])
+    let bake = crate::bake::CharacterBake::tree_level(&leaves, None, &[], &[])
         .map_err(|e| anyhow::anyhow!("{}: {e}", leaves.name))?;
     let mut a = metric_world(gpu, Loaded::forest_of_bake(&leaves, bake, 1))?;
-    let mut b = metric_world(
-        gpu,
-        Loaded::forest_of(&lod_foliage, lod_motion.as_ref(), 1)?,
-    )?;
+    let lod_bake = crate::bake::CharacterBake::tree_level(
+        &lod_foliage,
+        lod_motion.as_ref(),
+        &[],
+        &lod.vertex_windows(&lod_foliage),
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", lod_foliage.name))?;
+    let mut b = metric_world(gpu, Loaded::forest_of_bake(&lod_foliage, lod_bake, 1))?;
     disagreement(gpu, &mut a, &mut b, original, size, frames, distance)
 }
 

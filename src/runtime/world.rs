@@ -99,6 +99,7 @@ impl LevelSummary {
                 None => "full",
                 Some(CloudKind::Skeleton(_)) => "skeleton",
                 Some(CloudKind::Spectral(_)) => "spectral",
+                Some(CloudKind::Clumps { .. }) => "clumps",
                 Some(CloudKind::Impostor { .. }) => "impostor",
             },
             billboards: level.cloud.billboards,

@@ -12,7 +12,8 @@ pub enum FoliagePolicy {
     Skeleton,
     /// The spectral-cloud chain ([`ChainStyle::Spectral`]).
     Spectral,
-    /// Skeleton clouds near, spectral clouds far ([`ChainStyle::Automatic`]).
+    /// Skeleton clouds near, spectral clouds far, view-selected clumps farthest
+    /// ([`ChainStyle::Automatic`]).
     #[default]
     Automatic,
 }

@@ -346,6 +346,7 @@ mod tests {
             corners: [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
             leaves: vec![0, 1],
             drawn: vec![0, 1],
+            view_window: 0.0,
         };
         let layout = AtlasLayout {
             width: 64,

@@ -129,6 +129,10 @@ pub struct Billboard {
     /// The leaves its texture shows: `leaves`, plus, with increased density, every other leaf
     /// of the group valid for its plane.
     pub drawn: Vec<u32>,
+    /// Drawn only from views within this angle (radians) of its normal, horizontally, either
+    /// side: a clump billboard's view window ([`super::clumps`]; negative for the planes that
+    /// take the other half of the cross-fade's screen door). 0: drawn from every view.
+    pub view_window: f32,
 }
 
 impl Billboard {
@@ -294,6 +298,7 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
                 corners,
                 leaves: taken,
                 drawn,
+                view_window: 0.0,
             }
         })
         .collect()
@@ -422,7 +427,7 @@ fn candidate_plane(seed: &Leaf, eps: f32, rng: &mut fastrand::Rng) -> Plane {
 
 /// The least-area rectangle of the leaves' corners projected onto the plane, in scene space,
 /// wound counter-clockwise about the plane normal.
-fn rectangle<'a>(plane: &Plane, leaves: impl Iterator<Item = &'a Leaf>) -> [Vec3; 4] {
+pub(super) fn rectangle<'a>(plane: &Plane, leaves: impl Iterator<Item = &'a Leaf>) -> [Vec3; 4] {
     let (u, v) = plane.basis();
     let points: Vec<Vec2> = leaves
         .flat_map(|l| l.corners.iter())

@@ -12,6 +12,7 @@
 pub mod atlas;
 pub mod chain;
 pub mod cloud;
+pub mod clumps;
 pub mod impostor;
 pub mod occlusion;
 pub mod rect;
