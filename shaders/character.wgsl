@@ -125,8 +125,9 @@ fn morphed_to(vi: u32, coarse_vi: u32, inst: Instance) -> VsOut {
 // plane) not at all; anything else goes to the fragment shader.
 const VIEW_FADE: f32 = 0.25;
 
-fn view_coverage(vi: u32, inst: Instance, normal: vec3<f32>) -> f32 {
-    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+// `header` is the vertex's second header texel (see src/bake/vertex_texture.rs): the foliage
+// shaders fetch it once for this, the flat normal and the crown's light.
+fn view_coverage(header: vec4<f32>, inst: Instance, normal: vec3<f32>) -> f32 {
     let w = select(0.0, header.w, header.z > 0.5);
     let h = abs(w);
     let v = frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
@@ -155,9 +156,8 @@ fn out_of_view(coverage: f32) -> bool {
 // next. (The normal halfway between the view and the sun, which leaves facing every way
 // average to more nearly, made the tree's coarse levels far too bright beside the full tree:
 // tone error 0.12 against 0.03 in the report's lighting.md.)
-fn flat_normal(vi: u32, inst: Instance, o: VsOut) -> VsOut {
+fn flat_normal(header: vec4<f32>, inst: Instance, o: VsOut) -> VsOut {
     var out = o;
-    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
     let v = frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
     let facing = vec3<f32>(v.x, 0.0, v.y) * select(1.0, -1.0, dot(o.normal.xz, v) < 0.0);
     let windowed = header.z > 0.5 && header.w != 0.0 && dot(v, v) > 1e-12;
@@ -167,9 +167,9 @@ fn flat_normal(vi: u32, inst: Instance, o: VsOut) -> VsOut {
 
 // `o` with its billboard's view coverage in lod.w (1 outside clump levels), and dropped where
 // it is out of view.
-fn in_view(vi: u32, inst: Instance, o: VsOut) -> VsOut {
+fn in_view(header: vec4<f32>, inst: Instance, o: VsOut) -> VsOut {
     var out = o;
-    out.lod.w = view_coverage(vi, inst, o.normal);
+    out.lod.w = view_coverage(header, inst, o.normal);
     if (out_of_view(out.lod.w)) {
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
     }
@@ -184,7 +184,12 @@ fn vs_outline(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
     var out = skinned(vi, inst);
     out.world = mix(out.world, frame.camera_pos.xyz, 0.004);
     out.clip = frame.view_proj * vec4<f32>(out.world, 1.0);
-    return in_view(vi, inst, out);
+    return in_view(vertex_header(vi), inst, out);
+}
+
+// The second header texel of vertex `vi`.
+fn vertex_header(vi: u32) -> vec4<f32> {
+    return texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
 }
 
 @fragment
@@ -356,13 +361,23 @@ fn pixel_threshold(pixel: vec2<f32>) -> f32 {
 // dissolves, keeps all), c < 0 those whose threshold is at or above −c − 1, so the incoming
 // and outgoing halves of one dissolve cover complementary pixels.
 fn screened_out(pixel: vec2<f32>, coverage: f32) -> bool {
-    let x = pixel_threshold(pixel);
+    return screened_out_at(pixel_threshold(pixel), coverage);
+}
+
+// `screened_out` at a pixel whose threshold is `x`.
+fn screened_out_at(x: f32, coverage: f32) -> bool {
     return select(x >= coverage, x < -coverage - 1.0, coverage < 0.0);
+}
+
+// Out of either of two screen doors at one pixel of threshold `x`: a dissolve's and a clump
+// billboard's cross-fade.
+fn screened_out_by(x: f32, a: f32, b: f32) -> bool {
+    return screened_out_at(x, a) || screened_out_at(x, b);
 }
 
 // A tree changing level, or a clump billboard cross-fading with its neighbour.
 fn dissolved(in: FoliageOut) -> bool {
-    return screened_out(in.clip.xy, in.coverage) || screened_out(in.clip.xy, in.view);
+    return screened_out_by(pixel_threshold(in.clip.xy), in.coverage, in.view);
 }
 
 // Foliage is lit per vertex: leaves are flat, so sun, sky and rim light are the same at every
@@ -395,15 +410,17 @@ fn side_light(n: vec3<f32>, v: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(shade(vec3<f32>(1.0), n), rim(n, v));
 }
 
-// The light the crown leaves vertex `vi`: 1 − its occlusion (see src/bake/vertex_texture.rs);
-// a billboard's is in its atlas (its slot holds its view window).
-fn crown_light(vi: u32) -> f32 {
-    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+// The light the crown leaves a vertex of second header texel `header`: 1 − its occlusion (see
+// src/bake/vertex_texture.rs); a billboard's is in its atlas (its slot holds its view window).
+fn crown_light(header: vec4<f32>) -> f32 {
     return select(1.0 - header.w, 1.0, header.z > 0.5);
 }
 
-fn foliage_out(o: VsOut, crown: f32) -> FoliageOut {
-    // `o` comes through `in_view`.
+// A foliage vertex as the fragment shader takes it: `skinned_vertex` through `in_view`, lit per
+// vertex with its flat normal (`flat_normal`), by the crown's light of its `header`.
+fn foliage_out(skinned_vertex: VsOut, inst: Instance, header: vec4<f32>) -> FoliageOut {
+    let o = flat_normal(header, inst, in_view(header, inst, skinned_vertex));
+    let crown = crown_light(header);
     let n = normalize(o.normal);
     let v = normalize(frame.camera_pos.xyz - o.world);
     var out: FoliageOut;
@@ -422,12 +439,12 @@ fn foliage_out(o: VsOut, crown: f32) -> FoliageOut {
 
 @vertex
 fn vs_foliage(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
-    return foliage_out(flat_normal(vi, inst, in_view(vi, inst, skinned(vi, inst))), crown_light(vi));
+    return foliage_out(skinned(vi, inst), inst, vertex_header(vi));
 }
 
 @vertex
 fn vs_foliage_morph(@builtin(vertex_index) vi: u32, inst: Instance) -> FoliageOut {
-    return foliage_out(flat_normal(vi, inst, in_view(vi, inst, morphed(vi, inst))), crown_light(vi));
+    return foliage_out(morphed(vi, inst), inst, vertex_header(vi));
 }
 
 // The lit colour of a foliage fragment of texture colour `texel` (see `lit`, per vertex).
@@ -490,8 +507,8 @@ struct LitFoliageOut {
 @vertex
 fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageOut {
     let s = skin_vertex(vi, instance_frames(inst));
-    let o = in_view(vi, inst, finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences)));
-    let header = texel(vertex_tex, layout_of(vertex_tex), 2u * vi + 1u);
+    let header = vertex_header(vi);
+    let o = in_view(header, inst, finish(inst, s.position, s.normal, s.uv, s.material, f32(s.influences)));
     // The frame in model space (mirror of `billboard_frame`), then in the world.
     let nm = normalize(s.normal);
     let reference = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(nm.y) < 0.99);
@@ -509,7 +526,7 @@ fn vs_foliage_lit(@builtin(vertex_index) vi: u32, inst: Instance) -> LitFoliageO
     out.sun = vec3<f32>(dot(sun, t), dot(sun, b), dot(sun, n));
     out.up = vec3<f32>(t.y, b.y, n.y);
     out.light = vec4<f32>(
-        crown_light(vi),
+        crown_light(header),
         select(0.0, 1.0, header.z > 0.5),
         rim(n, v),
         rim(-n, v),
@@ -554,7 +571,7 @@ fn lit_foliage(in: LitFoliageOut, front: bool) -> LitTexels {
 @fragment
 fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let t = lit_foliage(in, front);
-    if (t.colour.a < 0.5 || screened_out(in.clip.xy, in.coverage) || screened_out(in.clip.xy, in.view)) {
+    if (t.colour.a < 0.5 || screened_out_by(pixel_threshold(in.clip.xy), in.coverage, in.view)) {
         discard;
     }
     return vec4<f32>(t.lit, 1.0);
@@ -564,7 +581,7 @@ fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @loc
 fn fs_foliage_lit_coverage(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let t = lit_foliage(in, front);
     let a = clamp((t.colour.a - 0.5) / max(fwidth(t.colour.a), 1e-4) + 0.5, 0.0, 1.0);
-    if (screened_out(in.clip.xy, in.coverage) || screened_out(in.clip.xy, in.view)) {
+    if (screened_out_by(pixel_threshold(in.clip.xy), in.coverage, in.view)) {
         discard;
     }
     return vec4<f32>(t.lit, a);

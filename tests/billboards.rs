@@ -520,18 +520,19 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
         clumps_from: 0,
         ..Default::default()
     };
-    let load = || {
+    let load_with = |opts: &ChainOptions| {
         load_or_build_chain(
             &AtlasRasterizer::new(&gpu),
             &lodlab::runtime::colour_error::GpuColourError::new(&gpu),
             &cache,
             &tree,
             &hash,
-            &opts,
+            opts,
             &|_| {},
         )
         .unwrap()
     };
+    let load = || load_with(&opts);
     let (built, origin) = load();
     assert_eq!(origin, Origin::Baked { warning: None });
     // The chain ends with the impostor, which comes in where the level it stands for would
@@ -575,20 +576,8 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     assert_eq!(rebuilt.len(), built.len());
     assert_eq!(load().1, Origin::Cache, "the rebuilt chain is stored again");
     // A chain ending in clumps: their view windows come back from the cache.
-    let with_clumps = || {
-        load_or_build_chain(
-            &AtlasRasterizer::new(&gpu),
-            &lodlab::runtime::colour_error::GpuColourError::new(&gpu),
-            &cache,
-            &tree,
-            &hash,
-            &ChainOptions::default(),
-            &|_| {},
-        )
-        .unwrap()
-    };
-    let (built, _) = with_clumps();
-    let (cached, origin) = with_clumps();
+    let (built, _) = load_with(&ChainOptions::default());
+    let (cached, origin) = load_with(&ChainOptions::default());
     assert_eq!(origin, Origin::Cache);
     let last = cached.last().unwrap();
     assert!(
