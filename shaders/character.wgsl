@@ -125,12 +125,18 @@ fn morphed_to(vi: u32, coarse_vi: u32, inst: Instance) -> VsOut {
 // plane) not at all; anything else goes to the fragment shader.
 const VIEW_FADE: f32 = 0.25;
 
+// The way from the instance's origin to the eye, horizontally: what chooses a clump's plane
+// and faces its flat normal, the same for every vertex of a tree.
+fn view_from_origin(inst: Instance) -> vec2<f32> {
+    return frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
+}
+
 // `header` is the vertex's second header texel (see src/bake/vertex_texture.rs): the foliage
 // shaders fetch it once for this, the flat normal and the crown's light.
 fn view_coverage(header: vec4<f32>, inst: Instance, normal: vec3<f32>) -> f32 {
     let w = select(0.0, header.w, header.z > 0.5);
     let h = abs(w);
-    let v = frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
+    let v = view_from_origin(inst);
     let n = normal.xz;
     let lengths = length(n) * length(v);
     // Straight above the tree every plane is as good: all are drawn.
@@ -158,7 +164,7 @@ fn out_of_view(coverage: f32) -> bool {
 // tone error 0.12 against 0.03 in the report's lighting.md.)
 fn flat_normal(header: vec4<f32>, inst: Instance, o: VsOut) -> VsOut {
     var out = o;
-    let v = frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
+    let v = view_from_origin(inst);
     let facing = vec3<f32>(v.x, 0.0, v.y) * select(1.0, -1.0, dot(o.normal.xz, v) < 0.0);
     let windowed = header.z > 0.5 && header.w != 0.0 && dot(v, v) > 1e-12;
     out.normal = select(o.normal, facing, windowed);
@@ -568,10 +574,15 @@ fn lit_foliage(in: LitFoliageOut, front: bool) -> LitTexels {
     return out;
 }
 
+// `dissolved` for the per-pixel foliage path.
+fn lit_dissolved(in: LitFoliageOut) -> bool {
+    return screened_out_by(pixel_threshold(in.clip.xy), in.coverage, in.view);
+}
+
 @fragment
 fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let t = lit_foliage(in, front);
-    if (t.colour.a < 0.5 || screened_out_by(pixel_threshold(in.clip.xy), in.coverage, in.view)) {
+    if (t.colour.a < 0.5 || lit_dissolved(in)) {
         discard;
     }
     return vec4<f32>(t.lit, 1.0);
@@ -581,7 +592,7 @@ fn fs_foliage_lit(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @loc
 fn fs_foliage_lit_coverage(in: LitFoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     let t = lit_foliage(in, front);
     let a = clamp((t.colour.a - 0.5) / max(fwidth(t.colour.a), 1e-4) + 0.5, 0.0, 1.0);
-    if (screened_out_by(pixel_threshold(in.clip.xy), in.coverage, in.view)) {
+    if (lit_dissolved(in)) {
         discard;
     }
     return vec4<f32>(t.lit, a);

@@ -118,90 +118,104 @@ pub fn cloud_level(
     wood: &Model,
     crown: Option<&CrownDensity>,
 ) -> Result<CloudLevel> {
-    let merged;
-    let original = foliage;
-    let (foliage, cloud, lines, groups) = match kind {
+    let built = build_cloud(tree, foliage, params, kind)?;
+    level_of_cloud(raster, tree, foliage, built, texels_per_unit, wood, crown)
+}
+
+/// A cloud's billboards before its atlas and model are made: enough to count them, which is
+/// all the chain needs to choose a level's kind.
+struct BuiltCloud<'a> {
+    /// The leaves it was built from: the tree's, or those rebound to merged siblings.
+    foliage: std::borrow::Cow<'a, Foliage>,
+    cloud: super::SkeletonCloud,
+    /// A spectral cloud's lines per billboard, and lines per axis.
+    lines: Option<(Vec<[Vec<crate::bake::spectral::bins::Line>; 3]>, usize)>,
+    /// The clouds or clumps it was built as.
+    groups: usize,
+    /// Billboards to a clump, of which a view draws one (1 for clouds).
+    views: usize,
+    /// How far a drawn leaf may lie off its billboard (the atlas's depth order is scaled to it).
+    depth: f32,
+}
+
+/// The billboards of `foliage` at `params`, made as `kind`.
+fn build_cloud<'a>(
+    tree: &Model,
+    foliage: &'a Foliage,
+    params: &CloudParams,
+    kind: &CloudKind,
+) -> Result<BuiltCloud<'a>> {
+    use std::borrow::Cow;
+    Ok(match kind {
         CloudKind::Skeleton(grouping) => {
             let foliage = if *grouping == Grouping::Siblings {
-                merged = merge_siblings(tree, foliage, params.epsilon);
-                &merged
+                Cow::Owned(merge_siblings(tree, foliage, params.epsilon))
             } else {
-                foliage
+                Cow::Borrowed(foliage)
             };
-            let cloud = grouped_cloud(&tree.skeleton, foliage, params, *grouping);
+            let cloud = grouped_cloud(&tree.skeleton, &foliage, params, *grouping);
             let mut bones = cloud.bones.clone();
             bones.sort_unstable();
             bones.dedup();
-            (foliage, cloud, None, bones.len())
+            BuiltCloud {
+                foliage,
+                cloud,
+                lines: None,
+                groups: bones.len(),
+                views: 1,
+                depth: params.epsilon,
+            }
         }
         CloudKind::Spectral(sp) => {
             let s = spectral_cloud(tree, foliage, params, sp);
-            (
-                foliage,
-                s.cloud,
-                Some((s.lines, lines_per_axis(sp))),
-                s.clusters,
-            )
+            BuiltCloud {
+                foliage: Cow::Borrowed(foliage),
+                cloud: s.cloud,
+                lines: Some((s.lines, lines_per_axis(sp))),
+                groups: s.clusters,
+                views: 1,
+                depth: params.epsilon,
+            }
         }
         CloudKind::Clumps { clumps, views } => {
             let c = super::clumps::clump_cloud(tree, foliage, *clumps, *views, params.seed);
-            let depth = c.depth;
-            let groups = c.clumps;
-            return level_of_cloud(
-                raster,
-                tree,
-                original,
-                foliage,
-                c.cloud,
-                None,
-                (groups, c.views),
-                depth,
-                texels_per_unit,
-                wood,
-                crown,
-            );
+            BuiltCloud {
+                foliage: Cow::Borrowed(foliage),
+                groups: c.clumps,
+                views: c.views,
+                depth: c.depth,
+                cloud: c.cloud,
+                lines: None,
+            }
         }
         CloudKind::Impostor { .. } => {
             return Err(anyhow!(
                 "an impostor is not a billboard cloud: see impostor_level"
             ));
         }
-    };
-    level_of_cloud(
-        raster,
-        tree,
-        original,
-        foliage,
-        cloud,
-        lines,
-        (groups, 1),
-        params.epsilon,
-        texels_per_unit,
-        wood,
-        crown,
-    )
+    })
 }
 
-/// The level that draws `cloud` (built from `foliage`, the tree's leaves `original` perhaps
-/// rebound), its billboards moved by `lines` where it is spectral: the atlas, the model with
-/// `wood`, the motion, the animation error against `original`. `(groups, views)`: the clouds
-/// or clumps it was built as, and the billboards to a clump of which a view draws one (1 for
-/// clouds). `depth` is how far a drawn leaf may lie off its billboard (the atlas's depth order
-/// is scaled to it).
-#[allow(clippy::too_many_arguments)]
+/// The level that draws `built` (the tree's leaves `original`, perhaps rebound first): the
+/// atlas, the model with `wood`, the motion, the animation error against `original`.
 fn level_of_cloud(
     raster: &dyn RasterizeAtlas,
     tree: &Model,
     original: &Foliage,
-    foliage: &Foliage,
-    cloud: super::SkeletonCloud,
-    lines: Option<(Vec<[Vec<crate::bake::spectral::bins::Line>; 3]>, usize)>,
-    (groups, views): (usize, usize),
-    depth: f32,
+    built: BuiltCloud<'_>,
     texels_per_unit: f32,
     wood: &Model,
     crown: Option<&CrownDensity>,
 ) -> Result<CloudLevel> {
+    let BuiltCloud {
+        foliage,
+        cloud,
+        lines,
+        groups,
+        views,
+        depth,
+    } = built;
+    let foliage = foliage.as_ref();
     let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
     let occlusion_at = |p: glam::Vec3| crown.map_or(0.0, |c| c.occlusion(p));
@@ -459,18 +473,10 @@ pub fn tree_chain(
         };
         // About two texels per screen pixel where this level comes in.
         let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
-        let base = wood.tree_at(tree, eps);
-        let cloud = cloud_level(
-            raster,
-            tree,
-            foliage,
-            &params,
-            &kind,
-            density,
-            &base,
-            crown.as_ref(),
-        )?;
-        let count = cloud.billboards;
+        // Counted before anything is drawn: a level that hardly improves on the last is
+        // not made, and a coarse one is made as clumps instead.
+        let built = build_cloud(tree, foliage, &params, &kind)?;
+        let count = built.cloud.billboards.len();
         // A level that hardly improves on the last: group coarser at the same ε instead.
         if count as f32 > 0.8 * previous as f32 {
             match clusters {
@@ -489,27 +495,20 @@ pub fn tree_chain(
                 _ => {}
             }
         }
-        previous_groups = cloud.groups;
+        previous_groups = built.groups;
         let clumps_here = opts.style == ChainStyle::Automatic && count <= opts.clumps_from;
-        let (kind, cloud) = if clumps_here {
+        let (kind, built) = if clumps_here {
             let clumps = CloudKind::Clumps {
                 clumps: count.max(1),
                 views: opts.clump_views,
             };
-            let level = cloud_level(
-                raster,
-                tree,
-                foliage,
-                &params,
-                &clumps,
-                density,
-                &base,
-                crown.as_ref(),
-            )?;
-            (clumps, level)
+            let built = build_cloud(tree, foliage, &params, &clumps)?;
+            (clumps, built)
         } else {
-            (kind, cloud)
+            (kind, built)
         };
+        let base = wood.tree_at(tree, eps);
+        let cloud = level_of_cloud(raster, tree, foliage, built, density, &base, crown.as_ref())?;
         levels.push(TreeLevel {
             epsilon: eps,
             kind: Some(kind),
