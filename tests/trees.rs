@@ -502,6 +502,9 @@ fn the_tree_report_writes_its_three_files() {
         for key in ["area", "texture_bytes", "colour_error", "bake_seconds"] {
             assert!(f(l, key) >= 0.0, "{key}: {l}");
         }
+        // Seen from where it comes in, at the same size: some error, never all of it.
+        let far = f(l, "colour_error_from_switch");
+        assert!(far > 0.0 && far < 1.0, "{l}");
         assert!(f(l, "billboards") >= 1.0 && f(l, "area") > 0.0, "{l}");
     }
     for w in levels[1..].windows(2) {

@@ -24,7 +24,7 @@ use crate::bake::spectral::cloud::SpectralParams;
 use crate::bake::spectral::description::DescriptionType;
 use crate::model::Model;
 use crate::render::Gpu;
-use crate::runtime::colour_error::{colour_error, colour_error_at, colour_error_over};
+use crate::runtime::colour_error::{at_switch, colour_error, colour_error_over};
 use anyhow::{Context, Result, anyhow};
 use plotters::prelude::*;
 use serde::Serialize;
@@ -53,6 +53,9 @@ pub struct LevelReport {
     pub switch_px: f32,
     /// The colour error with the tree drawn that high (0 for the full tree).
     pub colour_error_at_switch: f32,
+    /// The colour error at the metric's size, seen from as far off as where the level comes
+    /// in (0 for the full tree; see [`crate::runtime::colour_error::SwitchErrors`]).
+    pub colour_error_from_switch: f32,
     /// Mean RMS distance over the loop between a leaf and its projection on its billboard,
     /// in tree heights (see [`crate::bake::spectral::metrics`]).
     pub anim_rms: f32,
@@ -129,6 +132,8 @@ pub struct ThesisRow {
     pub chain_by_held: Option<f32>,
     /// The chain, animated, each level at its switch size.
     pub chain_at_switch: Option<f32>,
+    /// The chain, animated, at 800×600, each level seen from as far off as it comes in.
+    pub chain_from_switch: Option<f32>,
     /// One static cloud at rest, the thesis's own set-up.
     pub static_cloud: Option<f32>,
 }
@@ -160,22 +165,27 @@ pub fn at_billboards(points: &[(usize, f32)], billboards: f32) -> Option<f32> {
 pub fn thesis_table(report: &TreeReport) -> String {
     use std::fmt::Write as _;
     let cell = |e: Option<f32>| e.map_or("not reached".into(), |e| format!("{e:.3}"));
+    let framing = crate::runtime::colour_error::FRAMING;
     let mut out = format!(
         "{}: colour error against the thesis (§8.4.1: its 692-quad tree, one static cloud, \
          800×600). This tree's errors are read off its levels at the thesis's billboard counts: \
          the billboards a view draws (a clump level draws one of its planes per clump), or, \
-         in the third column, all the billboards a level holds.\n\n\
-         | billboards | thesis | chain, animated, 800×600 | chain by billboards held | chain, animated, at switch size | one static cloud at rest, 800×600 |\n\
-         |---:|---:|---:|---:|---:|---:|\n",
+         in the fourth column, all the billboards a level holds. The chain's levels are seen \
+         {framing} tree heights off (the thesis does not say from how far), or from \
+         as far off as each comes in (the field of view narrowed to fill 800×600 alike), or \
+         drawn as small as it is there.\n\n\
+         | billboards | thesis | chain, animated, 800×600 | chain, animated, 800×600 from the switch distance | chain by billboards held | chain, animated, at switch size | one static cloud at rest, 800×600 |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n",
         report.model
     );
     for r in &report.against_thesis {
         let _ = writeln!(
             out,
-            "| {:.1} | {:.3} | {} | {} | {} | {} |",
+            "| {:.1} | {:.3} | {} | {} | {} | {} | {} |",
             r.billboards,
             r.thesis,
             cell(r.chain),
+            cell(r.chain_from_switch),
             cell(r.chain_by_held),
             cell(r.chain_at_switch),
             cell(r.static_cloud)
@@ -268,6 +278,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             chain: at_billboards(&points(&|l| l.colour_error), billboards),
             chain_by_held: at_billboards(&held, billboards),
             chain_at_switch: at_billboards(&points(&|l| l.colour_error_at_switch), billboards),
+            chain_from_switch: at_billboards(&points(&|l| l.colour_error_from_switch), billboards),
             static_cloud: at_billboards(&still, billboards),
         })
         .collect();
@@ -328,21 +339,23 @@ fn measure_level(
     what: &str,
 ) -> Result<LevelReport> {
     let h = tree_height(tree);
-    let error = colour_error(gpu, tree, &l.cloud, METRIC_SIZE)?;
-    // Where the level comes in, and its error there (none for the full tree, level 0).
-    let (switch_px, at_switch) = if l.epsilon > 0.0 {
+    // Where the level comes in, and its errors there (none for the full tree, level 0).
+    let (error, switch_px, from_switch, at_switch) = if l.epsilon > 0.0 {
         let px = ChainOptions::default().tolerance_px * h / l.epsilon;
-        (px, colour_error_at(gpu, tree, &l.cloud, px)?)
+        let e = at_switch(gpu, tree, &l.cloud, METRIC_SIZE, px)?;
+        (e.close, px, e.from_switch, e.at_switch)
     } else {
-        (0.0, 0.0)
+        let close = colour_error(gpu, tree, &l.cloud, METRIC_SIZE)?;
+        (close, 0.0, 0.0, 0.0)
     };
     let anim = &l.cloud.animation;
     eprintln!(
-        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3} ({:.3} at {:.0} px), animation error {:.4} h / {:.3}",
+        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3} ({:.3} from the switch distance, {:.3} at {:.0} px), animation error {:.4} h / {:.3}",
         tree.name,
         l.epsilon / h,
         l.cloud.billboards,
         error,
+        from_switch,
         at_switch,
         switch_px,
         anim.rms,
@@ -360,6 +373,7 @@ fn measure_level(
         colour_error: error,
         switch_px,
         colour_error_at_switch: at_switch,
+        colour_error_from_switch: from_switch,
         anim_rms: anim.rms,
         anim_spectral: anim.spectral,
         bake_seconds: l.bake_seconds,

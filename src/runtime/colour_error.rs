@@ -33,30 +33,57 @@ pub fn colour_error_over(
     size: [u32; 2],
     frames: usize,
 ) -> Result<f32> {
-    foliage_disagreement(gpu, original, lod, size, frames, FRAMING)
+    Ok(foliage_disagreement(gpu, original, lod, &[(size, FRAMING)], frames)?[0])
 }
 
-/// [`colour_error`] with the tree drawn `height_px` pixels high, seen from as far off as a
-/// tree that high is (see [`framing`]): a level judged at the size where it comes in, its
-/// switch size.
-pub fn colour_error_at(
-    gpu: &Gpu,
-    original: &Model,
-    lod: &CloudLevel,
-    height_px: f32,
-) -> Result<f32> {
-    let (size, distance) = framing(height_px);
-    foliage_disagreement(gpu, original, lod, size, METRIC_FRAMES, distance)
+/// A level's colour errors where it comes in: see [`at_switch`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwitchErrors {
+    /// [`colour_error`]: at the metric's size, seen [`FRAMING`] heights off.
+    pub close: f32,
+    /// At the metric's size, seen from as far off as a tree `height_px` high stands (see
+    /// [`framing`]), the field of view narrowed to fill the picture alike: the level's shapes
+    /// as they stand where it comes in (nearly orthographic for a distant level), looked at as
+    /// closely as the thesis's 800×600 pictures. A level is never seen from nearer than
+    /// that, so the perspective of a close view is not held against it.
+    pub from_switch: f32,
+    /// With the tree drawn `height_px` pixels high, seen from as far off: the level at its
+    /// switch size, as a viewer sees it.
+    pub at_switch: f32,
 }
 
-fn foliage_disagreement(
+/// The colour errors of `lod` against `original` at `size`, and where the tree is drawn
+/// `height_px` pixels high (see [`SwitchErrors`]), all from one pair of worlds.
+pub fn at_switch(
     gpu: &Gpu,
     original: &Model,
     lod: &CloudLevel,
     size: [u32; 2],
+    height_px: f32,
+) -> Result<SwitchErrors> {
+    let (small, distance) = framing(height_px);
+    let e = foliage_disagreement(
+        gpu,
+        original,
+        lod,
+        &[(size, FRAMING), (size, distance), (small, distance)],
+        METRIC_FRAMES,
+    )?;
+    Ok(SwitchErrors {
+        close: e[0],
+        from_switch: e[1],
+        at_switch: e[2],
+    })
+}
+
+/// The colour error of `lod` against `original` for every `(size, distance)` of `pictures`.
+fn foliage_disagreement(
+    gpu: &Gpu,
+    original: &Model,
+    lod: &CloudLevel,
+    pictures: &[([u32; 2], f32)],
     frames: usize,
-    distance: f32,
-) -> Result<f32> {
+) -> Result<Vec<f32>> {
     let (lod_foliage, lod_motion) = lod.foliage();
     // Masks only: the original's leaves are baked without the crown's occlusion, which would
     // darken them and cost a crown's worth of rays a measurement.
@@ -72,7 +99,12 @@ fn foliage_disagreement(
     )
     .map_err(|e| anyhow::anyhow!("{}: {e}", lod_foliage.name))?;
     let mut b = metric_world(gpu, Loaded::forest_of_bake(&lod_foliage, lod_bake, 1))?;
-    disagreement(gpu, &mut a, &mut b, original, size, frames, distance)
+    pictures
+        .iter()
+        .map(|&(size, distance)| {
+            disagreement(gpu, &mut a, &mut b, original, size, frames, distance)
+        })
+        .collect()
 }
 
 /// The colour error of `level` against the whole of `tree`, wood and all, both drawn about

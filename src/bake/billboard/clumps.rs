@@ -128,7 +128,7 @@ pub fn clump_cloud(
     let leaves = &foliage.leaves;
     let centres: Vec<Vec3> = leaves.iter().map(|l| l.centre()).collect();
     let weights: Vec<f32> = leaves.iter().map(|l| l.area.max(1e-12)).collect();
-    let of = k_means(
+    let of = k_means_restarted(
         &centres,
         &weights,
         clumps.clamp(1, leaves.len().max(1)),
@@ -201,6 +201,52 @@ pub fn clump_cloud(
         views,
         depth,
     }
+}
+
+/// Restarts of k-means, from different seeds, of which the tightest is kept.
+const RESTARTS: u64 = 8;
+
+/// [`k_means`] from [`RESTARTS`] seeds drawn from `seed`, keeping the clustering of least
+/// weighted inertia (the sum of area times squared distance to the clump's centre). One
+/// k-means run lands in a local minimum that depends on its seeding, and at a handful of
+/// clumps that decides how a whole side of the crown is cut: on the sapling at 6 clumps, eight
+/// seeds gave colour errors 0.384 to 0.421, and inertia ranked them (the tightest was the
+/// best, the loosest, at over twice the inertia of the rest, the worst).
+fn k_means_restarted(points: &[Vec3], weights: &[f32], k: usize, seed: u64) -> Vec<u32> {
+    use rayon::prelude::*;
+    (0..RESTARTS)
+        .into_par_iter()
+        .map(|r| {
+            let of = k_means(
+                points,
+                weights,
+                k,
+                seed.wrapping_add(r.wrapping_mul(0x9E37_79B9)),
+            );
+            (inertia(points, weights, &of), r, of)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+        .map_or_else(Vec::new, |(_, _, of)| of)
+}
+
+/// The weighted inertia of the clustering `of`: Σ weight · |point − its cluster's centre|².
+fn inertia(points: &[Vec3], weights: &[f32], of: &[u32]) -> f64 {
+    let k = of.iter().max().map_or(0, |&m| m as usize + 1);
+    let mut sum = vec![glam::DVec3::ZERO; k];
+    let mut mass = vec![0.0f64; k];
+    for ((p, &w), &c) in points.iter().zip(weights).zip(of) {
+        sum[c as usize] += p.as_dvec3() * w as f64;
+        mass[c as usize] += w as f64;
+    }
+    points
+        .iter()
+        .zip(weights)
+        .zip(of)
+        .map(|((p, &w), &c)| {
+            let centre = sum[c as usize] / mass[c as usize].max(1e-300);
+            w as f64 * p.as_dvec3().distance_squared(centre)
+        })
+        .sum()
 }
 
 /// Weighted k-means of `points` into at most `k` clusters (k-means++ seeding from `seed`, then
@@ -315,6 +361,50 @@ mod tests {
             triangles: vec![Vec::new(); count],
             rebound: 0,
         }
+    }
+
+    #[test]
+    fn restarted_k_means_finds_balls_of_unequal_sizes_from_every_seed() {
+        // Two big balls and three small ones, 10 apart: k-means++ from one seed now and then
+        // puts two centres in a big ball and merges two small ones (the tighter clustering
+        // is the balls: splitting a big ball saves about 160, merging two small ones costs
+        // 600); the tightest of the restarts never does.
+        let sizes = [400, 400, 12, 12, 12];
+        let mut points = Vec::new();
+        let mut ball = Vec::new();
+        let mut rng = fastrand::Rng::with_seed(9);
+        for (b, &per) in sizes.iter().enumerate() {
+            let spread = if per > 100 { 2.0 } else { 0.3 };
+            for _ in 0..per {
+                let jitter = Vec3::new(rng.f32(), rng.f32(), rng.f32()) - 0.5;
+                points.push(Vec3::new(10.0 * b as f32, 0.0, 0.0) + jitter * spread);
+                ball.push(b);
+            }
+        }
+        let weights = vec![1.0; points.len()];
+        let finds_balls = |of: &[u32]| {
+            let mut cluster_of_ball = vec![None; sizes.len()];
+            for (&b, &c) in ball.iter().zip(of) {
+                if *cluster_of_ball[b].get_or_insert(c) != c {
+                    return false;
+                }
+            }
+            let mut clusters: Vec<u32> = cluster_of_ball.into_iter().flatten().collect();
+            clusters.sort_unstable();
+            clusters.dedup();
+            clusters.len() == sizes.len()
+        };
+        let single_misses = (0..20)
+            .filter(|&seed| !finds_balls(&k_means(&points, &weights, 5, seed)))
+            .count();
+        for seed in 0..20 {
+            let of = k_means_restarted(&points, &weights, 5, seed);
+            assert!(finds_balls(&of), "seed {seed}");
+            let single = k_means(&points, &weights, 5, seed);
+            assert!(inertia(&points, &weights, &of) <= inertia(&points, &weights, &single));
+        }
+        // Otherwise the restarts would have nothing to fix here.
+        assert!(single_misses > 0, "every single run found the balls");
     }
 
     #[test]
