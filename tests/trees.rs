@@ -579,6 +579,16 @@ fn the_tree_report_writes_its_three_files() {
     ] {
         assert!(n > 500, "{name}: {n} pixels of its curves");
     }
+    // Beside the chain, levels made at the thesis's counts, 36 and 6 clumps drawn.
+    let rows = json["against_thesis"].as_array().unwrap();
+    let counts: Vec<f64> = rows.iter().map(|r| f(&r["at_count"], "clumps")).collect();
+    assert_eq!(counts, [36.0, 6.0]);
+    for r in rows {
+        for key in ["close", "from_switch"] {
+            let e = f(&r["at_count"], key);
+            assert!(e > 0.0 && e < 1.0, "{key}: {r}");
+        }
+    }
     // Error grows from the first cloud level to the last.
     assert!(f(&levels[1], "colour_error") < f(levels.last().unwrap(), "colour_error"));
     assert_eq!(

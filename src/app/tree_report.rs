@@ -134,8 +134,21 @@ pub struct ThesisRow {
     pub chain_at_switch: Option<f32>,
     /// The chain, animated, at 800×600, each level seen from as far off as it comes in.
     pub chain_from_switch: Option<f32>,
+    /// A level of the chain's coarse kind made at exactly this many billboards drawn (as many
+    /// view-selected clumps), animated, at 800×600: close, and from as far off as it comes in.
+    pub at_count: AtCount,
     /// One static cloud at rest, the thesis's own set-up.
     pub static_cloud: Option<f32>,
+}
+
+/// A clump level made at one of the thesis's billboard counts (see [`ThesisRow::at_count`]).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct AtCount {
+    pub clumps: usize,
+    /// Its ε bound ([`crate::bake::billboard::clumps::ClumpCloud::epsilon`]), in tree heights.
+    pub epsilon: f32,
+    pub close: f32,
+    pub from_switch: f32,
 }
 
 /// The thesis's results to compare with: (billboards, colour error), §8.4.1: ε 4 gave 36.2
@@ -170,24 +183,27 @@ pub fn thesis_table(report: &TreeReport) -> String {
         "{}: colour error against the thesis (§8.4.1: its 692-quad tree, one static cloud, \
          800×600). This tree's errors are read off its levels at the thesis's billboard counts: \
          the billboards a view draws (a clump level draws one of its planes per clump), or, \
-         in the fourth column, all the billboards a level holds. The chain's levels are seen \
+         in the fourth column, all the billboards a level holds; and, beside them, a level of \
+         exactly that many clumps made as the chain makes its coarse levels. Levels are seen \
          {framing} tree heights off (the thesis does not say from how far), or from \
          as far off as each comes in (the field of view narrowed to fill 800×600 alike), or \
          drawn as small as it is there.\n\n\
-         | billboards | thesis | chain, animated, 800×600 | chain, animated, 800×600 from the switch distance | chain by billboards held | chain, animated, at switch size | one static cloud at rest, 800×600 |\n\
-         |---:|---:|---:|---:|---:|---:|---:|\n",
+         | billboards | thesis | chain, animated, 800×600 | chain, animated, 800×600 from the switch distance | chain by billboards held | chain, animated, at switch size | that many clumps, animated, 800×600 | the same from its switch distance | one static cloud at rest, 800×600 |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         report.model
     );
     for r in &report.against_thesis {
         let _ = writeln!(
             out,
-            "| {:.1} | {:.3} | {} | {} | {} | {} | {} |",
+            "| {:.1} | {:.3} | {} | {} | {} | {} | {} | {} | {} |",
             r.billboards,
             r.thesis,
             cell(r.chain),
             cell(r.chain_from_switch),
             cell(r.chain_by_held),
             cell(r.chain_at_switch),
+            cell(Some(r.at_count.close)),
+            cell(Some(r.at_count.from_switch)),
             cell(r.static_cloud)
         );
     }
@@ -270,15 +286,21 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         .iter()
         .map(|s| (s.billboards, s.colour_error))
         .collect();
+    let at_counts = THESIS
+        .iter()
+        .map(|&(billboards, _)| clumps_at_count(&gpu, &raster, tree, &f, &opts, billboards))
+        .collect::<Result<Vec<_>>>()?;
     let against_thesis = THESIS
         .iter()
-        .map(|&(billboards, thesis)| ThesisRow {
+        .zip(at_counts)
+        .map(|(&(billboards, thesis), at_count)| ThesisRow {
             billboards,
             thesis,
             chain: at_billboards(&points(&|l| l.colour_error), billboards),
             chain_by_held: at_billboards(&held, billboards),
             chain_at_switch: at_billboards(&points(&|l| l.colour_error_at_switch), billboards),
             chain_from_switch: at_billboards(&points(&|l| l.colour_error_from_switch), billboards),
+            at_count,
             static_cloud: at_billboards(&still, billboards),
         })
         .collect();
@@ -433,6 +455,67 @@ fn description_types(
 
 /// The thesis's own set-up (§8.4) at every level's ε: one static cloud for the whole crown of
 /// the tree at rest, scored by the static colour metric.
+/// A level of `billboards` (rounded) view-selected clumps, as the chain makes its coarse
+/// levels, measured close and from where it would come in (its ε bound projecting to the
+/// chain's tolerance): the chain's method at the thesis's count itself, where the chain's
+/// own levels straddle it.
+fn clumps_at_count(
+    gpu: &Gpu,
+    raster: &crate::render::atlas::AtlasRasterizer,
+    tree: &Model,
+    f: &Foliage,
+    opts: &ChainOptions,
+    billboards: f32,
+) -> Result<AtCount> {
+    let h = tree_height(tree);
+    let clumps = (billboards.round() as usize).max(1);
+    let c =
+        crate::bake::billboard::clumps::clump_cloud(tree, f, clumps, opts.clump_views, opts.seed);
+    let eps = c.epsilon().max(1e-4 * h);
+    let params = CloudParams {
+        epsilon: eps,
+        seed: opts.seed,
+        ..Default::default()
+    };
+    // Its atlas as sharp as the chain's sharpest, about two texels per pixel of the metric's
+    // picture (the tree some 500 px high), as the thesis sized its textures for its pictures:
+    // the chain's own coarse levels carry atlases sized for where they come in, a few dozen
+    // pixels high, and the metric's close look at them scores their blur as well
+    // (sapling, 36 clumps: 0.295 at the chain's density, where this one scores its shapes).
+    let density = 800.0 / h;
+    let wood = crate::bake::billboard::wood::WoodChain::new(tree).tree_at(tree, eps);
+    let crown = crate::bake::billboard::occlusion::CrownDensity::of(tree);
+    let kind = CloudKind::Clumps {
+        clumps,
+        views: opts.clump_views,
+    };
+    let level = cloud_level(
+        raster,
+        tree,
+        f,
+        &params,
+        &kind,
+        density,
+        &wood,
+        crown.as_ref(),
+    )?;
+    let px = opts.tolerance_px * h / eps;
+    let e = at_switch(gpu, tree, &level, METRIC_SIZE, px)?;
+    eprintln!(
+        "lodlab: {} {clumps} clumps: ε {:.4} h, colour error {:.3} ({:.3} from the switch distance, {px:.0} px)",
+        tree.name,
+        eps / h,
+        e.close,
+        e.from_switch
+    );
+    Ok(AtCount {
+        clumps: level.drawn_billboards(),
+        epsilon: eps / h,
+        close: e.close,
+        from_switch: e.from_switch,
+    })
+}
+
 fn static_clouds(
     gpu: &Gpu,
     raster: &crate::render::atlas::AtlasRasterizer,

@@ -45,7 +45,8 @@ pub struct SwitchErrors {
     /// [`framing`]), the field of view narrowed to fill the picture alike: the level's shapes
     /// as they stand where it comes in (nearly orthographic for a distant level), looked at as
     /// closely as the thesis's 800×600 pictures. A level is never seen from nearer than
-    /// that, so the perspective of a close view is not held against it.
+    /// that, so the perspective of a close view is not held against it; its atlas, sized for
+    /// where it comes in, is magnified as much, so its blur is.
     pub from_switch: f32,
     /// With the tree drawn `height_px` pixels high, seen from as far off: the level at its
     /// switch size, as a viewer sees it.
