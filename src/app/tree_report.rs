@@ -453,8 +453,6 @@ fn description_types(
     Ok(description_types)
 }
 
-/// The thesis's own set-up (§8.4) at every level's ε: one static cloud for the whole crown of
-/// the tree at rest, scored by the static colour metric.
 /// A level of `billboards` (rounded) view-selected clumps, as the chain makes its coarse
 /// levels, measured close and from where it would come in (its ε bound projecting to the
 /// chain's tolerance): the chain's method at the thesis's count itself, where the chain's
@@ -516,6 +514,8 @@ fn clumps_at_count(
     })
 }
 
+/// The thesis's own set-up (§8.4) at every level's ε: one static cloud for the whole crown of
+/// the tree at rest, scored by the static colour metric.
 fn static_clouds(
     gpu: &Gpu,
     raster: &crate::render::atlas::AtlasRasterizer,
