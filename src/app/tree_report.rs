@@ -8,7 +8,7 @@
 //! is lit beside the full tree under two suns, its billboards lit by their planes and per
 //! texel through their atlases (`lighting.md`).
 //!
-//! Besides the chain (skeleton clouds, then spectral ones), the report measures the
+//! Besides the chain (skeleton clouds, spectral ones, then clumps), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
 //! counts) and the spectral levels rebuilt with each description type and as plain SCA
 //! (`description_types`).
@@ -726,7 +726,7 @@ fn plot(report: &TreeReport, path: &Path) -> Result<()> {
             .iter()
             .map(|l| (l.epsilon as f64, l.colour_error as f64))
             .collect();
-        let chain_label = "the chain (skeleton clouds, then spectral), animated";
+        let chain_label = "the chain (skeleton clouds, spectral, then clumps), animated";
         series(
             &mut chart,
             &chain_errors,
