@@ -360,10 +360,54 @@ fn the_chain_falls_to_a_handful_of_billboards() {
             w + 2 * l.cloud.billboards
         );
         assert!(w <= wood(&tree));
+        // Its atlas is as sharp as the README says: about two texels a pixel where the level
+        // comes in (at least 8 a metre, at most 800 across the tree), and a clump level's never fewer than 256
+        // across the tree, so that the coarse end looked at closer (forced, or with the
+        // tolerance raised) still shows leaves; an atlas at the largest size may have been
+        // drawn less sharp, to fit.
+        let h = lodlab::bake::billboard::tree_height(&tree);
+        let clumps = matches!(
+            l.kind,
+            Some(lodlab::bake::billboard::chain::CloudKind::Clumps { .. })
+        );
+        let floor = if clumps { 256.0 / h } else { 0.0 };
+        let where_it_comes_in = (2.0 * opts.tolerance_px / l.epsilon)
+            .max(8.0)
+            .min(800.0 / h);
+        let sharpest = atlas_texels_per_unit(&l.cloud.model, a, [atlas.width, atlas.height]);
+        let full = atlas.width.max(atlas.height) >= lodlab::bake::billboard::atlas::MAX_ATLAS;
+        let asked = if full {
+            floor
+        } else {
+            where_it_comes_in.max(floor)
+        };
+        assert!(
+            sharpest >= 0.99 * asked,
+            "ε {:.3} m: {sharpest:.1} texels a metre, {asked:.1} asked",
+            l.epsilon
+        );
     }
     // The coarsest level draws a small fraction of the triangles of the full tree.
     let last = &chain.last().unwrap().cloud.model;
     assert!(last.mesh.triangle_count() * 20 < tree.mesh.triangle_count());
+}
+
+/// The fewest atlas texels a scene unit along any edge of the triangles of material
+/// `material` of `m`, whose texture is `size` texels.
+fn atlas_texels_per_unit(m: &Model, material: usize, size: [u32; 2]) -> f32 {
+    let mesh = &m.mesh;
+    let texels = |a: usize, b: usize| {
+        let d = (mesh.uvs[b] - mesh.uvs[a]) * Vec2::new(size[0] as f32, size[1] as f32);
+        d.length() / (mesh.positions[b] - mesh.positions[a]).length().max(1e-9)
+    };
+    mesh.indices
+        .chunks_exact(3)
+        .filter(|t| mesh.materials[t[0] as usize] as usize == material)
+        .flat_map(|t| {
+            let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+            [texels(a, b), texels(b, c), texels(c, a)]
+        })
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// Triangles of a tree's wood (material 0).

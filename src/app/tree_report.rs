@@ -422,7 +422,7 @@ fn description_types(
             seed: opts.seed,
             ..Default::default()
         };
-        let density = (2.0 * opts.tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
+        let density = opts.atlas_density(l.epsilon, h, &CloudKind::Spectral(sp));
         // Every description type with the shared bone, and the chain's own without it.
         let variants = DescriptionType::ALL
             .map(|d| (d, true))
@@ -480,7 +480,8 @@ fn clumps_at_count(
     // the chain's own coarse levels carry atlases sized for where they come in, a few dozen
     // pixels high, and the metric's close look at them scores their blur as well
     // (sapling, 36 clumps: 0.295 at the chain's density, where this one scores its shapes).
-    let density = 800.0 / h;
+    let density =
+        crate::bake::billboard::atlas::AtlasDensity::for_level(800.0 / h, eps, opts.tolerance_px);
     let wood = crate::bake::billboard::wood::WoodChain::new(tree).tree_at(tree, eps);
     let crown = crate::bake::billboard::occlusion::CrownDensity::of(tree);
     let kind = CloudKind::Clumps {
@@ -536,9 +537,8 @@ fn static_clouds(
             increased_density: false,
             ..Default::default()
         };
-        let density =
-            (2.0 * ChainOptions::default().tolerance_px / l.epsilon).clamp(8.0, 800.0 / h);
         let whole = CloudKind::Skeleton(Grouping::Subtree { forks: 0 });
+        let density = ChainOptions::default().atlas_density(l.epsilon, h, &whole);
         let cloud = cloud_level(
             raster,
             &still,

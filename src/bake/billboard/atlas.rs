@@ -18,8 +18,51 @@
 use super::cloud::Billboard;
 use glam::{Vec2, Vec3};
 
-/// Texels of gutter round every billboard's rectangle in the atlas.
+/// Texels of gutter round every billboard's rectangle in the atlas, at the least.
 pub const GUTTER: u32 = 2;
+/// The widest gutter [`AtlasDensity::for_level`] gives.
+pub const MAX_GUTTER: u32 = 4;
+
+/// How sharp a cloud's atlas is drawn, and how far apart its billboards lie in it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AtlasDensity {
+    /// Texels per scene unit.
+    pub texels_per_unit: f32,
+    /// Texels of gutter round every billboard's rectangle.
+    pub gutter: u32,
+}
+
+/// A bare density gets the least gutter.
+impl From<f32> for AtlasDensity {
+    fn from(texels_per_unit: f32) -> Self {
+        AtlasDensity {
+            texels_per_unit,
+            gutter: GUTTER,
+        }
+    }
+}
+
+impl AtlasDensity {
+    /// `texels_per_unit` for a level of error `epsilon` that comes in where `epsilon`
+    /// projects to `tolerance_px` pixels, with a gutter as wide as the atlas has texels a
+    /// screen pixel there (a power of two, [`GUTTER`] to [`MAX_GUTTER`]).
+    ///
+    /// Where a level comes in, the GPU reads its atlas at the mip level log₂ of the texels a
+    /// pixel, whose texels each average 2^k of the full-size texels on a side; a narrower
+    /// gutter lets those at a billboard's edge average in its neighbour's leaves. An atlas
+    /// drawn at two texels a pixel there needs the least gutter; a sharper one, made for
+    /// looking closer, a wider one.
+    pub fn for_level(texels_per_unit: f32, epsilon: f32, tolerance_px: f32) -> Self {
+        let per_pixel = texels_per_unit * epsilon / tolerance_px.max(1e-6);
+        let gutter = (per_pixel.clamp(1.0, MAX_GUTTER as f32).ceil() as u32)
+            .next_power_of_two()
+            .clamp(GUTTER, MAX_GUTTER);
+        AtlasDensity {
+            texels_per_unit,
+            gutter,
+        }
+    }
+}
 /// The atlas never grows beyond this on a side: the largest material layer the renderer keeps
 /// ([`crate::bake::materials::MAX_LAYER_SIZE`]).
 pub const MAX_ATLAS: u32 = crate::bake::materials::MAX_LAYER_SIZE;
@@ -63,6 +106,8 @@ pub struct AtlasLayout {
     /// Per billboard, the texels its rectangle maps onto: x, y, width, height (without the
     /// gutter).
     pub rects: Vec<[u32; 4]>,
+    /// Texels of gutter round every rectangle.
+    pub gutter: u32,
 }
 
 impl AtlasLayout {
@@ -82,13 +127,17 @@ impl AtlasLayout {
     }
 }
 
-/// Packs the billboards' rectangles, at `texels_per_unit`, into the smallest power-of-two
-/// atlas that holds them (width first); where even [`MAX_ATLAS`]² does not, at a lower
-/// density that fits.
-pub fn layout(billboards: &[Billboard], texels_per_unit: f32) -> Result<AtlasLayout, String> {
-    let mut density = texels_per_unit;
+/// Packs the billboards' rectangles, at `density`, into the smallest power-of-two atlas that
+/// holds them (width first); where even [`MAX_ATLAS`]² does not, at a lower density that fits.
+pub fn layout(
+    billboards: &[Billboard],
+    density: impl Into<AtlasDensity>,
+) -> Result<AtlasLayout, String> {
+    let density = density.into();
+    let gutter = density.gutter;
+    let mut density = density.texels_per_unit;
     for _ in 0..60 {
-        if let Some(l) = layout_at(billboards, density) {
+        if let Some(l) = layout_at(billboards, density, gutter) {
             return Ok(l);
         }
         density *= 0.9;
@@ -99,7 +148,7 @@ pub fn layout(billboards: &[Billboard], texels_per_unit: f32) -> Result<AtlasLay
     ))
 }
 
-fn layout_at(billboards: &[Billboard], texels_per_unit: f32) -> Option<AtlasLayout> {
+fn layout_at(billboards: &[Billboard], texels_per_unit: f32, gutter: u32) -> Option<AtlasLayout> {
     let sizes: Vec<[u32; 2]> = billboards
         .iter()
         .map(|b| {
@@ -113,7 +162,7 @@ fn layout_at(billboards: &[Billboard], texels_per_unit: f32) -> Option<AtlasLayo
         .collect();
     let area: u64 = sizes
         .iter()
-        .map(|s| ((s[0] + 2 * GUTTER) * (s[1] + 2 * GUTTER)) as u64)
+        .map(|s| ((s[0] + 2 * gutter) * (s[1] + 2 * gutter)) as u64)
         .sum();
     let mut side = 64u32;
     while (side as u64 * side as u64) < area && side < MAX_ATLAS {
@@ -121,12 +170,13 @@ fn layout_at(billboards: &[Billboard], texels_per_unit: f32) -> Option<AtlasLayo
     }
     let mut height = (side / 2).max(1);
     loop {
-        if let Some(rects) = try_pack(&sizes, side, height) {
+        if let Some(rects) = try_pack(&sizes, side, height, gutter) {
             return Some(AtlasLayout {
                 width: side,
                 height,
                 texels_per_unit,
                 rects,
+                gutter,
             });
         }
         if height < side {
@@ -140,7 +190,7 @@ fn layout_at(billboards: &[Billboard], texels_per_unit: f32) -> Option<AtlasLayo
     }
 }
 
-fn try_pack(sizes: &[[u32; 2]], width: u32, height: u32) -> Option<Vec<[u32; 4]>> {
+fn try_pack(sizes: &[[u32; 2]], width: u32, height: u32, gutter: u32) -> Option<Vec<[u32; 4]>> {
     let mut alloc = etagere::AtlasAllocator::new(etagere::size2(width as i32, height as i32));
     // Largest first packs tighter; the result is put back in billboard order.
     let mut order: Vec<usize> = (0..sizes.len()).collect();
@@ -149,11 +199,11 @@ fn try_pack(sizes: &[[u32; 2]], width: u32, height: u32) -> Option<Vec<[u32; 4]>
     for i in order {
         let [w, h] = sizes[i];
         let a = alloc.allocate(etagere::size2(
-            (w + 2 * GUTTER) as i32,
-            (h + 2 * GUTTER) as i32,
+            (w + 2 * gutter) as i32,
+            (h + 2 * gutter) as i32,
         ))?;
         let min = a.rectangle.min;
-        rects[i] = [min.x as u32 + GUTTER, min.y as u32 + GUTTER, w, h];
+        rects[i] = [min.x as u32 + gutter, min.y as u32 + gutter, w, h];
     }
     Some(rects)
 }
@@ -353,6 +403,7 @@ mod tests {
             height: 64,
             texels_per_unit: 32.0,
             rects: vec![[2, 2, 32, 32]],
+            gutter: GUTTER,
         };
         // Leaf 0 tilted 30° about x, towards +y, wound to face the billboard's front; leaf 1
         // wound the other way (the billboard's front sees its back face) with the same vertex
@@ -439,19 +490,42 @@ mod tests {
             })
             .collect();
         let cloud = stochastic_cloud(&leaves, &CloudParams::default());
-        let l = layout(&cloud, 40.0).unwrap();
-        assert_eq!(l.rects.len(), cloud.len());
-        for (i, a) in l.rects.iter().enumerate() {
-            assert!(a[0] + a[2] + GUTTER <= l.width && a[1] + a[3] + GUTTER <= l.height);
-            assert!(a[0] >= GUTTER && a[1] >= GUTTER);
-            for b in &l.rects[i + 1..] {
-                // Gutters included, no two rectangles share a texel.
-                let sep_x = a[0] + a[2] + GUTTER <= b[0] - GUTTER.min(b[0])
-                    || b[0] + b[2] + GUTTER <= a[0] - GUTTER.min(a[0]);
-                let sep_y = a[1] + a[3] + GUTTER <= b[1] - GUTTER.min(b[1])
-                    || b[1] + b[3] + GUTTER <= a[1] - GUTTER.min(a[1]);
-                assert!(sep_x || sep_y, "{a:?} overlaps {b:?}");
+        for gutter in [GUTTER, 8] {
+            let density = AtlasDensity {
+                texels_per_unit: 40.0,
+                gutter,
+            };
+            let l = layout(&cloud, density).unwrap();
+            assert_eq!(l.rects.len(), cloud.len());
+            assert_eq!(l.gutter, gutter);
+            let g = gutter;
+            for (i, a) in l.rects.iter().enumerate() {
+                assert!(a[0] + a[2] + g <= l.width && a[1] + a[3] + g <= l.height);
+                assert!(a[0] >= g && a[1] >= g);
+                for b in &l.rects[i + 1..] {
+                    // Gutters included, no two rectangles share a texel.
+                    let sep_x = a[0] + a[2] + g <= b[0] - g.min(b[0])
+                        || b[0] + b[2] + g <= a[0] - g.min(a[0]);
+                    let sep_y = a[1] + a[3] + g <= b[1] - g.min(b[1])
+                        || b[1] + b[3] + g <= a[1] - g.min(a[1]);
+                    assert!(sep_x || sep_y, "{a:?} overlaps {b:?}");
+                }
             }
         }
+    }
+
+    #[test]
+    fn the_gutter_is_as_wide_as_the_texels_a_pixel_where_the_level_comes_in() {
+        // ε 0.1 m at a 1.5 px tolerance: 1.5 px is 0.1 m there.
+        let g = |texels_per_unit: f32| AtlasDensity::for_level(texels_per_unit, 0.1, 1.5).gutter;
+        assert_eq!(g(30.0), GUTTER); // two texels a pixel: the chain's own rule
+        assert_eq!(g(5.0), GUTTER); // blurrier still: never narrower
+        assert_eq!(g(51.0), 4); // 3.4 texels a pixel
+        assert_eq!(g(102.0), MAX_GUTTER); // 6.8: as wide as it goes
+        assert_eq!(g(5000.0), MAX_GUTTER);
+        assert_eq!(
+            AtlasDensity::for_level(51.0, 0.1, 1.5).texels_per_unit,
+            51.0
+        );
     }
 }

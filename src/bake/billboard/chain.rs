@@ -3,7 +3,9 @@
 //! foliage as billboard clouds of growing ε, end to end: the cloud, its atlas (drawn through
 //! [`RasterizeAtlas`], then dilated), and the tree model that draws it; and the chain cached.
 
-use super::atlas::{LeafCorner, RasterizeAtlas, atlas_triangles, layout, lighting_material};
+use super::atlas::{
+    AtlasDensity, LeafCorner, RasterizeAtlas, atlas_triangles, layout, lighting_material,
+};
 use super::cloud::CloudParams;
 use super::impostor::{self, ImpostorFrame, ViewGrid};
 use super::occlusion::CrownDensity;
@@ -103,8 +105,8 @@ pub struct CloudLevel {
     pub views: usize,
 }
 
-/// The tree drawn with a billboard cloud of its foliage at `params`, made as `kind`, with
-/// `texels_per_unit` texels per scene unit in the atlas. The wood is that of `wood` (the tree
+/// The tree drawn with a billboard cloud of its foliage at `params`, made as `kind`, its atlas
+/// drawn at `density` (texels per scene unit, and gutter). The wood is that of `wood` (the tree
 /// itself, or the tree with its wood simplified). `crown` (the full tree's, where it has
 /// leaves) darkens the wood and the atlas's texels inside the crown.
 #[allow(clippy::too_many_arguments)]
@@ -114,12 +116,12 @@ pub fn cloud_level(
     foliage: &Foliage,
     params: &CloudParams,
     kind: &CloudKind,
-    texels_per_unit: f32,
+    density: impl Into<AtlasDensity>,
     wood: &Model,
     crown: Option<&CrownDensity>,
 ) -> Result<CloudLevel> {
     let built = build_cloud(tree, foliage, params, kind)?;
-    level_of_cloud(raster, tree, foliage, built, texels_per_unit, wood, crown)
+    level_of_cloud(raster, tree, foliage, built, density.into(), wood, crown)
 }
 
 /// A cloud's billboards before its atlas and model are made: enough to count them, which is
@@ -203,7 +205,7 @@ fn level_of_cloud(
     tree: &Model,
     original: &Foliage,
     built: BuiltCloud<'_>,
-    texels_per_unit: f32,
+    density: AtlasDensity,
     wood: &Model,
     crown: Option<&CrownDensity>,
 ) -> Result<CloudLevel> {
@@ -216,12 +218,22 @@ fn level_of_cloud(
         depth,
     } = built;
     let foliage = foliage.as_ref();
-    let atlas_layout = layout(&cloud.billboards, texels_per_unit).map_err(|e| anyhow!(e))?;
+    let atlas_layout = layout(&cloud.billboards, density).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
     let occlusion_at = |p: glam::Vec3| crown.map_or(0.0, |c| c.occlusion(p));
+    // One occlusion a leaf, at its centre: leaves are small beside the crown's voxels. Found
+    // once a leaf, not once a billboard drawing it: a clump level draws every leaf on four
+    // planes, and the conifer's spent a second a level marching the same rays again.
+    let leaf_occlusion: Vec<f32> = {
+        use rayon::prelude::*;
+        foliage
+            .leaves
+            .par_iter()
+            .map(|l| occlusion_at(l.centre()))
+            .collect()
+    };
     let triangles = atlas_triangles(&cloud.billboards, &atlas_layout, depth, |leaf| {
-        // One occlusion a leaf, at its centre: leaves are small beside the crown's voxels.
-        let occlusion = occlusion_at(foliage.leaves[leaf as usize].centre());
+        let occlusion = leaf_occlusion[leaf as usize];
         foliage.triangles[leaf as usize]
             .iter()
             .map(|&t| {
@@ -351,8 +363,11 @@ pub struct ChainOptions {
     /// The chain ends at the first level with this many billboards or fewer.
     pub last_billboards: usize,
     /// Screen tolerance the levels are made for, pixels: an atlas gets about two texels per
-    /// screen pixel at the distance where its ε projects to this.
+    /// screen pixel at the distance where its ε projects to this (see [`Self::atlas_density`]).
     pub tolerance_px: f32,
+    /// The fewest texels across the tree's height a clump level's atlas gets (see
+    /// [`Self::atlas_density`]).
+    pub min_atlas_texels: f32,
     pub style: ChainStyle,
     /// Spectral clouds: the description type their clustering and motion use, and the
     /// lines kept per axis (K).
@@ -374,6 +389,40 @@ pub struct ChainOptions {
     pub seed: u64,
 }
 
+impl ChainOptions {
+    /// How sharp the atlas of a level of ε `epsilon` on a tree `height` high, made as `kind`,
+    /// is drawn: about two texels a screen pixel where the level comes in, but at least 8 a
+    /// scene unit, nor more than 800 across the tree; a clump level's never fewer than
+    /// [`Self::min_atlas_texels`] across it.
+    /// Its gutter is as wide as that needs where the level comes in
+    /// ([`AtlasDensity::for_level`]).
+    ///
+    /// A level is also looked at larger than where it comes in: forced in the viewer or by
+    /// `shot --force-level` to compare levels by eye, in the report's contact sheet, or with
+    /// the tolerance raised (the viewer's slider goes to 16 px, where a level comes in ten
+    /// times larger). At two texels a pixel of a tree a few dozen pixels high the clump levels'
+    /// leaves were a blur there, blotches of one shade (the sapling's 99-clump level had 75
+    /// texels across its height, its 22-clump level 52). A clump level holds few billboards,
+    /// so the floor costs it little atlas. The cloud levels keep the rule: sharper, an atlas is
+    /// read at a deeper mip level where its level comes in, whose texels smooth the leaves'
+    /// coverage where the tree's own leaves are sampled sharp, and the broadleaf's level 3
+    /// (ε 0.02 h, 150 texels across) scored 0.288 against 0.270 at its 75 px with 256, which
+    /// put its impostor in a level sooner, paler than the cloud, on a third of the default
+    /// scene's broadleaves.
+    pub fn atlas_density(&self, epsilon: f32, height: f32, kind: &CloudKind) -> AtlasDensity {
+        let h = height.max(1e-6);
+        let floor = match kind {
+            CloudKind::Clumps { .. } => self.min_atlas_texels / h,
+            _ => 0.0,
+        };
+        let texels = (2.0 * self.tolerance_px / epsilon.max(1e-9))
+            .max(8.0)
+            .max(floor)
+            .min(800.0 / h);
+        AtlasDensity::for_level(texels, epsilon, self.tolerance_px)
+    }
+}
+
 impl Default for ChainOptions {
     fn default() -> Self {
         ChainOptions {
@@ -381,6 +430,7 @@ impl Default for ChainOptions {
             epsilon_growth: 2.0,
             last_billboards: 10,
             tolerance_px: 1.5,
+            min_atlas_texels: 256.0,
             style: ChainStyle::Automatic,
             description: DescriptionType::AxisPhase,
             bins: crate::bake::spectral::DEFAULT_BINS,
@@ -471,8 +521,6 @@ pub fn tree_chain(
             }),
             None => CloudKind::Skeleton(GROUPINGS[g]),
         };
-        // About two texels per screen pixel where this level comes in.
-        let density = (2.0 * opts.tolerance_px / eps).clamp(8.0, 800.0 / h);
         // Counted before anything is drawn: a level that hardly improves on the last is
         // not made, and a coarse one is made as clumps instead.
         let built = build_cloud(tree, foliage, &params, &kind)?;
@@ -508,6 +556,7 @@ pub fn tree_chain(
             (kind, built)
         };
         let base = wood.tree_at(tree, eps);
+        let density = opts.atlas_density(eps, h, &kind);
         let cloud = level_of_cloud(raster, tree, foliage, built, density, &base, crown.as_ref())?;
         levels.push(TreeLevel {
             epsilon: eps,
@@ -726,7 +775,7 @@ pub fn impostor_level(
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 19;
+const CHAIN_VERSION: u32 = 21;
 
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
 /// key inside it.
