@@ -556,27 +556,28 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
-    let tree = load_model("sapling").unwrap();
-    let hash = source_hash(&lodlab::import::source_path("sapling")).unwrap();
-    // Clouds all the way: the sapling's clump levels beat its impostor at every switch size,
-    // and the impostor is to be cached too (clump levels are cached below).
-    let opts = ChainOptions {
-        clumps_from: 0,
-        ..Default::default()
+    let tree_and_hash = |name: &str| {
+        let tree = load_model(name).unwrap();
+        let hash = source_hash(&lodlab::import::source_path(name)).unwrap();
+        (tree, hash)
     };
-    let load_with = |opts: &ChainOptions| {
+    // The broadleaf's chain ends in its impostor, which is to be cached too; the sapling's
+    // clump levels beat its impostor at every switch size (they are cached below).
+    let (tree, hash) = tree_and_hash("broadleaf");
+    let opts = ChainOptions::default();
+    let load_with = |tree: &lodlab::model::Model, hash: &[u8; 32], opts: &ChainOptions| {
         load_or_build_chain(
             &AtlasRasterizer::new(&gpu),
             &lodlab::runtime::colour_error::GpuColourError::new(&gpu),
             &cache,
-            &tree,
-            &hash,
+            tree,
+            hash,
             opts,
             &|_| {},
         )
         .unwrap()
     };
-    let load = || load_with(&opts);
+    let load = || load_with(&tree, &hash, &opts);
     let (built, origin) = load();
     assert_eq!(origin, Origin::Baked { warning: None });
     // The chain ends with the impostor, which comes in where the level it stands for would
@@ -620,8 +621,9 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
     assert_eq!(rebuilt.len(), built.len());
     assert_eq!(load().1, Origin::Cache, "the rebuilt chain is stored again");
     // A chain ending in clumps: their view windows come back from the cache.
-    let (built, _) = load_with(&ChainOptions::default());
-    let (cached, origin) = load_with(&ChainOptions::default());
+    let (sapling, sapling_hash) = tree_and_hash("sapling");
+    let (built, _) = load_with(&sapling, &sapling_hash, &ChainOptions::default());
+    let (cached, origin) = load_with(&sapling, &sapling_hash, &ChainOptions::default());
     assert_eq!(origin, Origin::Cache);
     let last = cached.last().unwrap();
     assert!(
