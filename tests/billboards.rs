@@ -562,7 +562,8 @@ fn tree_chains_come_from_the_cache_and_survive_a_damaged_file() {
         (tree, hash)
     };
     // The broadleaf's chain ends in its impostor, which is to be cached too; the sapling's
-    // clump levels beat its impostor at every switch size (they are cached below).
+    // coarsest level, clouds or clumps, already beats its impostor where it comes in, so its
+    // chain keeps all its levels (its clump levels are cached below).
     let (tree, hash) = tree_and_hash("broadleaf");
     let opts = ChainOptions::default();
     let load_with = |tree: &lodlab::model::Model, hash: &[u8; 32], opts: &ChainOptions| {
