@@ -477,9 +477,9 @@ fn clumps_at_count(
     };
     // Its atlas as sharp as the chain's sharpest, about two texels per pixel of the metric's
     // picture (the tree some 500 px high), as the thesis sized its textures for its pictures:
-    // the chain's own coarse levels carry atlases sized for where they come in, a few dozen
-    // pixels high, and the metric's close look at them scores their blur as well
-    // (sapling, 36 clumps: 0.295 at the chain's density, where this one scores its shapes).
+    // the chain's own clump levels carry 256 texels across the tree
+    // (`ChainOptions::min_atlas_texels`), which the metric's close look still magnifies, so
+    // this one scores their shapes alone.
     let density =
         crate::bake::billboard::atlas::AtlasDensity::for_level(800.0 / h, eps, opts.tolerance_px);
     let wood = crate::bake::billboard::wood::WoodChain::new(tree).tree_at(tree, eps);

@@ -54,9 +54,11 @@ impl AtlasDensity {
     /// looking closer, a wider one.
     pub fn for_level(texels_per_unit: f32, epsilon: f32, tolerance_px: f32) -> Self {
         let per_pixel = texels_per_unit * epsilon / tolerance_px.max(1e-6);
-        let gutter = (per_pixel.clamp(1.0, MAX_GUTTER as f32).ceil() as u32)
-            .next_power_of_two()
-            .clamp(GUTTER, MAX_GUTTER);
+        // GUTTER and MAX_GUTTER are powers of two: rounding up stays between them.
+        // (A float cast saturates, NaN to 0, so the clamp holds for any input.)
+        let gutter = (per_pixel.ceil() as u32)
+            .clamp(GUTTER, MAX_GUTTER)
+            .next_power_of_two();
         AtlasDensity {
             texels_per_unit,
             gutter,
