@@ -23,8 +23,13 @@ pub enum Kind {
     /// A character with the awkward properties of assets made elsewhere, for testing the LOD
     /// pipeline: `split-tube` (indexed, split along hard edges and a UV seam, mostly zero-area
     /// UVs), `armour` (57 separate closed parts, no UVs), `patchwork` (a texture in a couple of
-    /// hundred small charts).
+    /// hundred small charts), `lowpoly` (flat-shaded, plain colours), `robot` (19 rigid parts
+    /// in four meshes with four skins, degenerate triangles, a morph target), `mocap` (65
+    /// Mixamo-style joints under a scaled armature, a T-pose that does not move) and `knight`
+    /// (hundreds of plain materials, unskinned props).
     TestModel,
+    /// Clips without a mesh, for `--clips` (`mocap-walk`: the walk of `mocap`).
+    Clips,
 }
 
 pub const BUILTINS: &[Builtin] = &[
@@ -66,6 +71,31 @@ pub const BUILTINS: &[Builtin] = &[
     Builtin {
         name: "patchwork",
         file_name: "patchwork.glb",
+        kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "lowpoly",
+        file_name: "lowpoly.glb",
+        kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "robot",
+        file_name: "robot.glb",
+        kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "mocap",
+        file_name: "mocap.glb",
+        kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "mocap-walk",
+        file_name: "mocap-walk.glb",
+        kind: Kind::Clips,
+    },
+    Builtin {
+        name: "knight",
+        file_name: "knight.glb",
         kind: Kind::TestModel,
     },
 ];

@@ -345,6 +345,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     lodlab::import::validate::set_limits(cli.import_limits());
+    lodlab::import::set_extra_clips(cli.clips.clone());
     match run(cli) {
         Ok(code) => code,
         Err(e) => {

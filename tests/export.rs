@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::gltf_tools;
+use common::{gltf_tools, validate};
 use lodlab::bake::animation_space::AnimationSpaceMesh;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::load_model;
@@ -17,26 +17,6 @@ fn lodlab(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("lodlab runs")
-}
-
-/// The validator's verdict on each file: (errors, warnings).
-fn validate(tools: &Path, files: &[PathBuf]) -> Vec<(u64, u64, Value)> {
-    let out = Command::new("node")
-        .arg(tools.join("validate.js"))
-        .args(files)
-        .output()
-        .expect("node runs");
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| {
-            let v: Value = serde_json::from_str(l).unwrap();
-            (
-                v["errors"].as_u64().unwrap(),
-                v["warnings"].as_u64().unwrap(),
-                v,
-            )
-        })
-        .collect()
 }
 
 fn export(model: &str, method: &str, dir: &Path) -> Value {

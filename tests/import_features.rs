@@ -129,11 +129,25 @@ fn primitives_of_one_skin_are_merged_with_their_materials() {
     let m = load(&p).unwrap();
     assert_eq!(m.mesh.vertex_count(), 20);
     assert_eq!(m.mesh.triangle_count(), 16);
-    assert_eq!(m.materials.len(), 2);
-    assert_eq!(m.materials[1].base_color, [1.0, 0.0, 0.0, 1.0]);
-    assert!(m.mesh.materials[..10].iter().all(|&x| x == 0));
-    assert!(m.mesh.materials[10..].iter().all(|&x| x == 1));
     assert!(m.mesh.indices[24..].iter().all(|&i| i >= 10));
+    // Two plain colours: one palette texture, each primitive's vertices on its own colour.
+    assert_eq!(m.materials.len(), 1);
+    assert_eq!(
+        m.materials[0].name,
+        lodlab::import::palette::PALETTE_MATERIAL
+    );
+    let t = m.materials[0].texture.as_ref().unwrap();
+    let colour = |v: usize| {
+        let uv = m.mesh.uvs[v];
+        let (x, y) = (
+            (uv.x * t.width as f32) as u32,
+            (uv.y * t.height as f32) as u32,
+        );
+        let i = ((y * t.width + x) * 4) as usize;
+        [t.pixels[i], t.pixels[i + 1], t.pixels[i + 2]]
+    };
+    assert!((10..20).all(|v| colour(v) == [255, 0, 0]));
+    assert!((0..10).all(|v| colour(v) != [255, 0, 0] && colour(v) == colour(0)));
 }
 
 #[test]
@@ -247,13 +261,9 @@ fn generated_foliage_is_written_as_a_two_sided_mask() {
     assert!(bark.get("alphaMode").is_none_or(|m| m == "OPAQUE"));
     if let Some(tools) = common::gltf_tools() {
         let (_dir, path) = write(&bytes, "sapling.glb");
-        let out = std::process::Command::new("node")
-            .arg(tools.join("validate.js"))
-            .arg(&path)
-            .output()
-            .unwrap();
-        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        assert_eq!(report["errors"], 0, "{report}");
+        for (errors, _, report) in common::validate(&tools, &[path]) {
+            assert_eq!(errors, 0, "{report}");
+        }
     }
 }
 

@@ -169,6 +169,7 @@ fn far_characters_become_their_impostors() {
         impostor: Box::new(walker_impostor().clone()),
         placement: Placement {
             epsilon: Some(errors[coarsest]),
+            tolerance_px: lodlab::scene::LodPolicy::default().tolerance_px,
             measured: Vec::new(),
         },
     };

@@ -233,7 +233,7 @@ fn run(mesh: &AnimationSpaceMesh, bones: usize, method: Method) -> (Sequence, Ve
         rest_bones: &rest,
         expectation: &p,
         poses: &[],
-        textured: true,
+        textured: &[true],
     };
     let seq = simplify(&input, method, &|_| {});
     let prefixes = choose_prefixes(&seq, &options(1e-4, 1));

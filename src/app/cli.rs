@@ -31,11 +31,18 @@ pub struct Cli {
     pub view: ViewArgs,
     /// Raise (or lower) a bound on what one model file may ask for, NAME=VALUE, repeatable:
     /// file-mb (1024: the file and each file it refers to, MiB), nodes (100000), joints
-    /// (1024 in a skin), clip-seconds (600), materials (256), texture-side (8192 texels).
+    /// (1024 in a skin), clip-seconds (600), materials (256 textured ones; plain colours share
+    /// one palette), texture-side (8192 texels).
     /// Each keeps a small hostile file from taking the machine; a model past one is refused
     /// in one line naming the option.
     #[arg(long = "limit", value_name = "NAME=VALUE", global = true, value_parser = parse_limit)]
     pub limits: Vec<String>,
+    /// Add the clips of another glTF file to every model, bound by joint name, repeatable: a
+    /// character and its animations sent as separate files on one skeleton, as Mixamo and
+    /// many asset stores send them (a built-in name, such as mocap-walk, or a path). A joint
+    /// the file animates that the model lacks is an error naming it.
+    #[arg(long = "clips", value_name = "FILE", global = true)]
+    pub clips: Vec<PathBuf>,
 }
 
 impl Cli {
@@ -60,8 +67,9 @@ pub enum Command {
     View(ViewArgs),
     /// Render a scene headless to a PNG and print one JSON line of figures.
     Shot(ShotArgs),
-    /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling) and the test
-    /// models (split-tube, armour, patchwork) as .glb files.
+    /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling), the test
+    /// models (split-tube, armour, patchwork, lowpoly, robot, mocap, knight) and the clips of
+    /// mocap-walk as .glb files.
     GenAssets(GenAssetsArgs),
     /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS; a
     /// tree's chain of billboard clouds), or fetch them from the cache, and print them as a
@@ -249,7 +257,7 @@ pub struct BenchArgs {
 #[derive(Args, Debug)]
 pub struct ReportArgs {
     /// A built-in asset name (horse, walker, broadleaf, conifer, sapling, split-tube, armour,
-    /// patchwork) or a glTF path; the same as --model.
+    /// patchwork, lowpoly, robot, mocap, knight) or a glTF path; the same as --model.
     #[arg(value_name = "MODEL")]
     pub model: Option<String>,
     /// The model, as shot, bench and view take it.
@@ -274,7 +282,7 @@ pub enum Baseline {
 #[derive(Args, Debug)]
 pub struct BakeArgs {
     /// Models: built-in asset names (horse, walker, broadleaf, conifer, sapling, split-tube,
-    /// armour, patchwork) or glTF paths; the same as --model.
+    /// armour, patchwork, lowpoly, robot, mocap, knight) or glTF paths; the same as --model.
     #[arg(value_name = "MODEL", required_unless_present = "model_flags")]
     pub models: Vec<String>,
     /// A model, as shot, bench and view take it. Repeat for several.

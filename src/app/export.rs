@@ -73,10 +73,35 @@ fn with_mesh(model: &Model, mesh: SkinnedMesh) -> Model {
     }
 }
 
-/// The `MSFT_screencoverage` value of a level coming in at `height_px` pixels high on
-/// [`SCREEN`]: the share of its area covered by the model's bounding box seen from the side.
+/// The share of [`SCREEN`]'s area the model's bounding box covers, seen from the side, when
+/// the model is `height_px` pixels high.
 fn coverage(height_px: f32, aspect: f32) -> f32 {
     (height_px * height_px * aspect / (SCREEN[0] * SCREEN[1])).clamp(0.0, 1.0)
+}
+
+/// The `MSFT_screencoverage` hints of levels that lodlab switches from at `switch_px` pixels
+/// high (each where the next level's error projects to the tolerance; 0 for the last, drawn to
+/// the end): the coverage at that height, strictly falling level by level. A switch above the
+/// screen's height (a fine level's error is a fraction of a millimetre) is put at the height
+/// of the screen, so full detail shows wherever the model fills it, and a hint that would not
+/// fall below the one before is a quarter of it (a level's error doubles, so the height it
+/// comes in at halves): clamped at full coverage, every such hint would be 1, and a reader choosing by
+/// coverage would show full detail only once the model covers the whole screen.
+fn coverage_hints(switch_px: &[f32], aspect: f32) -> Vec<f32> {
+    let mut hints: Vec<f32> = Vec::with_capacity(switch_px.len());
+    for (k, &px) in switch_px.iter().enumerate() {
+        let mut c = coverage(px.min(SCREEN[1]), aspect);
+        if let Some(&before) = hints.last()
+            && c >= before
+        {
+            c = before / 4.0;
+        }
+        if k + 1 == switch_px.len() || px <= 0.0 {
+            c = 0.0;
+        }
+        hints.push(c);
+    }
+    hints
 }
 
 pub fn run(opts: &ExportOptions) -> Result<Exported> {
@@ -109,12 +134,18 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
         .map(|l| l.mesh.to_skinned(&model.skeleton))
         .collect();
     let stem = file_stem(&model.name);
+    // The next level takes over where its error projects to the tolerance.
+    let switch_px: Vec<f32> = (0..lods.levels.len())
+        .map(|k| {
+            lods.levels
+                .get(k + 1)
+                .map_or(0.0, |n| opts.tolerance_px * height / n.error.max(1e-9))
+        })
+        .collect();
+    let hints = coverage_hints(&switch_px, aspect);
     let mut levels = Vec::with_capacity(meshes.len());
     for (k, (level, mesh)) in lods.levels.iter().zip(&meshes).enumerate() {
-        // The next level takes over where its error projects to the tolerance.
-        let next = lods.levels.get(k + 1).map_or(0.0, |n| {
-            coverage(opts.tolerance_px * height / n.error.max(1e-9), aspect)
-        });
+        let next = hints[k];
         let bytes = to_glb(&with_mesh(&model, mesh.clone()));
         let file = opts
             .out
@@ -137,7 +168,6 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
         });
     }
     let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
-    let hints: Vec<f32> = levels.iter().map(|l| l.coverage).collect();
     let generator = format!("lodlab export ({} levels)", opts.method.name());
     let lod_bytes = to_lod_glb(&model, &refs, &hints, &generator);
     let lod_file = opts
@@ -210,4 +240,23 @@ pub fn table(e: &Exported) -> String {
         e.lod_bytes / 1024
     );
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coverage_hints_fall_from_below_full_screen() {
+        // Two fine levels whose successors come in far above the screen's height, then a
+        // level switching at 300 px, then the last.
+        let hints = coverage_hints(&[40_000.0, 9_000.0, 300.0, 0.0], 0.4);
+        let full_height = coverage(SCREEN[1], 0.4);
+        assert!((hints[0] - full_height).abs() < 1e-6, "{hints:?}");
+        assert!(hints[0] < 1.0);
+        assert!(hints.windows(2).all(|w| w[1] < w[0]), "{hints:?}");
+        assert!((hints[1] - full_height / 4.0).abs() < 1e-6, "{hints:?}");
+        assert!((hints[2] - coverage(300.0, 0.4)).abs() < 1e-6, "{hints:?}");
+        assert_eq!(hints[3], 0.0);
+    }
 }

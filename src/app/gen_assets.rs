@@ -1,7 +1,7 @@
 //! `lodlab gen-assets`: regenerate the demo creatures under `assets/`.
 
 use crate::assets::BUILTINS;
-use crate::generate::{generate, glb::to_glb};
+use crate::generate::file;
 use anyhow::{Context, Result, anyhow};
 use std::path::Path;
 
@@ -34,18 +34,28 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
         .iter()
         .filter(|b| only.is_empty() || only.iter().any(|o| o == b.name))
     {
-        let model = generate(b.name).ok_or_else(|| anyhow!("no generator for {}", b.name))?;
-        let bytes = to_glb(&model);
+        let bytes = file(b.name).ok_or_else(|| anyhow!("no generator for {}", b.name))?;
         let path = dir.join(b.file_name);
         crate::atomic::write(&path, &bytes)?;
+        // What the file holds, as lodlab reads it (a file of clips alone has no model).
+        let read = crate::import::gltf::from_bytes(
+            b.name,
+            bytes.clone(),
+            dir,
+            &crate::import::validate::limits(),
+        )
+        .ok()
+        .map(|(m, _)| m);
         written.push(Written {
             name: b.name.to_string(),
             path: path.display().to_string(),
             bytes: bytes.len(),
-            vertices: model.mesh.vertex_count(),
-            triangles: model.mesh.triangle_count(),
-            bones: model.skeleton.bone_count(),
-            clips: model.clips.iter().map(|c| c.name.clone()).collect(),
+            vertices: read.as_ref().map_or(0, |m| m.mesh.vertex_count()),
+            triangles: read.as_ref().map_or(0, |m| m.mesh.triangle_count()),
+            bones: read.as_ref().map_or(0, |m| m.skeleton.bone_count()),
+            clips: read.as_ref().map_or_else(Vec::new, |m| {
+                m.clips.iter().map(|c| c.name.clone()).collect()
+            }),
         });
     }
     Ok(written)

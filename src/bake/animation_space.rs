@@ -156,13 +156,7 @@ impl AnimationSpaceMesh {
     pub fn optimized_for_gpu_with_order(&self) -> (AnimationSpaceMesh, Vec<usize>) {
         let n = self.vertex_count();
         let indices = meshopt::optimize_vertex_cache(&self.indices, n);
-        let remap = meshopt::optimize_vertex_fetch_remap(&indices, n);
-        let mut order: Vec<usize> = vec![0; remap.iter().filter(|&&r| r != u32::MAX).count()];
-        for (old, &new) in remap.iter().enumerate() {
-            if new != u32::MAX {
-                order[new as usize] = old;
-            }
-        }
+        let (remap, order) = fetch_order(&indices, n);
         let mut out = AnimationSpaceMesh {
             offsets: Vec::with_capacity(order.len() + 1),
             influences: Vec::with_capacity(self.influences.len()),
@@ -227,6 +221,25 @@ impl AnimationSpaceMesh {
 /// `G p` for an affine `G` and a homogeneous 4-vector `p` (whose w need not be 1).
 pub fn transform_homogeneous(g: &Affine3A, p: Vec4) -> Vec3 {
     g.matrix3 * p.truncate() + Vec3::from(g.translation) * p.w
+}
+
+/// Vertices numbered in order of first use by `indices` (meshoptimizer's
+/// `optimizeVertexFetchRemap`): for every old vertex its new index (`u32::MAX` for one no
+/// triangle uses), and for every new vertex the old one. Written here because the `meshopt`
+/// crate's wrapper (0.7) cuts its remap, which is indexed by *old* vertex, to the number of
+/// vertices in use: with a vertex no triangle uses (a file's degenerate triangles dropped on
+/// import leave such vertices), the later vertices lost their entries and every bake panicked.
+fn fetch_order(indices: &[u32], vertex_count: usize) -> (Vec<u32>, Vec<usize>) {
+    let mut remap = vec![u32::MAX; vertex_count];
+    let mut order = Vec::with_capacity(vertex_count);
+    for &i in indices {
+        let r = &mut remap[i as usize];
+        if *r == u32::MAX {
+            *r = order.len() as u32;
+            order.push(i as usize);
+        }
+    }
+    (remap, order)
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@ use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
 /// Bump whenever the bake's output or its encoding changes.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 const MAGIC: &[u8; 8] = b"LODLABLC";
 const HEADER: usize = 8 + 4 + 32 + 32 + 8;
 
@@ -190,12 +190,19 @@ pub fn key(source: &[u8; 32], method: Method, options: &LodOptions) -> [u8; 32] 
     *h.finalize().as_bytes()
 }
 
-/// A hash of a model's source: the file's bytes, and for a `.gltf` the external files its
-/// buffers and images name (those that exist; a missing one fails the import anyway).
+/// A hash of a model's source: the file's bytes, the files `--clips` adds clips from
+/// ([`crate::import::extra_clips`]), and for a `.gltf` the external files its buffers and
+/// images name (those that exist; a missing one fails the import anyway).
 pub fn source_hash(path: &Path) -> std::io::Result<[u8; 32]> {
     let bytes = std::fs::read(path)?;
     let mut h = blake3::Hasher::new();
     h.update(&bytes);
+    // Clips added from other files (`--clips`) change what the metric is estimated from.
+    for file in crate::import::extra_clips() {
+        let file = crate::import::source_path(&file.to_string_lossy());
+        h.update(b"clips");
+        h.update(&std::fs::read(&file)?);
+    }
     if let Ok(json) = serde_json::from_slice::<serde_json::Value>(&bytes) {
         let dir = path.parent().unwrap_or(Path::new("."));
         for list in ["buffers", "images"] {

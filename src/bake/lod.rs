@@ -211,8 +211,8 @@ impl<'a> Replay<'a> {
                 StepKind::Influence {
                     wedges, influences, ..
                 } => {
-                    for &w in wedges {
-                        self.influences[w as usize] = influences.clone();
+                    for (&w, list) in wedges.iter().zip(influences) {
+                        self.influences[w as usize] = list.clone();
                     }
                 }
                 StepKind::Prune { wedges, anchor } => {
@@ -661,12 +661,17 @@ fn simplify_model(
     };
     let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
     let poses = pose_samples(model, POSE_SAMPLES);
+    let textured: Vec<bool> = model
+        .materials
+        .iter()
+        .map(|m| m.texture.is_some())
+        .collect();
     let input = SimplifyInput {
         mesh: base,
         rest_bones: &rest_bones,
         expectation: &expectation,
         poses: &poses,
-        textured: model.materials.iter().any(|m| m.texture.is_some()),
+        textured: &textured,
     };
     simplify_feeding(&input, method, progress, feed)
 }

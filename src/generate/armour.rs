@@ -227,6 +227,28 @@ pub fn armour() -> Model {
 /// The same knight with every shape's segments multiplied by `detail` (triangles grow with
 /// its square): at 2.25, about 60,000 triangles, for benchmarks.
 pub fn armour_at(detail: f32) -> Model {
+    let k = knight(detail);
+    Model {
+        name: "armour".into(),
+        mesh: k.parts.build(0.0),
+        skeleton: k.rig.skeleton(),
+        clips: vec![k.walk],
+        materials: vec![Material::opaque("steel", [0.62, 0.64, 0.68, 1.0], None)],
+    }
+}
+
+/// The knight before it is a model: its parts (each smoothing group one shape, or one face of
+/// a box), its rig and its walk, and the bones a prop would hang from.
+pub(crate) struct Knight {
+    pub parts: FacetBuilder,
+    pub rig: Rig,
+    pub walk: crate::model::Clip,
+    /// The right hand and the chest.
+    pub hand_r: usize,
+    pub chest: usize,
+}
+
+pub(crate) fn knight(detail: f32) -> Knight {
     let mut r = Rig::default();
     let root = r.bone("root", None, Vec3::ZERO);
     let hips = r.bone("hips", Some(root), Vec3::new(0.0, 0.95, 0.0));
@@ -430,11 +452,11 @@ pub fn armour_at(detail: f32) -> Model {
         pose.root_offset = Vec3::Y * (0.025 * (2.0 * TAU * ph).cos() - 0.02);
         pose
     });
-    Model {
-        name: "armour".into(),
-        mesh: p.b.build(0.0),
-        skeleton: r.skeleton(),
-        clips: vec![walk],
-        materials: vec![Material::opaque("steel", [0.62, 0.64, 0.68, 1.0], None)],
+    Knight {
+        parts: p.b,
+        hand_r: arms[1][2],
+        chest,
+        rig: r,
+        walk,
     }
 }

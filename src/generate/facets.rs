@@ -52,13 +52,34 @@ impl FacetBuilder {
         self.facets.len()
     }
 
+    /// The centre of facet `i` (in the order added), at rest.
+    pub fn facet_centre(&self, i: usize) -> Vec3 {
+        self.facets[i]
+            .p
+            .iter()
+            .map(|&p| self.positions[p as usize])
+            .sum::<Vec3>()
+            / 3.0
+    }
+
     /// The indexed mesh: one render vertex per distinct (position, smoothing group, texture
     /// coordinate), normals averaged (area-weighted) over the faces of one smoothing group at
     /// a position. With `rounding > 0`, every copy of a position after the first is moved by up
     /// to `rounding` (a fraction of the bounding-box diagonal) and its weights by up to
     /// `rounding` before renormalising, deterministically.
     pub fn build(&self, rounding: f32) -> SkinnedMesh {
-        let mut vertex_of: HashMap<(u32, u32, u32, u32), u32> = HashMap::new();
+        self.build_coloured(rounding, |_, _| 0)
+    }
+
+    /// [`Self::build`], every triangle in the material `material(group, facet)` gives it (by
+    /// its smoothing group and its index in the order added): a corner where two materials
+    /// meet is split like one on a hard edge.
+    pub fn build_coloured(
+        &self,
+        rounding: f32,
+        mut material: impl FnMut(u32, usize) -> u16,
+    ) -> SkinnedMesh {
+        let mut vertex_of: HashMap<(u32, u32, u32, u32, u16), u32> = HashMap::new();
         let mut mesh = SkinnedMesh::default();
         let mut normal_sum: HashMap<(u32, u32), Vec3> = HashMap::new();
         for f in &self.facets {
@@ -73,10 +94,11 @@ impl FacetBuilder {
         let mut rng = fastrand::Rng::with_seed(0x5eed);
         let mut copies = vec![0u32; self.positions.len()];
         mesh.influence_offsets.push(0);
-        for f in &self.facets {
+        for (i, f) in self.facets.iter().enumerate() {
+            let m = material(f.group, i);
             for k in 0..3 {
                 let (p, uv) = (f.p[k], f.uv[k]);
-                let key = (p, f.group, uv.x.to_bits(), uv.y.to_bits());
+                let key = (p, f.group, uv.x.to_bits(), uv.y.to_bits(), m);
                 let v = *vertex_of.entry(key).or_insert_with(|| {
                     let copy = copies[p as usize];
                     copies[p as usize] += 1;
@@ -93,7 +115,7 @@ impl FacetBuilder {
                     mesh.normals
                         .push(normal_sum[&(p, f.group)].normalize_or(Vec3::Y));
                     mesh.uvs.push(uv);
-                    mesh.materials.push(0);
+                    mesh.materials.push(m);
                     let w: Vec<(u32, f32)> = self.weights[p as usize]
                         .iter()
                         .map(|&(bone, w)| (bone, (w + jitter(&mut rng) * w).max(1e-6)))

@@ -8,7 +8,7 @@
 //! node indices and `MSFT_screencoverage` in its `extras` (Microsoft's vendor extension, read
 //! by Babylon.js and three.js's loader).
 
-use crate::model::{AlphaMode, ChannelTarget, Interpolation, Model, SkinnedMesh};
+use crate::model::{AlphaMode, ChannelTarget, Clip, Interpolation, Material, Model, SkinnedMesh};
 use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
 use gltf::json::validation::{Checked::Valid, USize64};
 use gltf::json::{self as gj, Index};
@@ -18,14 +18,14 @@ use std::collections::BTreeMap;
 /// The binary chunk and the buffer views and accessors into it, built up in the order the
 /// model is written.
 #[derive(Default)]
-struct Builder {
-    bin: Vec<u8>,
-    views: Vec<gj::buffer::View>,
-    accessors: Vec<gj::Accessor>,
+pub(crate) struct Builder {
+    pub(crate) bin: Vec<u8>,
+    pub(crate) views: Vec<gj::buffer::View>,
+    pub(crate) accessors: Vec<gj::Accessor>,
 }
 
 impl Builder {
-    fn view(
+    pub(crate) fn view(
         &mut self,
         bytes: &[u8],
         target: Option<gj::buffer::Target>,
@@ -48,7 +48,7 @@ impl Builder {
         Index::push(&mut self.views, view)
     }
 
-    fn accessor(
+    pub(crate) fn accessor(
         &mut self,
         bytes: &[u8],
         target: Option<gj::buffer::Target>,
@@ -79,7 +79,7 @@ impl Builder {
         Index::push(&mut self.accessors, accessor)
     }
 
-    fn floats(
+    pub(crate) fn floats(
         &mut self,
         data: &[f32],
         kind: Type,
@@ -111,7 +111,7 @@ impl Builder {
 }
 
 /// The `extras` object of a glTF property, from any serialisable value.
-fn extras(value: serde_json::Value) -> gj::Extras {
+pub(crate) fn extras(value: serde_json::Value) -> gj::Extras {
     Some(serde_json::value::to_raw_value(&value).expect("a JSON value serialises"))
 }
 
@@ -133,12 +133,14 @@ fn png(image: &crate::model::Rgba8Image) -> Vec<u8> {
     out
 }
 
-type Attributes = BTreeMap<gj::validation::Checked<gj::mesh::Semantic>, Index<gj::Accessor>>;
+pub(crate) type Attributes =
+    BTreeMap<gj::validation::Checked<gj::mesh::Semantic>, Index<gj::Accessor>>;
 
 /// Positions, normals, texture coordinates and joint/weight sets of the vertices `used`.
 /// A mesh whose texture coordinates are all zero has none, and is written without
-/// `TEXCOORD_0`, as a file without texture coordinates reads back.
-fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Attributes {
+/// `TEXCOORD_0`, as a file without texture coordinates reads back; a mesh without influences (an
+/// unskinned part) has no joint or weight sets.
+pub(crate) fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Attributes {
     use gj::buffer::Target::ArrayBuffer;
     use gj::mesh::Semantic;
     let gather =
@@ -160,6 +162,10 @@ fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Att
             Valid(Semantic::TexCoords(0)),
             b.floats(&uvs, Type::Vec2, false, Some(ArrayBuffer)),
         );
+    }
+    if mesh.influences.is_empty() {
+        // An unskinned part: no weight sets.
+        return attributes;
     }
     let most = used
         .iter()
@@ -194,25 +200,36 @@ fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usize]) -> Att
     attributes
 }
 
-/// One primitive per material, each with the vertices it uses (in order), so that an importer
-/// merging primitives in order gets the mesh back as it was.
+/// One primitive per material, each with the vertices its triangles use (in order of the
+/// vertices), so that an importer merging primitives in order gets the mesh back as it was. A
+/// triangle is in the primitive of its first corner's material, the vertex the renderer takes
+/// a triangle's material from (its provoking vertex): a simplified mesh can join corners of two
+/// materials in one triangle, and such a corner is then written in both primitives. A
+/// material no triangle uses gets no primitive.
 fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::mesh::Primitive> {
+    let material_of = |v: u32| mesh.materials.get(v as usize).copied().unwrap_or(0) as usize;
     let mut primitives = Vec::new();
     for material in 0..materials.max(1) {
-        let used: Vec<usize> = (0..mesh.vertex_count())
-            .filter(|&v| mesh.materials.get(v).copied().unwrap_or(0) as usize == material)
+        let triangles: Vec<&[u32]> = mesh
+            .indices
+            .chunks_exact(3)
+            .filter(|t| material_of(t[0]).min(materials.max(1) - 1) == material)
             .collect();
-        if used.is_empty() {
+        if triangles.is_empty() {
             continue;
         }
+        let mut in_use = vec![false; mesh.vertex_count()];
+        triangles
+            .iter()
+            .flat_map(|t| t.iter())
+            .for_each(|&v| in_use[v as usize] = true);
+        let used: Vec<usize> = (0..mesh.vertex_count()).filter(|&v| in_use[v]).collect();
         let mut local = vec![u32::MAX; mesh.vertex_count()];
         for (i, &v) in used.iter().enumerate() {
             local[v] = i as u32;
         }
-        let indices: Vec<u32> = mesh
-            .indices
-            .chunks_exact(3)
-            .filter(|t| local[t[0] as usize] != u32::MAX)
+        let indices: Vec<u32> = triangles
+            .iter()
             .flat_map(|t| t.iter().map(|&i| local[i as usize]))
             .collect();
         let attributes = vertex_attributes(b, mesh, &used);
@@ -229,7 +246,7 @@ fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::
             extensions: None,
             extras: None,
             indices: Some(indices),
-            material: Some(Index::new(material as u32)),
+            material: (materials > 0).then(|| Index::new(material as u32)),
             mode: Valid(gj::mesh::Mode::Triangles),
             targets: None,
         });
@@ -238,8 +255,8 @@ fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::
 }
 
 /// Materials, with each base colour texture embedded as a PNG in the binary chunk.
-fn materials(b: &mut Builder, model: &Model, root: &mut gj::Root) {
-    for m in &model.materials {
+pub(crate) fn materials(b: &mut Builder, materials: &[Material], root: &mut gj::Root) {
+    for m in materials {
         let mut pbr = gj::material::PbrMetallicRoughness {
             base_color_factor: gj::material::PbrBaseColorFactor(m.base_color),
             metallic_factor: gj::material::StrengthFactor(0.0),
@@ -375,11 +392,12 @@ fn skeleton(
     mesh_nodes
 }
 
-/// Every clip, with its ground speed in the animation's `extras`.
-fn animations(b: &mut Builder, model: &Model) -> Vec<gj::Animation> {
+/// Every clip, with its ground speed in the animation's `extras`; a channel's node is the
+/// file's node of that index.
+pub(crate) fn animations(b: &mut Builder, clips: &[Clip]) -> Vec<gj::Animation> {
     use gj::animation::{Channel, Property, Sampler, Target};
     let mut animations = Vec::new();
-    for clip in &model.clips {
+    for clip in clips {
         let mut channels = Vec::new();
         let mut samplers = Vec::new();
         for ch in &clip.channels {
@@ -495,9 +513,9 @@ fn document(
             weights: None,
         });
     }
-    materials(&mut b, model, &mut root);
+    materials(&mut b, &model.materials, &mut root);
     skeleton(&mut b, model, &mut root, meshes.len(), all_in_scene);
-    root.animations = animations(&mut b, model);
+    root.animations = animations(&mut b, &model.clips);
     while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
@@ -520,7 +538,7 @@ fn skeleton_nodes(model: &Model) -> usize {
 }
 
 /// A GLB container of `json_bytes` and the binary chunk `bin`.
-fn glb_bytes(mut json_bytes: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
+pub(crate) fn glb_bytes(mut json_bytes: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
     while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }

@@ -15,6 +15,7 @@ pub mod rig;
 pub mod split_tube;
 pub mod tree;
 pub mod walker;
+pub mod wild;
 
 use crate::model::Model;
 
@@ -29,6 +30,19 @@ pub fn generate(name: &str) -> Option<Model> {
         "split-tube" => Some(split_tube::split_tube()),
         "armour" => Some(armour::armour()),
         "patchwork" => Some(walker::patchwork()),
+        "lowpoly" => Some(walker::lowpoly()),
         _ => None,
+    }
+}
+
+/// The `.glb` bytes of a built-in asset by name: a generated model as [`glb::to_glb`] writes
+/// it, or one of the [`wild`] files as its document lays it out.
+pub fn file(name: &str) -> Option<Vec<u8>> {
+    match name {
+        "robot" => Some(wild::robot::robot().to_glb()),
+        "mocap" => Some(wild::mocap::mocap().to_glb()),
+        "mocap-walk" => Some(wild::mocap::mocap_walk().to_glb()),
+        "knight" => Some(wild::knight::knight().to_glb()),
+        _ => generate(name).map(|m| glb::to_glb(&m)),
     }
 }

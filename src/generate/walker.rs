@@ -462,3 +462,49 @@ pub fn patchwork() -> Model {
         Box::new(clothes(&r, &l, eyes(surface)))
     })
 }
+
+/// "lowpoly": a test model with the properties of low-poly game characters: the walker's
+/// control cage itself (732 triangles), every quad flat-shaded (a hard edge all round it),
+/// no texture coordinates, coloured by six plain materials (tunic, sleeves, trousers, boots,
+/// gloves and skin) where its parts meet.
+pub fn lowpoly() -> Model {
+    use super::facets::FacetBuilder;
+    use crate::model::Material;
+    let (r, l) = rig();
+    let cage = cage(&r, &l);
+    let mut b = FacetBuilder::default();
+    let ids: Vec<u32> = cage
+        .positions
+        .iter()
+        .zip(&cage.weights)
+        .map(|(p, w)| b.point(*p, w.clone()))
+        .collect();
+    let mut part_of_group = Vec::new();
+    for (g, f) in cage.live_faces().enumerate() {
+        b.quad(f.v.map(|v| ids[v as usize]), g as u32, [Vec2::ZERO; 4]);
+        part_of_group.push(cage.chart_parts[f.chart as usize]);
+    }
+    let material = |part: u32| match part {
+        TORSO => 0,
+        ARM => 1,
+        LEG => 2,
+        SOLE => 3,
+        THUMB => 4,
+        _ => 5,
+    };
+    let mesh = b.build_coloured(0.0, |g, _| material(part_of_group[g as usize]));
+    Model {
+        name: "lowpoly".into(),
+        mesh,
+        skeleton: r.skeleton(),
+        clips: clips(&r, &l),
+        materials: vec![
+            Material::opaque("tunic", [0.16, 0.3, 0.12, 1.0], None),
+            Material::opaque("sleeves", [0.1, 0.2, 0.08, 1.0], None),
+            Material::opaque("trousers", [0.42, 0.36, 0.22, 1.0], None),
+            Material::opaque("boots", [0.05, 0.04, 0.03, 1.0], None),
+            Material::opaque("gloves", [0.3, 0.17, 0.08, 1.0], None),
+            Material::opaque("skin", [0.8, 0.55, 0.42, 1.0], None),
+        ],
+    }
+}

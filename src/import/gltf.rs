@@ -56,6 +56,24 @@ pub fn from_bytes(
     base: &Path,
     limits: &validate::Limits,
 ) -> Result<(Model, Vec<String>), String> {
+    let (doc, buffers) = read_document(read, base, limits)?;
+    let images = validate::import_images(&doc, base, &buffers, limits)?;
+    let mut warnings = Vec::new();
+    let mut model = build(name, &doc, &buffers, &images, &mut warnings)?;
+    let packed = super::palette::pack_plain_colours(&mut model);
+    if packed > 0 {
+        log::info!("{packed} plain-coloured materials share one palette texture");
+    }
+    Ok((model, warnings))
+}
+
+/// The document in the bytes of a `.glb` or `.gltf` and its buffers, every check of
+/// [`validate`] passed before anything reads an attribute.
+fn read_document(
+    read: Vec<u8>,
+    base: &Path,
+    limits: &validate::Limits,
+) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), String> {
     validate::check_glb_header(&read)?;
     validate::check_raw(&read)?;
     let bytes = unpacked(&read, base)?.unwrap_or(read);
@@ -66,10 +84,96 @@ pub fn from_bytes(
     validate::check_sources(&doc, base, limits)?;
     let buffers = gltf::import_buffers(&doc, Some(base), blob).map_err(|e| gltf_problem(&e))?;
     validate::check_document(&doc, &buffers, limits)?;
-    let images = validate::import_images(&doc, base, &buffers, limits)?;
-    let mut warnings = Vec::new();
-    let model = build(name, &doc, &buffers, &images, &mut warnings)?;
-    Ok((model, warnings))
+    Ok((doc, buffers))
+}
+
+/// Adds the clips of the glTF file `path` to `model`, bound by joint name: what a service
+/// that sends a character and its animations as separate files on one skeleton sends (Mixamo
+/// does). Every node the file animates must be a node of the model's skeleton of the same
+/// name; the error names those that are not. Returns how many clips came.
+pub fn add_clips(model: &mut Model, path: &Path) -> Result<usize, InputError> {
+    let fail = |p: String| InputError::new(path, p);
+    let limits = validate::limits();
+    let meta = std::fs::metadata(path).map_err(|e| fail(io_problem(&e)))?;
+    validate::check_file(&meta, &limits).map_err(fail)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
+    let (doc, buffers) = read_document(read, base, &limits).map_err(fail)?;
+    let skeleton = &model.skeleton;
+    let mut remap = vec![u32::MAX; doc.nodes().len()];
+    for n in doc.nodes() {
+        if let Some(i) = n
+            .name()
+            .and_then(|name| skeleton.nodes.iter().position(|s| s.name == name))
+        {
+            remap[n.index()] = i as u32;
+        }
+    }
+    let mut unmatched: Vec<String> = Vec::new();
+    for anim in doc.animations() {
+        for ch in anim.channels() {
+            let node = ch.target().node();
+            let moves = ch.target().property() != gltf::animation::Property::MorphTargetWeights;
+            let name = node
+                .name()
+                .map_or_else(|| format!("node {}", node.index()), str::to_string);
+            if moves && remap[node.index()] == u32::MAX && !unmatched.contains(&name) {
+                unmatched.push(name);
+            }
+        }
+    }
+    if !unmatched.is_empty() {
+        let list = |names: &[String]| {
+            let shown: Vec<&str> = names.iter().take(6).map(String::as_str).collect();
+            let more = names.len().saturating_sub(shown.len());
+            if more > 0 {
+                format!("{} and {more} more", shown.join(", "))
+            } else {
+                shown.join(", ")
+            }
+        };
+        let joints: Vec<String> = model
+            .skeleton
+            .joints
+            .iter()
+            .map(|&j| model.skeleton.nodes[j as usize].name.clone())
+            .collect();
+        return Err(fail(format!(
+            "its clips animate {} joint(s) that {} does not have: {} (its joints are {})",
+            unmatched.len(),
+            model.name,
+            list(&unmatched),
+            list(&joints)
+        )));
+    }
+    let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+    let mut clips = Vec::new();
+    for anim in doc.animations() {
+        if let Some(clip) = read_clip(&anim, buffer, &remap).map_err(fail)? {
+            clips.push(clip);
+        }
+    }
+    if clips.is_empty() {
+        return Err(fail("has no clips to add".into()));
+    }
+    // Ground speeds into the model's scene units, as `place_in_scene` does for its own.
+    let scale = model.skeleton.root_transform.matrix3.x_axis.length();
+    let rest = crate::anim::linear_blend_skinning(
+        &model.mesh,
+        &model.skeleton,
+        &crate::anim::bone_matrices(&model.skeleton, None, 0.0),
+    );
+    let height = Bounds::of(rest).map_or(1.0, |b| b.size().y);
+    for clip in &mut clips {
+        if clip.ground_speed < 0.0 {
+            clip.ground_speed = guess_ground_speed(&clip.name, height);
+        } else {
+            clip.ground_speed *= scale;
+        }
+    }
+    let count = clips.len();
+    model.clips.extend(clips);
+    Ok(count)
 }
 
 /// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or
@@ -193,6 +297,47 @@ fn build(
         }
         maps.push(map);
     }
+    // Unskinned parts ride rigidly on what carries them in the file: the nearest joint above
+    // the node (a helmet on the head bone), else the node itself, which becomes a bone of its
+    // own so that whatever animates it or the nodes above it moves the part (a cape on the
+    // armature's node beside the skeleton's root, a prop standing in the scene).
+    let parents = node_parents(doc);
+    let skin_bones = bone_nodes.len();
+    let mut props: Vec<(gltf::Node, Mat4, usize)> = Vec::new();
+    for (node, world) in mesh_nodes_in_scene(doc) {
+        if node.skin().is_some() || lower_lods.contains(&node.index()) {
+            continue;
+        }
+        if !world.is_finite() {
+            return Err(format!(
+                "mesh node {} has a non-finite transform",
+                node.index()
+            ));
+        }
+        // The validator has ruled out cycles, so the walk up ends.
+        let mut up = parents[node.index()];
+        while let Some(p) = up.filter(|&p| !bone_nodes[..skin_bones].contains(&p)) {
+            up = parents[p];
+        }
+        let carrier = match up {
+            Some(joint) => joint,
+            None if !crate::model::keeps_every_direction(&world) => {
+                warnings.push(format!(
+                    "mesh node {} is left out: its transform squashes it flat",
+                    node.index()
+                ));
+                continue;
+            }
+            None => {
+                if !bone_nodes.contains(&node.index()) {
+                    bone_nodes.push(node.index());
+                    inverse_bind.push(world.inverse());
+                }
+                node.index()
+            }
+        };
+        props.push((node, world, carrier));
+    }
     let (nodes, remap) = read_hierarchy(doc, &bone_nodes)?;
     let mut skeleton = Skeleton {
         nodes,
@@ -200,7 +345,7 @@ fn build(
         inverse_bind,
         root_transform: Affine3A::IDENTITY,
     };
-    let bound: Vec<(gltf::Node, Binding)> = skinned
+    let mut bound: Vec<(gltf::Node, Binding)> = skinned
         .iter()
         .map(|n| {
             let s = n.skin().expect("filtered on a skin").index();
@@ -211,39 +356,21 @@ fn build(
             (n.clone(), Binding::Skin(&maps[k]))
         })
         .collect();
-    // Unskinned parts below a joint follow that joint rigidly; any other is left out.
-    let parents = node_parents(doc);
-    let bone_of_node = |n: usize| bone_nodes.iter().position(|&b| b == n);
-    let mut bound = bound;
-    let mut left_out = 0;
-    for (node, world) in mesh_nodes_in_scene(doc) {
-        if node.skin().is_some() || lower_lods.contains(&node.index()) {
-            continue;
-        }
-        // The validator has ruled out cycles, so the walk up ends.
-        let mut up = parents[node.index()];
-        while let Some(p) = up.filter(|&p| bone_of_node(p).is_none()) {
-            up = parents[p];
-        }
-        match up.and_then(|p| bone_of_node(p).map(|b| (p, b))) {
-            Some((joint, bone)) => {
-                // Into the bone's bind space: G_b · IBM_b · v̂ then puts the part where the
-                // joint carries it, whatever the bind matrices say.
-                let joint_world = world_of(doc, &parents, joint);
-                let bind = skeleton.inverse_bind[bone].inverse();
-                let to_bind = bind * joint_world.inverse() * world;
-                bound.push((node, Binding::Rigid(to_bind, bone as u32)));
-            }
-            None => left_out += 1,
-        }
+    for (node, world, carrier) in props {
+        // The carrier's first bone (a node may be a bone of two skins).
+        let bone = bone_nodes
+            .iter()
+            .position(|&b| b == carrier)
+            .expect("every carrier is a bone");
+        // Into the bone's bind space: G_b · IBM_b · v̂ then puts the part where the node
+        // carrying it puts it, whatever the bind matrices say.
+        let carrier_world = world_of(doc, &parents, carrier);
+        let bind = skeleton.inverse_bind[bone].inverse();
+        let to_bind = bind * carrier_world.inverse() * world;
+        bound.push((node, Binding::Rigid(to_bind, bone as u32)));
     }
-    if left_out > 0 {
-        warnings.push(format!(
-            "{left_out} mesh node(s) without a skin and not below a joint left out: only the \
-             skinned character is loaded"
-        ));
-    }
-    let (mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
+    let (mut mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
+    into_bind_space(&mut mesh, &mut skeleton);
     let mut clips = Vec::new();
     for anim in doc.animations() {
         if let Some(clip) = read_clip(&anim, buffer, &remap)? {
@@ -400,9 +527,11 @@ fn read_inverse_bind(
         ));
     }
     let inverse_bind: Vec<Mat4> = inverse_bind[..joints].to_vec();
+    // Judged against the matrix's own scale (see `keeps_every_direction`): gltfpack's
+    // quantised skins scale by about 9·10⁻⁵, a determinant of about 10⁻¹².
     if let Some(i) = inverse_bind
         .iter()
-        .position(|m| !m.is_finite() || m.determinant().abs() < 1e-12)
+        .position(|m| !crate::model::keeps_every_direction(m))
     {
         return Err(format!(
             "inverse bind matrix of joint {i} is not finite or not invertible"
@@ -454,7 +583,7 @@ enum Binding<'m> {
 
 /// The meshes of `nodes` (each mesh once), all their primitives merged into one mesh (normals
 /// computed where a primitive has none), and the materials they use. Morph targets are left
-/// out with a warning in `warnings`: the base shape is drawn.
+/// out with one warning in `warnings`: the base shape is drawn.
 fn read_meshes(
     nodes: &[(gltf::Node, Binding)],
     buffers: &[gltf::buffer::Data],
@@ -467,6 +596,7 @@ fn read_meshes(
     let mut mesh = SkinnedMesh::default();
     let mut needs_normals: Vec<bool> = Vec::new();
     let mut seen_meshes = Vec::new();
+    let mut morphed = 0;
     for (node, binding) in nodes {
         let Some(m) = node.mesh() else { continue };
         if seen_meshes.contains(&m.index()) {
@@ -476,10 +606,7 @@ fn read_meshes(
         for prim in m.primitives() {
             let label = format!("mesh {} primitive {}", m.index(), prim.index());
             if prim.morph_targets().len() > 0 {
-                warnings.push(format!(
-                    "{label}: its {} morph targets are left out (the base shape is drawn)",
-                    prim.morph_targets().len()
-                ));
+                morphed += 1;
             }
             let material = prim.material();
             let slot = match material_slots.get(&material.index()) {
@@ -533,11 +660,25 @@ fn read_meshes(
             append_primitive(&mut mesh, &mut needs_normals, raw, slot);
         }
     }
-    if mesh.triangle_count() == 0 {
-        return Err("the skinned mesh has no triangles".into());
+    if morphed > 0 {
+        warnings.push(format!(
+            "morph targets are left out on {morphed} primitive(s) (the base shape is drawn)"
+        ));
     }
     if needs_normals.iter().any(|&n| n) {
         compute_normals(&mut mesh, &needs_normals);
+    }
+    // Degenerate and repeated triangles, and the vertices only they used (or none did), go
+    // before anything counts vertices or builds animation space from them.
+    let (triangles, vertices) = mesh.drop_unused();
+    if triangles + vertices > 0 {
+        log::info!(
+            "{triangles} degenerate or repeated triangle(s) and {vertices} vertex(es) no \
+             triangle uses left out"
+        );
+    }
+    if mesh.triangle_count() == 0 {
+        return Err("the skinned mesh has no triangles".into());
     }
 
     Ok((mesh, materials))
@@ -595,6 +736,50 @@ fn mesh_nodes_in_scene(doc: &gltf::Document) -> Vec<(gltf::Node<'_>, Mat4)> {
     }
     out.sort_by_key(|(n, _)| n.index());
     out
+}
+
+/// Moves the mesh into the space its bind pose stands in, so that the rest pose is `Ĝ_i =
+/// IBM_i⁻¹` (Merry et al. §2.1.1) in the skeleton's space and rest positions are where the
+/// skinned character stands. glTF skins a vertex by `G_i · IBM_i · v̂` and leaves the space of
+/// `v̂` to the exporter: Blender writes a rig's mesh in its armature's space, which the armature
+/// node scales (0.01 from centimetres) and turns (Z up) on its way to the scene, so every joint
+/// at rest has `G_i · IBM_i = A`, the armature's transform, and not the identity. Read as they
+/// were, such a mesh's rest positions were a hundred times too large and lying down: the
+/// rest-pose metric measured centimetres, a level's tolerance came from a height of 180
+/// instead of 1.8, and the texture and torn-chart costs (from rest positions) outweighed the
+/// L2,2 deviation (from the poses, in metres) a hundredfold. `A` is taken from the joint that
+/// carries the most skin weight (where the rest pose is not quite the bind pose, the body's
+/// main bone says best where the bound mesh stands); `v̂ ← A v̂` and `IBM_i ← IBM_i A⁻¹` leave
+/// every posed vertex where it was.
+fn into_bind_space(mesh: &mut SkinnedMesh, skeleton: &mut Skeleton) {
+    let mut weight = vec![0.0f64; skeleton.bone_count()];
+    for inf in &mesh.influences {
+        weight[inf.bone as usize] += inf.weight as f64;
+    }
+    let Some(main) = (0..weight.len()).max_by(|&a, &b| weight[a].total_cmp(&weight[b])) else {
+        return;
+    };
+    let rest = crate::anim::bone_matrices(skeleton, None, 0.0);
+    let a = Mat4::from(rest[main]) * skeleton.inverse_bind[main];
+    if a.abs_diff_eq(Mat4::IDENTITY, 1e-6) || !crate::model::keeps_every_direction(&a) {
+        return;
+    }
+    let normal_matrix = glam::Mat3::from_mat4(a).inverse().transpose();
+    for p in &mut mesh.positions {
+        *p = a.transform_point3(*p);
+    }
+    for n in &mut mesh.normals {
+        *n = (normal_matrix * *n).normalize_or(Vec3::Y);
+    }
+    let back = a.inverse();
+    for ibm in &mut skeleton.inverse_bind {
+        *ibm *= back;
+    }
+    log::info!(
+        "the mesh is bound in a space of its own (the armature's, scale {:.3}): moved into \
+         the skeleton's",
+        Affine3A::from_mat4(a).matrix3.x_axis.length()
+    );
 }
 
 /// Scene units: metres, standing on the ground, centred. A model of implausible height (in
@@ -934,11 +1119,9 @@ fn append_primitive(
         mesh.influence_offsets.push(mesh.influences.len() as u32);
         needs_normals.push(!has_normals);
     }
+    // Triangles that welding (or the file) made degenerate go later, with the rest
+    // (`SkinnedMesh::drop_unused`).
     for t in raw.triangles {
-        // Triangles that welding (or the file) made degenerate draw nothing.
-        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-            continue;
-        }
         mesh.indices.extend(t.iter().map(|&i| i + base));
     }
 }

@@ -2,16 +2,51 @@
 
 pub mod gltf;
 pub mod gltfpack;
+pub mod palette;
 pub mod validate;
 pub mod weld;
 
 use crate::error::InputError;
 use crate::model::Model;
 use std::path::{Path, PathBuf};
+use std::sync::RwLock;
+
+/// Files whose clips every model loaded by [`load_model`] gets (the command line's
+/// `--clips`), in order.
+static EXTRA_CLIPS: RwLock<Vec<PathBuf>> = RwLock::new(Vec::new());
+
+/// Sets the files of clips [`load_model`] adds to every model, for the rest of the process.
+pub fn set_extra_clips(files: Vec<PathBuf>) {
+    *EXTRA_CLIPS.write().unwrap_or_else(|e| e.into_inner()) = files;
+}
+
+/// The files of clips [`load_model`] adds to every model (a bake's cache key holds them).
+pub fn extra_clips() -> Vec<PathBuf> {
+    EXTRA_CLIPS
+        .read()
+        .unwrap_or_else(|e| e.into_inner())
+        .clone()
+}
 
 /// Loads a model given on the command line: the name of a built-in asset (`horse`, `walker`)
-/// or a path to a glTF file.
+/// or a path to a glTF file, with the clips of [`extra_clips`] added by joint name.
 pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
+    let mut model = load_file(name_or_path)?;
+    for file in extra_clips() {
+        // A built-in's name (`mocap-walk`) or a path.
+        let path = source_path(&file.to_string_lossy());
+        let added = gltf::add_clips(&mut model, &path)?;
+        log::info!(
+            "{}: {added} clip(s) added to {}",
+            path.display(),
+            model.name
+        );
+    }
+    Ok(model)
+}
+
+/// [`load_model`] without the extra clips.
+fn load_file(name_or_path: &str) -> Result<Model, InputError> {
     match crate::assets::builtin(name_or_path) {
         Some(asset) => gltf::load(&asset.path()).map(|mut m| {
             m.name = asset.name.to_string();

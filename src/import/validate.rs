@@ -23,7 +23,8 @@ pub struct Limits {
     pub joints: usize,
     /// Length of one clip in seconds (the animation texture holds 30 frames a second of it).
     pub clip_seconds: f32,
-    /// Materials (each is a layer of the material texture array at every level of detail).
+    /// Textured materials (each is a layer of the material texture array at every level of
+    /// detail; plain colours share one, see [`super::palette`]).
     pub materials: usize,
     /// Width or height of one texture image, in texels.
     pub texture_side: u32,
@@ -48,7 +49,7 @@ impl Limits {
         ("nodes", "nodes in a file"),
         ("joints", "joints of a skin"),
         ("clip-seconds", "length of a clip"),
-        ("materials", "materials of a model"),
+        ("materials", "textured materials of a model"),
         ("texture-side", "width or height of a texture image"),
     ];
 
@@ -576,10 +577,15 @@ fn check_sizes(
             ));
         }
     }
-    let materials = doc.materials().len();
+    // Plain colours go into one palette texture on import: only textured materials take a
+    // texture layer each.
+    let materials = doc
+        .materials()
+        .filter(|m| m.pbr_metallic_roughness().base_color_texture().is_some())
+        .count();
     if materials > limits.materials {
         return Err(over(
-            format!("has {materials} materials"),
+            format!("has {materials} textured materials"),
             limits.materials,
             "materials",
         ));

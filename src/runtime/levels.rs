@@ -184,7 +184,7 @@ pub fn bake_each(
 const IMPOSTOR_PENDING: f32 = 0.9;
 
 /// Bump whenever placing an impostor changes its result.
-const PLACEMENT_VERSION: u32 = 3;
+const PLACEMENT_VERSION: u32 = 4;
 
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
@@ -206,17 +206,11 @@ fn impostor_level(
         let start = std::time::Instant::now();
         let full = CharacterBake::new(&s.model).map_err(anyhow::Error::msg)?;
         let placement = place_impostor(gpu, &s.model, &full, &lods.levels, &impostor, tolerance)?;
-        log::info!(
-            "{} {}: impostor placed in {:.2} s: error {}; {:?}",
+        log::debug!(
+            "{} {}: impostor placed in {:.2} s; measured {:?}",
             s.model.name,
             lods.method,
             start.elapsed().as_secs_f64(),
-            placement
-                .epsilon
-                .map_or("none (it beats no level)".to_string(), |e| format!(
-                    "{:.0} mm",
-                    e * 1e3
-                )),
             placement.measured,
         );
         Ok(placement)
@@ -239,6 +233,27 @@ fn impostor_level(
         }
         placement
     };
+    // Said whether placed now or read from the cache: where the impostor comes in is what a
+    // user looking at a crowd needs to know.
+    let height = crate::bake::lod::model_height(&s.model);
+    match (placement.epsilon, placement.largest_px(height)) {
+        (Some(e), Some(px)) => {
+            let replaces = lods.levels.iter().position(|l| l.error >= e);
+            log::info!(
+                "{} {}: the impostor comes in below {px:.0} px high (error {:.1} mm at \
+                 {tolerance} px{}; never larger at a higher tolerance)",
+                s.model.name,
+                lods.method,
+                e * 1e3,
+                replaces.map_or(String::new(), |k| format!(", in place of level {k} and up"))
+            )
+        }
+        _ => log::info!(
+            "{} {}: no impostor (it beats none of the levels where they come in)",
+            s.model.name,
+            lods.method
+        ),
+    }
     Ok(ImpostorLevel {
         impostor: Box::new(impostor),
         placement,

@@ -127,9 +127,13 @@ pub struct LodView {
     models: Vec<[Option<LodModel>; 4]>,
     /// Whether far characters show as their animated impostors (where they have one).
     impostors: bool,
-    /// Per model and method slot: its impostor's error bound where it has one on the GPU
-    /// placed in that method's chain.
-    impostor_errors: Vec<[Option<f32>; 4]>,
+    /// Per model and method slot: its impostor's placement in that method's chain, where it
+    /// has one on the GPU.
+    impostor_errors: Vec<[Option<crate::runtime::impostor_placement::Placement>; 4]>,
+    /// The tolerance `with_impostors` was worked out for (see [`Placement::epsilon_at`]).
+    ///
+    /// [`Placement::epsilon_at`]: crate::runtime::impostor_placement::Placement::epsilon_at
+    impostors_at: f32,
     /// `models` with each character's impostor appended as its last level (see
     /// [`with_impostor`]), for the simplified methods.
     with_impostors: Vec<[Option<LodModel>; 4]>,
@@ -202,8 +206,10 @@ impl LodView {
         self.impostors
     }
 
-    /// Rebuilds [`LodView::with_impostors`] after levels or impostors came.
+    /// Rebuilds [`LodView::with_impostors`] after levels or impostors came, or the tolerance
+    /// changed.
     fn refresh_impostors(&mut self) {
+        self.impostors_at = self.policy.tolerance_px;
         self.with_impostors = self
             .models
             .iter()
@@ -211,7 +217,10 @@ impl LodView {
             .map(|(slots, errors)| {
                 let mut with: [Option<LodModel>; 4] = Default::default();
                 for (slot, levels) in slots.iter().enumerate().skip(1) {
-                    if let (Some(levels), Some(e)) = (levels, errors[slot]) {
+                    let e = errors[slot]
+                        .as_ref()
+                        .and_then(|p| p.epsilon_at(self.policy.tolerance_px));
+                    if let (Some(levels), Some(e)) = (levels, e) {
                         with[slot] = Some(with_impostor(levels, e));
                     }
                 }
@@ -273,7 +282,8 @@ impl World {
                 })
                 .collect(),
             impostors: true,
-            impostor_errors: vec![[None; 4]; n_models],
+            impostor_errors: vec![Default::default(); n_models],
+            impostors_at: f32::NAN,
             with_impostors: vec![Default::default(); n_models],
         };
         Ok(World {
@@ -390,14 +400,14 @@ impl World {
                     self.lod.impostor_errors[m][slot] = None;
                     if let Some(level) = impostor {
                         self.install_impostor(gpu, m, &level.impostor)?;
-                        self.lod.impostor_errors[m][slot] = level.placement.epsilon;
+                        self.lod.impostor_errors[m][slot] = Some(level.placement.clone());
                     }
                 }
                 Some(Levels::Impostor(level)) => {
                     self.lod.impostor_errors[m][slot] = None;
                     if let Some(level) = level {
                         self.install_impostor(gpu, m, &level.impostor)?;
-                        self.lod.impostor_errors[m][slot] = level.placement.epsilon;
+                        self.lod.impostor_errors[m][slot] = Some(level.placement.clone());
                     }
                 }
                 Some(Levels::Tree {
@@ -688,6 +698,9 @@ impl World {
     /// Chooses every instance's level for a frame at scene time `time`, `dt` seconds of
     /// wall time after the last, seen in a view `height` pixels high.
     pub fn select(&mut self, height: u32, time: f32, dt: f32) {
+        if self.lod.impostors_at != self.lod.policy.tolerance_px {
+            self.lod.refresh_impostors();
+        }
         self.crowd.instances_at(time, &mut self.instances);
         let screen = ScreenProjection::new(
             self.camera.eye(),

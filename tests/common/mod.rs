@@ -177,3 +177,24 @@ pub fn shared_model(name: &str) -> Option<PathBuf> {
     eprintln!("skipped: {} is absent", path.display());
     None
 }
+
+/// The Khronos glTF-Validator's verdict on each file (`tools` from [`gltf_tools`]): errors,
+/// warnings, and its whole report line.
+pub fn validate(tools: &Path, files: &[PathBuf]) -> Vec<(u64, u64, Value)> {
+    let out = Command::new("node")
+        .arg(tools.join("validate.js"))
+        .args(files)
+        .output()
+        .expect("node runs");
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| {
+            let v: Value = serde_json::from_str(l).unwrap();
+            (
+                v["errors"].as_u64().unwrap(),
+                v["warnings"].as_u64().unwrap(),
+                v,
+            )
+        })
+        .collect()
+}

@@ -361,7 +361,7 @@ pub fn impostor_model(tree: &Model, frame: &ImpostorFrame, images: ViewImages) -
             .fold(glam::Mat4::ZERO, |a, m| a + m);
         // A blend of bones that squashes space flat (a zero scale at rest) has no inverse:
         // the row is then stored where it stands, and sways from a little off its place.
-        let to_bind = if squashes_nothing(&rest) {
+        let to_bind = if crate::model::keeps_every_direction(&rest) {
             rest.inverse()
         } else {
             log::warn!(
@@ -533,42 +533,9 @@ pub fn bake_impostor(
     Ok((impostor_model(tree, &frame, images), frame))
 }
 
-/// Whether `m` keeps every direction (an inverse worth taking), whatever its scale: its
-/// determinant against the product of its axes' lengths, the volume it would have with them
-/// at right angles. A file gltfpack has quantised skins its positions through matrices that
-/// scale by about 1/16,000 (determinant about 10⁻¹⁰ on the sapling), which an absolute bound of
-/// 10⁻⁸ took for flat, and the impostor was stored in the wrong space, off its tree.
-fn squashes_nothing(m: &glam::Mat4) -> bool {
-    let axes =
-        m.x_axis.truncate().length() * m.y_axis.truncate().length() * m.z_axis.truncate().length();
-    m.is_finite() && m.determinant().abs() > 1e-6 * axes && axes > 0.0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_rest_pose_is_invertible_at_any_scale_and_not_when_flat() {
-        use glam::Mat4;
-        let turned = Mat4::from_rotation_y(0.7) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
-        assert!(squashes_nothing(&turned));
-        // gltfpack's dequantisation of a 6.5 m tree in 14 bits.
-        assert!(squashes_nothing(
-            &(turned * Mat4::from_scale(Vec3::splat(4e-4)))
-        ));
-        assert!(!squashes_nothing(
-            &(turned * Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)))
-        ));
-        let sheared_flat = Mat4::from_cols(
-            glam::Vec4::new(1.0, 0.0, 0.0, 0.0),
-            glam::Vec4::new(1.0, 1e-9, 0.0, 0.0),
-            glam::Vec4::Z,
-            glam::Vec4::W,
-        );
-        assert!(!squashes_nothing(&sheared_flat));
-        assert!(!squashes_nothing(&Mat4::ZERO));
-    }
 
     #[test]
     fn the_map_is_inverted_by_its_decode() {

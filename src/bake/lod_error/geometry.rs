@@ -14,6 +14,31 @@ impl Located {
     pub(super) fn closest(&self, p: DVec3) -> (DVec3, [f64; 3]) {
         let [a, b, c] = self.corners.map(DVec3::from_array);
         let (ab, ac, ap) = (b - a, c - a, p - a);
+        // A triangle of no area (two corners at one point, or all three on a line: a file's
+        // debris, or a fold of a pose) is the nearest of its edges. Ericson's regions below
+        // divide by the edges' lengths and gave NaN there, which made a level's RMS error NaN.
+        if ab.cross(ac).length_squared() <= 1e-24 * ab.length_squared() * ac.length_squared() {
+            let on = |x: DVec3, y: DVec3| {
+                let d = y - x;
+                let t = if d.length_squared() > 0.0 {
+                    ((p - x).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (x + d * t, t)
+            };
+            let (pab, t1) = on(a, b);
+            let (pbc, t2) = on(b, c);
+            let (pca, t3) = on(c, a);
+            return [
+                (pab, [1.0 - t1, t1, 0.0]),
+                (pbc, [0.0, 1.0 - t2, t2]),
+                (pca, [t3, 0.0, 1.0 - t3]),
+            ]
+            .into_iter()
+            .min_by(|x, y| x.0.distance_squared(p).total_cmp(&y.0.distance_squared(p)))
+            .expect("three edges");
+        }
         let (d1, d2) = (ab.dot(ap), ac.dot(ap));
         if d1 <= 0.0 && d2 <= 0.0 {
             return (a, [1.0, 0.0, 0.0]);
@@ -378,5 +403,28 @@ mod tests {
             let found: Vec<f64> = out.iter().map(|e| e.0).collect();
             assert_eq!(found, all[..4].to_vec(), "at {p}");
         }
+    }
+
+    #[test]
+    fn a_triangle_of_no_area_is_its_nearest_edge() {
+        let at = |c: [[f64; 3]; 3], p: [f64; 3]| {
+            let (q, w) = Located { corners: c }.closest(DVec3::from_array(p));
+            assert!(
+                q.is_finite() && w.iter().all(|x| x.is_finite()),
+                "{q} {w:?}"
+            );
+            q
+        };
+        // Two corners at one point: the segment to the third.
+        let q = at([[0.0; 3], [0.0; 3], [2.0, 0.0, 0.0]], [1.0, 1.0, 0.0]);
+        assert!(q.distance(DVec3::new(1.0, 0.0, 0.0)) < 1e-12, "{q}");
+        // Three on a line, and all three at one point.
+        let q = at(
+            [[0.0; 3], [1.0, 0.0, 0.0], [3.0, 0.0, 0.0]],
+            [2.5, -1.0, 0.0],
+        );
+        assert!(q.distance(DVec3::new(2.5, 0.0, 0.0)) < 1e-12, "{q}");
+        let q = at([[1.0; 3]; 3], [0.0; 3]);
+        assert_eq!(q, DVec3::ONE);
     }
 }

@@ -189,6 +189,9 @@ pub struct Context<'a> {
     pub uv_tolerance: f64,
     /// Metres of surface per texture unit where a texture can slide; 0 for none.
     pub slide_scale: f64,
+    /// Per render vertex, its material; per material, whether it has a texture.
+    pub materials: &'a [u16],
+    pub textured: &'a [bool],
     /// Rest-pose positions, by position.
     pub rest: &'a [DVec3],
     /// Rest-pose normals, by render vertex.
@@ -350,7 +353,7 @@ impl Context<'_> {
                 .max(b.distance(c))
                 .max(c.distance(a));
         }
-        let weight = if self.slide_scale > 0.0 {
+        let weight = if self.slide_scale > 0.0 || others.iter().any(|&r| !self.same_colour(r1, r)) {
             1.0
         } else {
             let n = self.normals[r1 as usize];
@@ -367,8 +370,11 @@ impl Context<'_> {
     }
 
     /// Which wedge of `u2` each wedge of `u1` becomes, and whether that tears its chart. Only
-    /// a corner tears: a chart of its that does not reach `u2` takes the wedge of `u2` whose
-    /// normal is closest to its own (the same side of a hard edge, where one is).
+    /// a corner tears: a chart of its that does not reach `u2` takes a wedge of `u2` of its own
+    /// colour where there is one (its material, and its texture coordinate on a textured one),
+    /// and among those the one whose normal is closest to its own (the same side of a hard
+    /// edge, where one is). A material border is a seam like any other: a chart that must take
+    /// another colour pays for it in [`Self::tear`].
     pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<WedgeMap> {
         if self.mesh.kind[u1 as usize] != Kind::Corner {
             return self.mesh.torn_wedge_map(u1, u2, |_, _| None);
@@ -376,13 +382,25 @@ impl Context<'_> {
         self.mesh.torn_wedge_map(u1, u2, |r1, candidates| {
             let n = self.normals[r1 as usize];
             candidates.iter().copied().max_by(|&a, &b| {
+                let (ca, cb) = (self.same_colour(r1, a), self.same_colour(r1, b));
                 let (da, db) = (
                     self.normals[a as usize].dot(n),
                     self.normals[b as usize].dot(n),
                 );
-                da.total_cmp(&db).then(b.cmp(&a))
+                ca.cmp(&cb).then(da.total_cmp(&db)).then(b.cmp(&a))
             })
         })
+    }
+
+    /// Whether render vertices `a` and `b` show the same colour: the same material, and on a
+    /// textured one the same texture coordinate (a palette of plain colours in one texture
+    /// tells its colours apart by coordinate alone).
+    fn same_colour(&self, a: u32, b: u32) -> bool {
+        let material = |r: u32| self.materials.get(r as usize).copied().unwrap_or(0);
+        let (ma, mb) = (material(a), material(b));
+        ma == mb
+            && !(self.textured.get(ma as usize).copied().unwrap_or(false)
+                && self.uv[a as usize] != self.uv[b as usize])
     }
 
     /// No triangle of v1's fan may turn over, nor become a sliver (thinner than

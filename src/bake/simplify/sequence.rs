@@ -11,12 +11,13 @@ pub enum StepKind {
     /// Half-edge collapse: every wedge `[from, to]` of the removed position goes to the wedge
     /// of the kept position in the same chart (render vertex indices).
     Collapse { wedges: Vec<[u32; 2]> },
-    /// Influence simplification of one position: its render vertices (the wedges) all take
-    /// `influences` from now on.
+    /// Influence simplification of one position: its render vertices (the wedges) take
+    /// `influences` from now on, one list a wedge. The lists share their `p_i` (one point)
+    /// and differ in their normals' `n_i`, as the wedges did (a hard edge stays hard).
     Influence {
         wedges: Vec<u32>,
         removed_bone: u32,
-        influences: Vec<AsInfluence>,
+        influences: Vec<Vec<AsInfluence>>,
     },
     /// A whole connected part removed: its render vertices still in use, and the render vertex
     /// nearby (on another part) its geomorph shrinks it towards; `None` when nothing is left.

@@ -1,0 +1,390 @@
+//! The test models with the properties of files from elsewhere (`lodlab::generate::wild`, and
+//! `lowpoly`), and random valid meshes: each loads as what it stands for, every level of each
+//! exports as glTF the Khronos validator passes and lodlab reads back, the files gltfpack makes
+//! of them when it simplifies and quantises load and bake, and clips come from a second file
+//! by joint name.
+
+mod common;
+
+use common::{gltf_tools, validate};
+use lodlab::bake::lod::bake_lods;
+use lodlab::bake::simplify::{Method, SimplifyInput};
+use lodlab::generate::wild;
+use lodlab::import::load_model;
+use lodlab::model::{Model, SkinnedMesh};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+/// Triangles of `mesh` that draw something: no repeated vertex, no repeat of another triangle.
+fn drawn(mesh: &SkinnedMesh) -> usize {
+    let mut seen = HashSet::new();
+    mesh.indices
+        .chunks_exact(3)
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .filter(|t| {
+            let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+            seen.insert([t[k], t[(k + 1) % 3], t[(k + 2) % 3]])
+        })
+        .count()
+}
+
+/// The name of the node bone `bone` of `m` is.
+fn bone_name(m: &Model, bone: u32) -> &str {
+    &m.skeleton.nodes[m.skeleton.joints[bone as usize] as usize].name
+}
+
+#[test]
+fn the_field_models_load_as_what_they_stand_for() {
+    // The robot: its 19 primitives of four skins in one mesh, the debris gone, every vertex
+    // used, its four plain colours in one palette.
+    let doc = wild::robot::robot();
+    let robot = load_model("robot").unwrap();
+    let expected: usize = doc
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .map(|p| drawn(&p.mesh))
+        .sum();
+    assert_eq!(robot.mesh.triangle_count(), expected);
+    let mut used = vec![false; robot.mesh.vertex_count()];
+    robot
+        .mesh
+        .indices
+        .iter()
+        .for_each(|&v| used[v as usize] = true);
+    assert!(used.iter().all(|&u| u), "a vertex no triangle uses");
+    assert_eq!(robot.skeleton.bone_count(), 18);
+    assert_eq!(robot.materials.len(), 1);
+
+    // The knight: hundreds of plain materials load by default, and its two unskinned props
+    // ride on what carries them: the spear on the right hand's bone, the cape on its own node.
+    let doc = wild::knight::knight();
+    assert!(doc.materials.len() > 300);
+    let knight = load_model("knight").unwrap();
+    let expected: usize = doc
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .map(|p| drawn(&p.mesh))
+        .sum();
+    assert_eq!(knight.mesh.triangle_count(), expected);
+    assert_eq!(knight.materials.len(), 1, "plain colours share one palette");
+    let rest = lodlab::anim::linear_blend_skinning(
+        &knight.mesh,
+        &knight.skeleton,
+        &lodlab::anim::bone_matrices(&knight.skeleton, None, 0.0),
+    );
+    let on = |name: &str| -> Vec<usize> {
+        (0..knight.mesh.vertex_count())
+            .filter(|&v| {
+                let inf = knight.mesh.influences_of(v);
+                inf.len() == 1 && bone_name(&knight, inf[0].bone) == name
+            })
+            .collect()
+    };
+    let spear = on("hand_r");
+    let top = spear.iter().map(|&v| rest[v].y).fold(f32::MIN, f32::max);
+    assert!(top > 1.7, "the spear rises above the head: {top}");
+    let cape = on("Cape");
+    assert!(
+        cape.len() > 100,
+        "{} vertices on the cape's node",
+        cape.len()
+    );
+    // The cape hangs behind the back, from the shoulders to the knees.
+    let (lo, hi) = cape.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| {
+        (a.min(rest[v].y), b.max(rest[v].y))
+    });
+    let back = cape.iter().map(|&v| rest[v].z).fold(f32::MIN, f32::max);
+    assert!(lo < 0.7 && hi > 1.4 && back < 0.0, "{lo} {hi} {back}");
+
+    // The rigged character: 65 joints, and bound in metres and Y up though its mesh was
+    // written in its armature's centimetres, Z up: rest positions stand where the skinned
+    // character stands.
+    let mocap = load_model("mocap").unwrap();
+    assert_eq!(mocap.skeleton.bone_count(), 65);
+    let am = lodlab::bake::animation_space::AnimationSpaceMesh::from_skinned(
+        &mocap.mesh,
+        &mocap.skeleton,
+    );
+    let rest_bones = SimplifyInput::rest_bones(&mocap.skeleton);
+    let at_rest = am.rest_positions(&rest_bones);
+    let skinned = lodlab::anim::linear_blend_skinning(
+        &mocap.mesh,
+        &mocap.skeleton,
+        &lodlab::anim::bone_matrices(&mocap.skeleton, None, 0.0),
+    );
+    let off = at_rest
+        .iter()
+        .zip(&skinned)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    assert!(
+        off < 1e-4,
+        "rest positions {off} m from the skinned rest pose"
+    );
+    let height = lodlab::bake::lod::model_height(&mocap);
+    assert!((1.6..2.0).contains(&height), "{height}");
+
+    // The low-poly character: flat-shaded, every position on several facets' normals.
+    let lowpoly = load_model("lowpoly").unwrap();
+    let groups = lodlab::import::weld::position_groups(&lowpoly.mesh.positions, 1e-6);
+    let positions = groups.iter().max().unwrap() + 1;
+    assert!(lowpoly.mesh.vertex_count() as u32 >= 2 * positions);
+}
+
+/// Every level of `model` by `method` exported, checked by the validator (0 errors), and
+/// read back with the level's triangles.
+fn export_checked(model: &str, method: &str, tools: Option<&Path>, dir: &Path) {
+    let out = lodlab(&[
+        "export",
+        model,
+        "--method",
+        method,
+        "--out",
+        dir.to_str().unwrap(),
+        "--cache",
+        dir.join("cache").to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{model} {method}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut files = Vec::new();
+    for l in e["levels"].as_array().unwrap() {
+        let file = PathBuf::from(l["file"].as_str().unwrap());
+        let back = load_model(file.to_str().unwrap()).unwrap();
+        assert_eq!(
+            back.mesh.triangle_count() as u64,
+            l["triangles"].as_u64().unwrap(),
+            "{model} {method}: {}",
+            file.display()
+        );
+        files.push(file);
+    }
+    files.push(PathBuf::from(e["lod_file"].as_str().unwrap()));
+    if let Some(tools) = tools {
+        for (errors, _, report) in validate(tools, &files) {
+            assert_eq!(errors, 0, "{model} {method}: {report}");
+        }
+    }
+}
+
+#[test]
+fn every_level_of_the_field_models_exports_as_valid_gltf() {
+    let tools = gltf_tools();
+    let dir = tempfile::tempdir().unwrap();
+    for method in ["rest-pose", "as", "as+is"] {
+        export_checked("robot", method, tools.as_deref(), dir.path());
+    }
+    for model in ["lowpoly", "knight", "armour"] {
+        export_checked(model, "as+is", tools.as_deref(), dir.path());
+    }
+}
+
+fn gltfpack(tools: &Path, input: &Path, output: &Path, args: &[&str]) {
+    let out = Command::new("node")
+        .arg(tools.join("node_modules/gltfpack/cli.js"))
+        .arg("-i")
+        .arg(input)
+        .arg("-o")
+        .arg(output)
+        .args(args)
+        .output()
+        .expect("node runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// What gltfpack writes when it simplifies a file (`-si 0.1`) and quantises it (its default):
+/// skins through inverse bind matrices that scale by about 10⁻⁴, which an absolute test of
+/// invertibility took for singular.
+#[test]
+fn files_gltfpack_simplified_and_quantised_load_and_bake() {
+    let Some(tools) = gltf_tools() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for name in ["robot", "mocap", "knight"] {
+        let packed = dir.path().join(format!("{name}-packed.glb"));
+        gltfpack(
+            &tools,
+            &root.join(format!("assets/{name}.glb")),
+            &packed,
+            &["-si", "0.1"],
+        );
+        let m = load_model(packed.to_str().unwrap())
+            .unwrap_or_else(|e| panic!("{name}: gltfpack's output: {e}"));
+        let source = load_model(name).unwrap().mesh.triangle_count();
+        assert!(m.mesh.triangle_count() < source, "{name}");
+        let out = lodlab(&[
+            "bake",
+            packed.to_str().unwrap(),
+            "--methods",
+            "as",
+            "--cache",
+            dir.path().join("cache").to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// Valid files of random meshes (coincident points, degenerate and repeated triangles,
+/// unused vertices, several skins): each loads (or, where nothing in it draws, is refused in
+/// one line), bakes by every method, and its levels written as glTF read back as baked.
+#[test]
+fn random_meshes_load_bake_and_export() {
+    let tools = gltf_tools();
+    let dir = tempfile::tempdir().unwrap();
+    let mut written = Vec::new();
+    let mut loaded = 0;
+    for seed in 0..120u64 {
+        let mut rng = fastrand::Rng::with_seed(seed);
+        let bytes: Vec<u8> = (0..rng.usize(20..900)).map(|_| rng.u8(..)).collect();
+        let file = wild::random::random_file(&bytes);
+        let limits = lodlab::import::validate::limits();
+        let model = match lodlab::import::gltf::from_bytes("random", file, dir.path(), &limits) {
+            Ok((m, _)) => m,
+            Err(e) => {
+                assert!(
+                    !e.contains('\n') && (e.contains("no triangles") || e.contains("zero size")),
+                    "seed {seed}: {e}"
+                );
+                continue;
+            }
+        };
+        loaded += 1;
+        let opts = lodlab::runtime::levels::runtime_options(&model);
+        for method in Method::ALL {
+            let lods = bake_lods(&model, method, &opts, &|_| {});
+            assert!(!lods.levels.is_empty(), "seed {seed} {method}");
+            let meshes: Vec<SkinnedMesh> = lods
+                .levels
+                .iter()
+                .map(|l| l.mesh.to_skinned(&model.skeleton))
+                .collect();
+            let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
+            let coverage: Vec<f32> = (0..meshes.len())
+                .map(|k| 0.5f32.powi(k as i32 + 1))
+                .collect();
+            let bytes = lodlab::generate::glb::to_lod_glb(&model, &refs, &coverage, "test");
+            for mesh in &meshes {
+                let one = lodlab::generate::glb::to_glb(&Model {
+                    mesh: mesh.clone(),
+                    ..model.clone()
+                });
+                let (back, _) = lodlab::import::gltf::from_bytes("level", one, dir.path(), &limits)
+                    .unwrap_or_else(|e| panic!("seed {seed} {method}: {e}"));
+                assert_eq!(
+                    back.mesh.triangle_count(),
+                    drawn(mesh),
+                    "seed {seed} {method}"
+                );
+            }
+            if seed % 10 == 0 {
+                let path = dir.path().join(format!("random-{seed}-{method}.glb"));
+                std::fs::write(&path, bytes).unwrap();
+                written.push(path);
+            }
+        }
+    }
+    assert!(loaded > 60, "{loaded} of 120 random files loaded");
+    if let Some(tools) = tools {
+        for (errors, _, report) in validate(&tools, &written) {
+            assert_eq!(errors, 0, "{report}");
+        }
+    }
+}
+
+/// `--clips FILE` adds the clips of a file of the same skeleton by joint name; a file of
+/// another skeleton is refused in one line naming joints it animates that the model lacks.
+#[test]
+fn clips_come_from_another_file_by_joint_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("walk.png");
+    let out = lodlab(&[
+        "shot",
+        "--scene",
+        "study",
+        "--model",
+        "mocap",
+        "--clips",
+        "mocap-walk",
+        "--clip",
+        "Walking",
+        "--count",
+        "1",
+        "--size",
+        "96x96",
+        "--time",
+        "0.3",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(png.is_file());
+
+    let out = lodlab(&[
+        "shot",
+        "--scene",
+        "study",
+        "--model",
+        "mocap",
+        "--clips",
+        "robot",
+        "--count",
+        "1",
+        "--size",
+        "96x96",
+        "--out",
+        dir.path().join("none.png").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(
+        errors[0].contains("robot.glb")
+            && errors[0].contains("shoulder_l")
+            && errors[0].contains("mixamorig:Hips"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"));
+
+    // Added by the library: the walk is the model's second clip, and it moves the hands.
+    let mut m = load_model("mocap").unwrap();
+    let walk = lodlab::import::source_path("mocap-walk");
+    assert_eq!(lodlab::import::gltf::add_clips(&mut m, &walk).unwrap(), 1);
+    assert_eq!(m.clips.len(), 2);
+    assert_eq!(m.clips[1].name, "Walking");
+    let hand = m
+        .skeleton
+        .joints
+        .iter()
+        .position(|&j| m.skeleton.nodes[j as usize].name == "mixamorig:LeftHand")
+        .unwrap();
+    let a = lodlab::anim::bone_matrices(&m.skeleton, Some(&m.clips[1]), 0.0)[hand].translation;
+    let b = lodlab::anim::bone_matrices(&m.skeleton, Some(&m.clips[1]), 0.5)[hand].translation;
+    assert!(a.distance(b) > 0.1, "the hand swings {}", a.distance(b));
+}
