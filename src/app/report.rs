@@ -676,9 +676,13 @@ fn shading_markdown(report: &Report) -> String {
          covers, from {} views 15° above the ground at {} times of the first clip. Both columns \
          draw the same triangles, lit by the level's own vertex normals or through its normal \
          map (full detail's normals baked on its texture coordinates); their difference is the \
-         lighting alone.\n",
+         lighting alone. The worst tile is the same error over the {}-pixel tile where it is \
+         largest (of those full detail mostly covers): where a mean hides a streak. Recoloured: \
+         the share of the pixels both cover that show a colour full detail shows nowhere within \
+         the level's error of them (a part's colour bleeding onto another's).\n",
         crate::runtime::colour_error::METRIC_VIEWS,
         crate::runtime::colour_error::METRIC_FRAMES,
+        crate::runtime::shading_error::TILE,
     );
     let measured: Vec<_> = report
         .methods
@@ -690,7 +694,7 @@ fn shading_markdown(report: &Report) -> String {
     }
     for (name, m) in measured {
         md += &format!(
-            "\n### {name}\n\n| LOD | triangles | vertex normals | normal map | change |\n|---|---|---|---|---|\n"
+            "\n### {name}\n\n| LOD | triangles | vertex normals | normal map | change | worst tile, vertex normals | worst tile, normal map | recoloured |\n|---|---|---|---|---|---|---|---|\n"
         );
         for s in &m.shading {
             let change = if !s.mapped {
@@ -701,8 +705,14 @@ fn shading_markdown(report: &Report) -> String {
                 "–".to_string()
             };
             md += &format!(
-                "| {} | {} | {:.5} | {:.5} | {change} |\n",
-                s.level, s.triangles, s.vertex_normals, s.normal_maps
+                "| {} | {} | {:.5} | {:.5} | {change} | {:.4} | {:.4} | {:.2}% |\n",
+                s.level,
+                s.triangles,
+                s.vertex_normals,
+                s.normal_maps,
+                s.worst_tile_vertex_normals,
+                s.worst_tile_normal_maps,
+                100.0 * s.recoloured
             );
         }
     }

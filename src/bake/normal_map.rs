@@ -23,11 +23,21 @@
 //!   one texel, two places) gets no map: its vertices keep their vertex normals, and the reason
 //!   is kept for the viewer's panel ([`UvProblem`]).
 //!
+//! - **Never worse than the vertex normals, tile by tile.** The map is right where the point of
+//!   full detail with a texel's texture coordinate is where the level's surface is. Where a
+//!   collapse let the texture slide (priced, at coarse levels), it is elsewhere, and its normal
+//!   lights the level with a crease or a dark streak that the level's own vertex normals do
+//!   not have. So every [`TILE`]-texel tile of a layer is judged against full detail's normal at
+//!   the nearest point of its surface (where the renderer's comparison finds full detail): a
+//!   tile whose stored normals are further from those than the interpolated vertex normals are
+//!   gets the vertex normals ((0, 0, 1) in the frame), and a map never makes a tile worse.
+//!
 //! Each level that gets a map has one layer per mapped material, `size`² texels of RGB8 (the
 //! unit vector's coordinates in the frame, as 128 + 127·x), with mipmaps, in one texture array.
 //! Full detail gets none: its vertex normals are full detail's own.
 
 use super::animation_space::AnimationSpaceMesh;
+use super::lod_error::Surface;
 use super::uv_grid::UvGrid;
 use glam::{Affine3A, DVec2, Vec2, Vec3};
 use rayon::prelude::*;
@@ -44,6 +54,8 @@ const MIN_TEXELS: usize = 16;
 const DILATION: u32 = 3;
 /// The encoding of the unperturbed normal (0, 0, 1): what texels no triangle covers hold.
 const FLAT: [u8; 4] = [128, 128, 255, 0];
+/// Texels on a side of the tiles a layer is judged by against the vertex normals.
+pub const TILE: u32 = 8;
 
 /// Why a material's vertices keep their vertex normals.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -241,11 +253,27 @@ fn bake_layer(
     full: &Posed,
     full_tris: &[[u32; 3]],
     grid: &UvGrid,
+    surface: &Surface,
     level: &Posed,
     coarse: &[[u32; 3]],
     size: u32,
 ) -> Vec<u8> {
     let mut pixels: Vec<u8> = FLAT.repeat((size * size) as usize);
+    // Per tile: how far the stored normals and the vertex normals are from full detail's
+    // nearest (1 − cos, summed over its texels).
+    let tiles = size.div_ceil(TILE) as usize;
+    let mut off = vec![(0.0f64, 0.0f64); tiles * tiles];
+    let tile_of = |i: usize| {
+        let (x, y) = (i % size as usize, i / size as usize);
+        (y / TILE as usize) * tiles + x / TILE as usize
+    };
+    let nearest_normal = |p: Vec3| -> Option<Vec3> {
+        let (t, w) = surface.closest(p.as_dvec3())?;
+        (0..3)
+            .map(|k| full.normals[t[k] as usize] * w[k] as f32)
+            .sum::<Vec3>()
+            .try_normalize()
+    };
     let uvs = &level.mesh.uvs;
     for t in coarse {
         let uv = t.map(|v| uvs[v as usize]);
@@ -279,9 +307,27 @@ fn bake_layer(
             let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5) / size as f64;
             let nf = full_normal(full, full_tris, grid, centre, at).unwrap_or(nc);
             let local = Vec3::new(nf.dot(tangent), nf.dot(bitangent), nf.dot(nc));
-            let i = 4 * wrap(x, y, size);
-            pixels[i..i + 4].copy_from_slice(&encode(local.normalize_or(Vec3::Z)));
+            let texel = wrap(x, y, size);
+            let i = 4 * texel;
+            let code = encode(local.normalize_or(Vec3::Z));
+            pixels[i..i + 4].copy_from_slice(&code);
+            if let Some(truth) = nearest_normal(at) {
+                // The normal as the shader reads it back, eight bits a coordinate: where the
+                // level is as good as full detail, that rounding is all a map adds.
+                let q = decode(&code);
+                let stored = (tangent * q.x + bitangent * q.y + nc * q.z).normalize_or(nc);
+                let o = &mut off[tile_of(texel)];
+                o.0 += (1.0 - stored.dot(truth)) as f64;
+                o.1 += (1.0 - nc.dot(truth)) as f64;
+            }
         });
+    }
+    // A tile the map lights worse than the vertex normals do keeps the vertex normals.
+    for (texel, px) in pixels.chunks_exact_mut(4).enumerate() {
+        let (map, vertex) = off[tile_of(texel)];
+        if px[3] == 255 && map > vertex {
+            px.copy_from_slice(&[FLAT[0], FLAT[1], FLAT[2], 255]);
+        }
     }
     super::materials::dilate(&mut pixels, size, size, DILATION);
     pixels
@@ -326,6 +372,14 @@ pub fn bake(
         "normal map size {size} is not a power of two"
     );
     let full = Posed::new(full, rest_bones);
+    // Full detail's surface, for the normal where the renderer's comparison finds it.
+    let all: Vec<[u32; 3]> = full
+        .mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let surface = Surface::new(&all, |v| full.positions[v as usize].as_dvec3());
     let per_material: Vec<(Vec<[u32; 3]>, Option<UvProblem>)> = (0..materials)
         .map(|m| {
             let tris = full.triangles_of(m as u16);
@@ -366,6 +420,7 @@ pub fn bake(
                 &full,
                 full_tris,
                 grid,
+                &surface,
                 level,
                 &level.triangles_of(m as u16),
                 size,
@@ -501,6 +556,42 @@ mod tests {
             assert!(worst < 0.03, "mirrored {mirrored}: off by {worst}");
             assert!(tilted >= 3, "the bump must show in the map");
         }
+    }
+
+    #[test]
+    fn a_texture_that_slid_keeps_the_vertex_normals_where_the_map_would_be_worse() {
+        // The coarse level's corners read the texture of the square's lower left quarter: its
+        // texels find full detail's normals half the square away from where they are, the
+        // bump where the level is flat and flat where the bump is.
+        let uv = |x: f32, y: f32| Vec2::new(0.05 + 0.9 * x, 0.05 + 0.9 * y);
+        let (full, mut coarse) = bumpy_square(64, uv);
+        for (k, (x, y)) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            coarse.uvs[k] = uv(0.5 * x, 0.5 * y);
+        }
+        let maps = bake(&full, &[None, Some(&coarse)], &[Affine3A::IDENTITY], 1, 64);
+        assert!(maps.maps_level(1));
+        let (mut covered, mut tilted) = (0, 0);
+        for y in 4..30 {
+            for x in 4..30 {
+                covered += 1;
+                tilted += (maps.texel(0, x, y).z < 0.99) as usize;
+            }
+        }
+        assert!(
+            tilted * 20 < covered,
+            "{tilted} of {covered} texels keep normals from the wrong place"
+        );
+        // Where the texture did not slide, the map stays (the test above checks its normals).
+        let (full, coarse) = bumpy_square(64, uv);
+        let maps = bake(&full, &[None, Some(&coarse)], &[Affine3A::IDENTITY], 1, 64);
+        let tilted = (20..44)
+            .flat_map(|y| (20..44).map(move |x| (x, y)))
+            .filter(|&(x, y)| maps.texel(0, x, y).z < 0.99)
+            .count();
+        assert!(tilted > 100, "only {tilted} texels show the bump");
     }
 
     #[test]

@@ -233,7 +233,7 @@ impl TriangleGrid {
 }
 
 /// A rest-pose surface given as triangles of render vertices, indexed for closest points.
-pub(super) struct Surface {
+pub(crate) struct Surface {
     grid: TriangleGrid,
     /// Area-weighted running sums over `triangles`, for sampling.
     cumulative: Vec<f64>,
@@ -242,7 +242,7 @@ pub(super) struct Surface {
 }
 
 impl Surface {
-    pub(super) fn new(triangles: &[[u32; 3]], rest: impl Fn(u32) -> DVec3) -> Surface {
+    pub(crate) fn new(triangles: &[[u32; 3]], rest: impl Fn(u32) -> DVec3) -> Surface {
         let corners: Vec<[DVec3; 3]> = triangles.iter().map(|t| t.map(&rest)).collect();
         let mut total = 0.0;
         let cumulative = corners
@@ -261,6 +261,27 @@ impl Surface {
     }
 
     /// The `k` triangles nearest `p` in the rest pose.
+    /// The triangle nearest `p` and the barycentric weights of its point nearest `p`.
+    pub(crate) fn closest(&self, p: DVec3) -> Option<([u32; 3], [f64; 3])> {
+        let located = |t: u32| Located {
+            corners: self.corners[t as usize].map(|x| x.to_array()),
+        };
+        let mut out = Vec::with_capacity(2);
+        self.grid.nearest(
+            p,
+            1,
+            |t| {
+                let [a, b, c] = self.corners[t as usize];
+                let gap = (a.min(b).min(c) - p).max(p - a.max(b).max(c));
+                gap.max(DVec3::ZERO).length_squared()
+            },
+            |t| located(t).closest(p).0.distance_squared(p),
+            &mut out,
+        );
+        let &(_, t) = out.first()?;
+        Some((self.triangles[t as usize], located(t).closest(p).1))
+    }
+
     pub(super) fn nearest(&self, p: DVec3, k: usize) -> Vec<[u32; 3]> {
         let mut out = Vec::with_capacity(k + 1);
         self.grid.nearest(

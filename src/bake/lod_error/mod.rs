@@ -20,6 +20,7 @@ mod geometry;
 mod surface;
 mod texture;
 
+pub(crate) use geometry::Surface;
 pub use surface::SurfaceProbe;
 pub use texture::ErrorProbe;
 

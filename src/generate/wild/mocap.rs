@@ -437,7 +437,7 @@ fn retarget(w: &Walker, joints: &[Joint], q: &[Quat], clip: &Clip, name: &str) -
             }
             rotations[i].push(v);
         }
-        let at = Affine3A::from(armature().matrix()).inverse();
+        let at = armature().matrix().inverse();
         let h = g[joints[0].follows.expect("the hips follow the walker's")].translation;
         hips.push(at.transform_point3(Vec3::from(h)).extend(0.0));
     }

@@ -65,10 +65,10 @@ pub fn random_document(bytes: &[u8]) -> Document {
         .map(|b| Mat4::from_translation(Vec3::new(0.0, -0.5 * b as f32, 0.0)))
         .collect();
     let primitives = r.within(1, 3);
-    let coloured = r.byte() % 2 == 0;
+    let coloured = r.byte().is_multiple_of(2);
     for k in 0..primitives {
         let n = r.within(3, 48);
-        let textured = r.byte() % 3 == 0;
+        let textured = r.byte().is_multiple_of(3);
         let mut mesh = SkinnedMesh::empty();
         for _ in 0..n {
             let p = Vec3::new(r.coordinate(), r.coordinate(), r.coordinate());
@@ -127,7 +127,11 @@ pub fn random_document(bytes: &[u8]) -> Document {
             doc.materials.len() - 1
         });
         // A primitive bound to a skin of its own, or to the first.
-        let skin = if k > 0 && r.byte() % 2 == 0 { k } else { 0 };
+        let skin = if k > 0 && r.byte().is_multiple_of(2) {
+            k
+        } else {
+            0
+        };
         if skin >= doc.skins.len() {
             doc.skins.push(DocSkin {
                 joints: (0..bones).collect(),
@@ -148,7 +152,7 @@ pub fn random_document(bytes: &[u8]) -> Document {
         doc.nodes[node].skin = Some(skin);
     }
     // A clip that bends the chain, or none.
-    if r.byte() % 2 == 0 {
+    if r.byte().is_multiple_of(2) {
         let angle = r.coordinate();
         let times = vec![0.0, 0.5, 1.0];
         let bend = Quat::from_rotation_z(angle);
