@@ -102,7 +102,8 @@ fn bake(a: BakeArgs) -> anyhow::Result<ExitCode> {
         models: a.models.into_iter().chain(a.model_flags).collect(),
         methods: dedup(a.methods),
         tolerance_px: a.first_error,
-        budgets: a.triangles,
+        // `--triangles`, or the budgets `--levels triangles:…` gave every command.
+        budgets: a.triangles.or_else(lodlab::runtime::levels::level_budgets),
         cache_dir: a.cache,
     })?;
     for warning in lodlab::app::bake::budget_warnings(&results) {
@@ -184,6 +185,9 @@ fn report(a: ReportArgs) -> anyhow::Result<ExitCode> {
         report.correspondence.describe(),
         a.out.display()
     );
+    if let Some(still) = report.stillness() {
+        println!("{}: {still}", report.model);
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -346,6 +350,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     lodlab::import::validate::set_limits(cli.import_limits());
     lodlab::import::set_extra_clips(cli.clips.clone());
+    lodlab::runtime::levels::set_level_budgets(cli.levels.as_ref().and_then(|l| l.budgets()));
     match run(cli) {
         Ok(code) => code,
         Err(e) => {

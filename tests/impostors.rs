@@ -284,3 +284,91 @@ fn the_background_bake_hands_over_levels_then_the_impostor() {
     assert!(files.iter().any(|f| f.contains("-impostor-")), "{files:?}");
     assert!(files.iter().any(|f| f.contains("-placement-")), "{files:?}");
 }
+
+/// Every limb is inside every view: the rigged character bound in a T-pose, arms out level
+/// (its widest pose), baked as the crowd bakes it. In every view of its rest-pose page the
+/// covered texels span what the mesh spans seen from there (an arm cut off, or left out,
+/// would leave the view narrower), and each view's quad holds what any page covers there.
+#[test]
+fn every_limb_of_a_t_pose_is_inside_every_view() {
+    use lodlab::bake::billboard::impostor::{ViewGrid, posed};
+    let _serial = serial();
+    let model = load_model("mocap").unwrap();
+    let options = ImpostorOptions::default();
+    let imp = bake_animated_impostor(&AtlasRasterizer::new(gpu()), &model, options).unwrap();
+    let colour = imp.model.materials[0].texture.as_ref().unwrap();
+    let (cell, views) = (options.cell as usize, options.views as usize);
+    let side = views * cell;
+    let columns = imp.frame.columns as usize;
+    let rest = posed(&model, None, 0.0);
+    let (centre, radius) = (glam::Vec3::from(imp.frame.centre), imp.frame.radius);
+    let texels = cell as f32 / (2.0 * radius);
+    let mut widest = 0.0f32;
+    for page in 0..imp.frames as usize {
+        let (px, py) = ((page % columns) * side, (page / columns) * side);
+        for j in 0..views {
+            for i in 0..views {
+                let (x0, y0) = (px + i * cell, py + j * cell);
+                let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
+                for t in 0..cell * cell {
+                    let (x, y) = (t % cell, t / cell);
+                    let k = 4 * ((y0 + y) * colour.width as usize + x0 + x);
+                    if colour.pixels[k + 3] >= 128 {
+                        lo = [lo[0].min(x), lo[1].min(y)];
+                        hi = [hi[0].max(x), hi[1].max(y)];
+                    }
+                }
+                assert!(lo[0] <= hi[0], "page {page}, view ({i}, {j}) is empty");
+                let r = imp.frame.rects[j * views + i];
+                let inside = |v: usize, a: f32, b: f32| {
+                    let s = (v as f32 + 0.5) / cell as f32;
+                    s >= a - 0.5 / cell as f32 && s <= b + 0.5 / cell as f32
+                };
+                assert!(
+                    inside(lo[0], r[0], r[2])
+                        && inside(hi[0], r[0], r[2])
+                        && inside(lo[1], r[1], r[3])
+                        && inside(hi[1], r[1], r[3]),
+                    "view ({i}, {j}): its quad {r:?} cuts what page {page} covers"
+                );
+                let covered = [(hi[0] - lo[0] + 1) as f32, (hi[1] - lo[1] + 1) as f32];
+                if page > 0 {
+                    continue;
+                }
+                // The rest pose seen from this view, in the cell's texels.
+                let d = ViewGrid {
+                    frames: options.views,
+                    cell: options.cell,
+                }
+                .direction(i as u32, j as u32);
+                let (right, up) = ViewGrid::view_axes(d);
+                let span = |axis: glam::Vec3| {
+                    let (a, b) =
+                        rest.mesh
+                            .positions
+                            .iter()
+                            .fold((f32::MAX, f32::MIN), |(a, b), p| {
+                                let x = (*p - centre).dot(axis);
+                                (a.min(x), b.max(x))
+                            });
+                    (b - a) * texels
+                };
+                let spans = [span(right), span(up)];
+                for k in 0..2 {
+                    assert!(
+                        (covered[k] - spans[k]).abs() <= 2.0,
+                        "view ({i}, {j}): {:.1} texels covered {} where the mesh spans {:.1}",
+                        covered[k],
+                        ["across", "up"][k],
+                        spans[k]
+                    );
+                }
+                widest = widest.max(covered[0] / covered[1]);
+            }
+        }
+    }
+    assert!(
+        widest > 0.85,
+        "the widest view is {widest:.2} as wide as high"
+    );
+}

@@ -455,3 +455,75 @@ fn bake_prints_json_and_names_its_first_error() {
     let out = lodlab(&["bake", model.to_str().unwrap(), "--tolerance", "1"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// Levels cut by `bake --triangles` are what `--levels triangles:N,N` shows: the shot reads
+/// the bake's cached cut (no second file of levels) and its forced level has the budget's
+/// triangles.
+#[test]
+fn levels_cut_by_triangles_can_be_shown() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let out = lodlab(&[
+        "bake",
+        "robot",
+        "--methods",
+        "as",
+        "--triangles",
+        "200,120",
+        "--cache",
+        cache.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let baked: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let levels = baked["characters"][0]["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    let files = || std::fs::read_dir(&cache).unwrap().count();
+    let before = files();
+    let png = dir.path().join("level.png");
+    let out = lodlab(&[
+        "shot",
+        "--scene",
+        "study",
+        "--model",
+        "robot",
+        "--count",
+        "1",
+        "--method",
+        "as",
+        "--impostors",
+        "off",
+        "--levels",
+        "triangles:200,120",
+        "--force-level",
+        "2",
+        "--cache",
+        cache.to_str().unwrap(),
+        "--size",
+        "64x64",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let shot: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(shot["triangles"], levels[2]["triangles"]);
+    assert_eq!(files(), before, "the shot baked its own levels");
+    // A malformed cut is one line.
+    let out = lodlab(&[
+        "shot",
+        "--levels",
+        "triangles:200,x",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("'x' is not a positive whole number"));
+}

@@ -43,6 +43,51 @@ pub struct Cli {
     /// the file animates that the model lacks is an error naming it.
     #[arg(long = "clips", value_name = "FILE", global = true)]
     pub clips: Vec<PathBuf>,
+    /// How characters' levels are cut: `error` (the default: each level's error doubling
+    /// from the first) or `triangles:N,N,...`, the levels `lodlab bake MODEL --triangles
+    /// N,N,...` made (read from its cache when it is there).
+    #[arg(long = "levels", value_name = "error|triangles:N,N,...", global = true, value_parser = parse_levels)]
+    pub levels: Option<LevelCut>,
+}
+
+/// How characters' levels are cut (`--levels`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum LevelCut {
+    Error,
+    Triangles(Vec<u32>),
+}
+
+impl LevelCut {
+    /// The budgets it cuts by, where it cuts by triangles.
+    pub fn budgets(&self) -> Option<Vec<u32>> {
+        match self {
+            LevelCut::Error => None,
+            LevelCut::Triangles(b) => Some(b.clone()),
+        }
+    }
+}
+
+fn parse_levels(s: &str) -> Result<LevelCut, String> {
+    if s == "error" {
+        return Ok(LevelCut::Error);
+    }
+    let list = s
+        .strip_prefix("triangles:")
+        .ok_or_else(|| format!("'{s}' is neither 'error' nor 'triangles:N,N,...'"))?;
+    let budgets: Vec<u32> = list
+        .split(',')
+        .map(|n| {
+            n.trim()
+                .parse::<u32>()
+                .ok()
+                .filter(|&v| v > 0)
+                .ok_or_else(|| format!("'{n}' is not a positive whole number of triangles"))
+        })
+        .collect::<Result<_, _>>()?;
+    if budgets.is_empty() {
+        return Err("triangles: needs at least one budget".into());
+    }
+    Ok(LevelCut::Triangles(budgets))
 }
 
 impl Cli {

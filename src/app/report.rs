@@ -116,6 +116,50 @@ pub struct Report {
     pub units: String,
     /// The tolerances of every level's `silhouette_px`.
     pub silhouette_tolerances: Vec<f32>,
+    /// How far the clips move the character: the farthest any vertex gets from its rest-pose
+    /// place over the frames measured, scene units, and as a share of its height.
+    pub motion: f64,
+    pub motion_share: f64,
+}
+
+/// Clips that move no vertex further than this share of the height from the rest pose give
+/// `P` the rest pose's own blocks: AS then measures what rest-pose does.
+pub const STILL: f64 = 0.01;
+
+impl Report {
+    /// The line a report says about its clips where they barely move the character.
+    pub fn stillness(&self) -> Option<String> {
+        (self.motion_share < STILL).then(|| {
+            format!(
+                "its clips barely move it (no vertex more than {:.1} mm, {:.2}% of its height, \
+                 from its rest pose): AS measures what rest-pose measures, and their curves \
+                 differ only by the order of equal steps",
+                self.motion * 1e3,
+                self.motion_share * 100.0
+            )
+        })
+    }
+}
+
+/// How far `model`'s clips take its vertices from the rest pose (see [`Report::motion`]).
+fn motion(model: &Model) -> (f64, f64) {
+    let skel = &model.skeleton;
+    // The bind pose, where the rest-pose metric measures (`Σ Ĝ_i p_i = v̂`), in scene space.
+    let rest: Vec<glam::Vec3> = model
+        .mesh
+        .positions
+        .iter()
+        .map(|&p| skel.root_transform.transform_point3(p))
+        .collect();
+    let mut far = 0.0f64;
+    for g in crate::bake::lod_error::animation_frames(model) {
+        let posed = crate::anim::linear_blend_skinning(&model.mesh, skel, &g);
+        for (a, b) in rest.iter().zip(&posed) {
+            far = far.max(a.distance(*b) as f64);
+        }
+    }
+    let height = crate::bake::lod::model_height(model) as f64;
+    (far, far / height.max(1e-9))
 }
 
 /// Runs the whole report and writes `timings.md`, `report.json` and `error.png` into `out`,
@@ -197,6 +241,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     }
 
     let comparison = compare(&methods);
+    let moved = motion(&model);
     let report = Report {
         model: model.name.clone(),
         vertices: model.mesh.vertex_count(),
@@ -209,6 +254,8 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         frames: probe.frame_count(),
         units: "scene units (metres)".into(),
         silhouette_tolerances: SILHOUETTE_TOLERANCES.to_vec(),
+        motion: moved.0,
+        motion_share: moved.1,
     };
     crate::atomic::write(
         &opts.out.join("timings.md"),
@@ -525,14 +572,7 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
             .x_label_formatter(&|x| format!("{:.0}", 10f64.powf(*x)))
             .y_desc("RMS error / rest-pose RMS error (log scale)")
             .y_labels(12)
-            .y_label_formatter(&|y| {
-                let v = 10f64.powf(*y);
-                if v >= 10.0 {
-                    format!("{v:.0}")
-                } else {
-                    format!("{:.2}", v)
-                }
-            })
+            .y_label_formatter(&|y| log_label(10f64.powf(*y)))
             .label_style(("sans-serif", 16))
             .axis_desc_style(("sans-serif", 19))
             .draw()
@@ -562,6 +602,19 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
         root.present().map_err(plot_error)?;
     }
     write_plot(path, w, h, buf)
+}
+
+/// A value on a log axis with two significant digits: 0.0012, 0.050, 0.50, 3.2, 40. (With two
+/// decimals, every label under 0.01 read "0.00".)
+pub(crate) fn log_label(v: f64) -> String {
+    if !(v > 0.0) || !v.is_finite() {
+        return format!("{v}");
+    }
+    if v >= 10.0 {
+        return format!("{v:.0}");
+    }
+    let decimals = (1 - v.log10().floor() as i32).max(1) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// Writes a plot drawn into an RGB buffer `w`×`h` as a PNG.
@@ -647,13 +700,16 @@ fn timings_markdown(
     md += &format!(
         "\n## Error at equal influence counts\n\n\
          Measured by {}, over {} surface samples and {} frames.\n\n\
-         - AS ≤ rest-pose on {} of the AS curve\n\
+         {}- AS ≤ rest-pose on {} of the AS curve\n\
          - AS+IS ≤ AS on {} of the AS+IS curve\n\
          - meshopt ≤ rest-pose on {} of the meshopt curve\n\
          - fewest total influences reached: {}\n",
         report.correspondence.describe(),
         report.samples,
         report.frames,
+        report
+            .stillness()
+            .map_or(String::new(), |s| format!("Note: {s}.\n\n")),
         pct(c.as_le_rest_pose),
         pct(c.as_is_le_as),
         pct(c.meshopt_le_rest_pose),
@@ -785,4 +841,18 @@ fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String {
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_axis_labels_keep_two_significant_digits() {
+        let labels: Vec<String> = [0.00123, 0.05, 0.5, 1.0, 3.16, 40.0]
+            .into_iter()
+            .map(log_label)
+            .collect();
+        assert_eq!(labels, ["0.0012", "0.050", "0.50", "1.0", "3.2", "40"]);
+    }
 }

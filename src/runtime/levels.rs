@@ -32,9 +32,29 @@ pub struct LevelSource {
 }
 
 /// The level options the front ends bake with: the defaults of `lodlab bake`, so that a
-/// `lodlab bake MODEL` beforehand fills the same cache entries.
+/// `lodlab bake MODEL` beforehand fills the same cache entries; or, where the command line
+/// asked for levels by triangle count (`--levels triangles:N,N,…`, see [`set_level_budgets`]),
+/// those of `lodlab bake MODEL --triangles N,N,…`, whose cached cut they then read.
 pub fn runtime_options(model: &Model) -> crate::bake::lod::LodOptions {
-    crate::bake::lod::lod_options(model, DEFAULT_FIRST_ERROR_PX, None)
+    crate::bake::lod::lod_options(model, DEFAULT_FIRST_ERROR_PX, level_budgets().as_deref())
+}
+
+/// The triangle budgets levels are cut by (see [`set_level_budgets`]); `None`: by error.
+pub fn level_budgets() -> Option<Vec<u32>> {
+    LEVEL_BUDGETS
+        .read()
+        .unwrap_or_else(|e| e.into_inner())
+        .clone()
+}
+
+/// Triangle budgets every character's levels are cut by (`None`: by error), for the rest of
+/// the process.
+static LEVEL_BUDGETS: std::sync::RwLock<Option<Vec<u32>>> = std::sync::RwLock::new(None);
+
+/// Cuts every character's levels by these triangle budgets from now on (`None`: by error, the
+/// default).
+pub fn set_level_budgets(budgets: Option<Vec<u32>>) {
+    *LEVEL_BUDGETS.write().unwrap_or_else(|e| e.into_inner()) = budgets;
 }
 
 /// `lodlab bake --first-error` default: e₁, the error bound of LOD 1 in pixels.
