@@ -175,10 +175,16 @@ fn report(a: ReportArgs) -> anyhow::Result<ExitCode> {
         .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
         .collect();
     println!(
-        "{}: AS <= rest-pose on {} of the curve, AS+IS <= AS on {}; coarsest levels {} \
-         of {} triangles; errors by {}; wrote {}",
+        "{}: AS <= rest-pose on {} of the curve ({} within the noise band of {}, where the \
+         same mesh reordered scores {}; AS/rest-pose {} at the median), AS+IS <= AS on {}; \
+         coarsest levels {} of {} triangles; errors by {}; wrote {}",
         report.model,
         pct(c.as_le_rest_pose),
+        pct(c.as_le_rest_pose_within_noise),
+        c.noise.map_or("-".into(), |n| format!("{:.1}%", n * 100.0)),
+        pct(c.reordered_le_rest_pose),
+        c.as_over_rest_pose
+            .map_or("-".into(), |r| format!("{r:.2}")),
         pct(c.as_is_le_as),
         floors.join(", "),
         report.triangles,

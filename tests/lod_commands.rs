@@ -256,6 +256,18 @@ fn report_writes_curves_plot_and_timings() {
         }
     }
     assert!(json["methods"]["as+is"]["cache_hit_rate"].as_f64().unwrap() > 0.0);
+    // The noise reference: rest-pose once more on the mesh in another order, its curve, its
+    // score against rest-pose and the band the AS comparison is read within.
+    let c = &json["comparison"];
+    let twin = json["reordered_rest_pose"].as_array().unwrap();
+    assert!(twin.len() >= 30, "{} points", twin.len());
+    assert_eq!(twin[0]["triangles"], 240);
+    let fraction = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k}: {c}"));
+    assert!((0.0..=1.0).contains(&fraction("reordered_le_rest_pose")));
+    let noise = fraction("noise");
+    assert!(noise.is_finite() && noise >= 0.0, "{noise}");
+    assert!(fraction("as_le_rest_pose_within_noise") >= fraction("as_le_rest_pose"));
+    assert!(fraction("as_over_rest_pose") > 0.0);
     // Every level but full detail's lighting, by vertex normals and through its map.
     for method in ["rest-pose", "as", "as+is"] {
         let m = &json["methods"][method];
@@ -294,6 +306,7 @@ fn report_writes_curves_plot_and_timings() {
         md.contains("| cylinder |") && md.contains("AS+IS/3D"),
         "{md}"
     );
+    assert!(md.contains("within the noise band"), "{md}");
     // The cylinder's texture coordinates are a parameterisation: the curves measure through
     // them. Every level the viewer bakes is there, with its silhouette at three tolerances.
     assert_eq!(json["correspondence"], "texture");

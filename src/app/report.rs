@@ -10,12 +10,12 @@
 //! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
 
 use crate::bake::animation_space::AnimationSpaceMesh;
-use crate::bake::lod::{LodOptions, Replay, SkinnedLods, bake_lods};
+use crate::bake::lod::{LodOptions, Replay, SkinnedLods, bake_lods, progressive_mesh};
 use crate::bake::lod_error::{Correspondence, MeshError, Probe};
 use crate::bake::simplify::{Method, Sequence, SimplifyInput, pose_samples};
 use crate::error::InputError;
 use crate::import::load_model;
-use crate::model::Model;
+use crate::model::{Model, SkinnedMesh};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use plotters::prelude::*;
@@ -97,6 +97,20 @@ pub struct Comparison {
     pub as_is_le_as: Option<f64>,
     /// Fraction of the meshopt curve with meshopt ≤ rest-pose.
     pub meshopt_le_rest_pose: Option<f64>,
+    /// What two equal methods score against each other: the fraction of the curve of
+    /// rest-pose baked on the same mesh in another order ([`reordered`]) that lies at or
+    /// under rest-pose's. Where steps of nearly equal cost abound, which comes first is
+    /// decided by order and rounding, and the fraction strays far from 100% (or 50%) for
+    /// that alone: read `as_le_rest_pose` against it.
+    pub reordered_le_rest_pose: Option<f64>,
+    /// The noise band: the median of |rest-pose reordered / rest-pose − 1| over its curve.
+    pub noise: Option<f64>,
+    /// Fraction of the AS curve at or under rest-pose's by more than the noise band allows
+    /// against it: AS ≤ rest-pose × (1 + `noise`).
+    pub as_le_rest_pose_within_noise: Option<f64>,
+    /// The median of AS / rest-pose over the AS curve: below 1 where AS is better on most
+    /// of it, by how much.
+    pub as_over_rest_pose: Option<f64>,
     /// The fewest total influences each method reaches.
     pub min_influences: BTreeMap<String, u32>,
 }
@@ -120,6 +134,9 @@ pub struct Report {
     /// place over the frames measured, scene units, and as a share of its height.
     pub motion: f64,
     pub motion_share: f64,
+    /// Rest-pose's curve on the same mesh in another order ([`reordered`]): the noise
+    /// reference of [`Comparison`], drawn in `error.png` beside the methods.
+    pub reordered_rest_pose: Vec<CurvePoint>,
 }
 
 /// Clips that move no vertex further than this share of the height from the rest pose give
@@ -240,7 +257,10 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         );
     }
 
-    let comparison = compare(&methods);
+    // Rest-pose once more on the same mesh in another order: how far two equal methods'
+    // curves stray apart, what the comparison of two methods is read against.
+    let twin = reordered_rest_pose(&model);
+    let comparison = compare(&methods, &twin);
     let moved = motion(&model);
     let report = Report {
         model: model.name.clone(),
@@ -256,6 +276,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         silhouette_tolerances: SILHOUETTE_TOLERANCES.to_vec(),
         motion: moved.0,
         motion_share: moved.1,
+        reordered_rest_pose: twin.curve,
     };
     crate::atomic::write(
         &opts.out.join("timings.md"),
@@ -454,35 +475,88 @@ fn points(r: &MethodReport) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Fraction of `a`'s points (with error, within `b`'s range) where `a ≤ b`.
-fn fraction_below(a: &MethodReport, b: &MethodReport) -> Option<f64> {
+/// `a / b` at each of `a`'s points with error within `b`'s range.
+fn ratios(a: &MethodReport, b: &MethodReport) -> Vec<f64> {
     let reference = points(b);
-    let mut total = 0;
-    let mut below = 0;
-    for p in &a.curve {
-        if p.rms_error <= NEGLIGIBLE {
-            continue;
-        }
-        if let Some(r) = interpolate(&reference, p.influences as f64) {
-            total += 1;
-            if p.rms_error <= r * (1.0 + 1e-9) {
-                below += 1;
-            }
-        }
-    }
-    (total > 0).then(|| below as f64 / total as f64)
+    a.curve
+        .iter()
+        .filter(|p| p.rms_error > NEGLIGIBLE)
+        .filter_map(|p| Some(p.rms_error / interpolate(&reference, p.influences as f64)?))
+        .collect()
 }
 
-fn compare(methods: &BTreeMap<String, MethodReport>) -> Comparison {
+/// Fraction of `a`'s points (with error, within `b`'s range) where `a ≤ b × (1 + slack)`.
+fn fraction_below(a: &MethodReport, b: &MethodReport, slack: f64) -> Option<f64> {
+    let r = ratios(a, b);
+    let below = r
+        .iter()
+        .filter(|&&x| x <= (1.0 + slack) * (1.0 + 1e-9))
+        .count();
+    (!r.is_empty()).then(|| below as f64 / r.len() as f64)
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    (!v.is_empty()).then(|| v[v.len() / 2])
+}
+
+/// `model` with its vertices in reverse order and each triangle's corners rotated: the same
+/// surface, the same skin, so a method baked on it differs from the original only where
+/// steps of equal cost are taken in another order.
+pub fn reordered(model: &Model) -> Model {
+    let src = &model.mesh;
+    let n = src.vertex_count() as u32;
+    let mut mesh = SkinnedMesh::empty();
+    for v in (0..n as usize).rev() {
+        mesh.copy_vertex_from(src, v);
+    }
+    mesh.indices = src
+        .indices
+        .chunks_exact(3)
+        .rev()
+        .flat_map(|t| [t[1], t[2], t[0]])
+        .map(|v| n - 1 - v)
+        .collect();
+    Model {
+        mesh,
+        ..model.clone()
+    }
+}
+
+/// Rest-pose's error curve on [`reordered`] `model`, for the noise band.
+fn reordered_rest_pose(model: &Model) -> MethodReport {
+    let twin = reordered(model);
+    let (base, sequence, seconds) = progressive_mesh(&twin, Method::RestPose, &|_| {});
+    let probe = Probe::for_model(&twin, &base, SAMPLES);
+    MethodReport {
+        bake_seconds: seconds,
+        cache_hit_rate: None,
+        curve: measure_sequence(&probe, &base, &sequence),
+        levels: Vec::new(),
+        shading: Vec::new(),
+    }
+}
+
+fn compare(methods: &BTreeMap<String, MethodReport>, twin: &MethodReport) -> Comparison {
     let get = |n: &str| methods.get(n);
     let pair = |a: &str, b: &str| match (get(a), get(b)) {
-        (Some(a), Some(b)) => fraction_below(a, b),
+        (Some(a), Some(b)) => fraction_below(a, b, 0.0),
         _ => None,
     };
+    let rest = get("rest-pose");
+    let noise =
+        rest.and_then(|r| median(ratios(twin, r).iter().map(|x| (x - 1.0).abs()).collect()));
+    let as_rest = get("as").zip(rest);
     Comparison {
         as_le_rest_pose: pair("as", "rest-pose"),
         as_is_le_as: pair("as+is", "as"),
         meshopt_le_rest_pose: pair("meshopt", "rest-pose"),
+        reordered_le_rest_pose: rest.and_then(|r| fraction_below(twin, r, 0.0)),
+        noise,
+        as_le_rest_pose_within_noise: as_rest
+            .zip(noise)
+            .and_then(|((a, r), n)| fraction_below(a, r, n)),
+        as_over_rest_pose: as_rest.and_then(|(a, r)| median(ratios(a, r))),
         min_influences: methods
             .iter()
             .map(|(k, v)| {
@@ -503,27 +577,36 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
     let (w, h) = (1000u32, 640u32);
     let mut buf = vec![255u8; (w * h * 3) as usize];
     let rest = points(&report.methods["rest-pose"]);
-    let series: Vec<Series> = [
-        ("rest-pose", RGBColor(40, 40, 40)),
-        ("as", RGBColor(30, 100, 220)),
-        ("as+is", RGBColor(220, 50, 40)),
-        ("meshopt", RGBColor(40, 160, 70)),
-    ]
-    .into_iter()
-    .filter_map(|(name, colour)| {
-        let m = report.methods.get(name)?;
-        let pts: Vec<(f64, f64)> = m
-            .curve
-            .iter()
-            .filter(|p| p.rms_error > NEGLIGIBLE)
-            .filter_map(|p| {
-                let r = interpolate(&rest, p.influences as f64)?;
-                Some((p.influences as f64, p.rms_error / r))
-            })
-            .collect();
-        Some((name, colour, pts))
-    })
-    .collect();
+    // The noise reference first, under the methods: where two equal methods' curves part,
+    // no difference is a method's.
+    let noise = (
+        "rest-pose, reordered",
+        RGBColor(175, 175, 175),
+        &report.reordered_rest_pose,
+    );
+    let series: Vec<Series> = std::iter::once(noise)
+        .chain(
+            [
+                ("rest-pose", RGBColor(40, 40, 40)),
+                ("as", RGBColor(30, 100, 220)),
+                ("as+is", RGBColor(220, 50, 40)),
+                ("meshopt", RGBColor(40, 160, 70)),
+            ]
+            .into_iter()
+            .filter_map(|(name, colour)| Some((name, colour, &report.methods.get(name)?.curve))),
+        )
+        .map(|(name, colour, curve)| {
+            let pts: Vec<(f64, f64)> = curve
+                .iter()
+                .filter(|p| p.rms_error > NEGLIGIBLE)
+                .filter_map(|p| {
+                    let r = interpolate(&rest, p.influences as f64)?;
+                    Some((p.influences as f64, p.rms_error / r))
+                })
+                .collect();
+            (name, colour, pts)
+        })
+        .collect();
     // Both axes are drawn as log10 of the value on a linear axis, labelled with the value:
     // plotters' own log axes leave a narrow range (a few hundred influences) unlabelled.
     let series: Vec<Series> = series
@@ -700,7 +783,10 @@ fn timings_markdown(
     md += &format!(
         "\n## Error at equal influence counts\n\n\
          Measured by {}, over {} surface samples and {} frames.\n\n\
-         {}- AS ≤ rest-pose on {} of the AS curve\n\
+         {}- AS ≤ rest-pose on {} of the AS curve; within the noise band ({}), on {}; \
+         AS / rest-pose {} at the median\n\
+         - the same mesh in another order, baked by rest-pose, ≤ rest-pose on {} of its \
+         curve: what two equal methods score, the fraction above is read against it\n\
          - AS+IS ≤ AS on {} of the AS+IS curve\n\
          - meshopt ≤ rest-pose on {} of the meshopt curve\n\
          - fewest total influences reached: {}\n",
@@ -711,6 +797,12 @@ fn timings_markdown(
             .stillness()
             .map_or(String::new(), |s| format!("Note: {s}.\n\n")),
         pct(c.as_le_rest_pose),
+        c.noise
+            .map_or("–".into(), |n| format!("±{:.1}%", n * 100.0)),
+        pct(c.as_le_rest_pose_within_noise),
+        c.as_over_rest_pose
+            .map_or("–".into(), |r| format!("{r:.2}")),
+        pct(c.reordered_le_rest_pose),
         pct(c.as_is_le_as),
         pct(c.meshopt_le_rest_pose),
         c.min_influences
@@ -854,5 +946,38 @@ mod tests {
             .map(log_label)
             .collect();
         assert_eq!(labels, ["0.0012", "0.050", "0.50", "1.0", "3.2", "40"]);
+    }
+    #[test]
+    fn a_reordered_model_is_the_same_surface_and_skin() {
+        let model = crate::generate::walker::lowpoly();
+        let twin = reordered(&model);
+        let corners = |m: &Model| {
+            let mesh = &m.mesh;
+            let mut tris: Vec<String> = mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    // A triangle up to rotation, by its corners' positions and skins.
+                    let c: Vec<String> = t
+                        .iter()
+                        .map(|&v| {
+                            let v = v as usize;
+                            format!("{:?}{:?}", mesh.positions[v], mesh.influences_of(v))
+                        })
+                        .collect();
+                    let k = (0..3).min_by_key(|&k| &c[k]).unwrap();
+                    format!("{}{}{}", c[k], c[(k + 1) % 3], c[(k + 2) % 3])
+                })
+                .collect();
+            tris.sort();
+            tris
+        };
+        assert_eq!(corners(&model), corners(&twin));
+        // And not the same order: vertex 0 is the last one now.
+        assert_eq!(
+            twin.mesh.positions[0],
+            *model.mesh.positions.last().unwrap()
+        );
+        assert_ne!(model.mesh.indices, twin.mesh.indices);
     }
 }
