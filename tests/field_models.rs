@@ -173,7 +173,27 @@ fn export_checked(model: &str, method: &str, tools: Option<&Path>, dir: &Path) {
         );
         files.push(file);
     }
-    files.push(PathBuf::from(e["lod_file"].as_str().unwrap()));
+    let lod_file = PathBuf::from(e["lod_file"].as_str().unwrap());
+    // Coverage hints fall from below full screen, so an engine choosing by them shows full
+    // detail before the model fills the whole screen.
+    let bytes = std::fs::read(&lod_file).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&gltf::binary::Glb::from_slice(&bytes).unwrap().json).unwrap();
+    let hints: Vec<f64> = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find_map(|n| n["extras"]["MSFT_screencoverage"].as_array())
+        .unwrap()
+        .iter()
+        .map(|h| h.as_f64().unwrap())
+        .collect();
+    assert!(hints[0] < 1.0, "{model} {method}: {hints:?}");
+    assert!(
+        hints.windows(2).all(|w| w[1] < w[0]),
+        "{model} {method}: {hints:?}"
+    );
+    files.push(lod_file);
     if let Some(tools) = tools {
         for (errors, _, report) in validate(tools, &files) {
             assert_eq!(errors, 0, "{model} {method}: {report}");

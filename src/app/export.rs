@@ -79,22 +79,32 @@ fn coverage(height_px: f32, aspect: f32) -> f32 {
     (height_px * height_px * aspect / (SCREEN[0] * SCREEN[1])).clamp(0.0, 1.0)
 }
 
+/// The height in pixels at which the model's box fills the screen: 90% of its height, or of
+/// its width for a model wider than the screen's shape (a fox, a horse seen from the side).
+fn filling_px(aspect: f32) -> f32 {
+    0.9 * SCREEN[1].min(SCREEN[0] / aspect.max(1e-6))
+}
+
 /// The `MSFT_screencoverage` hints of levels that lodlab switches from at `switch_px` pixels
 /// high (each where the next level's error projects to the tolerance; 0 for the last, drawn to
 /// the end): the coverage at that height, strictly falling level by level. A switch above the
-/// screen's height (a fine level's error is a fraction of a millimetre) is put at the height
-/// of the screen, so full detail shows wherever the model fills it, and a hint that would not
-/// fall below the one before is a quarter of it (a level's error doubles, so the height it
-/// comes in at halves): clamped at full coverage, every such hint would be 1, and a reader choosing by
-/// coverage would show full detail only once the model covers the whole screen.
+/// height where the model fills the screen ([`filling_px`]; a fine level's error is a
+/// fraction of a millimetre) is put at that height, so full detail shows wherever the model
+/// fills the screen. A hint that would not fall below the one before (two fine levels both
+/// switching above that height) is nine tenths of it: a narrow band for the level, so that
+/// the next hints are again the coverage where their levels switch. (A quarter, as this was
+/// before, made every later hint a quarter of the one before it, far below where lodlab
+/// switches: a fox's last levels were hinted at a twentieth of their coverage.)
 fn coverage_hints(switch_px: &[f32], aspect: f32) -> Vec<f32> {
+    /// The share of the hint before that a crowded level's hint takes.
+    const CROWDED: f32 = 0.9;
     let mut hints: Vec<f32> = Vec::with_capacity(switch_px.len());
     for (k, &px) in switch_px.iter().enumerate() {
-        let mut c = coverage(px.min(SCREEN[1]), aspect);
+        let mut c = coverage(px.min(filling_px(aspect)), aspect);
         if let Some(&before) = hints.last()
             && c >= before
         {
-            c = before / 4.0;
+            c = before * CROWDED;
         }
         if k + 1 == switch_px.len() || px <= 0.0 {
             c = 0.0;
@@ -251,12 +261,36 @@ mod tests {
         // Two fine levels whose successors come in far above the screen's height, then a
         // level switching at 300 px, then the last.
         let hints = coverage_hints(&[40_000.0, 9_000.0, 300.0, 0.0], 0.4);
-        let full_height = coverage(SCREEN[1], 0.4);
+        let full_height = coverage(filling_px(0.4), 0.4);
         assert!((hints[0] - full_height).abs() < 1e-6, "{hints:?}");
         assert!(hints[0] < 1.0);
         assert!(hints.windows(2).all(|w| w[1] < w[0]), "{hints:?}");
-        assert!((hints[1] - full_height / 4.0).abs() < 1e-6, "{hints:?}");
+        assert!((hints[1] - full_height * 0.9).abs() < 1e-6, "{hints:?}");
         assert!((hints[2] - coverage(300.0, 0.4)).abs() < 1e-6, "{hints:?}");
         assert_eq!(hints[3], 0.0);
+    }
+
+    #[test]
+    fn a_model_wider_than_the_screen_still_shows_full_detail_below_full_screen() {
+        // A fox from the side is about twice as long as it is high, wider than 16:9.
+        for aspect in [1.0, 16.0 / 9.0, 2.5, 8.0] {
+            let hints = coverage_hints(&[40_000.0, 9_000.0, 0.0], aspect);
+            assert!(hints[0] < 1.0 && hints[0] > 0.1, "{aspect}: {hints:?}");
+            assert!(hints.windows(2).all(|w| w[1] < w[0]), "{aspect}: {hints:?}");
+        }
+    }
+
+    #[test]
+    fn hints_rejoin_the_coverage_after_crowded_fine_levels() {
+        // Three fine levels switching above the screen, then levels at 300, 150 and 20 px:
+        // their hints are their own coverage, not a chain of fractions of the fine ones.
+        let hints = coverage_hints(&[9e4, 5e4, 2e4, 300.0, 150.0, 20.0, 0.0], 1.0);
+        for (k, px) in [(3, 300.0), (4, 150.0), (5, 20.0)] {
+            assert!(
+                (hints[k] - coverage(px, 1.0)).abs() < 1e-7,
+                "{k}: {hints:?}"
+            );
+        }
+        assert!(hints.windows(2).all(|w| w[1] < w[0]), "{hints:?}");
     }
 }

@@ -690,7 +690,8 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
 /// A value on a log axis with two significant digits: 0.0012, 0.050, 0.50, 3.2, 40. (With two
 /// decimals, every label under 0.01 read "0.00".)
 pub(crate) fn log_label(v: f64) -> String {
-    if !(v > 0.0) || !v.is_finite() {
+    // NaN, infinities, zero and below: no log label; written as they are.
+    if v.is_nan() || v <= 0.0 || !v.is_finite() {
         return format!("{v}");
     }
     if v >= 10.0 {
