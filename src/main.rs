@@ -175,17 +175,22 @@ fn report(a: ReportArgs) -> anyhow::Result<ExitCode> {
         .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
         .collect();
     println!(
-        "{}: AS <= rest-pose on {} of the curve ({} within the noise band of {}, where the \
-         same mesh reordered scores {}; AS/rest-pose {} at the median), AS+IS <= AS on {}; \
+        "{}: AS <= rest-pose on {} of the curve ({} down to the coarsest level; {} within the \
+         noise, {} at the median, where the same mesh reordered scores {}; AS/rest-pose {} at \
+         the median), AS+IS <= AS on {} (its lighting at most {} AS's at equal influences); \
          coarsest levels {} of {} triangles; errors by {}; wrote {}",
         report.model,
         pct(c.as_le_rest_pose),
+        pct(c.as_le_rest_pose_at_levels),
         pct(c.as_le_rest_pose_within_noise),
-        c.noise.map_or("-".into(), |n| format!("{:.1}%", n * 100.0)),
+        c.noise
+            .map_or("-".into(), |n| format!("±{:.1}%", n * 100.0)),
         pct(c.reordered_le_rest_pose),
         c.as_over_rest_pose
             .map_or("-".into(), |r| format!("{r:.2}")),
         pct(c.as_is_le_as),
+        c.as_is_lighting_over_as
+            .map_or("-".into(), |r| format!("{r:.2}x")),
         floors.join(", "),
         report.triangles,
         report.correspondence.describe(),

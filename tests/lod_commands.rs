@@ -268,6 +268,14 @@ fn report_writes_curves_plot_and_timings() {
     assert!(noise.is_finite() && noise >= 0.0, "{noise}");
     assert!(fraction("as_le_rest_pose_within_noise") >= fraction("as_le_rest_pose"));
     assert!(fraction("as_over_rest_pose") > 0.0);
+    assert!((0.0..=1.0).contains(&fraction("as_le_rest_pose_at_levels")));
+    // The lighting of AS+IS against AS's at equal influences: a ratio where the levels
+    // show any colour error, else null.
+    let lighting = &c["as_is_lighting_over_as"];
+    assert!(
+        lighting.is_null() || lighting.as_f64().unwrap() >= 0.0,
+        "{lighting}"
+    );
     // Every level but full detail's lighting, by vertex normals and through its map.
     for method in ["rest-pose", "as", "as+is"] {
         let m = &json["methods"][method];
@@ -306,7 +314,8 @@ fn report_writes_curves_plot_and_timings() {
         md.contains("| cylinder |") && md.contains("AS+IS/3D"),
         "{md}"
     );
-    assert!(md.contains("within the noise band"), "{md}");
+    assert!(md.contains("within the noise"), "{md}");
+    assert!(md.contains("at the same total influences"), "{md}");
     // The cylinder's texture coordinates are a parameterisation: the curves measure through
     // them. Every level the viewer bakes is there, with its silhouette at three tolerances.
     assert_eq!(json["correspondence"], "texture");

@@ -105,12 +105,22 @@ pub struct Comparison {
     pub reordered_le_rest_pose: Option<f64>,
     /// The noise band: the median of |rest-pose reordered / rest-pose − 1| over its curve.
     pub noise: Option<f64>,
-    /// Fraction of the AS curve at or under rest-pose's by more than the noise band allows
-    /// against it: AS ≤ rest-pose × (1 + `noise`).
+    /// Fraction of the AS curve no further above rest-pose than the reordered rest-pose strays
+    /// from it there: AS ≤ rest-pose × (1 + band), the band the local one of [`local_band`]
+    /// (the largest deviation of the nearest reordered points, at least `noise`).
     pub as_le_rest_pose_within_noise: Option<f64>,
+    /// `as_le_rest_pose` over the part of the curve the viewer's levels span: down to the
+    /// coarsest level of AS or rest-pose, not on to the end of the sequence.
+    pub as_le_rest_pose_at_levels: Option<f64>,
     /// The median of AS / rest-pose over the AS curve: below 1 where AS is better on most
     /// of it, by how much.
     pub as_over_rest_pose: Option<f64>,
+    /// The largest ratio, over AS+IS's levels, of a level's colour error (by vertex normals,
+    /// through the renderer) to AS's at the same total influences ([`lighting_at`]), where
+    /// either shows at least [`VISIBLE_COLOUR`]; `None` where nothing was drawn or no level
+    /// reaches that. Levels of one index are cut at one error, and AS+IS's then hold fewer
+    /// influences and triangles: equal cost compares the lighting, equal indices the budget.
+    pub as_is_lighting_over_as: Option<f64>,
     /// The fewest total influences each method reaches.
     pub min_influences: BTreeMap<String, u32>,
 }
@@ -475,24 +485,125 @@ fn points(r: &MethodReport) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// `a / b` at each of `a`'s points with error within `b`'s range.
-fn ratios(a: &MethodReport, b: &MethodReport) -> Vec<f64> {
+/// `(influences, a / b)` at each of `a`'s points with error within `b`'s range.
+fn ratios_at(a: &MethodReport, b: &MethodReport) -> Vec<(f64, f64)> {
     let reference = points(b);
     a.curve
         .iter()
         .filter(|p| p.rms_error > NEGLIGIBLE)
-        .filter_map(|p| Some(p.rms_error / interpolate(&reference, p.influences as f64)?))
+        .filter_map(|p| {
+            let x = p.influences as f64;
+            Some((x, p.rms_error / interpolate(&reference, x)?))
+        })
         .collect()
 }
 
-/// Fraction of `a`'s points (with error, within `b`'s range) where `a ≤ b × (1 + slack)`.
-fn fraction_below(a: &MethodReport, b: &MethodReport, slack: f64) -> Option<f64> {
-    let r = ratios(a, b);
+/// `a / b` at each of `a`'s points with error within `b`'s range.
+fn ratios(a: &MethodReport, b: &MethodReport) -> Vec<f64> {
+    ratios_at(a, b).into_iter().map(|(_, r)| r).collect()
+}
+
+/// Fraction of `a`'s points (with error, within `b`'s range) where `a ≤ b × (1 + slack)`,
+/// `slack` given at the point's influence count.
+fn fraction_below(a: &MethodReport, b: &MethodReport, slack: impl Fn(f64) -> f64) -> Option<f64> {
+    let r = ratios_at(a, b);
     let below = r
         .iter()
-        .filter(|&&x| x <= (1.0 + slack) * (1.0 + 1e-9))
+        .filter(|&&(x, ratio)| ratio <= (1.0 + slack(x)) * (1.0 + 1e-9))
         .count();
     (!r.is_empty()).then(|| below as f64 / r.len() as f64)
+}
+
+/// Reordered points either side of a point that its local noise band looks at.
+const BAND_NEIGHBOURS: usize = 1;
+
+/// The noise band at `x` influences: the largest |reordered / rest-pose − 1| at the reordered
+/// point nearest `x` in log(influences) and at [`BAND_NEIGHBOURS`] points either side of it,
+/// and no less than the median band. The noise is not even along a curve: where steps of
+/// equal cost are many (chart and material borders at the coarse end), equal methods part by
+/// half and more, so one band for the whole curve would call that a method's loss.
+fn local_band(deviations: &[(f64, f64)], median: f64, x: f64) -> f64 {
+    let mut sorted = deviations.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let distance = |d: &(f64, f64)| (d.0.ln() - x.ln()).abs();
+    let Some(nearest) =
+        (0..sorted.len()).min_by(|&i, &j| distance(&sorted[i]).total_cmp(&distance(&sorted[j])))
+    else {
+        return median;
+    };
+    let from = nearest.saturating_sub(BAND_NEIGHBOURS);
+    let to = (nearest + BAND_NEIGHBOURS + 1).min(sorted.len());
+    sorted[from..to].iter().map(|d| d.1).fold(median, f64::max)
+}
+
+/// Colour errors (0 to 1) below this are invisible: a quarter of one 8-bit step over the
+/// figure. Ratios of two such errors say nothing.
+pub const VISIBLE_COLOUR: f64 = 1e-3;
+
+/// The total influences of the level a lighting row measures.
+fn influences_of(m: &MethodReport, s: &crate::runtime::shading_error::LevelShading) -> Option<f64> {
+    Some(m.levels.get(s.level)?.influences as f64)
+}
+
+/// `m`'s colour error by vertex normals at `influences` in all, interpolated between its
+/// levels (linearly in the error, in log(influences)), full detail counting as exact; `None`
+/// outside the levels' range or where no lighting was measured. Influences are the paper's
+/// measure of a level's cost (Merry et al. §5, Figure 7): an AS+IS level that drops
+/// influences and keeps every triangle is compared with the AS level as cheap as it.
+fn lighting_at(m: &MethodReport, influences: f64) -> Option<f64> {
+    let full = m.levels.first()?.influences as f64;
+    let mut pts: Vec<(f64, f64)> = std::iter::once((full, 0.0))
+        .chain(
+            m.shading
+                .iter()
+                .filter_map(|s| Some((influences_of(m, s)?, s.vertex_normals as f64))),
+        )
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let i = pts.partition_point(|p| p.0 < influences);
+    if i < pts.len() && pts[i].0 == influences {
+        return Some(pts[i].1);
+    }
+    if i == 0 || i == pts.len() {
+        return None;
+    }
+    let (a, b) = (pts[i - 1], pts[i]);
+    let t = (influences.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
+    Some(a.1 + t * (b.1 - a.1))
+}
+
+/// See [`Comparison::as_is_lighting_over_as`].
+fn lighting_over(is: &MethodReport, as_: &MethodReport) -> Option<f64> {
+    is.shading
+        .iter()
+        .filter_map(|s| {
+            let own = s.vertex_normals as f64;
+            let reference = lighting_at(as_, influences_of(is, s)?)?;
+            (own.max(reference) >= VISIBLE_COLOUR).then(|| own / reference.max(1e-6))
+        })
+        .reduce(f64::max)
+}
+
+/// `a`'s curve down to the coarsest level `a` or `b` has: where the viewer shows levels. What
+/// lies beyond is the extreme simplification that no level reaches (Merry et al. find AS worse
+/// than rest-pose there).
+fn down_to_levels(a: &MethodReport, b: &MethodReport) -> MethodReport {
+    let floor = |m: &MethodReport| m.levels.last().map_or(0, |l| l.influences);
+    let lowest = floor(a).max(floor(b));
+    MethodReport {
+        curve: a
+            .curve
+            .iter()
+            .filter(|p| p.influences >= lowest)
+            .cloned()
+            .collect(),
+        levels: Vec::new(),
+        shading: Vec::new(),
+        ..*a
+    }
 }
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -540,7 +651,7 @@ fn reordered_rest_pose(model: &Model) -> MethodReport {
 fn compare(methods: &BTreeMap<String, MethodReport>, twin: &MethodReport) -> Comparison {
     let get = |n: &str| methods.get(n);
     let pair = |a: &str, b: &str| match (get(a), get(b)) {
-        (Some(a), Some(b)) => fraction_below(a, b, 0.0),
+        (Some(a), Some(b)) => fraction_below(a, b, |_| 0.0),
         _ => None,
     };
     let rest = get("rest-pose");
@@ -551,12 +662,21 @@ fn compare(methods: &BTreeMap<String, MethodReport>, twin: &MethodReport) -> Com
         as_le_rest_pose: pair("as", "rest-pose"),
         as_is_le_as: pair("as+is", "as"),
         meshopt_le_rest_pose: pair("meshopt", "rest-pose"),
-        reordered_le_rest_pose: rest.and_then(|r| fraction_below(twin, r, 0.0)),
+        reordered_le_rest_pose: rest.and_then(|r| fraction_below(twin, r, |_| 0.0)),
         noise,
-        as_le_rest_pose_within_noise: as_rest
-            .zip(noise)
-            .and_then(|((a, r), n)| fraction_below(a, r, n)),
+        as_le_rest_pose_within_noise: as_rest.zip(noise).and_then(|((a, r), n)| {
+            let deviations: Vec<(f64, f64)> = ratios_at(twin, r)
+                .into_iter()
+                .map(|(x, q)| (x, (q - 1.0).abs()))
+                .collect();
+            fraction_below(a, r, |x| local_band(&deviations, n, x))
+        }),
         as_over_rest_pose: as_rest.and_then(|(a, r)| median(ratios(a, r))),
+        as_is_lighting_over_as: get("as+is")
+            .zip(get("as"))
+            .and_then(|(i, a)| lighting_over(i, a)),
+        as_le_rest_pose_at_levels: as_rest
+            .and_then(|(a, r)| fraction_below(&down_to_levels(a, r), r, |_| 0.0)),
         min_influences: methods
             .iter()
             .map(|(k, v)| {
@@ -784,11 +904,14 @@ fn timings_markdown(
     md += &format!(
         "\n## Error at equal influence counts\n\n\
          Measured by {}, over {} surface samples and {} frames.\n\n\
-         {}- AS ≤ rest-pose on {} of the AS curve; within the noise band ({}), on {}; \
-         AS / rest-pose {} at the median\n\
+         {}- AS ≤ rest-pose on {} of the AS curve ({} down to the coarsest level, not \
+         beyond); within the noise (above rest-pose by no more than the reordered curve strays \
+         from it nearby; that is {} at the median), on {}; AS / rest-pose {} at the median\n\
          - the same mesh in another order, baked by rest-pose, ≤ rest-pose on {} of its \
          curve: what two equal methods score, the fraction above is read against it\n\
          - AS+IS ≤ AS on {} of the AS+IS curve\n\
+         - AS+IS's lighting (colour error by vertex normals) at most {} AS's at the same \
+         total influences, over the levels where either shows {VISIBLE_COLOUR} or more\n\
          - meshopt ≤ rest-pose on {} of the meshopt curve\n\
          - fewest total influences reached: {}\n",
         report.correspondence.describe(),
@@ -798,6 +921,7 @@ fn timings_markdown(
             .stillness()
             .map_or(String::new(), |s| format!("Note: {s}.\n\n")),
         pct(c.as_le_rest_pose),
+        pct(c.as_le_rest_pose_at_levels),
         c.noise
             .map_or("–".into(), |n| format!("±{:.1}%", n * 100.0)),
         pct(c.as_le_rest_pose_within_noise),
@@ -805,6 +929,8 @@ fn timings_markdown(
             .map_or("–".into(), |r| format!("{r:.2}")),
         pct(c.reordered_le_rest_pose),
         pct(c.as_is_le_as),
+        c.as_is_lighting_over_as
+            .map_or("–".into(), |r| format!("{r:.2}×")),
         pct(c.meshopt_le_rest_pose),
         c.min_influences
             .iter()
@@ -948,6 +1074,73 @@ mod tests {
             .collect();
         assert_eq!(labels, ["0.0012", "0.050", "0.50", "1.0", "3.2", "40"]);
     }
+    #[test]
+    fn the_noise_band_follows_the_reordered_curve_along_it() {
+        // Equal methods part by 50% around 500 influences and by 1% elsewhere.
+        let deviations: Vec<(f64, f64)> = [8000.0, 4000.0, 2000.0, 1000.0, 500.0, 250.0, 125.0]
+            .into_iter()
+            .map(|x| (x, if x == 500.0 { 0.5 } else { 0.01 }))
+            .collect();
+        let median = 0.02;
+        assert_eq!(local_band(&deviations, median, 480.0), 0.5);
+        // A neighbour of the spike sees it; two points off, the median is the band.
+        assert_eq!(local_band(&deviations, median, 1000.0), 0.5);
+        assert_eq!(local_band(&deviations, median, 4000.0), median);
+        assert_eq!(local_band(&deviations, median, 130.0), median);
+    }
+
+    /// A method's report of its levels' triangle counts and colour errors only.
+    fn lit(levels: &[(u32, f32)]) -> MethodReport {
+        let level = |&(triangles, _): &(u32, f32)| LevelReport {
+            triangles,
+            influences: triangles,
+            error: 0.0,
+            bound: 0.0,
+            silhouette_px: Vec::new(),
+            silhouette_resolution_px: Vec::new(),
+        };
+        let shading = |(k, &(triangles, e)): (usize, &(u32, f32))| {
+            crate::runtime::shading_error::LevelShading {
+                level: k,
+                triangles: triangles as usize,
+                px: SHADING_PX,
+                vertex_normals: e,
+                normal_maps: e,
+                mapped: false,
+                worst_tile_vertex_normals: e,
+                worst_tile_normal_maps: e,
+                recoloured: 0.0,
+            }
+        };
+        MethodReport {
+            bake_seconds: 0.0,
+            cache_hit_rate: None,
+            curve: Vec::new(),
+            levels: levels.iter().map(level).collect(),
+            shading: levels.iter().enumerate().skip(1).map(shading).collect(),
+        }
+    }
+
+    #[test]
+    fn as_is_lighting_is_read_against_as_at_equal_triangles() {
+        // AS+IS's level 1 is coarser than AS's (fewer influences at one index): at its own
+        // count AS's error, between its levels 1 and 2, is about its own.
+        let as_ = lit(&[(1000, 0.0), (900, 0.002), (500, 0.010)]);
+        let is = lit(&[(1000, 0.0), (600, 0.008), (400, 0.02)]);
+        let at_600 = lighting_at(&as_, 600.0).unwrap();
+        assert!(at_600 > 0.002 && at_600 < 0.010, "{at_600}");
+        // Level 2 (400) is past AS's coarsest level: no reference, not counted.
+        assert!(lighting_at(&as_, 400.0).is_none());
+        let r = lighting_over(&is, &as_).unwrap();
+        assert!((r - 0.008 / at_600).abs() < 1e-6, "{r}");
+        // Errors too small to see compare to nothing.
+        let faint_as = lit(&[(1000, 0.0), (900, 0.00001), (500, 0.0005)]);
+        let faint_is = lit(&[(1000, 0.0), (600, 0.0008)]);
+        assert!(lighting_over(&faint_is, &faint_as).is_none());
+        // Where one of them shows, it counts.
+        assert!(lighting_over(&is, &faint_as).unwrap() > 20.0);
+    }
+
     #[test]
     fn a_reordered_model_is_the_same_surface_and_skin() {
         let model = crate::generate::walker::lowpoly();
