@@ -333,6 +333,27 @@ fn random_meshes_load_bake_and_export() {
     }
 }
 
+/// The `random_mesh` fuzzer's first find: one triangle whose two corners stand at one point
+/// with one skin. It draws nothing in any pose, and animation space welds it away, so its
+/// levels held no triangle and their exports could not be read back. It is refused in one line.
+#[test]
+fn a_mesh_of_triangles_with_two_corners_at_one_point_is_refused_in_one_line() {
+    let bytes = [
+        0, 0, 0, 0, 56, 185, 90, 56, 56, 0, 10, 0, 0, 0, 0, 0, 0, 0, 56, 185, 90, 0, 0, 0, 0, 0,
+        55, 0, 0, 0, 37, 0, 0, 71, 1, 0, 115,
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let limits = lodlab::import::validate::limits();
+    let file = wild::random::random_file(&bytes);
+    match lodlab::import::gltf::from_bytes("random", file, dir.path(), &limits) {
+        Ok((m, _)) => panic!("loaded {} triangles", m.mesh.triangle_count()),
+        Err(e) => assert!(
+            !e.contains('\n') && e.contains("no triangles that draw"),
+            "{e}"
+        ),
+    }
+}
+
 /// `--clips FILE` adds the clips of a file of the same skeleton by joint name; a file of
 /// another skeleton is refused in one line naming joints it animates that the model lacks.
 #[test]
