@@ -464,7 +464,14 @@ fn meshopt_curve(
 
 /// `y` of a curve at `x`, interpolated linearly in log–log; `None` outside its range.
 fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
-    let mut pts: Vec<(f64, f64)> = curve.iter().copied().filter(|p| p.1 > NEGLIGIBLE).collect();
+    let pts: Vec<(f64, f64)> = curve.iter().copied().filter(|p| p.1 > NEGLIGIBLE).collect();
+    between(pts, x, |a, b, t| (a.ln() + t * (b.ln() - a.ln())).exp())
+}
+
+/// `y` at `x` from the two points of `pts` either side of it, `blend(y_a, y_b, t)` with `t`
+/// where `x` lies between their `x` in log scale; the point's own `y` where `x` is one; `None`
+/// outside their range.
+fn between(mut pts: Vec<(f64, f64)>, x: f64, blend: impl Fn(f64, f64, f64) -> f64) -> Option<f64> {
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
     let i = pts.partition_point(|p| p.0 < x);
     if i < pts.len() && pts[i].0 == x {
@@ -475,7 +482,7 @@ fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
     }
     let (a, b) = (pts[i - 1], pts[i]);
     let t = (x.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
-    Some((a.1.ln() + t * (b.1.ln() - a.1.ln())).exp())
+    Some(blend(a.1, b.1, t))
 }
 
 fn points(r: &MethodReport) -> Vec<(f64, f64)> {
@@ -522,9 +529,8 @@ const BAND_NEIGHBOURS: usize = 1;
 /// and no less than the median band. The noise is not even along a curve: where steps of
 /// equal cost are many (chart and material borders at the coarse end), equal methods part by
 /// half and more, so one band for the whole curve would call that a method's loss.
-fn local_band(deviations: &[(f64, f64)], median: f64, x: f64) -> f64 {
-    let mut sorted = deviations.to_vec();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+/// `sorted`: `(influences, deviation)` in order of influences.
+fn local_band(sorted: &[(f64, f64)], median: f64, x: f64) -> f64 {
     let distance = |d: &(f64, f64)| (d.0.ln() - x.ln()).abs();
     let Some(nearest) =
         (0..sorted.len()).min_by(|&i, &j| distance(&sorted[i]).total_cmp(&distance(&sorted[j])))
@@ -552,7 +558,7 @@ fn influences_of(m: &MethodReport, s: &crate::runtime::shading_error::LevelShadi
 /// influences and keeps every triangle is compared with the AS level as cheap as it.
 fn lighting_at(m: &MethodReport, influences: f64) -> Option<f64> {
     let full = m.levels.first()?.influences as f64;
-    let mut pts: Vec<(f64, f64)> = std::iter::once((full, 0.0))
+    let pts: Vec<(f64, f64)> = std::iter::once((full, 0.0))
         .chain(
             m.shading
                 .iter()
@@ -562,17 +568,7 @@ fn lighting_at(m: &MethodReport, influences: f64) -> Option<f64> {
     if pts.len() < 2 {
         return None;
     }
-    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let i = pts.partition_point(|p| p.0 < influences);
-    if i < pts.len() && pts[i].0 == influences {
-        return Some(pts[i].1);
-    }
-    if i == 0 || i == pts.len() {
-        return None;
-    }
-    let (a, b) = (pts[i - 1], pts[i]);
-    let t = (influences.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
-    Some(a.1 + t * (b.1 - a.1))
+    between(pts, influences, |a, b, t| a + t * (b - a))
 }
 
 /// See [`Comparison::as_is_lighting_over_as`].
@@ -655,8 +651,16 @@ fn compare(methods: &BTreeMap<String, MethodReport>, twin: &MethodReport) -> Com
         _ => None,
     };
     let rest = get("rest-pose");
-    let noise =
-        rest.and_then(|r| median(ratios(twin, r).iter().map(|x| (x - 1.0).abs()).collect()));
+    // |reordered / rest-pose − 1| along the curve, in order of influences.
+    let deviations: Vec<(f64, f64)> = rest.map_or(Vec::new(), |r| {
+        let mut d: Vec<(f64, f64)> = ratios_at(twin, r)
+            .into_iter()
+            .map(|(x, q)| (x, (q - 1.0).abs()))
+            .collect();
+        d.sort_by(|a, b| a.0.total_cmp(&b.0));
+        d
+    });
+    let noise = median(deviations.iter().map(|d| d.1).collect());
     let as_rest = get("as").zip(rest);
     Comparison {
         as_le_rest_pose: pair("as", "rest-pose"),
@@ -664,13 +668,9 @@ fn compare(methods: &BTreeMap<String, MethodReport>, twin: &MethodReport) -> Com
         meshopt_le_rest_pose: pair("meshopt", "rest-pose"),
         reordered_le_rest_pose: rest.and_then(|r| fraction_below(twin, r, |_| 0.0)),
         noise,
-        as_le_rest_pose_within_noise: as_rest.zip(noise).and_then(|((a, r), n)| {
-            let deviations: Vec<(f64, f64)> = ratios_at(twin, r)
-                .into_iter()
-                .map(|(x, q)| (x, (q - 1.0).abs()))
-                .collect();
-            fraction_below(a, r, |x| local_band(&deviations, n, x))
-        }),
+        as_le_rest_pose_within_noise: as_rest
+            .zip(noise)
+            .and_then(|((a, r), n)| fraction_below(a, r, |x| local_band(&deviations, n, x))),
         as_over_rest_pose: as_rest.and_then(|(a, r)| median(ratios(a, r))),
         as_is_lighting_over_as: get("as+is")
             .zip(get("as"))
@@ -811,7 +811,7 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
 /// decimals, every label under 0.01 read "0.00".)
 pub(crate) fn log_label(v: f64) -> String {
     // NaN, infinities, zero and below: no log label; written as they are.
-    if v.is_nan() || v <= 0.0 || !v.is_finite() {
+    if !v.is_finite() || v <= 0.0 {
         return format!("{v}");
     }
     if v >= 10.0 {
@@ -1089,7 +1089,8 @@ mod tests {
         assert_eq!(local_band(&deviations, median, 130.0), median);
     }
 
-    /// A method's report of its levels' triangle counts and colour errors only.
+    /// A method's report of its levels' colour errors only, each level with as many
+    /// influences as triangles.
     fn lit(levels: &[(u32, f32)]) -> MethodReport {
         let level = |&(triangles, _): &(u32, f32)| LevelReport {
             triangles,
@@ -1122,7 +1123,7 @@ mod tests {
     }
 
     #[test]
-    fn as_is_lighting_is_read_against_as_at_equal_triangles() {
+    fn as_is_lighting_is_read_against_as_at_equal_influences() {
         // AS+IS's level 1 is coarser than AS's (fewer influences at one index): at its own
         // count AS's error, between its levels 1 and 2, is about its own.
         let as_ = lit(&[(1000, 0.0), (900, 0.002), (500, 0.010)]);
