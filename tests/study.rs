@@ -142,6 +142,50 @@ fn a_study_is_made_run_and_analyzed() {
     ]);
     assert_eq!(o.status.code(), Some(1));
 
+    // A make interrupted after two of its three clips (killed: no manifest, no sessions, the
+    // clips so far noted in making.json) is resumed by the next run of the same plan.
+    let resumed = tmp.path().join("resumed");
+    std::fs::create_dir_all(resumed.join("clips")).unwrap();
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("study.json")).unwrap()).unwrap();
+    let mut making = manifest.clone();
+    let clips = making["clips"].as_array_mut().unwrap();
+    let dropped = clips.pop().unwrap();
+    for c in clips.iter() {
+        let file = c["file"].as_str().unwrap();
+        std::fs::copy(dir.join(file), resumed.join(file)).unwrap();
+    }
+    making["conditions"] = serde_json::json!([]);
+    making["participants"] = serde_json::json!([]);
+    std::fs::write(resumed.join("making.json"), making.to_string()).unwrap();
+    let r = resumed.display().to_string();
+    let o = lodlab(&[
+        "study", "make", "--plan", &plan_s, "--out", &r, "--cache", &cache, "--msaa", "1",
+    ]);
+    ok(&o);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("resuming"), "{stderr}");
+    assert!(resumed.join(dropped["file"].as_str().unwrap()).is_file());
+    assert!(!resumed.join("making.json").exists());
+    assert_eq!(session(&resumed, "P01"), sessions[0]);
+    // A folder of clips without making.json is still not taken for a study.
+    let stray = tmp.path().join("stray");
+    std::fs::create_dir_all(&stray).unwrap();
+    std::fs::write(stray.join("notes.txt"), "mine").unwrap();
+    let o = lodlab(&[
+        "study",
+        "make",
+        "--plan",
+        &plan_s,
+        "--out",
+        &stray.display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        std::fs::read_to_string(stray.join("notes.txt")).unwrap(),
+        "mine"
+    );
+
     // Participant 1 answers everything in one go.
     let script1 = prefer_b(&sessions[0], &pairs);
     ok(&lodlab(&[

@@ -101,7 +101,16 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
         .into_par_iter()
         .map(|(i, method, bar)| {
             let (model, hash) = &models[i];
-            let progress = |f: f32| bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+            let what = format!(
+                "{} {}",
+                model.name,
+                method.map_or("clouds".to_string(), |m| m.to_string())
+            );
+            let lines = LogLines::new(what);
+            let progress = |f: f32| {
+                bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+                lines.tick(f);
+            };
             let Some(method) = method else {
                 let start = std::time::Instant::now();
                 let gpu = gpu.as_ref().expect("a GPU when there are trees");
@@ -198,6 +207,48 @@ pub fn budget_warnings(results: &BakeResults) -> Vec<String> {
 }
 
 /// The progress bar of one (model, method) job, shared by `bake` and `report`.
+/// Progress where stderr is not a terminal (a log, CI, a pipe), which indicatif's bars leave
+/// blank: a line every [`LogLines::EVERY`] of how far a job has come, so that a long bake is
+/// seen to be working.
+pub struct LogLines {
+    what: String,
+    started: std::time::Instant,
+    last: std::sync::Mutex<std::time::Instant>,
+    on: bool,
+}
+
+impl LogLines {
+    pub const EVERY: std::time::Duration = std::time::Duration::from_secs(5);
+
+    pub fn new(what: String) -> Self {
+        use std::io::IsTerminal;
+        let now = std::time::Instant::now();
+        LogLines {
+            what,
+            started: now,
+            last: std::sync::Mutex::new(now),
+            on: !std::io::stderr().is_terminal(),
+        }
+    }
+
+    /// Notes progress `f` (0 to 1); prints a line if the last was long enough ago.
+    pub fn tick(&self, f: f32) {
+        if !self.on {
+            return;
+        }
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        if last.elapsed() >= Self::EVERY {
+            *last = std::time::Instant::now();
+            eprintln!(
+                "{}: {:.0}% after {:.0} s",
+                self.what,
+                f.clamp(0.0, 1.0) * 100.0,
+                self.started.elapsed().as_secs_f32()
+            );
+        }
+    }
+}
+
 pub fn bar_style() -> ProgressStyle {
     ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")
         .expect("valid template")

@@ -29,14 +29,22 @@ pub struct Cli {
     /// The viewer's options, for `lodlab` without a subcommand.
     #[command(flatten)]
     pub view: ViewArgs,
-    /// Raise (or lower) a bound on what one model file may ask for, NAME=VALUE, repeatable:
-    /// file-mb (1024: the file and each file it refers to, MiB), nodes (100000), joints
-    /// (1024 in a skin), clip-seconds (600), materials (256 textured ones; plain colours share
-    /// one palette), texture-side (8192 texels).
+    /// Raise (or lower) a bound on what one model file may ask for or expand to, NAME=VALUE,
+    /// repeatable: file-mb (1024: the file and each file it refers to, MiB), nodes (100000),
+    /// joints (1024, all skins together), clip-seconds (600 a clip), clips-seconds (3600, all
+    /// clips), materials (256 textured ones; plain colours share one palette), texture-side
+    /// (8192 texels), texture-mb (1024: decoded texels of the textured materials), vertices
+    /// and triangles (4000000 each, every primitive as often as nodes draw it), decoded-mb
+    /// (1024: accessors and decoded compressed views).
     /// Each keeps a small hostile file from taking the machine; a model past one is refused
     /// in one line naming the option.
     #[arg(long = "limit", value_name = "NAME=VALUE", global = true, value_parser = parse_limit)]
     pub limits: Vec<String>,
+    /// Let a model's buffers and images be files outside its folder (absolute paths, '..',
+    /// file: URIs, symbolic links leading out). By default only files beside the model are
+    /// read, so that a file from a stranger cannot read others.
+    #[arg(long, global = true)]
+    pub allow_outside_files: bool,
     /// Add the clips of another glTF file to every model, bound by joint name, repeatable: a
     /// character and its animations sent as separate files on one skeleton, as Mixamo and
     /// many asset stores send them (a built-in name, such as mocap-walk, or a path). A joint
@@ -97,6 +105,7 @@ impl Cli {
         for l in &self.limits {
             limits.set(l).expect("checked by parse_limit");
         }
+        limits.outside_files = self.allow_outside_files;
         limits
     }
 }
@@ -237,8 +246,8 @@ pub struct RecordArgs {
     /// Frames a second.
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=240))]
     pub fps: u32,
-    /// Length of the clip in seconds.
-    #[arg(long, default_value_t = 8.0, value_parser = parse_non_negative)]
+    /// Length of the clip in seconds (at most an hour).
+    #[arg(long, default_value_t = 8.0, value_parser = parse_clip_length)]
     pub seconds: f32,
     /// Camera path over the clip: spiral (inwards, Merry et al. §6.2) or orbit.
     #[arg(long, default_value = "spiral", value_enum)]
@@ -276,11 +285,11 @@ pub struct BenchArgs {
     /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
     #[arg(long, value_parser = parse_samples)]
     pub msaa: Option<u32>,
-    /// Seconds of measuring, all methods together (their calibration included).
-    #[arg(long, default_value_t = 30.0, value_parser = parse_non_negative)]
+    /// Seconds of measuring, all methods together (their calibration included; at most a day).
+    #[arg(long, default_value_t = 30.0, value_parser = parse_seconds)]
     pub seconds: f32,
-    /// Seconds of unmeasured warm-up frames first.
-    #[arg(long, default_value_t = 3.0, value_parser = parse_non_negative)]
+    /// Seconds of unmeasured warm-up frames first (at most a day).
+    #[arg(long, default_value_t = 3.0, value_parser = parse_seconds)]
     pub warmup: f32,
     /// Frames per method, instead of as many as fit --seconds.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100000))]
@@ -288,8 +297,8 @@ pub struct BenchArgs {
     /// Camera path: orbit (one turn, swinging from near to far and back) or spiral (inwards).
     #[arg(long, default_value = "orbit", value_enum)]
     pub path: PathKind,
-    /// Seconds the camera path lasts.
-    #[arg(long, default_value_t = 20.0, value_parser = parse_non_negative)]
+    /// Seconds the camera path lasts (at most a day).
+    #[arg(long, default_value_t = 20.0, value_parser = parse_seconds)]
     pub path_seconds: f32,
     /// Also write the figures as JSON.
     #[arg(long, value_name = "FILE")]
@@ -426,7 +435,7 @@ pub struct SceneArgs {
     pub seed: u64,
     /// Walkers stop now and then to play a clip on the spot (a wave), cross-fading into it and
     /// back over this many seconds; 0: they never stop.
-    #[arg(long, default_value_t = 0.0, value_name = "SECONDS", value_parser = parse_non_negative)]
+    #[arg(long, default_value_t = 0.0, value_name = "SECONDS", value_parser = parse_seconds)]
     pub cross_fade: f32,
     /// Far characters become animated impostors, their last level of detail under every
     /// simplified method: VIEWSxFRAMESxCELL is views on a side of the view grid, frames per
@@ -496,7 +505,7 @@ pub struct PolicyArgs {
     #[arg(long, value_enum, default_value = "time")]
     pub drive: Drive,
     /// Seconds a time-driven transition takes.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_non_negative)]
+    #[arg(long, default_value_t = 0.5, value_parser = parse_seconds)]
     pub duration: f32,
     /// Width of a morph zone, as a fraction of its threshold distance.
     #[arg(long, default_value_t = 0.25, value_parser = parse_non_negative)]
@@ -675,6 +684,17 @@ fn parse_non_negative(s: &str) -> Result<f32, String> {
             Err(format!("'{s}' must not be negative"))
         }
     })
+}
+
+/// A span of time a command runs or waits for: finite, not negative, at most a day (a larger
+/// one is a slip of the keyboard that would keep the command running for ever).
+fn parse_seconds(s: &str) -> Result<f32, String> {
+    parse_in(s, "seconds", 0.0..=86_400.0)
+}
+
+/// A recorded clip's length: at most an hour (108,000 frames at 30 a second).
+fn parse_clip_length(s: &str) -> Result<f32, String> {
+    parse_in(s, "clip length in seconds", 0.0..=3600.0)
 }
 
 fn parse_tolerance(s: &str) -> Result<f32, String> {

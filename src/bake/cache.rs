@@ -87,11 +87,30 @@ impl LodCache {
 
     /// Reads a cached bake, checking its version, key and integrity.
     pub fn load<T: DeserializeOwned>(&self, path: &Path, key: &[u8; 32]) -> Lookup<T> {
-        let bytes = match std::fs::read(path) {
-            Ok(b) => b,
+        // Only a regular file, and no more of it than a cache file can hold: a FIFO would
+        // block the read for ever, a link to /dev/zero fill the memory.
+        let meta = match std::fs::metadata(path) {
+            Ok(m) => m,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Lookup::Miss,
             Err(e) => return Lookup::Unusable(format!("cannot read it ({e})")),
         };
+        if !meta.is_file() {
+            return Lookup::Unusable("not a regular file (a device, pipe or folder)".into());
+        }
+        let most = (MAX_UNPACKED + HEADER) as u64;
+        if meta.len() > most {
+            return Lookup::Unusable(format!(
+                "{} MiB, more than a cache file holds",
+                meta.len() >> 20
+            ));
+        }
+        let mut bytes = Vec::with_capacity(meta.len() as usize);
+        let read = std::fs::File::open(path).and_then(|f| {
+            std::io::Read::read_to_end(&mut std::io::Read::take(f, most), &mut bytes)
+        });
+        if let Err(e) = read {
+            return Lookup::Unusable(format!("cannot read it ({e})"));
+        }
         decode(&bytes, key)
     }
 
@@ -193,22 +212,31 @@ pub fn key(source: &[u8; 32], method: Method, options: &LodOptions) -> [u8; 32] 
 /// A hash of a model's source: the file's bytes, the files `--clips` adds clips from
 /// ([`crate::import::extra_clips`]), and for a `.gltf` the external files its buffers and
 /// images name (those that exist; a missing one fails the import anyway).
+///
+/// Files are read as the import reads them ([`crate::import::sources::read_regular`]): regular
+/// files within the limits and the folder policy, so that a FIFO or `/dev/zero` named by a
+/// buffer does not hang the hash before the import can refuse it.
 pub fn source_hash(path: &Path) -> std::io::Result<[u8; 32]> {
-    let bytes = std::fs::read(path)?;
+    let limits = crate::import::validate::limits();
+    let read = |p: &Path| {
+        crate::import::sources::read_regular(p, &limits)
+            .map_err(|e| std::io::Error::other(format!("{}: {e}", p.display())))
+    };
+    let bytes = read(path)?;
     let mut h = blake3::Hasher::new();
     h.update(&bytes);
     // Clips added from other files (`--clips`) change what the metric is estimated from.
     for file in crate::import::extra_clips() {
         let file = crate::import::source_path(&file.to_string_lossy());
         h.update(b"clips");
-        h.update(&std::fs::read(&file)?);
+        h.update(&read(&file)?);
     }
     if let Ok(json) = serde_json::from_slice::<serde_json::Value>(&bytes) {
         let dir = path.parent().unwrap_or(Path::new("."));
         for list in ["buffers", "images"] {
             for item in json[list].as_array().into_iter().flatten() {
                 if let Some(uri) = item["uri"].as_str().filter(|u| !u.starts_with("data:"))
-                    && let Ok(extra) = std::fs::read(dir.join(uri))
+                    && let Ok(extra) = crate::import::sources::read_uri(uri, dir, &limits)
                 {
                     h.update(uri.as_bytes());
                     h.update(&extra);

@@ -64,12 +64,16 @@ pub enum UvProblem {
     NoTexCoords,
     /// Its charts overlap: this share of the texels they cover is covered twice.
     Overlapping(f32),
+    /// A triangle spans more than the whole texture (it tiles it): every texel it covers is
+    /// more than one place.
+    Tiled,
 }
 
 impl std::fmt::Display for UvProblem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             UvProblem::NoTexCoords => write!(f, "no texture coordinates"),
+            UvProblem::Tiled => write!(f, "texture coordinates tile the texture"),
             UvProblem::Overlapping(share) => write!(
                 f,
                 "texture coordinates overlap ({:.0}% of texels twice)",
@@ -170,8 +174,10 @@ fn texels_of(uv: [Vec2; 3], size: u32, mut each: impl FnMut(i64, i64, [f64; 3]))
     let q = uv.map(|u| u.as_dvec2() * size as f64);
     let lo = q[0].min(q[1]).min(q[2]);
     let hi = q[0].max(q[1]).max(q[2]);
-    // A triangle larger than a thousand maps is not a chart: leave it out.
-    if !(lo.is_finite() && hi.is_finite()) || (hi - lo).max_element() > 1000.0 * size as f64 {
+    // A triangle larger than the map is not a chart (`check_uvs` finds it first): leave it
+    // out, so that the cost is bounded by the map's texels, not by the texture coordinates'
+    // extent (coordinates up to 1000 made it a million maps a triangle).
+    if !(lo.is_finite() && hi.is_finite()) || (hi - lo).max_element() > 2.0 * size as f64 {
         return;
     }
     for y in (lo.y - 0.5).ceil() as i64..=(hi.y - 0.5).floor() as i64 {
@@ -196,8 +202,19 @@ fn check_uvs(full: &Posed, tris: &[[u32; 3]], size: u32) -> Option<UvProblem> {
     let uvs = &full.mesh.uvs;
     let mut first: Vec<u32> = vec![u32::MAX; (size * size) as usize];
     let (mut covered, mut twice) = (0usize, 0usize);
+    let texels = (size * size) as usize;
     for (i, t) in tris.iter().enumerate() {
-        texels_of(t.map(|v| uvs[v as usize]), size, |x, y, _| {
+        let uv = t.map(|v| uvs[v as usize]);
+        let extent = uv[0].max(uv[1]).max(uv[2]) - uv[0].min(uv[1]).min(uv[2]);
+        if extent.max_element() > 1.0 + 1.0 / size as f32 {
+            return Some(UvProblem::Tiled);
+        }
+        // Texels covered again more often than the map has texels: overlapping whatever
+        // follows, so the rest need not be rasterised (the share of texels twice is all).
+        if twice > texels {
+            return Some(UvProblem::Overlapping(1.0));
+        }
+        texels_of(uv, size, |x, y, _| {
             let slot = &mut first[wrap(x, y, size)];
             if *slot == u32::MAX {
                 *slot = i as u32;

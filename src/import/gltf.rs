@@ -28,6 +28,10 @@ const MAX_PLAUSIBLE_HEIGHT: f32 = 40.0;
 const MIN_PLAUSIBLE_HEIGHT: f32 = 0.1;
 const DEFAULT_HEIGHT: f32 = 1.0;
 
+/// The largest translation or scale a clip's key may hold: 10⁹ is a million kilometres in
+/// metres, ten thousand in centimetres.
+const MAX_KEY_VALUE: f32 = 1e9;
+
 /// Loads a skinned model from a `.glb` or `.gltf` file.
 pub fn load(path: &Path) -> Result<Model, InputError> {
     let fail = |p: String| InputError::new(path, p);
@@ -57,7 +61,7 @@ pub fn from_bytes(
     limits: &validate::Limits,
 ) -> Result<(Model, Vec<String>), String> {
     let (doc, buffers) = read_document(read, base, limits)?;
-    let images = validate::import_images(&doc, base, &buffers, limits)?;
+    let images = super::sources::read_images(&doc, base, &buffers, limits)?;
     let mut warnings = Vec::new();
     let mut model = build(name, &doc, &buffers, &images, &mut warnings)?;
     let packed = super::palette::pack_plain_colours(&mut model);
@@ -76,13 +80,14 @@ fn read_document(
 ) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), String> {
     validate::check_glb_header(&read)?;
     validate::check_raw(&read)?;
-    let bytes = unpacked(&read, base)?.unwrap_or(read);
+    let bytes = unpacked(&read, base, limits)?.unwrap_or(read);
+    let bytes = validate::without_untargeted_channels(&bytes).unwrap_or(bytes);
     let gltf::Gltf {
         document: doc,
         blob,
-    } = gltf::Gltf::from_slice(&bytes).map_err(|e| gltf_problem(&e))?;
-    validate::check_sources(&doc, base, limits)?;
-    let buffers = gltf::import_buffers(&doc, Some(base), blob).map_err(|e| gltf_problem(&e))?;
+    } = gltf::Gltf::from_slice(&bytes).map_err(|e| gltf_problem(&e, &bytes))?;
+    super::sources::check_uris(&doc, base, limits)?;
+    let buffers = super::sources::read_buffers(&doc, base, blob, limits)?;
     validate::check_document(&doc, &buffers, limits)?;
     Ok((doc, buffers))
 }
@@ -178,7 +183,11 @@ pub fn add_clips(model: &mut Model, path: &Path) -> Result<usize, InputError> {
 
 /// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or
 /// `KHR_mesh_quantization` (what gltfpack writes), else `None`: the gltf crate reads it as it is.
-fn unpacked(bytes: &[u8], base: &Path) -> Result<Option<Vec<u8>>, String> {
+fn unpacked(
+    bytes: &[u8],
+    base: &Path,
+    limits: &validate::Limits,
+) -> Result<Option<Vec<u8>>, String> {
     // The extensions are named in the JSON: a `.glb`'s first chunk, or the whole `.gltf`.
     let json_part = match bytes.get(12..16) {
         Some(len) if bytes.starts_with(b"glTF") => {
@@ -198,7 +207,7 @@ fn unpacked(bytes: &[u8], base: &Path) -> Result<Option<Vec<u8>>, String> {
     if !super::gltfpack::needs_unpacking(&json) {
         return Ok(None);
     }
-    super::gltfpack::unpack(bytes, base).map(Some)
+    super::gltfpack::unpack(bytes, base, limits).map(Some)
 }
 
 fn io_problem(e: &std::io::Error) -> String {
@@ -209,9 +218,15 @@ fn io_problem(e: &std::io::Error) -> String {
     }
 }
 
-fn gltf_problem(e: &gltf::Error) -> String {
+/// What is wrong, in one line, where the gltf crate refused `bytes`.
+fn gltf_problem(e: &gltf::Error, bytes: &[u8]) -> String {
     match e {
         gltf::Error::Io(io) => format!("cannot read a file it refers to: {}", io_problem(io)),
+        // Well-formed JSON that is not what glTF's schema asks (a string where a number
+        // goes) is a glTF problem, not a JSON one.
+        gltf::Error::Deserialize(d) if well_formed_json(bytes) => {
+            format!("invalid glTF (its JSON does not follow the glTF schema: {d})")
+        }
         gltf::Error::Deserialize(d) => format!("not a glTF file (invalid JSON: {d})"),
         gltf::Error::Binary(b) => format!("not a valid binary glTF (truncated or corrupt: {b})"),
         gltf::Error::Validation(errors) => {
@@ -237,6 +252,19 @@ fn gltf_problem(e: &gltf::Error) -> String {
     }
 }
 
+/// Whether the JSON of a `.gltf`, or of a `.glb`'s first chunk, parses as JSON.
+fn well_formed_json(bytes: &[u8]) -> bool {
+    let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        match gltf::binary::Glb::from_slice(bytes) {
+            Ok(glb) => glb.json,
+            Err(_) => return false,
+        }
+    } else {
+        bytes.into()
+    };
+    serde_json::from_slice::<serde_json::Value>(&json).is_ok()
+}
+
 /// Per-primitive vertex data before welding.
 struct RawPrimitive {
     positions: Vec<Vec3>,
@@ -251,7 +279,7 @@ fn build(
     name: &str,
     doc: &gltf::Document,
     buffers: &[gltf::buffer::Data],
-    images: &[gltf::image::Data],
+    images: &[Option<Rgba8Image>],
     warnings: &mut Vec<String>,
 ) -> Result<Model, String> {
     let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
@@ -394,7 +422,7 @@ fn build_rigid(
     name: &str,
     doc: &gltf::Document,
     buffers: &[gltf::buffer::Data],
-    images: &[gltf::image::Data],
+    images: &[Option<Rgba8Image>],
     warnings: &mut Vec<String>,
 ) -> Result<Model, String> {
     let lower_lods = msft_lod_lower_levels(doc);
@@ -484,6 +512,23 @@ fn read_hierarchy(doc: &gltf::Document, joints: &[usize]) -> Result<(Vec<Node>, 
     let mut nodes = Vec::with_capacity(order.len());
     for &(_, old) in &order {
         let n = &gltf_nodes[old];
+        match n.transform() {
+            gltf::scene::Transform::Matrix { matrix } => {
+                let m = Mat4::from_cols_array_2d(&matrix);
+                if m.is_finite() && !crate::model::keeps_every_direction(&m) {
+                    return Err(format!(
+                        "node {old} has a singular matrix (it squashes space flat)"
+                    ));
+                }
+            }
+            gltf::scene::Transform::Decomposed { rotation, .. } => {
+                if rotation.iter().all(|&c| c == 0.0) {
+                    return Err(format!(
+                        "node {old} has a rotation of length zero (not a quaternion)"
+                    ));
+                }
+            }
+        }
         let (t, r, s) = n.transform().decomposed();
         let rest = Trs {
             translation: Vec3::from(t),
@@ -581,13 +626,26 @@ enum Binding<'m> {
     Rigid(Mat4, u32),
 }
 
-/// The meshes of `nodes` (each mesh once), all their primitives merged into one mesh (normals
+impl Binding<'_> {
+    /// Whether a mesh bound by both lands in the same place: the same skin (a skinned mesh's
+    /// node transform does not move it), or the same bone and transform.
+    fn same(&self, other: &Binding) -> bool {
+        match (self, other) {
+            (Binding::Skin(a), Binding::Skin(b)) => std::ptr::eq(*a, *b),
+            (Binding::Rigid(m, a), Binding::Rigid(n, b)) => a == b && m == n,
+            _ => false,
+        }
+    }
+}
+
+/// The meshes of `nodes` (a mesh that two nodes draw in one place once, in two places twice),
+/// all their primitives merged into one mesh (normals
 /// computed where a primitive has none), and the materials they use. Morph targets are left
 /// out with one warning in `warnings`: the base shape is drawn.
 fn read_meshes(
     nodes: &[(gltf::Node, Binding)],
     buffers: &[gltf::buffer::Data],
-    images: &[gltf::image::Data],
+    images: &[Option<Rgba8Image>],
     warnings: &mut Vec<String>,
 ) -> Result<(SkinnedMesh, Vec<Material>), String> {
     let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
@@ -595,14 +653,19 @@ fn read_meshes(
     let mut materials: Vec<Material> = Vec::new();
     let mut mesh = SkinnedMesh::default();
     let mut needs_normals: Vec<bool> = Vec::new();
-    let mut seen_meshes = Vec::new();
+    let mut seen: Vec<(usize, &Binding)> = Vec::new();
+    // Where the vertices of each set of vertex accessors, node and material went, and how many.
+    let mut vertex_bases: std::collections::HashMap<
+        (Vec<(String, usize)>, usize, u16),
+        (u32, usize),
+    > = std::collections::HashMap::new();
     let mut morphed = 0;
     for (node, binding) in nodes {
         let Some(m) = node.mesh() else { continue };
-        if seen_meshes.contains(&m.index()) {
+        if seen.iter().any(|(k, b)| *k == m.index() && b.same(binding)) {
             continue;
         }
-        seen_meshes.push(m.index());
+        seen.push((m.index(), binding));
         for prim in m.primitives() {
             let label = format!("mesh {} primitive {}", m.index(), prim.index());
             if prim.morph_targets().len() > 0 {
@@ -631,6 +694,15 @@ fn read_meshes(
                 Binding::Rigid(..) => None,
             };
             let mut raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
+            if let Some(t) = &transform {
+                let finite = t.offset().iter().chain(&t.scale()).all(|v| v.is_finite())
+                    && t.rotation().is_finite();
+                if !finite {
+                    return Err(format!(
+                        "{label}: its material's KHR_texture_transform is not finite"
+                    ));
+                }
+            }
             if let Some(t) = transform {
                 apply_texture_transform(&mut raw.uvs, t.offset(), t.rotation(), t.scale());
             }
@@ -657,7 +729,19 @@ fn read_meshes(
                     }
                 }
             }
-            append_primitive(&mut mesh, &mut needs_normals, raw, slot);
+            // Primitives over the same vertex accessors, drawn by one node in one material,
+            // share their vertices: an exporter's layout (one vertex buffer, index buffers
+            // per part), and what a file repeating one primitive thousands of times is, whose
+            // triangles then repeat exactly and go in `drop_unused`.
+            let mut attributes: Vec<(String, usize)> = prim
+                .attributes()
+                .map(|(s, a)| (s.to_string(), a.index()))
+                .collect();
+            attributes.sort();
+            let key = (attributes, node.index(), slot);
+            let shared = vertex_bases.get(&key).copied();
+            let base = append_primitive(&mut mesh, &mut needs_normals, raw, slot, shared);
+            vertex_bases.entry(key).or_insert(base);
         }
     }
     if morphed > 0 {
@@ -1110,13 +1194,25 @@ fn weld(raw: RawPrimitive) -> RawPrimitive {
     }
 }
 
+/// Appends a primitive's vertices and triangles; with `shared`, where the same vertices were
+/// appended before (their first index and count), only its triangles, onto those. Returns
+/// where its vertices are.
 fn append_primitive(
     mesh: &mut SkinnedMesh,
     needs_normals: &mut Vec<bool>,
     raw: RawPrimitive,
     material: u16,
-) {
+    shared: Option<(u32, usize)>,
+) -> (u32, usize) {
     let raw = if raw.indexed { raw } else { weld(raw) };
+    if let Some((base, count)) = shared
+        && count == raw.positions.len()
+    {
+        for t in raw.triangles {
+            mesh.indices.extend(t.iter().map(|&i| i + base));
+        }
+        return (base, count);
+    }
     let base = mesh.positions.len() as u32;
     let has_normals = raw.normals.is_some();
     if mesh.influence_offsets.is_empty() {
@@ -1138,23 +1234,26 @@ fn append_primitive(
     }
     // Triangles that welding (or the file) made degenerate go later, with the rest
     // (`SkinnedMesh::drop_unused`).
+    let count = raw.positions.len();
     for t in raw.triangles {
         mesh.indices.extend(t.iter().map(|&i| i + base));
     }
+    (base, count)
 }
 
 fn convert_material(
     material: &gltf::Material,
-    images: &[gltf::image::Data],
+    images: &[Option<Rgba8Image>],
 ) -> Result<Material, String> {
     let pbr = material.pbr_metallic_roughness();
     let texture = match pbr.base_color_texture() {
         Some(info) => {
             let index = info.texture().source().index();
-            let data = images
+            let image = images
                 .get(index)
+                .and_then(Option::as_ref)
                 .ok_or_else(|| format!("material refers to missing image {index}"))?;
-            Some(to_rgba8(data)?)
+            Some(image.clone())
         }
         None => None,
     };
@@ -1182,54 +1281,6 @@ fn convert_material(
         },
         alpha_cutoff,
         double_sided: material.double_sided(),
-    })
-}
-
-/// Converts any glTF image format to 8-bit RGBA.
-fn to_rgba8(data: &gltf::image::Data) -> Result<Rgba8Image, String> {
-    use gltf::image::Format;
-    let px = (data.width * data.height) as usize;
-    let src = &data.pixels;
-    let u16_at = |i: usize| (u16::from_le_bytes([src[2 * i], src[2 * i + 1]]) >> 8) as u8;
-    let f32_at = |i: usize| {
-        let v = f32::from_le_bytes([src[4 * i], src[4 * i + 1], src[4 * i + 2], src[4 * i + 3]]);
-        (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
-    };
-    let (channels, get): (usize, Box<dyn Fn(usize) -> u8>) = match data.format {
-        Format::R8 => (1, Box::new(|i| src[i])),
-        Format::R8G8 => (2, Box::new(|i| src[i])),
-        Format::R8G8B8 => (3, Box::new(|i| src[i])),
-        Format::R8G8B8A8 => (4, Box::new(|i| src[i])),
-        Format::R16 => (1, Box::new(u16_at)),
-        Format::R16G16 => (2, Box::new(u16_at)),
-        Format::R16G16B16 => (3, Box::new(u16_at)),
-        Format::R16G16B16A16 => (4, Box::new(u16_at)),
-        Format::R32G32B32FLOAT => (3, Box::new(f32_at)),
-        Format::R32G32B32A32FLOAT => (4, Box::new(f32_at)),
-    };
-    let bytes_per_channel = match data.format {
-        Format::R16 | Format::R16G16 | Format::R16G16B16 | Format::R16G16B16A16 => 2,
-        Format::R32G32B32FLOAT | Format::R32G32B32A32FLOAT => 4,
-        _ => 1,
-    };
-    if src.len() < px * channels * bytes_per_channel || px == 0 {
-        return Err("a texture image is truncated or empty".into());
-    }
-    let mut pixels = Vec::with_capacity(px * 4);
-    for p in 0..px {
-        let c = |k: usize| get(p * channels + k);
-        let rgba = match channels {
-            1 => [c(0), c(0), c(0), 255],
-            2 => [c(0), c(0), c(0), c(1)],
-            3 => [c(0), c(1), c(2), 255],
-            _ => [c(0), c(1), c(2), c(3)],
-        };
-        pixels.extend_from_slice(&rgba);
-    }
-    Ok(Rgba8Image {
-        width: data.width,
-        height: data.height,
-        pixels,
     })
 }
 
@@ -1295,6 +1346,25 @@ where
         }
         if values.iter().any(|v| !v.is_finite()) {
             return Err(format!("clip '{name}': a key value is not finite"));
+        }
+        // Finite but past any scene: a translation of 10³⁰ puts the character where no
+        // camera framing can see it, or anything else, and squares to infinity in every
+        // distance measured on it.
+        if target != ChannelTarget::Rotation
+            && let Some(v) = values
+                .iter()
+                .find(|v| v.abs().max_element() > MAX_KEY_VALUE)
+        {
+            return Err(format!(
+                "clip '{name}': a {} key of {} is out of range (at most {MAX_KEY_VALUE:e} in \
+                 the file's units)",
+                if target == ChannelTarget::Translation {
+                    "translation"
+                } else {
+                    "scale"
+                },
+                v.abs().max_element()
+            ));
         }
         channels.push(Channel {
             node: remap[node],

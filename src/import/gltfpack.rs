@@ -14,6 +14,7 @@
 //! `TRIANGLES` or `INDICES`) and a filter applied after it (`OCTAHEDRAL`, `QUATERNION`,
 //! `EXPONENTIAL` or none). The meshopt crate's bindings decode them.
 
+use super::validate::{Limits, over};
 use serde_json::Value;
 use std::borrow::Cow;
 use std::path::Path;
@@ -45,11 +46,16 @@ pub fn split(bytes: &[u8]) -> Result<(Value, Option<Vec<u8>>), String> {
 
 /// A `.glb` of `json` and the binary chunk `bin`.
 fn glb(json: &Value, bin: Vec<u8>) -> Result<Vec<u8>, String> {
+    glb_of(json, Some(bin))
+}
+
+/// A `.glb` of `json` and a binary chunk, if any.
+pub(super) fn glb_of(json: &Value, bin: Option<Vec<u8>>) -> Result<Vec<u8>, String> {
     let mut j = serde_json::to_vec(json).map_err(|e| e.to_string())?;
     while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
-    let length = 12 + 8 + j.len() + 8 + bin.len();
+    let length = 12 + 8 + j.len() + bin.as_ref().map_or(0, |b| 8 + b.len());
     gltf::binary::Glb {
         header: gltf::binary::Header {
             magic: *b"glTF",
@@ -57,7 +63,7 @@ fn glb(json: &Value, bin: Vec<u8>) -> Result<Vec<u8>, String> {
             length: u32::try_from(length).map_err(|_| "larger than 4 GB".to_string())?,
         },
         json: Cow::Owned(j),
-        bin: Some(Cow::Owned(bin)),
+        bin: bin.map(Cow::Owned),
     }
     .to_vec()
     .map_err(|e| e.to_string())
@@ -150,7 +156,11 @@ fn decode(ext: &Value, data: &[u8], what: &str) -> Result<Vec<u8>, String> {
 /// `bytes` (a `.glb` or `.gltf` at `base`'s folder) rewritten as a `.glb` that the gltf crate
 /// reads: compressed views decoded, every buffer in one binary chunk, the two extensions off
 /// the required list. Images the file names by URI stay where they are (read from `base`).
-pub fn unpack(bytes: &[u8], base: &Path) -> Result<Vec<u8>, String> {
+///
+/// Its buffers are read as every import reads them ([`super::sources::read_buffers`]: inside
+/// the model's folder, regular files, within `file-mb`), and what the views decode to counts
+/// against `decoded-mb` before each is decoded (200 views may all name one small stream).
+pub fn unpack(bytes: &[u8], base: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
     let (mut json, bin) = split(bytes)?;
     if !json.is_object() {
         return Err("its JSON is not an object".into());
@@ -171,8 +181,8 @@ pub fn unpack(bytes: &[u8], base: &Path) -> Result<Vec<u8>, String> {
         let shell = glb(&only_buffers, bin.unwrap_or_default())?;
         let doc = gltf::Gltf::from_slice_without_validation(&shell)
             .map_err(|e| format!("its buffers cannot be read ({e})"))?;
-        gltf::import_buffers(&doc.document, Some(base), doc.blob)
-            .map_err(|e| format!("its buffers cannot be read ({e})"))?
+        super::sources::check_uris(&doc.document, base, limits)?;
+        super::sources::read_buffers(&doc.document, base, doc.blob, limits)?
     };
     let mut data: Vec<Option<&[u8]>> = vec![None; buffers.len()];
     for (k, &i) in kept.iter().enumerate() {
@@ -188,7 +198,9 @@ pub fn unpack(bytes: &[u8], base: &Path) -> Result<Vec<u8>, String> {
         start[i] = chunk.len();
         chunk.extend_from_slice(data[i].unwrap_or_default());
     }
-    if let Some(views) = json["bufferViews"].as_array_mut() {
+    let most = limits.decoded_mb.saturating_mul(1 << 20);
+    let mut decoded_bytes = 0u64;
+    if let Some(views) = json.get_mut("bufferViews").and_then(Value::as_array_mut) {
         for (v, view) in views.iter_mut().enumerate() {
             let what = format!("bufferViews[{v}]");
             if !view.is_object() {
@@ -201,6 +213,23 @@ pub fn unpack(bytes: &[u8], base: &Path) -> Result<Vec<u8>, String> {
                     .copied()
                     .flatten()
                     .ok_or_else(|| format!("{what}: its compressed buffer {b} has no data"))?;
+                let claimed = (field(&ext, "count", &what)? as u64).saturating_mul(field(
+                    &ext,
+                    "byteStride",
+                    &what,
+                )?
+                    as u64);
+                decoded_bytes = decoded_bytes.saturating_add(claimed);
+                if decoded_bytes > most {
+                    return Err(over(
+                        format!(
+                            "its compressed views decode to more than {} MiB",
+                            decoded_bytes >> 20
+                        ),
+                        format!("{} MiB", limits.decoded_mb),
+                        "decoded-mb",
+                    ));
+                }
                 let decoded = decode(&ext, src, &what)?;
                 while !chunk.len().is_multiple_of(4) {
                     chunk.push(0);
@@ -228,8 +257,12 @@ pub fn unpack(bytes: &[u8], base: &Path) -> Result<Vec<u8>, String> {
     }
     json["buffers"] = serde_json::json!([{ "byteLength": chunk.len() }]);
     for key in ["extensionsUsed", "extensionsRequired"] {
-        if let Some(list) = json[key].as_array_mut() {
-            list.retain(|e| e != MESHOPT && e != QUANTIZATION);
+        // `get_mut`, not indexing: indexing a missing key inserts a null, which the gltf
+        // crate then refuses as a list that is not one.
+        // KHR_mesh_quantization stays in extensionsUsed: the importer reads quantised
+        // attributes itself, and allows unnormalised integers only where it is named.
+        if let Some(list) = json.get_mut(key).and_then(Value::as_array_mut) {
+            list.retain(|e| e != MESHOPT && (e != QUANTIZATION || key == "extensionsUsed"));
         }
     }
     glb(&json, chunk)

@@ -3,6 +3,7 @@
 pub mod gltf;
 pub mod gltfpack;
 pub mod palette;
+pub mod sources;
 pub mod validate;
 pub mod weld;
 

@@ -7,27 +7,45 @@
 //! the size of what a 3 KB file claims. Everything here runs in time linear in the file, before
 //! the importer reads any attribute, so that each problem is one line naming what is wrong.
 
-use std::io::Read;
-use std::path::{Path, PathBuf};
 use std::sync::RwLock;
 
 /// What one model may ask for. Each bound keeps a small hostile file from taking the machine's
 /// memory or minutes of baking; a real model past one can raise it (`--limit NAME=VALUE`).
+///
+/// The bounds are on what a file *expands to*, not only on what it declares piece by piece: a
+/// primitive drawn by 5,000 nodes counts 5,000 times, an accessor with no data (all zeros, or
+/// a few sparse values) counts every element it claims, a compressed view counts what it
+/// decodes to, and a texture counts once per material that samples it (each is a layer).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
     /// Size of the file and of each file it refers to, in MiB.
     pub file_mb: u64,
     /// Nodes in the file.
     pub nodes: usize,
-    /// Joints of one skin (and bones of the merged skeleton).
+    /// Joints of all skins together (and bones of the merged skeleton).
     pub joints: usize,
     /// Length of one clip in seconds (the animation texture holds 30 frames a second of it).
     pub clip_seconds: f32,
+    /// Seconds of all clips together.
+    pub clips_seconds: f32,
     /// Textured materials (each is a layer of the material texture array at every level of
     /// detail; plain colours share one, see [`super::palette`]).
     pub materials: usize,
     /// Width or height of one texture image, in texels.
     pub texture_side: u32,
+    /// Decoded texels of every textured material's image together, in MiB (RGBA, 4 bytes a
+    /// texel; an image two materials use counts twice).
+    pub texture_mb: u64,
+    /// Vertices of every primitive drawn, each as often as nodes draw it.
+    pub vertices: u64,
+    /// Triangles of every primitive drawn, each as often as nodes draw it.
+    pub triangles: u64,
+    /// Bytes of every accessor's elements and every decoded compressed view together, in MiB.
+    pub decoded_mb: u64,
+    /// Buffers and images may name files outside the model's folder (absolute paths, `..`,
+    /// `file:` URIs, symbolic links that lead out). Off by default: a viewer that opens files
+    /// from strangers reads only what lies beside the model (`--allow-outside-files`).
+    pub outside_files: bool,
 }
 
 impl Limits {
@@ -36,21 +54,44 @@ impl Limits {
         nodes: 100_000,
         joints: 1024,
         clip_seconds: 600.0,
+        clips_seconds: 3600.0,
         materials: 256,
         texture_side: 8192,
+        texture_mb: 1024,
+        vertices: 4_000_000,
+        triangles: 4_000_000,
+        decoded_mb: 1024,
+        outside_files: false,
     };
 
     /// The names `--limit` takes, with what each bounds.
-    pub const NAMES: [(&'static str, &'static str); 6] = [
+    pub const NAMES: [(&'static str, &'static str); 11] = [
         (
             "file-mb",
             "size of a model file and of each file it refers to, MiB",
         ),
         ("nodes", "nodes in a file"),
-        ("joints", "joints of a skin"),
+        ("joints", "joints of all skins together"),
         ("clip-seconds", "length of a clip"),
+        ("clips-seconds", "length of all clips together"),
         ("materials", "textured materials of a model"),
         ("texture-side", "width or height of a texture image"),
+        (
+            "texture-mb",
+            "decoded texels of all textured materials, MiB",
+        ),
+        (
+            "vertices",
+            "vertices drawn, each primitive as often as nodes draw it",
+        ),
+        (
+            "triangles",
+            "triangles drawn, each primitive as often as nodes draw it",
+        ),
+        (
+            "decoded-mb",
+            "bytes of all accessors and decoded compressed views, MiB",
+        ),
     ];
 
     /// Applies one `NAME=VALUE` (see [`Limits::NAMES`]).
@@ -65,21 +106,32 @@ impl Limits {
         let (name, value) = assignment
             .split_once('=')
             .ok_or_else(|| format!("'{assignment}' is not NAME=VALUE (names: {})", names()))?;
-        let number = || -> Result<u64, String> {
+        // Sizes and counts past 2⁴⁰ are slips of the keyboard; bounding them keeps the
+        // arithmetic on them (MiB to bytes) from wrapping.
+        let number = |most: u64| -> Result<u64, String> {
             value
                 .trim()
                 .parse::<u64>()
                 .ok()
-                .filter(|&v| v > 0)
-                .ok_or_else(|| format!("limit {name}: '{value}' is not a positive whole number"))
+                .filter(|&v| v > 0 && v <= most)
+                .ok_or_else(|| {
+                    format!("limit {name}: '{value}' is not a whole number from 1 to {most}")
+                })
         };
+        const MIB: u64 = 1 << 24; // 16 TiB in MiB
+        const COUNT: u64 = 1 << 40;
         match name.trim() {
-            "file-mb" => self.file_mb = number()?,
-            "nodes" => self.nodes = number()? as usize,
-            "joints" => self.joints = number()? as usize,
-            "clip-seconds" => self.clip_seconds = number()? as f32,
-            "materials" => self.materials = number()? as usize,
-            "texture-side" => self.texture_side = number()?.min(u32::MAX as u64) as u32,
+            "file-mb" => self.file_mb = number(MIB)?,
+            "nodes" => self.nodes = number(COUNT)? as usize,
+            "joints" => self.joints = number(1 << 20)? as usize,
+            "clip-seconds" => self.clip_seconds = number(1 << 24)? as f32,
+            "clips-seconds" => self.clips_seconds = number(1 << 24)? as f32,
+            "materials" => self.materials = number(1 << 20)? as usize,
+            "texture-side" => self.texture_side = number(u32::MAX as u64)? as u32,
+            "texture-mb" => self.texture_mb = number(MIB)?,
+            "vertices" => self.vertices = number(COUNT)?,
+            "triangles" => self.triangles = number(COUNT)?,
+            "decoded-mb" => self.decoded_mb = number(MIB)?,
             other => return Err(format!("no limit named '{other}' (names: {})", names())),
         }
         Ok(())
@@ -105,7 +157,7 @@ pub fn set_limits(limits: Limits) {
 }
 
 /// "…; the limit is N (--limit NAME=M raises it)".
-fn over(what: String, limit: impl std::fmt::Display, name: &str) -> String {
+pub(super) fn over(what: String, limit: impl std::fmt::Display, name: &str) -> String {
     format!("{what}; the limit is {limit} (--limit {name}=N raises it)")
 }
 
@@ -203,82 +255,16 @@ pub fn check_raw(bytes: &[u8]) -> Result<(), String> {
             }
         }
     }
-    Ok(())
-}
-
-/// `%XX` escapes of a relative URI decoded, as glTF asks; `None` where they do not make UTF-8.
-fn percent_decoded(uri: &str) -> Option<String> {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(bytes[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
-}
-
-/// The file an external URI names, relative to `base`; `Ok(None)` for a `data:` URI.
-fn external_file(uri: &str, base: &Path) -> Result<Option<PathBuf>, String> {
-    if uri.starts_with("data:") {
-        return Ok(None);
-    }
-    let path = if let Some(rest) = uri
-        .strip_prefix("file://")
-        .or_else(|| uri.strip_prefix("file:"))
-    {
-        PathBuf::from(rest)
-    } else if uri.contains(':') {
-        return Err(format!(
-            "refers to '{uri}', a kind of URI lodlab cannot read"
-        ));
-    } else {
-        let decoded = percent_decoded(uri)
-            .ok_or_else(|| format!("refers to '{uri}', which is not a valid URI"))?;
-        base.join(decoded)
-    };
-    Ok(Some(path))
-}
-
-/// Every file the document refers to (buffers and images) is a regular file within the size
-/// limit, so that reading it ends; a missing one is named.
-pub fn check_sources(doc: &gltf::Document, base: &Path, limits: &Limits) -> Result<(), String> {
-    let buffers = doc.buffers().filter_map(|b| match b.source() {
-        gltf::buffer::Source::Uri(u) => Some((format!("buffer {}", b.index()), u)),
-        gltf::buffer::Source::Bin => None,
-    });
-    let images = doc.images().filter_map(|i| match i.source() {
-        gltf::image::Source::Uri { uri, .. } => Some((format!("image {}", i.index()), uri)),
-        gltf::image::Source::View { .. } => None,
-    });
-    for (what, uri) in buffers.chain(images) {
-        let Some(path) = external_file(uri, base).map_err(|e| format!("{what} {e}"))? else {
-            continue;
-        };
-        let meta = std::fs::metadata(&path)
-            .map_err(|_| format!("{what} refers to {uri}, which cannot be read"))?;
-        if !meta.is_file() {
-            return Err(format!(
-                "{what} refers to {}, which is not a regular file",
-                path.display()
-            ));
-        }
-        if meta.len() > limits.file_mb << 20 {
-            return Err(over(
-                format!(
-                    "{what} refers to {}, {} MiB",
-                    path.display(),
-                    meta.len() >> 20
-                ),
-                format!("{} MiB", limits.file_mb),
-                "file-mb",
-            ));
+    // The gltf crate unwraps a channel's target node when it is read, not when it validates.
+    for (a, anim) in root.animations.iter().enumerate() {
+        for (c, channel) in anim.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            if node >= root.nodes.len() {
+                return Err(format!(
+                    "invalid glTF (animation {a} channel {c} targets node {node}, of {})",
+                    root.nodes.len()
+                ));
+            }
         }
     }
     Ok(())
@@ -446,6 +432,7 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
     };
     let ints = [T::I8, T::U8, T::I16, T::U16];
     let with_float = |t: &[T]| -> Vec<T> { t.iter().copied().chain([T::F32]).collect() };
+    let quantized = doc.extensions_used().any(|e| e == "KHR_mesh_quantization");
     for mesh in doc.meshes() {
         for (k, prim) in mesh.primitives().enumerate() {
             let what = |name: &str| format!("mesh {} primitive {k}: {name}", mesh.index());
@@ -458,6 +445,20 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
                     S::Weights(_) => allowed(&a, &[D::Vec4], &[T::F32, T::U8, T::U16]),
                     _ => true,
                 };
+                // Integers read as they are (not normalised to 0..1) are what
+                // KHR_mesh_quantization adds; without it a texture coordinate of SHORT 1000
+                // is a mistake, and tiles the texture a thousand times.
+                let plain = matches!(semantic, S::Positions | S::Normals | S::TexCoords(_));
+                if ok && plain && a.data_type() != T::F32 && !a.normalized() && !quantized {
+                    return Err(format!(
+                        "{} is {:?} of {:?} not normalised (accessor {}), which glTF allows \
+                         only with KHR_mesh_quantization, not named in extensionsUsed",
+                        what(&semantic.to_string()),
+                        a.dimensions(),
+                        a.data_type(),
+                        a.index()
+                    ));
+                }
                 if !ok {
                     return Err(format!(
                         "{} is a {:?} of {:?} (accessor {}), which glTF does not allow",
@@ -541,25 +542,143 @@ fn check_types(doc: &gltf::Document) -> Result<(), String> {
     Ok(())
 }
 
+/// The file without its animation channels that name no target node, which glTF allows ("the
+/// channel should be ignored": an extension may target something else) and the gltf crate
+/// refuses; `None` where there are none (or the JSON is not glTF, for the crate to say why).
+pub fn without_untargeted_channels(bytes: &[u8]) -> Option<Vec<u8>> {
+    if !bytes
+        .windows(b"\"channels\"".len())
+        .any(|w| w == b"\"channels\"")
+    {
+        return None;
+    }
+    let (mut json, bin) = super::gltfpack::split(bytes).ok()?;
+    let mut dropped = 0;
+    for anim in json.get_mut("animations")?.as_array_mut()? {
+        if let Some(channels) = anim.get_mut("channels").and_then(|c| c.as_array_mut()) {
+            let before = channels.len();
+            channels.retain(|c| c.get("target").is_none_or(|t| t.get("node").is_some()));
+            dropped += before - channels.len();
+        }
+    }
+    if dropped == 0 {
+        return None;
+    }
+    log::info!("{dropped} animation channel(s) without a target node ignored");
+    if bytes.starts_with(b"glTF") {
+        super::gltfpack::glb_of(&json, bin).ok()
+    } else {
+        serde_json::to_vec(&json).ok()
+    }
+}
+
+/// Every attribute of a primitive has as many elements as its POSITION (glTF asks it): a
+/// primitive of 10 vertices whose weights claim 2²⁸ is refused here, not read.
+fn check_counts(doc: &gltf::Document) -> Result<(), String> {
+    for mesh in doc.meshes() {
+        for (k, prim) in mesh.primitives().enumerate() {
+            let Some(position) = prim.get(&gltf::Semantic::Positions) else {
+                continue;
+            };
+            for (semantic, a) in prim.attributes() {
+                if a.count() != position.count() {
+                    return Err(format!(
+                        "mesh {} primitive {k}: {} has {} elements, POSITION has {}",
+                        mesh.index(),
+                        semantic.to_string(),
+                        a.count(),
+                        position.count()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What the file expands to, from its declarations alone, before anything is read: vertices
+/// and triangles of every primitive as often as nodes draw it (one primitive repeated 9,000
+/// times, or a mesh on 5,000 nodes, is millions of triangles from a few kilobytes), and the
+/// bytes of every accessor's elements (an accessor with no buffer view is all zeros, or a few
+/// sparse values, however many elements it claims).
+fn check_expansion(doc: &gltf::Document, limits: &Limits) -> Result<(), String> {
+    use gltf::mesh::Mode;
+    // Nodes drawing each mesh (an upper bound: nodes outside the scene count too).
+    let mut draws = vec![0u64; doc.meshes().len()];
+    for n in doc.nodes() {
+        if let Some(m) = n.mesh() {
+            draws[m.index()] += 1;
+        }
+    }
+    let (mut vertices, mut triangles) = (0u64, 0u64);
+    for mesh in doc.meshes() {
+        let times = draws[mesh.index()];
+        for prim in mesh.primitives() {
+            let v = prim
+                .get(&gltf::Semantic::Positions)
+                .map_or(0, |a| a.count() as u64);
+            let corners = prim.indices().map_or(v, |a| a.count() as u64);
+            let t = match prim.mode() {
+                Mode::Triangles => corners / 3,
+                Mode::TriangleStrip | Mode::TriangleFan => corners.saturating_sub(2),
+                _ => 0,
+            };
+            vertices = vertices.saturating_add(v.saturating_mul(times));
+            triangles = triangles.saturating_add(t.saturating_mul(times));
+        }
+    }
+    if vertices > limits.vertices {
+        return Err(over(
+            format!("its meshes draw {vertices} vertices"),
+            limits.vertices,
+            "vertices",
+        ));
+    }
+    if triangles > limits.triangles {
+        return Err(over(
+            format!("its meshes draw {triangles} triangles"),
+            limits.triangles,
+            "triangles",
+        ));
+    }
+    let bytes: u64 = doc
+        .accessors()
+        .map(|a| (a.count() as u64).saturating_mul(a.size() as u64))
+        .fold(0, u64::saturating_add);
+    if bytes > limits.decoded_mb.saturating_mul(1 << 20) {
+        return Err(over(
+            format!("its accessors hold {} MiB", bytes >> 20),
+            format!("{} MiB", limits.decoded_mb),
+            "decoded-mb",
+        ));
+    }
+    Ok(())
+}
+
 /// Skins, clips and materials within their limits.
 fn check_sizes(
     doc: &gltf::Document,
     buffers: &[gltf::buffer::Data],
     limits: &Limits,
 ) -> Result<(), String> {
-    for s in doc.skins() {
-        let joints = s.joints().len();
-        if joints > limits.joints {
-            return Err(over(
-                format!("skin {} has {joints} joints", s.index()),
-                limits.joints,
-                "joints",
-            ));
-        }
+    // Every skin's joints become bones of one skeleton: the total is what it costs.
+    let joints: usize = doc.skins().map(|s| s.joints().len()).sum();
+    if joints > limits.joints {
+        let skins = doc.skins().len();
+        return Err(over(
+            if skins == 1 {
+                format!("its skin has {joints} joints")
+            } else {
+                format!("its {skins} skins have {joints} joints together")
+            },
+            limits.joints,
+            "joints",
+        ));
     }
     // The animation texture holds every frame of every clip: a key at t = 10⁶ s in a 3 KB file
     // would ask for gigabytes of it. (Accessors are checked by now, so reading is safe.)
     let data = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+    let mut total = 0.0f32;
     for anim in doc.animations() {
         let last = anim
             .channels()
@@ -574,6 +693,17 @@ fn check_sizes(
                 format!("clip '{name}' is {last} s long"),
                 format!("{} s", limits.clip_seconds),
                 "clip-seconds",
+            ));
+        }
+        total += last;
+        if total > limits.clips_seconds {
+            return Err(over(
+                format!(
+                    "its first {} clips are {total} s long together",
+                    anim.index() + 1
+                ),
+                format!("{} s", limits.clips_seconds),
+                "clips-seconds",
             ));
         }
     }
@@ -604,60 +734,9 @@ pub fn check_document(
     check_views(doc, buffers)?;
     check_accessors(doc, buffers)?;
     check_types(doc)?;
+    check_counts(doc)?;
+    check_expansion(doc, limits)?;
     check_sizes(doc, buffers, limits)
-}
-
-/// The images decoded, each checked against the texture limit from its header before its
-/// texels are allocated.
-pub fn import_images(
-    doc: &gltf::Document,
-    base: &Path,
-    buffers: &[gltf::buffer::Data],
-    limits: &Limits,
-) -> Result<Vec<gltf::image::Data>, String> {
-    for image in doc.images() {
-        let what = format!("image {}", image.index());
-        let header: std::borrow::Cow<[u8]> = match image.source() {
-            gltf::image::Source::View { view, .. } => {
-                let data = &buffers[view.buffer().index()];
-                data[view.offset()..view.offset() + view.length()].into()
-            }
-            gltf::image::Source::Uri { uri, .. } => match external_file(uri, base) {
-                Ok(Some(path)) => {
-                    let mut head = Vec::new();
-                    std::fs::File::open(&path)
-                        .and_then(|f| f.take(1 << 16).read_to_end(&mut head))
-                        .map_err(|e| format!("{what}: cannot read {}: {e}", path.display()))?;
-                    head.into()
-                }
-                // A data URI's image is inside the file, bounded by its size; the decoder's
-                // own allocation limit holds it.
-                _ => continue,
-            },
-        };
-        let reader = image::ImageReader::new(std::io::Cursor::new(&header[..]))
-            .with_guessed_format()
-            .map_err(|e| format!("{what} cannot be read: {e}"))?;
-        // A header too short to say is left to the decoder, which says why.
-        if let Ok((w, h)) = reader.into_dimensions()
-            && w.max(h) > limits.texture_side
-        {
-            return Err(over(
-                format!("{what} is {w}×{h} texels"),
-                limits.texture_side,
-                "texture-side",
-            ));
-        }
-    }
-    doc.images()
-        .map(|image| {
-            gltf::image::Data::from_source(image.source(), Some(base), buffers).map_err(|e| match e
-            {
-                gltf::Error::Image(i) => format!("image {} cannot be decoded: {i}", image.index()),
-                e => format!("image {} cannot be read: {e}", image.index()),
-            })
-        })
-        .collect()
 }
 
 #[cfg(test)]
@@ -679,19 +758,5 @@ mod tests {
         assert!(l.set("joints=-1").is_err());
         assert!(l.set("joints=0").is_err());
         assert!(l.set("joints").is_err());
-    }
-
-    #[test]
-    fn uris_are_percent_decoded_or_refused() {
-        assert_eq!(percent_decoded("a%20b.bin").as_deref(), Some("a b.bin"));
-        assert_eq!(percent_decoded("%ff%fe"), None);
-        assert_eq!(percent_decoded("cut%2"), None);
-        let base = Path::new("/models");
-        assert_eq!(
-            external_file("tex%20ture.png", base).unwrap(),
-            Some(PathBuf::from("/models/tex ture.png"))
-        );
-        assert_eq!(external_file("data:,abc", base).unwrap(), None);
-        assert!(external_file("http://example.com/x.bin", base).is_err());
     }
 }

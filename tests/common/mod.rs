@@ -60,17 +60,13 @@ pub fn tiny_model() -> Model {
     }
 }
 
-/// Rewrites the JSON chunk of a `.glb`.
-pub fn edit_glb(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
-    let glb = gltf::binary::Glb::from_slice(bytes).expect("valid glb");
-    let mut json: Value = serde_json::from_slice(&glb.json).unwrap();
-    edit(&mut json);
-    let mut j = serde_json::to_vec(&json).unwrap();
+/// A `.glb` of this JSON and binary chunk, padded as the format wants.
+pub fn glb_of(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
+    let mut j = json.to_vec();
     while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
-    let bin = glb.bin.map(|b| b.into_owned());
-    let length = 12 + 8 + j.len() + bin.as_ref().map_or(0, |b| 8 + b.len());
+    let length = 12 + 8 + j.len() + bin.map_or(0, |b| 8 + b.len());
     gltf::binary::Glb {
         header: gltf::binary::Header {
             magic: *b"glTF",
@@ -78,10 +74,18 @@ pub fn edit_glb(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
             length: length as u32,
         },
         json: Cow::Owned(j),
-        bin: bin.map(Cow::Owned),
+        bin: bin.map(|b| Cow::Owned(b.to_vec())),
     }
     .to_vec()
     .unwrap()
+}
+
+/// Rewrites the JSON chunk of a `.glb`.
+pub fn edit_glb(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+    let glb = gltf::binary::Glb::from_slice(bytes).expect("valid glb");
+    let mut json: Value = serde_json::from_slice(&glb.json).unwrap();
+    edit(&mut json);
+    glb_of(&serde_json::to_vec(&json).unwrap(), glb.bin.as_deref())
 }
 
 /// A strip bent by a chain of six bones, every vertex weighted by all six (so the file needs

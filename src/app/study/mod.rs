@@ -123,6 +123,10 @@ pub struct Manifest {
 }
 
 pub const MANIFEST: &str = "study.json";
+/// `DIR/making.json`: while `study make` runs, the plan and the clips recorded so far (a
+/// [`Manifest`] without conditions or participants), so that a run that was interrupted (even
+/// by SIGKILL) is resumed by the next, and a folder holding it is known to be this study's.
+pub const MAKING: &str = "making.json";
 pub const ANSWERS: &str = "answers.csv";
 pub const SESSIONS: &str = "sessions";
 pub const CLIPS: &str = "clips";
@@ -278,9 +282,29 @@ pub struct MakeOptions {
 pub fn make(o: &MakeOptions) -> Result<Manifest> {
     let plan = Plan::read(&o.plan)?;
     let manifest_path = o.out.join(MANIFEST);
+    let making_path = o.out.join(MAKING);
     // A folder already holding another study (or answers) is not overwritten.
     let mut earlier = Vec::new();
-    if manifest_path.exists() {
+    if !manifest_path.exists() && making_path.exists() {
+        let text = std::fs::read_to_string(&making_path)
+            .with_context(|| format!("{}: cannot read", making_path.display()))?;
+        let old: Manifest = serde_json::from_str(&text).map_err(|e| {
+            anyhow::anyhow!("{}: not a study in the making: {e}", making_path.display())
+        })?;
+        if old.plan != plan {
+            bail!(
+                "{}: holds an interrupted study of another plan; make the new one in another \
+                 folder",
+                o.out.display()
+            );
+        }
+        eprintln!(
+            "{}: resuming a study interrupted after {} clip(s)",
+            o.out.display(),
+            old.clips.len()
+        );
+        earlier = old.clips;
+    } else if manifest_path.exists() {
         let old: Manifest = read_manifest(&o.out)?;
         earlier = old.clips.clone();
         if old.plan != plan {
@@ -304,9 +328,27 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
         .with_context(|| format!("{}: cannot create", o.out.display()))?;
     let mut clips = plan.clips();
     let total = clips.len();
+    // Clips recorded so far, written after each: what a resumed run starts from.
+    let mut making = Manifest {
+        plan: plan.clone(),
+        conditions: Vec::new(),
+        clips: earlier.clone(),
+        participants: Vec::new(),
+    };
+    if !manifest_path.exists() {
+        write_atomic(
+            &making_path,
+            serde_json::to_string_pretty(&making)?.as_bytes(),
+        )?;
+    }
     for (k, clip) in clips.iter_mut().enumerate() {
         let file = o.out.join(&clip.file);
-        if file.exists() {
+        // A clip file an interrupted run left is complete (written atomically) but has no
+        // record unless the run got to note it: such a one is recorded again.
+        let noted = earlier
+            .iter()
+            .any(|c| c.file == clip.file && c.record.is_some());
+        if file.exists() && (noted || manifest_path.exists()) {
             eprintln!("clip {}/{total}: {} (there already)", k + 1, clip.file);
             clip.record = earlier
                 .iter()
@@ -326,6 +368,14 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
             o.progress,
         )?)?;
         clip.record = Some(report);
+        if !manifest_path.exists() {
+            making.clips.retain(|c| c.file != clip.file);
+            making.clips.push(clip.clone());
+            write_atomic(
+                &making_path,
+                serde_json::to_string_pretty(&making)?.as_bytes(),
+            )?;
+        }
     }
     let manifest = Manifest {
         conditions: plan.conditions(),
@@ -347,6 +397,10 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
         &manifest_path,
         serde_json::to_string_pretty(&manifest)?.as_bytes(),
     )?;
+    if making_path.exists() {
+        std::fs::remove_file(&making_path)
+            .with_context(|| format!("{}: cannot remove", making_path.display()))?;
+    }
     Ok(manifest)
 }
 
