@@ -59,6 +59,37 @@ pub fn check_target(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Makes `dir` (and the folders above it) for a command's outputs, failing with what is in the
+/// way: something there that is not a folder (a file, a device such as `/dev/full`), a
+/// permission, a read-only or full disk.
+pub fn make_folder(dir: &Path) -> Result<()> {
+    if let Ok(meta) = std::fs::metadata(dir)
+        && !meta.is_dir()
+    {
+        let what = if meta.is_file() {
+            "a file"
+        } else {
+            "a device, FIFO or socket"
+        };
+        bail!(
+            "{}: cannot write into it: it is {what}, not a folder",
+            dir.display()
+        );
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        let why = match e.kind() {
+            std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
+            std::io::ErrorKind::ReadOnlyFilesystem => "the file system is read-only".into(),
+            std::io::ErrorKind::StorageFull => "the disk is full".into(),
+            std::io::ErrorKind::NotADirectory => {
+                "a file stands where a folder above it goes".into()
+            }
+            _ => e.to_string(),
+        };
+        anyhow!("{}: cannot create the folder: {why}", dir.display())
+    })
+}
+
 /// On Ctrl-C or SIGTERM, removes the temporary files being written and exits with 130.
 fn remove_pending_on_interrupt() {
     static INSTALL: Once = Once::new();

@@ -9,6 +9,10 @@
 //! fuzzer's seeds, or to try them on the command line).
 
 mod common;
+/// The second round: valid but odd files, files that expand far past their size, pipes,
+/// devices and files outside the model's folder, through `bake`, `shot` and `export`.
+#[path = "malformed/second_round.rs"]
+mod second_round;
 
 use common::{edit_glb, glb_of, tiny_model};
 use image::ImageEncoder;

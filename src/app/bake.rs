@@ -2,9 +2,10 @@
 //! methods at once, in parallel, and print them as a table. A tree gets its chain of
 //! billboard-cloud levels instead (the same for every method), as the viewer uses it.
 
+use crate::bake::animation_space::AnimationSpaceMesh;
 use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin, source_hash};
-use crate::bake::lod::{SkinnedLods, lod_options};
+use crate::bake::lod::{LevelProbes, SkinnedLods, bake_lods_sharing, full_detail, lod_options};
 use crate::bake::simplify::Method;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
@@ -12,6 +13,7 @@ use crate::render::atlas::AtlasRasterizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 #[derive(Clone, Debug)]
 pub struct BakeOptions {
@@ -97,70 +99,103 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             bars.suspend(|| eprintln!("warning: {w}"));
         }
     };
-    let results: Vec<anyhow::Result<Result<Baked, TreeBaked>>> = jobs
-        .into_par_iter()
+    // Each character's full-detail mesh and level probes, made by the first of its methods'
+    // bakes that misses the cache and shared by the others (see `bake_lods_sharing`).
+    let bases: Vec<OnceLock<AnimationSpaceMesh>> = models.iter().map(|_| OnceLock::new()).collect();
+    let probes: Vec<OnceLock<LevelProbes>> = models.iter().map(|_| OnceLock::new()).collect();
+    let lines = ProgressLines::new();
+    let jobs: Vec<_> = jobs
+        .into_iter()
         .map(|(i, method, bar)| {
-            let (model, hash) = &models[i];
-            let what = format!(
-                "{} {}",
-                model.name,
-                method.map_or("clouds".to_string(), |m| m.to_string())
-            );
-            let lines = LogLines::new(what);
-            let progress = |f: f32| {
-                bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
-                lines.tick(f);
-            };
-            let Some(method) = method else {
-                let start = std::time::Instant::now();
-                let gpu = gpu.as_ref().expect("a GPU when there are trees");
-                let opts = crate::bake::billboard::chain::ChainOptions::default();
-                let (levels, origin) = crate::bake::billboard::chain::load_or_build_chain(
-                    &AtlasRasterizer::new(gpu),
-                    &crate::runtime::colour_error::GpuColourError::new(gpu),
-                    &cache,
-                    model,
-                    hash,
-                    &opts,
-                    &progress,
-                )
-                .map_err(|e| anyhow::anyhow!("{}: {e:#}", model.name))?;
+            let what = method.map_or("clouds".to_string(), |m| m.to_string());
+            let line = lines.add(format!("{} {what}", models[i].0.name));
+            (i, method, bar, line)
+        })
+        .collect();
+    let done = std::sync::atomic::AtomicBool::new(false);
+    let results: Vec<anyhow::Result<Result<Baked, TreeBaked>>> = std::thread::scope(|scope| {
+        scope.spawn(|| lines.print_until(&done));
+        // Stops the lines however the jobs end (a panic included: the scope joins the
+        // printer before it passes the panic on).
+        struct Stop<'d>(&'d std::sync::atomic::AtomicBool);
+        impl Drop for Stop<'_> {
+            fn drop(&mut self) {
+                self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+        let _stop = Stop(&done);
+        jobs.into_par_iter()
+            .map(|(i, method, bar, line)| {
+                let (model, hash) = &models[i];
+                let progress = |f: f32| {
+                    bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+                    lines.set(line, f);
+                };
+                // Whichever way the job ends.
+                struct Finish<'l>(&'l ProgressLines, usize);
+                impl Drop for Finish<'_> {
+                    fn drop(&mut self) {
+                        self.0.finish(self.1);
+                    }
+                }
+                let _finish = Finish(&lines, line);
+                let Some(method) = method else {
+                    let start = std::time::Instant::now();
+                    let gpu = gpu.as_ref().expect("a GPU when there are trees");
+                    let opts = crate::bake::billboard::chain::ChainOptions::default();
+                    let (levels, origin) = crate::bake::billboard::chain::load_or_build_chain(
+                        &AtlasRasterizer::new(gpu),
+                        &crate::runtime::colour_error::GpuColourError::new(gpu),
+                        &cache,
+                        model,
+                        hash,
+                        &opts,
+                        &progress,
+                    )
+                    .map_err(|e| anyhow::anyhow!("{}: {e:#}", model.name))?;
+                    warn(&origin);
+                    let from_cache = origin == Origin::Cache;
+                    let seconds = start.elapsed().as_secs_f64();
+                    bar.finish_with_message(if from_cache {
+                        "cached".to_string()
+                    } else {
+                        format!("{seconds:.2} s")
+                    });
+                    return Ok(Err(TreeBaked {
+                        model: model.name.clone(),
+                        source_triangles: model.mesh.triangle_count(),
+                        bones: model.skeleton.bone_count(),
+                        height: crate::bake::billboard::tree_height(model),
+                        levels,
+                        from_cache,
+                        seconds,
+                    }));
+                };
+                let options = lod_options(model, opts.tolerance_px, opts.budgets.as_deref());
+                let (path, key) = cache.levels_file(&model.name, hash, method, &options);
+                let Ok((lods, origin)) = cache.load_or_build(&path, &key, || {
+                    let base = bases[i].get_or_init(|| full_detail(model));
+                    Ok::<_, std::convert::Infallible>(bake_lods_sharing(
+                        model, base, &probes[i], method, &options, &progress,
+                    ))
+                });
                 warn(&origin);
                 let from_cache = origin == Origin::Cache;
-                let seconds = start.elapsed().as_secs_f64();
                 bar.finish_with_message(if from_cache {
                     "cached".to_string()
                 } else {
-                    format!("{seconds:.2} s")
+                    format!("{:.2} s", lods.bake_seconds)
                 });
-                return Ok(Err(TreeBaked {
+                Ok(Ok(Baked {
                     model: model.name.clone(),
                     source_triangles: model.mesh.triangle_count(),
                     bones: model.skeleton.bone_count(),
-                    height: crate::bake::billboard::tree_height(model),
-                    levels,
+                    lods,
                     from_cache,
-                    seconds,
-                }));
-            };
-            let options = lod_options(model, opts.tolerance_px, opts.budgets.as_deref());
-            let (lods, origin) = cache.load_or_bake(model, hash, method, &options, &progress);
-            warn(&origin);
-            let from_cache = origin == Origin::Cache;
-            bar.finish_with_message(if from_cache {
-                "cached".to_string()
-            } else {
-                format!("{:.2} s", lods.bake_seconds)
-            });
-            Ok(Ok(Baked {
-                model: model.name.clone(),
-                source_triangles: model.mesh.triangle_count(),
-                bones: model.skeleton.bone_count(),
-                lods,
-                from_cache,
-            }))
-        })
-        .collect();
+                }))
+            })
+            .collect()
+    });
     let mut out = BakeResults {
         characters: Vec::new(),
         trees: Vec::new(),
@@ -206,49 +241,93 @@ pub fn budget_warnings(results: &BakeResults) -> Vec<String> {
     out
 }
 
-/// The progress bar of one (model, method) job, shared by `bake` and `report`.
 /// Progress where stderr is not a terminal (a log, CI, a pipe), which indicatif's bars leave
-/// blank: a line every [`LogLines::EVERY`] of how far a job has come, so that a long bake is
-/// seen to be working.
-pub struct LogLines {
-    what: String,
-    started: std::time::Instant,
-    last: std::sync::Mutex<std::time::Instant>,
+/// blank: every [`ProgressLines::EVERY`], one line for each job still running, saying how far
+/// it has come, so that a long bake is seen to be working however long one of its stages goes
+/// without news (measuring the last levels of a large model reports no fraction).
+pub struct ProgressLines {
     on: bool,
+    started: std::time::Instant,
+    /// Each job's name, the fraction of its simplification done (`None` before the first
+    /// report), and whether it has finished.
+    jobs: std::sync::Mutex<Vec<(String, Option<f32>, bool)>>,
 }
 
-impl LogLines {
+impl ProgressLines {
     pub const EVERY: std::time::Duration = std::time::Duration::from_secs(5);
 
-    pub fn new(what: String) -> Self {
+    pub fn new() -> Self {
         use std::io::IsTerminal;
-        let now = std::time::Instant::now();
-        LogLines {
-            what,
-            started: now,
-            last: std::sync::Mutex::new(now),
+        ProgressLines {
             on: !std::io::stderr().is_terminal(),
+            started: std::time::Instant::now(),
+            jobs: std::sync::Mutex::new(Vec::new()),
         }
     }
 
-    /// Notes progress `f` (0 to 1); prints a line if the last was long enough ago.
-    pub fn tick(&self, f: f32) {
-        if !self.on {
-            return;
-        }
-        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-        if last.elapsed() >= Self::EVERY {
-            *last = std::time::Instant::now();
-            eprintln!(
-                "{}: {:.0}% after {:.0} s",
-                self.what,
-                f.clamp(0.0, 1.0) * 100.0,
-                self.started.elapsed().as_secs_f32()
-            );
+    fn jobs(&self) -> std::sync::MutexGuard<'_, Vec<(String, Option<f32>, bool)>> {
+        self.jobs.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// A job to report on; returns its number.
+    pub fn add(&self, what: String) -> usize {
+        let mut jobs = self.jobs();
+        jobs.push((what, None, false));
+        jobs.len() - 1
+    }
+
+    /// Job `job` has come to `f` (0 to 1) of its simplification.
+    pub fn set(&self, job: usize, f: f32) {
+        self.jobs()[job].1 = Some(f.clamp(0.0, 1.0));
+    }
+
+    pub fn finish(&self, job: usize) {
+        self.jobs()[job].2 = true;
+    }
+
+    /// The lines for the jobs still running.
+    fn lines(&self) -> Vec<String> {
+        let seconds = self.started.elapsed().as_secs_f32();
+        self.jobs()
+            .iter()
+            .filter(|(_, _, done)| !done)
+            .map(|(what, f, _)| match f {
+                None => format!("{what}: starting, after {seconds:.0} s"),
+                Some(f) if *f >= 1.0 => {
+                    format!("{what}: simplified; measuring its levels, after {seconds:.0} s")
+                }
+                Some(f) => format!(
+                    "{what}: {:.0}% of the triangles simplified away, after {seconds:.0} s",
+                    f * 100.0
+                ),
+            })
+            .collect()
+    }
+
+    /// Prints the lines every [`Self::EVERY`] until `done` is set (nothing where stderr is a
+    /// terminal: the bars show it there).
+    pub fn print_until(&self, done: &std::sync::atomic::AtomicBool) {
+        use std::sync::atomic::Ordering;
+        let mut last = std::time::Instant::now();
+        while self.on && !done.load(Ordering::Relaxed) {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            if last.elapsed() >= Self::EVERY {
+                last = std::time::Instant::now();
+                for line in self.lines() {
+                    eprintln!("{line}");
+                }
+            }
         }
     }
 }
 
+impl Default for ProgressLines {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The progress bar of one (model, method) job, shared by `bake` and `report`.
 pub fn bar_style() -> ProgressStyle {
     ProgressStyle::with_template("{prefix:>18} [{bar:30}] {percent:>3}% {msg}")
         .expect("valid template")

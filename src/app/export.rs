@@ -124,8 +124,7 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
     }
     let path = source_path(&opts.model);
     let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
-    std::fs::create_dir_all(&opts.out)
-        .map_err(|e| InputError::new(&opts.out, format!("cannot create the folder ({e})")))?;
+    crate::atomic::make_folder(&opts.out)?;
     let cache = LodCache::new(opts.cache_dir.clone());
     let options = crate::runtime::levels::runtime_options(&model);
     let (lods, origin) = cache.load_or_bake(&model, &hash, opts.method, &options, &|_| {});

@@ -2,7 +2,7 @@
 
 use crate::assets::BUILTINS;
 use crate::generate::file;
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use std::path::Path;
 
 /// One written asset, for the summary line.
@@ -28,7 +28,7 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
             ));
         }
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    crate::atomic::make_folder(dir)?;
     let mut written = Vec::new();
     for b in BUILTINS
         .iter()

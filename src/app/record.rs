@@ -83,7 +83,7 @@ fn prepare_frames_dir(dir: &Path) -> Result<()> {
             );
         }
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
+    crate::atomic::make_folder(dir)
 }
 
 pub fn run(o: &RecordOptions) -> Result<RecordReport> {

@@ -13,7 +13,6 @@ use crate::bake::animation_space::AnimationSpaceMesh;
 use crate::bake::lod::{LodOptions, Replay, SkinnedLods, bake_lods, progressive_mesh};
 use crate::bake::lod_error::{Correspondence, MeshError, Probe};
 use crate::bake::simplify::{Method, Sequence, SimplifyInput, pose_samples};
-use crate::error::InputError;
 use crate::import::load_model;
 use crate::model::{Model, SkinnedMesh};
 use anyhow::{Context, Result};
@@ -193,8 +192,7 @@ fn motion(model: &Model) -> (f64, f64) {
 /// `timings.md` first, so it is there even if drawing the plot fails.
 pub fn run(opts: &ReportOptions) -> Result<Report> {
     let model = load_model(&opts.model)?;
-    std::fs::create_dir_all(&opts.out)
-        .map_err(|e| InputError::new(&opts.out, format!("cannot create the folder ({e})")))?;
+    crate::atomic::make_folder(&opts.out)?;
     let base = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
     let probe = Probe::for_model(&model, &base, SAMPLES);
     let lod_opts = crate::runtime::levels::runtime_options(&model);

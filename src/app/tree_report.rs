@@ -25,7 +25,7 @@ use crate::bake::spectral::description::DescriptionType;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::runtime::colour_error::{at_switch, colour_error, colour_error_over};
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use serde::Serialize;
 use std::path::Path;
@@ -237,7 +237,7 @@ pub fn lighting_table(report: &TreeReport) -> String {
 /// Builds the chain of `tree`, measures it and writes the three files into `out`.
 pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let f = foliage(tree).map_err(|e| anyhow!("{}: {e}", tree.name))?;
-    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
+    crate::atomic::make_folder(out)?;
     let gpu = Gpu::headless()?;
     let raster = crate::render::atlas::AtlasRasterizer::new(&gpu);
     let h = tree_height(tree);

@@ -24,6 +24,7 @@ use super::simplify::{
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
+use std::sync::OnceLock;
 use std::sync::mpsc::{self, Receiver};
 
 /// Poses the simplifier checks every collapse in, and a level's error is measured over.
@@ -642,7 +643,7 @@ pub fn progressive_mesh(
 }
 
 /// `model`'s mesh in animation space, in GPU order: what every level is cut from.
-fn full_detail(model: &Model) -> AnimationSpaceMesh {
+pub fn full_detail(model: &Model) -> AnimationSpaceMesh {
     AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu()
 }
 
@@ -687,18 +688,37 @@ pub fn bake_lods(
 ) -> SkinnedLods {
     let start = std::time::Instant::now();
     let base = full_detail(model);
+    let probes = OnceLock::new();
+    let mut lods = bake_lods_sharing(model, &base, &probes, method, opts, progress);
+    lods.bake_seconds = start.elapsed().as_secs_f64();
+    lods
+}
+
+/// [`bake_lods`] of a model whose bakes by several methods share its full-detail mesh `base`
+/// ([`full_detail`]) and the probes its levels are measured with, which the first bake to need
+/// them makes (the others' cutters wait for them while their simplifiers go on). The probes
+/// hold the full-detail surface in 16 poses and an index of it: on a 2-million-triangle model
+/// about a gigabyte and several seconds, which three methods baking at once each made again.
+pub fn bake_lods_sharing<'a>(
+    model: &Model,
+    base: &'a AnimationSpaceMesh,
+    probes: &OnceLock<LevelProbes<'a>>,
+    method: Method,
+    opts: &LodOptions,
+    progress: &(dyn Fn(f32) + Sync),
+) -> SkinnedLods {
+    let start = std::time::Instant::now();
     let (sequence, levels) = std::thread::scope(|scope| {
         // Made inside the scope, so that a panicking simplifier drops them and the cutter,
         // seeing the channel close, ends before the scope joins it.
         let (start_tx, start_rx) = mpsc::channel::<Sequence>();
         let (steps_tx, steps_rx) = mpsc::channel::<Vec<Step>>();
-        let base = &base;
         let cutter = scope.spawn(move || {
-            let probes = LevelProbes::new(model, base);
+            let probes = probes.get_or_init(|| LevelProbes::new(model, base));
             // No start: the simplifier stopped before its first step (it panicked).
             let first = start_rx.recv().ok()?;
             let mut seq = GrowingSequence::fed(first, steps_rx);
-            Some(cut_growing_levels(base, &mut seq, opts, &probes))
+            Some(cut_growing_levels(base, &mut seq, opts, probes))
         });
         // A closed channel means the cutter panicked: joining it below says so.
         let sequence = simplify_model(model, base, method, progress, &mut |feed| match feed {

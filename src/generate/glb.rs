@@ -365,6 +365,20 @@ fn skeleton(
         .filter(|&i| skel.nodes[i].parent.is_none())
         .map(|i| Index::new(i as u32))
         .collect();
+    // glTF asks the joints for one common root, and the skin's `skeleton` to be it (or above
+    // it). A skeleton of several trees (a part riding on a node of its own beside the
+    // armature) gets one, which moves nothing.
+    if roots.len() > 1 {
+        let common = Index::push(
+            &mut nodes,
+            gj::Node {
+                name: Some("skeleton".into()),
+                children: Some(roots.clone()),
+                ..Default::default()
+            },
+        );
+        roots = vec![common];
+    }
     let shown = if all_in_scene { meshes } else { 1 };
     roots.extend(mesh_nodes.iter().take(shown).copied());
     root.nodes = nodes;

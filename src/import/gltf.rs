@@ -18,7 +18,7 @@ use crate::model::{
 use glam::{Affine3A, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::animation::util::ReadOutputs;
 use gltf::mesh::Mode;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
 
 /// Models whose rest pose is taller than this, or shorter than [`MIN_PLAUSIBLE_HEIGHT`], are in
@@ -627,15 +627,24 @@ enum Binding<'m> {
 }
 
 impl Binding<'_> {
-    /// Whether a mesh bound by both lands in the same place: the same skin (a skinned mesh's
-    /// node transform does not move it), or the same bone and transform.
-    fn same(&self, other: &Binding) -> bool {
-        match (self, other) {
-            (Binding::Skin(a), Binding::Skin(b)) => std::ptr::eq(*a, *b),
-            (Binding::Rigid(m, a), Binding::Rigid(n, b)) => a == b && m == n,
-            _ => false,
+    /// A key equal for bindings that put a mesh in the same place: the same skin (a skinned
+    /// mesh's node transform does not move it), or the same bone and transform.
+    fn key(&self) -> BindingKey {
+        match self {
+            Binding::Skin(map) => BindingKey::Skin(map.as_ptr() as usize),
+            Binding::Rigid(m, bone) => {
+                BindingKey::Rigid(*bone, m.to_cols_array().map(|x| (x + 0.0).to_bits()))
+            }
         }
     }
+}
+
+/// Where a binding puts a primitive, hashable: a skin (by its joint map, which the import
+/// holds for as long as the meshes are read), or a bone and a transform.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum BindingKey {
+    Skin(usize),
+    Rigid(u32, [u32; 16]),
 }
 
 /// The meshes of `nodes` (a mesh that two nodes draw in one place once, in two places twice),
@@ -653,20 +662,42 @@ fn read_meshes(
     let mut materials: Vec<Material> = Vec::new();
     let mut mesh = SkinnedMesh::default();
     let mut needs_normals: Vec<bool> = Vec::new();
-    let mut seen: Vec<(usize, &Binding)> = Vec::new();
-    // Where the vertices of each set of vertex accessors, node and material went, and how many.
-    let mut vertex_bases: std::collections::HashMap<
-        (Vec<(String, usize)>, usize, u16),
-        (u32, usize),
-    > = std::collections::HashMap::new();
+    // Where the vertices of each set of vertex accessors went (and how many), by where they
+    // are drawn and in which material.
+    let mut vertex_bases: HashMap<(Vec<(String, usize)>, BindingKey, u16), (u32, usize)> =
+        HashMap::new();
+    // Primitives read, by their accessors, mode and material and where they are drawn: one
+    // drawn again in the same place (a mesh on a second node of the same skin, or of the same
+    // transform; the same primitive listed again, over one accessor, thousands of times)
+    // would only repeat every triangle exactly, on top of itself.
+    let mut drawn: HashSet<(
+        Vec<(String, usize)>,
+        Option<usize>,
+        u32,
+        Option<usize>,
+        BindingKey,
+    )> = HashSet::new();
+    let mut repeated = 0usize;
     let mut morphed = 0;
     for (node, binding) in nodes {
         let Some(m) = node.mesh() else { continue };
-        if seen.iter().any(|(k, b)| *k == m.index() && b.same(binding)) {
-            continue;
-        }
-        seen.push((m.index(), binding));
         for prim in m.primitives() {
+            let mut attributes: Vec<(String, usize)> = prim
+                .attributes()
+                .map(|(s, a)| (s.to_string(), a.index()))
+                .collect();
+            attributes.sort();
+            let this = (
+                attributes.clone(),
+                prim.indices().map(|a| a.index()),
+                prim.mode().as_gl_enum(),
+                prim.material().index(),
+                binding.key(),
+            );
+            if !drawn.insert(this) {
+                repeated += 1;
+                continue;
+            }
             let label = format!("mesh {} primitive {}", m.index(), prim.index());
             if prim.morph_targets().len() > 0 {
                 morphed += 1;
@@ -729,16 +760,10 @@ fn read_meshes(
                     }
                 }
             }
-            // Primitives over the same vertex accessors, drawn by one node in one material,
+            // Primitives over the same vertex accessors, drawn in one place in one material,
             // share their vertices: an exporter's layout (one vertex buffer, index buffers
-            // per part), and what a file repeating one primitive thousands of times is, whose
-            // triangles then repeat exactly and go in `drop_unused`.
-            let mut attributes: Vec<(String, usize)> = prim
-                .attributes()
-                .map(|(s, a)| (s.to_string(), a.index()))
-                .collect();
-            attributes.sort();
-            let key = (attributes, node.index(), slot);
+            // per part).
+            let key = (attributes, binding.key(), slot);
             let shared = vertex_bases.get(&key).copied();
             let base = append_primitive(&mut mesh, &mut needs_normals, raw, slot, shared);
             vertex_bases.entry(key).or_insert(base);
@@ -748,6 +773,9 @@ fn read_meshes(
         warnings.push(format!(
             "morph targets are left out on {morphed} primitive(s) (the base shape is drawn)"
         ));
+    }
+    if repeated > 0 {
+        log::info!("{repeated} primitive(s) drawn again where they were already drawn read once");
     }
     if needs_normals.iter().any(|&n| n) {
         compute_normals(&mut mesh, &needs_normals);

@@ -198,8 +198,32 @@ pub fn unpack(bytes: &[u8], base: &Path, limits: &Limits) -> Result<Vec<u8>, Str
         start[i] = chunk.len();
         chunk.extend_from_slice(data[i].unwrap_or_default());
     }
+    // What every compressed view decodes to, together, before any is decoded: 200 views may
+    // all name one small stream.
     let most = limits.decoded_mb.saturating_mul(1 << 20);
     let mut decoded_bytes = 0u64;
+    for (v, view) in json
+        .get("bufferViews")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .enumerate()
+    {
+        if let Some(ext) = view.get("extensions").and_then(|e| e.get(MESHOPT)) {
+            let what = format!("bufferViews[{v}]");
+            let claimed =
+                (field(ext, "count", &what)? as u64)
+                    .saturating_mul(field(ext, "byteStride", &what)? as u64);
+            decoded_bytes = decoded_bytes.saturating_add(claimed);
+        }
+    }
+    if decoded_bytes > most {
+        return Err(over(
+            format!("its compressed views decode to {} MiB", decoded_bytes >> 20),
+            format!("{} MiB", limits.decoded_mb),
+            "decoded-mb",
+        ));
+    }
     if let Some(views) = json.get_mut("bufferViews").and_then(Value::as_array_mut) {
         for (v, view) in views.iter_mut().enumerate() {
             let what = format!("bufferViews[{v}]");
@@ -213,23 +237,6 @@ pub fn unpack(bytes: &[u8], base: &Path, limits: &Limits) -> Result<Vec<u8>, Str
                     .copied()
                     .flatten()
                     .ok_or_else(|| format!("{what}: its compressed buffer {b} has no data"))?;
-                let claimed = (field(&ext, "count", &what)? as u64).saturating_mul(field(
-                    &ext,
-                    "byteStride",
-                    &what,
-                )?
-                    as u64);
-                decoded_bytes = decoded_bytes.saturating_add(claimed);
-                if decoded_bytes > most {
-                    return Err(over(
-                        format!(
-                            "its compressed views decode to more than {} MiB",
-                            decoded_bytes >> 20
-                        ),
-                        format!("{} MiB", limits.decoded_mb),
-                        "decoded-mb",
-                    ));
-                }
                 let decoded = decode(&ext, src, &what)?;
                 while !chunk.len().is_multiple_of(4) {
                     chunk.push(0);

@@ -393,6 +393,17 @@ fn check_accessors(doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Resu
             let index_size = sparse.indices().index_type().size() as u64;
             let iv = sparse.indices().view();
             let vv = sparse.values().view();
+            // glTF: "the referenced buffer view MUST NOT have its target or byteStride
+            // properties defined" (the gltf crate would read such indices at the stride).
+            for (part, view) in [("indices", &iv), ("values", &vv)] {
+                if let Some(stride) = view.stride() {
+                    return Err(format!(
+                        "{name}'s sparse {part} are in buffer view {}, which has byteStride \
+                         {stride}: glTF allows none there",
+                        view.index()
+                    ));
+                }
+            }
             let index_end = sparse.indices().offset() as u64 + n * index_size;
             let value_end = sparse.values().offset() as u64 + n * size;
             if index_end > iv.length() as u64 || value_end > vv.length() as u64 {

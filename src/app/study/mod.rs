@@ -324,8 +324,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
             o.out.display()
         );
     }
-    std::fs::create_dir_all(o.out.join(CLIPS))
-        .with_context(|| format!("{}: cannot create", o.out.display()))?;
+    crate::atomic::make_folder(&o.out.join(CLIPS))?;
     let mut clips = plan.clips();
     let total = clips.len();
     // Clips recorded so far, written after each: what a resumed run starts from.
@@ -384,8 +383,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
         clips,
     };
     let sessions = o.out.join(SESSIONS);
-    std::fs::create_dir_all(&sessions)
-        .with_context(|| format!("{}: cannot create", sessions.display()))?;
+    crate::atomic::make_folder(&sessions)?;
     for id in &manifest.participants {
         let trials = session::plan_session(&manifest, id);
         write_atomic(

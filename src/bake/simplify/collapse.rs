@@ -70,7 +70,23 @@ pub enum Rejection {
     /// A triangle would become a sliver, in the rest pose or in a sampled pose.
     Sliver,
     ChangesParameterArea,
+    /// v1's fan has more than [`MAX_FAN`] triangles: it waits until its ring has thinned.
+    Crowded,
 }
+
+/// The most triangles v1's fan may have for its collapse to be evaluated.
+///
+/// A collapse's cell corners are the crossings of v1's old edges with v2's new ones, about a
+/// quarter of the fan's size squared, and every one is a term of the metric in every sampled
+/// pose; the fan's evaluation is repeated whenever a collapse nearby changes it. A pole of a
+/// finely segmented sphere (a rivet of a dense scan, 120 triangles round it) would cost 3,600
+/// corners an evaluation, and on a 2-million-triangle model such fans took three quarters of
+/// the bake. Turning them down costs nothing in quality: the collapse of so large a fan into
+/// one of its ring's vertices makes a fan of slivers, never a cheap step, and each collapse
+/// along the ring takes a triangle off the fan, so the vertex comes up again once its ring
+/// has thinned. No fan of the models the figures in the README come from is this large at full
+/// detail.
+pub const MAX_FAN: usize = 32;
 
 impl Rejection {
     /// Rejections of the texture chart alone: the geometric correspondence may still take the
@@ -240,6 +256,9 @@ impl Context<'_> {
         let (k1, k2) = (mesh.kind[u1 as usize], mesh.kind[u2 as usize]);
         if !can_collapse(k1, k2) {
             return Err(Rejection::Kind);
+        }
+        if mesh.incident[u1 as usize].len() > MAX_FAN {
+            return Err(Rejection::Crowded);
         }
         let edge = mesh.edge_kind(u1, u2);
         match k1 {

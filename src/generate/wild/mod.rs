@@ -10,3 +10,4 @@ pub mod knight;
 pub mod mocap;
 pub mod random;
 pub mod robot;
+pub mod structure;

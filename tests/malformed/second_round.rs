@@ -6,12 +6,11 @@
 //! loop's trip count. Each goes through the command line as a user meets it: exit 1 and one
 //! line naming the file and the problem, or a bake that succeeds, within a minute.
 //!
-//! `LODLAB_HARDENING_DIR=DIR cargo test --test hardening` also leaves the files in DIR (for
-//! `/usr/bin/time -v` runs of the release build).
+//! `LODLAB_HARDENING_DIR=DIR cargo test --test malformed second_round` also leaves the files
+//! in DIR, with `commands.txt` listing each case's command line (for `/usr/bin/time -v` runs of
+//! the release build: `tools/hardening-time.sh DIR`).
 
-mod common;
-
-use common::{edit_glb, glb_of, tiny_model};
+use crate::common::{edit_glb, glb_of, gltf_tools, tiny_model, validate};
 use lodlab::generate::glb::to_glb;
 use serde_json::{Value, json};
 use std::os::unix::fs::FileTypeExt;
@@ -802,6 +801,86 @@ fn cases(dir: &Path) -> Vec<Case> {
         Expect::Error("singular"),
     );
 
+    // --- Found by the probe and not in the lists above.
+    c.add(
+        "meshes-5000-over-one-accessor.glb",
+        edit_glb(&tiny(), |j| {
+            // 5,000 meshes, each the tiny model's primitive over the same accessors, each on a
+            // node of its own bound to the one skin.
+            let p = prim(j).clone();
+            let skin_node = j["nodes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|n| n.get("skin").is_some())
+                .unwrap()
+                .clone();
+            j["meshes"] = (0..5000).map(|_| json!({"primitives": [p]})).collect();
+            let nodes = j["nodes"].as_array_mut().unwrap();
+            let first = nodes.len();
+            for k in 0..5000 {
+                let mut n = skin_node.clone();
+                n["mesh"] = json!(k);
+                n["name"] = json!(format!("part{k}"));
+                nodes.push(n);
+            }
+            let scene = j["scenes"][0]["nodes"].as_array_mut().unwrap();
+            scene.extend((first..first + 5000).map(|n| json!(n)));
+        }),
+        Expect::Succeeds,
+    );
+    c.add(
+        "texcoords-tiled-50.glb",
+        tiny_with(|j, append| {
+            let uvs: Vec<f32> = (0..10)
+                .flat_map(|i| [(i % 2) as f32 * 50.0, (i / 2) as f32 * 12.5])
+                .collect();
+            let v = append(&f32s(&uvs));
+            let a = accessor(
+                j,
+                json!({"bufferView": v, "componentType": 5126, "count": 10, "type": "VEC2"}),
+            );
+            prim(j)["attributes"]["TEXCOORD_0"] = json!(a);
+            j["images"] = json!([{"uri": "data:image/png;base64,".to_string() + &base64(&png(1))}]);
+            j["textures"] = json!([{"source": 0}]);
+            j["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+        }),
+        Expect::Succeeds,
+    );
+    c.add(
+        "quantised-positions-small-scale.glb",
+        quantised_tiny(),
+        Expect::Succeeds,
+    );
+    c.add(
+        "rotation-zero-quaternion.glb",
+        edit_glb(&tiny(), |j| {
+            let n = j["skins"][0]["joints"][1].as_u64().unwrap() as usize;
+            j["nodes"][n]["rotation"] = json!([0.0, 0.0, 0.0, 0.0]);
+        }),
+        Expect::Error("rotation of length zero"),
+    );
+    c.add(
+        "sparse-indices-with-stride.glb",
+        {
+            let sparse = tiny_with(|j, append| {
+                let iv = append(&u32s(&[0, 0, 1, 0]));
+                let vv = append(&f32s(&[0.0, 0.1, 0.0, 0.0, 0.2, 0.0]));
+                let position = prim(j)["attributes"]["POSITION"].as_u64().unwrap() as usize;
+                j["accessors"][position]["sparse"] = json!({"count": 2,
+                    "indices": {"bufferView": iv, "componentType": 5125},
+                    "values": {"bufferView": vv}});
+            });
+            // The indices' view strided, as the probe's file had it.
+            edit_glb(&sparse, |j| {
+                let position = prim(j)["attributes"]["POSITION"].as_u64().unwrap() as usize;
+                let iv = j["accessors"][position]["sparse"]["indices"]["bufferView"].clone();
+                j["bufferViews"][iv.as_u64().unwrap() as usize]["byteStride"] = json!(8);
+            })
+        },
+        Expect::Error("byteStride"),
+    );
+
     // --- Command-line values.
     for (name, args, problem) in [
         (
@@ -849,23 +928,81 @@ fn meshopt_amplified(views: usize, count: usize) -> Vec<u8> {
     })
 }
 
-/// Standard base64, for `data:` URIs.
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
-        for k in 0..4 {
-            if k <= c.len() {
-                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                s.push('=');
+/// The tiny model as gltfpack quantises a small model: positions as unsigned shorts on a grid
+/// of 7.4 µm, the dequantising scale and offset folded into the inverse bind matrices (their
+/// determinant about 4·10⁻¹⁶), with `KHR_mesh_quantization`.
+fn quantised_tiny() -> Vec<u8> {
+    let model = tiny_model();
+    // A grid fine enough that the tiny model's 2 m need more than a short: shrink it to a
+    // fifth (the skeleton with it), as a small prop would be.
+    let shrink = 0.2f32;
+    let step = 7.4e-6f32;
+    let lo = model
+        .mesh
+        .positions
+        .iter()
+        .fold(glam::Vec3::splat(f32::MAX), |a, p| a.min(*p * shrink));
+    let q: Vec<u8> = model
+        .mesh
+        .positions
+        .iter()
+        .flat_map(|p| {
+            let g = ((*p * shrink - lo) / step).round();
+            assert!(g.max_element() <= 65535.0, "{g}");
+            [g.x as u16, g.y as u16, g.z as u16, 0]
+        })
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let dequantise =
+        glam::Mat4::from_translation(lo) * glam::Mat4::from_scale(glam::Vec3::splat(step));
+    let quantised = tiny_with(move |j, append| {
+        let v = append(&q);
+        let a = accessor(
+            j,
+            json!({"bufferView": v, "componentType": 5123, "count": 10, "type": "VEC3",
+                "min": [0, 0, 0], "max": [65535, 65535, 65535]}),
+        );
+        prim(j)["attributes"]["POSITION"] = json!(a);
+        // Joint rest translations shrink with the mesh.
+        for joint in j["skins"][0]["joints"].clone().as_array().unwrap() {
+            let n = &mut j["nodes"][joint.as_u64().unwrap() as usize];
+            if let Some(t) = n.get_mut("translation").and_then(|t| t.as_array_mut()) {
+                for c in t.iter_mut() {
+                    *c = json!(c.as_f64().unwrap() * shrink as f64);
+                }
             }
         }
-    }
-    s
+        let joints = j["skins"][0]["joints"].as_array().unwrap().len();
+        // The tiny model's inverse bind matrices are translations by the joints' rest
+        // heights (0 and 1 m): shrunk, then composed with the dequantisation.
+        let ibms: Vec<f32> = (0..joints)
+            .flat_map(|k| {
+                let bind =
+                    glam::Mat4::from_translation(glam::Vec3::new(0.0, k as f32 * shrink, 0.0));
+                (bind.inverse() * dequantise).to_cols_array()
+            })
+            .collect();
+        let m = append(&f32s(&ibms));
+        let ma = accessor(
+            j,
+            json!({"bufferView": m, "componentType": 5126, "count": joints, "type": "MAT4"}),
+        );
+        j["skins"][0]["inverseBindMatrices"] = json!(ma);
+        j["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        j["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    });
+    // Four shorts a position, the fourth padding, as gltfpack aligns them.
+    edit_glb(&quantised, |j| {
+        let a = prim(j)["attributes"]["POSITION"].as_u64().unwrap() as usize;
+        let v = j["accessors"][a]["bufferView"].as_u64().unwrap() as usize;
+        j["bufferViews"][v]["byteStride"] = json!(8);
+    })
+}
+
+/// Standard base64, for `data:` URIs.
+fn base64(bytes: &[u8]) -> String {
+    use base64::Engine;
+    base64::engine::general_purpose::STANDARD.encode(bytes)
 }
 
 /// Runs the command, killing it after `limit`; its exit code (None if killed) and stderr.
@@ -906,6 +1043,19 @@ fn odd_and_hostile_files_are_refused_in_one_line_or_baked() {
     let _ = std::fs::remove_file(dir.join("pipe.bin"));
     let cases = cases(dir);
     assert!(cases.len() >= 30, "{} cases", cases.len());
+    if keep.is_some() {
+        // One case a line: its name, then its arguments, tab-separated.
+        let lines: Vec<String> = cases
+            .iter()
+            .map(|c| {
+                std::iter::once(c.name.to_string())
+                    .chain(c.args.iter().cloned())
+                    .collect::<Vec<_>>()
+                    .join("\t")
+            })
+            .collect();
+        std::fs::write(dir.join("commands.txt"), lines.join("\n") + "\n").unwrap();
+    }
     let mut failures = Vec::new();
     for case in &cases {
         let started = Instant::now();
@@ -1014,4 +1164,107 @@ fn cache_files_that_are_not_regular_files_are_passed_over() {
             .file_type()
             .is_symlink()
     );
+}
+
+/// The valid but odd files, as a user meets them beyond `bake`: each renders
+/// (`shot --method as+is`, its impostor made and placed) and exports levels that
+/// glTF-Validator passes and that read back, each command within a minute. A mesh two nodes
+/// draw in two places is drawn twice.
+#[test]
+fn odd_valid_files_render_and_export_valid_gltf() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let all = cases(dir);
+    let odd = [
+        "one-triangle-rigid.glb",
+        "one-triangle-skinned.glb",
+        "fan.glb",
+        "fan-skinned.glb",
+        "strip.glb",
+        "unreferenced-vertices.glb",
+        "shared-vertex-accessors.glb",
+        "channel-without-node.glb",
+        "mesh-on-two-nodes.glb",
+        "texcoords-0-to-1000.glb",
+        "inverse-bind-1e12.glb",
+        "quantised-positions-small-scale.glb",
+        "quantised-no-required-list.glb",
+        "meshes-5000-over-one-accessor.glb",
+    ];
+    let cache = dir.join("cache").display().to_string();
+    let mut failures = Vec::new();
+    let mut exported = Vec::new();
+    for name in odd {
+        let case = all
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("no case {name}"));
+        assert!(matches!(case.expect, Expect::Succeeds), "{name}");
+        let file = case.file.display().to_string();
+        let png = dir.join(format!("{name}.png"));
+        let out = dir.join(format!("{name}-export"));
+        let commands: [Vec<String>; 2] = [
+            [
+                "shot", "--scene", "study", "--model", &file, "--count", "3", "--method", "as+is",
+                "--size", "96x96", "--frames", "1", "--cache", &cache, "--out",
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .chain([png.display().to_string()])
+            .collect(),
+            ["export", "--model", &file, "--cache", &cache, "--out"]
+                .iter()
+                .map(|s| s.to_string())
+                .chain([out.display().to_string()])
+                .collect(),
+        ];
+        for args in &commands {
+            let started = Instant::now();
+            let (code, stderr) = run_within(args, Duration::from_secs(60));
+            eprintln!(
+                "{name:<40} {:<6} {:>6.2} s  exit {code:?}",
+                args[0],
+                started.elapsed().as_secs_f32()
+            );
+            if code != Some(0) {
+                failures.push(format!("{name} {}: exit {code:?}: {stderr}", args[0]));
+            }
+        }
+        if !png.is_file() {
+            failures.push(format!("{name}: no picture"));
+        }
+        for entry in std::fs::read_dir(&out).into_iter().flatten() {
+            let level = entry.unwrap().path();
+            if level.extension().is_some_and(|e| e == "glb") {
+                match lodlab::import::gltf::load(&level) {
+                    Ok(m) if m.mesh.triangle_count() > 0 => {}
+                    Ok(_) => failures.push(format!("{}: no triangles", level.display())),
+                    Err(e) => {
+                        failures.push(format!("{}: does not read back: {e}", level.display()))
+                    }
+                }
+                exported.push(level);
+            }
+        }
+    }
+    // Two nodes drawing one mesh in two places: both copies are there.
+    let two = dir.join("mesh-on-two-nodes.glb");
+    assert_eq!(
+        lodlab::import::gltf::load(&two)
+            .unwrap()
+            .mesh
+            .triangle_count(),
+        2
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+    assert!(
+        exported.len() >= odd.len() * 2,
+        "{} files exported",
+        exported.len()
+    );
+    if let Some(tools) = gltf_tools() {
+        for (file, (errors, _, report)) in exported.iter().zip(validate(&tools, &exported)) {
+            assert_eq!(errors, 0, "{}: {report}", file.display());
+        }
+    }
 }

@@ -1,0 +1,64 @@
+//! Every stage on valid files of random structure: the bytes describe a node graph, skins,
+//! rigid parts, clips and materials around small random meshes
+//! (`lodlab::generate::wild::structure`), written as glTF that glTF-Validator passes. Under
+//! small limits (what the generator makes fits them; a fuzzer-grown file past them is refused
+//! in one line), it must load or be refused in one line, bake by every method with levels cut
+//! by small triangle budgets, and every level it exports, and the file holding them all under
+//! MSFT_lod, must read back.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use lodlab::bake::lod::{LodOptions, bake_lods, model_height};
+use lodlab::bake::simplify::Method;
+use lodlab::generate::glb::{to_glb, to_lod_glb};
+use lodlab::generate::wild::structure::structure_file;
+use lodlab::import::gltf::from_bytes;
+use lodlab::import::validate::Limits;
+use lodlab::model::{Model, SkinnedMesh};
+
+fuzz_target!(|data: &[u8]| {
+    let base = std::path::Path::new("/nonexistent-lodlab-fuzz");
+    let limits = Limits {
+        vertices: 2_000,
+        triangles: 2_000,
+        joints: 16,
+        clips_seconds: 30.0,
+        texture_mb: 1,
+        decoded_mb: 4,
+        ..Limits::DEFAULT
+    };
+    let (model, _) = match from_bytes("fuzz", structure_file(data), base, &limits) {
+        Ok(m) => m,
+        Err(e) => {
+            assert!(!e.contains('\n'), "{e}");
+            return;
+        }
+    };
+    let triangles = model.mesh.triangle_count() as u32;
+    let options = LodOptions {
+        budgets: Some(vec![(triangles * 2 / 3).max(1), (triangles / 3).max(1), 1]),
+        ..LodOptions::from_pixels(1.5, model_height(&model))
+    };
+    for method in Method::ALL {
+        let lods = bake_lods(&model, method, &options, &|_| {});
+        assert!(!lods.levels.is_empty());
+        let meshes: Vec<SkinnedMesh> = lods
+            .levels
+            .iter()
+            .map(|l| l.mesh.to_skinned(&model.skeleton))
+            .collect();
+        for mesh in &meshes {
+            let bytes = to_glb(&Model {
+                mesh: mesh.clone(),
+                ..model.clone()
+            });
+            let (back, _) = from_bytes("level", bytes, base, &limits)
+                .expect("an exported level reads back");
+            assert!(back.mesh.triangle_count() <= mesh.triangle_count());
+        }
+        let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
+        let coverage: Vec<f32> = (0..refs.len()).map(|k| 0.5f32.powi(k as i32 + 1)).collect();
+        let all = to_lod_glb(&model, &refs, &coverage, "fuzz");
+        from_bytes("levels", all, base, &limits).expect("the MSFT_lod file reads back");
+    }
+});
