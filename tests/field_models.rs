@@ -266,6 +266,40 @@ fn files_gltfpack_simplified_and_quantised_load_and_bake() {
     }
 }
 
+/// `model` baked by every method at the viewer's options, each level written as glTF and read
+/// back with the triangles it draws (`seed` names the model in failures): the levels' meshes by
+/// method.
+fn levels_read_back(model: &Model, seed: u64, dir: &Path) -> Vec<(Method, Vec<SkinnedMesh>)> {
+    let limits = lodlab::import::validate::limits();
+    let opts = lodlab::runtime::levels::runtime_options(model);
+    Method::ALL
+        .into_iter()
+        .map(|method| {
+            let lods = bake_lods(model, method, &opts, &|_| {});
+            assert!(!lods.levels.is_empty(), "seed {seed} {method}");
+            let meshes: Vec<SkinnedMesh> = lods
+                .levels
+                .iter()
+                .map(|l| l.mesh.to_skinned(&model.skeleton))
+                .collect();
+            for mesh in &meshes {
+                let one = lodlab::generate::glb::to_glb(&Model {
+                    mesh: mesh.clone(),
+                    ..model.clone()
+                });
+                let (back, _) = lodlab::import::gltf::from_bytes("level", one, dir, &limits)
+                    .unwrap_or_else(|e| panic!("seed {seed} {method}: {e}"));
+                assert_eq!(
+                    back.mesh.triangle_count(),
+                    drawn(mesh),
+                    "seed {seed} {method}"
+                );
+            }
+            (method, meshes)
+        })
+        .collect()
+}
+
 /// Valid files of random meshes (coincident points, degenerate and repeated triangles,
 /// unused vertices, several skins): each loads (or, where nothing in it draws, is refused in
 /// one line), bakes by every method, and its levels written as glTF read back as baked.
@@ -291,33 +325,12 @@ fn random_meshes_load_bake_and_export() {
             }
         };
         loaded += 1;
-        let opts = lodlab::runtime::levels::runtime_options(&model);
-        for method in Method::ALL {
-            let lods = bake_lods(&model, method, &opts, &|_| {});
-            assert!(!lods.levels.is_empty(), "seed {seed} {method}");
-            let meshes: Vec<SkinnedMesh> = lods
-                .levels
-                .iter()
-                .map(|l| l.mesh.to_skinned(&model.skeleton))
-                .collect();
+        for (method, meshes) in levels_read_back(&model, seed, dir.path()) {
             let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
             let coverage: Vec<f32> = (0..meshes.len())
                 .map(|k| 0.5f32.powi(k as i32 + 1))
                 .collect();
             let bytes = lodlab::generate::glb::to_lod_glb(&model, &refs, &coverage, "test");
-            for mesh in &meshes {
-                let one = lodlab::generate::glb::to_glb(&Model {
-                    mesh: mesh.clone(),
-                    ..model.clone()
-                });
-                let (back, _) = lodlab::import::gltf::from_bytes("level", one, dir.path(), &limits)
-                    .unwrap_or_else(|e| panic!("seed {seed} {method}: {e}"));
-                assert_eq!(
-                    back.mesh.triangle_count(),
-                    drawn(mesh),
-                    "seed {seed} {method}"
-                );
-            }
             if seed % 10 == 0 {
                 let path = dir.path().join(format!("random-{seed}-{method}.glb"));
                 std::fs::write(&path, bytes).unwrap();
@@ -367,28 +380,7 @@ fn random_structures_load_bake_and_export() {
             }
         };
         loaded += 1;
-        let opts = lodlab::runtime::levels::runtime_options(&model);
-        for method in Method::ALL {
-            let lods = bake_lods(&model, method, &opts, &|_| {});
-            assert!(!lods.levels.is_empty(), "seed {seed} {method}");
-            let meshes: Vec<SkinnedMesh> = lods
-                .levels
-                .iter()
-                .map(|l| l.mesh.to_skinned(&model.skeleton))
-                .collect();
-            for mesh in &meshes {
-                let one = lodlab::generate::glb::to_glb(&Model {
-                    mesh: mesh.clone(),
-                    ..model.clone()
-                });
-                let (back, _) = lodlab::import::gltf::from_bytes("level", one, dir.path(), &limits)
-                    .unwrap_or_else(|e| panic!("seed {seed} {method}: {e}"));
-                assert_eq!(
-                    back.mesh.triangle_count(),
-                    drawn(mesh),
-                    "seed {seed} {method}"
-                );
-            }
+        for (method, meshes) in levels_read_back(&model, seed, dir.path()) {
             if seed % 10 == 0 {
                 let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
                 let coverage: Vec<f32> = (0..meshes.len())
@@ -610,5 +602,48 @@ fn normal_maps_do_not_make_the_worst_tile_worse() {
             s.worst_tile_normal_maps,
             s.worst_tile_vertex_normals
         );
+    }
+}
+
+/// The `valid_structure` fuzzer's first find (250,000 runs in): a file of random structure
+/// whose levels, cut by triangle budgets, exported and read back, were refused as having "no
+/// triangles that draw".
+#[test]
+fn a_random_structures_levels_read_back() {
+    let bytes = [
+        43u8, 41, 19, 3, 126, 126, 126, 126, 126, 126, 126, 126, 50, 8, 0, 0, 185, 97, 169, 0, 0,
+        35, 131, 131, 67, 101, 0, 97, 99, 101, 0, 47, 169, 67, 67, 169, 0, 0, 35, 131, 131, 131,
+        131, 131, 131, 169, 101, 0, 47, 169, 67, 67, 70, 67, 101, 0, 97, 99, 99, 101, 115, 115,
+        111, 114, 72, 255, 255, 120, 255, 255, 255, 255, 101, 0, 47, 70, 67, 101, 0, 97, 99, 99,
+        101, 115, 115, 111, 114, 72, 255, 255, 120, 255, 255, 255, 255, 101, 0, 47, 169,
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let limits = lodlab::import::validate::limits();
+    let file = wild::structure::structure_file(&bytes);
+    let (model, _) =
+        lodlab::import::gltf::from_bytes("structure", file, dir.path(), &limits).expect("loads");
+    let triangles = model.mesh.triangle_count() as u32;
+    let options = lodlab::bake::lod::LodOptions {
+        budgets: Some(vec![(triangles * 2 / 3).max(1), (triangles / 3).max(1), 1]),
+        ..lodlab::bake::lod::LodOptions::from_pixels(1.5, lodlab::bake::lod::model_height(&model))
+    };
+    for method in Method::ALL {
+        let lods = bake_lods(&model, method, &options, &|_| {});
+        for (k, level) in lods.levels.iter().enumerate() {
+            let mesh = level.mesh.to_skinned(&model.skeleton);
+            let one = lodlab::generate::glb::to_glb(&Model {
+                mesh: mesh.clone(),
+                ..model.clone()
+            });
+            let back = lodlab::import::gltf::from_bytes("level", one, dir.path(), &limits);
+            assert!(
+                back.is_ok(),
+                "{method} level {k} of {}: {} triangles ({} drawn): {:?}",
+                lods.levels.len(),
+                mesh.triangle_count(),
+                drawn(&mesh),
+                back.err()
+            );
+        }
     }
 }

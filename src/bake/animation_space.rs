@@ -142,6 +142,25 @@ impl AnimationSpaceMesh {
         &self.influences[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 
+    /// Whether some triangle covers area in some pose: its corners are three points in
+    /// animation space (`v = Σ G_i p_i` with different `p_i`). Two corners with the same
+    /// influences are one point in every pose, and such a triangle never covers a pixel.
+    pub fn draws(&self) -> bool {
+        self.indices.chunks_exact(3).any(|t| {
+            // Normals aside: two corners with different normals are still one point.
+            let same = |a: u32, b: u32| {
+                let (x, y) = (
+                    self.influences_of(a as usize),
+                    self.influences_of(b as usize),
+                );
+                a == b
+                    || (x.len() == y.len()
+                        && x.iter().zip(y).all(|(i, j)| i.bone == j.bone && i.p == j.p))
+            };
+            !same(t[0], t[1]) && !same(t[1], t[2]) && !same(t[2], t[0])
+        })
+    }
+
     /// The same mesh in the order a GPU draws fastest: triangles reordered for the
     /// post-transform vertex cache, then vertices renumbered in order of first use
     /// (meshoptimizer's `optimizeVertexCache` and `optimizeVertexFetchRemap`). Vertices no

@@ -337,6 +337,44 @@ fn page_times(model: &Model, frames: u32) -> Vec<(Option<&crate::model::Clip>, f
         .collect()
 }
 
+/// The most triangles an impostor is drawn from. Its views are a few dozen pixels across, and
+/// every page draws the model once a view (144 views by default): a 2-million-triangle
+/// character is thousands of triangles a pixel there, and hours of a software rasteriser's
+/// time for pictures no different. A larger mesh is simplified to this many first
+/// ([`drawn_for_impostor`]). Every built-in model is under it, drawn as it is.
+pub const IMPOSTOR_TRIANGLES: usize = 32_768;
+
+/// `model`, or where it has more than [`IMPOSTOR_TRIANGLES`] triangles, a copy whose mesh
+/// meshoptimizer has simplified to that many (by position; the vertices it keeps keep their
+/// skin weights, texture coordinates and materials).
+pub fn drawn_for_impostor(model: &Model) -> std::borrow::Cow<'_, Model> {
+    if model.mesh.triangle_count() <= IMPOSTOR_TRIANGLES {
+        return std::borrow::Cow::Borrowed(model);
+    }
+    let adapter =
+        meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&model.mesh.positions), 12, 0)
+            .expect("tightly packed positions");
+    // No error bound: at this count the error is far under a texel of the views anyway.
+    let indices = meshopt::simplify(
+        &model.mesh.indices,
+        &adapter,
+        IMPOSTOR_TRIANGLES * 3,
+        1.0,
+        meshopt::SimplifyOptions::empty(),
+        None,
+    );
+    let mut coarse = model.clone();
+    coarse.mesh.indices = indices;
+    coarse.mesh.drop_unused();
+    log::info!(
+        "{}: impostor drawn from {} of its {} triangles",
+        model.name,
+        coarse.mesh.triangle_count(),
+        model.mesh.triangle_count()
+    );
+    std::borrow::Cow::Owned(coarse)
+}
+
 /// Bakes the animated impostor of `model`: every page's views drawn through `raster` at
 /// twice the cell size, averaged down and dilated, and the error bound measured on the way.
 pub fn bake_animated_impostor(
@@ -344,6 +382,7 @@ pub fn bake_animated_impostor(
     model: &Model,
     options: ImpostorOptions,
 ) -> Result<AnimatedImpostor> {
+    let model = &*drawn_for_impostor(model);
     let name = &model.name;
     let times = page_times(model, options.frames);
     let side = options.page_side();

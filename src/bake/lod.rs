@@ -348,6 +348,12 @@ impl Chain {
     fn push(&mut self, replay: &Replay, seq: &Sequence, error: f32, min_growth: f32) {
         let prefix = replay.applied();
         let level = replay.snapshot(prefix, error, seq.error_after(prefix));
+        // A level whose every triangle has two corners at one point in every pose (influence
+        // simplification can give two vertices at one rest point the same influences) would
+        // show nothing: the coarsest level that draws stays the coarsest.
+        if !self.levels.is_empty() && !level.mesh.draws() {
+            return;
+        }
         if self.levels.len() > 1
             && self
                 .levels

@@ -639,6 +639,19 @@ impl Binding<'_> {
     }
 }
 
+/// A primitive's vertex accessors: each attribute's name and accessor, sorted.
+type VertexAccessors = Vec<(String, usize)>;
+
+/// What a primitive draws and where: two equal ones draw the same triangles in one place.
+#[derive(PartialEq, Eq, Hash)]
+struct DrawnPrimitive {
+    attributes: VertexAccessors,
+    indices: Option<usize>,
+    mode: u32,
+    material: Option<usize>,
+    place: BindingKey,
+}
+
 /// Where a binding puts a primitive, hashable: a skin (by its joint map, which the import
 /// holds for as long as the meshes are read), or a bone and a transform.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -664,36 +677,30 @@ fn read_meshes(
     let mut needs_normals: Vec<bool> = Vec::new();
     // Where the vertices of each set of vertex accessors went (and how many), by where they
     // are drawn and in which material.
-    let mut vertex_bases: HashMap<(Vec<(String, usize)>, BindingKey, u16), (u32, usize)> =
+    let mut vertex_bases: HashMap<(VertexAccessors, BindingKey, u16), (u32, usize)> =
         HashMap::new();
     // Primitives read, by their accessors, mode and material and where they are drawn: one
     // drawn again in the same place (a mesh on a second node of the same skin, or of the same
     // transform; the same primitive listed again, over one accessor, thousands of times)
     // would only repeat every triangle exactly, on top of itself.
-    let mut drawn: HashSet<(
-        Vec<(String, usize)>,
-        Option<usize>,
-        u32,
-        Option<usize>,
-        BindingKey,
-    )> = HashSet::new();
+    let mut drawn: HashSet<DrawnPrimitive> = HashSet::new();
     let mut repeated = 0usize;
     let mut morphed = 0;
     for (node, binding) in nodes {
         let Some(m) = node.mesh() else { continue };
         for prim in m.primitives() {
-            let mut attributes: Vec<(String, usize)> = prim
+            let mut attributes: VertexAccessors = prim
                 .attributes()
                 .map(|(s, a)| (s.to_string(), a.index()))
                 .collect();
             attributes.sort();
-            let this = (
-                attributes.clone(),
-                prim.indices().map(|a| a.index()),
-                prim.mode().as_gl_enum(),
-                prim.material().index(),
-                binding.key(),
-            );
+            let this = DrawnPrimitive {
+                attributes: attributes.clone(),
+                indices: prim.indices().map(|a| a.index()),
+                mode: prim.mode().as_gl_enum(),
+                material: prim.material().index(),
+                place: binding.key(),
+            };
             if !drawn.insert(this) {
                 repeated += 1;
                 continue;

@@ -157,15 +157,12 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
                 ..Default::default()
             });
             if !vertices.is_empty() {
-                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("atlas triangles"),
-                    contents: bytemuck::cast_slice(vertices),
-                    usage: wgpu::BufferUsages::VERTEX,
-                });
                 pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &bind, &[]);
-                pass.set_vertex_buffer(0, buffer.slice(..));
-                pass.draw(0..vertices.len() as u32, 0..1);
+                for (buffer, count) in triangle_buffers(device, "atlas triangles", vertices) {
+                    pass.set_vertex_buffer(0, buffer.slice(..));
+                    pass.draw(0..count, 0..1);
+                }
             }
         }
         gpu.queue.submit([enc.finish()]);
@@ -236,11 +233,6 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
                 ..Default::default()
             });
             if !request.vertices.is_empty() && !request.views.is_empty() {
-                let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("impostor triangles"),
-                    contents: bytemuck::cast_slice(&request.vertices),
-                    usage: wgpu::BufferUsages::VERTEX,
-                });
                 let views = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("impostor cameras"),
                     contents: bytemuck::cast_slice(&request.views),
@@ -248,12 +240,13 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
                 });
                 pass.set_pipeline(&self.views.1);
                 pass.set_bind_group(0, &bind, &[]);
-                pass.set_vertex_buffer(0, vertices.slice(..));
                 pass.set_vertex_buffer(1, views.slice(..));
-                pass.draw(
-                    0..request.vertices.len() as u32,
-                    0..request.views.len() as u32,
-                );
+                for (buffer, count) in
+                    triangle_buffers(device, "impostor triangles", &request.vertices)
+                {
+                    pass.set_vertex_buffer(0, buffer.slice(..));
+                    pass.draw(0..count, 0..request.views.len() as u32);
+                }
             }
         }
         gpu.queue.submit([enc.finish()]);
@@ -270,6 +263,31 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
             normal: image(&normal)?,
         })
     }
+}
+
+/// `vertices` (whole triangles, unindexed) in vertex buffers no larger than the device takes,
+/// with their vertex counts, to be drawn in turn: a 2-million-triangle character drawn
+/// unindexed for its impostor is 280 MB, past lavapipe's 256 MB buffers.
+fn triangle_buffers<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    label: &str,
+    vertices: &[T],
+) -> Vec<(wgpu::Buffer, u32)> {
+    let largest = device.limits().max_buffer_size as usize;
+    let per = (largest / std::mem::size_of::<T>().max(1) / 3 * 3)
+        .min(u32::MAX as usize / 3 * 3)
+        .max(3);
+    vertices
+        .chunks(per)
+        .map(|chunk| {
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(chunk),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            (buffer, chunk.len() as u32)
+        })
+        .collect()
 }
 
 /// The impostor views' pipeline: tree triangles per vertex, views per instance, two colour

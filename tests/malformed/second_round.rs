@@ -221,6 +221,25 @@ fn shared_texture(image: &[u8], mime: &str, materials: usize) -> Vec<u8> {
     })
 }
 
+/// The tiny model textured by a 1×1 image, its texture coordinates spanning `extent` texture
+/// widths across the strip (and a quarter of that up it): tiled that many times.
+fn textured_tiny(extent: f32) -> Vec<u8> {
+    tiny_with(|j, append| {
+        let uvs: Vec<f32> = (0..10)
+            .flat_map(|i| [(i % 2) as f32 * extent, (i / 2) as f32 * extent / 4.0])
+            .collect();
+        let v = append(&f32s(&uvs));
+        let a = accessor(
+            j,
+            json!({"bufferView": v, "componentType": 5126, "count": 10, "type": "VEC2"}),
+        );
+        prim(j)["attributes"]["TEXCOORD_0"] = json!(a);
+        j["images"] = json!([{"uri": "data:image/png;base64,".to_string() + &base64(&png(1))}]);
+        j["textures"] = json!([{"source": 0}]);
+        j["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    })
+}
+
 /// A sparse substitution of element 0 by one zero value of `size` bytes: what lets an
 /// accessor without a buffer view claim any count (its other elements are zeros).
 fn one_sparse_value(append: &mut dyn FnMut(&[u8]) -> usize, size: usize) -> Value {
@@ -408,20 +427,7 @@ fn cases(dir: &Path) -> Vec<Case> {
     );
     c.add(
         "texcoords-0-to-1000.glb",
-        tiny_with(|j, append| {
-            let uvs: Vec<f32> = (0..10)
-                .flat_map(|i| [(i % 2) as f32 * 1000.0, (i / 2) as f32 * 250.0])
-                .collect();
-            let v = append(&f32s(&uvs));
-            let a = accessor(
-                j,
-                json!({"bufferView": v, "componentType": 5126, "count": 10, "type": "VEC2"}),
-            );
-            prim(j)["attributes"]["TEXCOORD_0"] = json!(a);
-            j["images"] = json!([{"uri": "data:image/png;base64,".to_string() + &base64(&png(1))}]);
-            j["textures"] = json!([{"source": 0}]);
-            j["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
-        }),
+        textured_tiny(1000.0),
         Expect::Succeeds,
     );
     c.add(
@@ -831,20 +837,7 @@ fn cases(dir: &Path) -> Vec<Case> {
     );
     c.add(
         "texcoords-tiled-50.glb",
-        tiny_with(|j, append| {
-            let uvs: Vec<f32> = (0..10)
-                .flat_map(|i| [(i % 2) as f32 * 50.0, (i / 2) as f32 * 12.5])
-                .collect();
-            let v = append(&f32s(&uvs));
-            let a = accessor(
-                j,
-                json!({"bufferView": v, "componentType": 5126, "count": 10, "type": "VEC2"}),
-            );
-            prim(j)["attributes"]["TEXCOORD_0"] = json!(a);
-            j["images"] = json!([{"uri": "data:image/png;base64,".to_string() + &base64(&png(1))}]);
-            j["textures"] = json!([{"source": 0}]);
-            j["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
-        }),
+        textured_tiny(50.0),
         Expect::Succeeds,
     );
     c.add(
@@ -1109,15 +1102,16 @@ fn odd_and_hostile_files_are_refused_in_one_line_or_baked() {
     );
 }
 
-/// A cache file that is a FIFO, a link to `/dev/zero` or a folder is unusable, not read: the
-/// bake warns, bakes again, and leaves what is there alone (it may be the user's).
+/// A cache file that is a FIFO, a link to `/dev/zero` or 3 GiB long (a sparse file, more than
+/// any cache file holds) is unusable, not read: the bake warns, bakes again, and leaves what is
+/// there alone (it may be the user's).
 #[test]
 fn cache_files_that_are_not_regular_files_are_passed_over() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("tiny.glb");
     std::fs::write(&model, tiny()).unwrap();
     let cache = dir.path().join("cache");
-    let args: Vec<String> = ["bake", "--methods", "rest-pose,as", "--cache"]
+    let args: Vec<String> = ["bake", "--methods", "rest-pose,as,as+is", "--cache"]
         .iter()
         .map(|s| s.to_string())
         .chain([cache.display().to_string(), model.display().to_string()])
@@ -1130,7 +1124,7 @@ fn cache_files_that_are_not_regular_files_are_passed_over() {
         .filter(|p| p.extension().is_some_and(|e| e == "lods"))
         .collect();
     files.sort();
-    assert!(files.len() >= 2, "{files:?}");
+    assert!(files.len() >= 3, "{files:?}");
     std::fs::remove_file(&files[0]).unwrap();
     assert!(
         Command::new("mkfifo")
@@ -1141,11 +1135,17 @@ fn cache_files_that_are_not_regular_files_are_passed_over() {
     );
     std::fs::remove_file(&files[1]).unwrap();
     std::os::unix::fs::symlink("/dev/zero", &files[1]).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&files[2])
+        .unwrap()
+        .set_len(3 << 30)
+        .unwrap();
     let started = Instant::now();
     let (code, stderr) = run_within(&args, Duration::from_secs(120));
     assert_eq!(code, Some(0), "{stderr}");
     assert!(started.elapsed() < Duration::from_secs(110));
-    for f in &files[..2] {
+    for f in &files[..3] {
         let shown = f.display().to_string();
         assert!(
             stderr.contains(&shown),
@@ -1164,6 +1164,8 @@ fn cache_files_that_are_not_regular_files_are_passed_over() {
             .file_type()
             .is_symlink()
     );
+    // The oversized one was a regular file in the cache: baked again in its place.
+    assert!(std::fs::metadata(&files[2]).unwrap().len() < 1 << 20);
 }
 
 /// The valid but odd files, as a user meets them beyond `bake`: each renders

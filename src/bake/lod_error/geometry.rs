@@ -85,6 +85,8 @@ struct TriangleGrid {
     lo: DVec3,
     cell: f64,
     dims: [usize; 3],
+    /// Triangles binned.
+    count: usize,
     /// Cell `i`'s triangles are `items[start[i]..start[i + 1]]`.
     start: Vec<u32>,
     items: Vec<u32>,
@@ -113,6 +115,7 @@ impl TriangleGrid {
             lo,
             cell,
             dims,
+            count: corners.len(),
             start: vec![0; dims[0] * dims[1] * dims[2] + 1],
             items: Vec::new(),
         };
@@ -180,10 +183,26 @@ impl TriangleGrid {
         out: &mut Vec<(f64, u32)>,
     ) {
         out.clear();
+        let consider = |t: u32, out: &mut Vec<(f64, u32)>| {
+            if out.len() == k && lower2(t) >= out[k - 1].0 {
+                return;
+            }
+            let d = distance2(t);
+            if out.len() < k || d < out[k - 1].0 {
+                let at = out.partition_point(|e| e.0 <= d);
+                out.insert(at, (d, t));
+                out.truncate(k);
+            }
+        };
         let c = self.cell_of(p).map(|x| x as i64);
         let dims = self.dims.map(|d| d as i64);
         let rings = dims.iter().copied().max().unwrap_or(1);
         let mut seen: Vec<u32> = Vec::new();
+        // Cells looked at so far: a point far from a sparse surface (a coarse level whose
+        // parts were pruned, far from where the original's samples lie) would search ring
+        // after empty ring, each larger than the last; once the rings cost more than looking
+        // at every triangle, every triangle is looked at instead.
+        let mut visited = 0usize;
         for r in 0..=rings {
             // Every cell of ring r is at least r − 1 cells from the point.
             if out.len() == k {
@@ -193,9 +212,33 @@ impl TriangleGrid {
                 }
             }
             let range = |i: usize| (c[i] - r).max(0)..=(c[i] + r).min(dims[i] - 1);
+            let shell: usize = (0..3).map(|i| range(i).count()).product::<usize>()
+                - (0..3)
+                    .map(|i| ((c[i] - r + 1).max(0)..=(c[i] + r - 1).min(dims[i] - 1)).count())
+                    .product::<usize>();
+            visited += shell;
+            if visited > 4 * self.count + 64 {
+                out.clear();
+                for t in 0..self.count as u32 {
+                    consider(t, out);
+                }
+                return;
+            }
             for z in range(2) {
                 for y in range(1) {
-                    for x in range(0) {
+                    // Inside the shell's faces in z and y, only its two x ends are on ring r:
+                    // step from one to the other.
+                    let inner = (y - c[1]).abs() < r && (z - c[2]).abs() < r;
+                    let (x0, x1) = (*range(0).start(), *range(0).end());
+                    let (first, last, step) = if inner {
+                        (c[0] - r, c[0] + r, 2 * r)
+                    } else {
+                        (x0, x1, 1)
+                    };
+                    for x in (first..=last).step_by(step as usize) {
+                        if x < x0 || x > x1 {
+                            continue;
+                        }
                         let ring = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
                         if ring != r {
                             continue;
@@ -215,15 +258,7 @@ impl TriangleGrid {
                                 continue;
                             }
                             seen.push(t);
-                            if out.len() == k && lower2(t) >= out[k - 1].0 {
-                                continue;
-                            }
-                            let d = distance2(t);
-                            if out.len() < k || d < out[k - 1].0 {
-                                let at = out.partition_point(|e| e.0 <= d);
-                                out.insert(at, (d, t));
-                                out.truncate(k);
-                            }
+                            consider(t, out);
                         }
                     }
                 }

@@ -5,35 +5,12 @@
 //! triangles repeating a vertex or another triangle, vertices no triangle uses, a fan of one
 //! triangle, several primitives and skins of one to four bones, weights of any spread.
 
+use super::Choices;
 use super::file::{DocMesh, DocPrimitive, DocSkin, Document};
 use crate::model::{
     Channel, ChannelTarget, Clip, Influence, Interpolation, Material, SkinnedMesh, Trs,
 };
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
-
-/// Reads the bytes as numbers, then zeros once they run out.
-struct Bytes<'a> {
-    data: &'a [u8],
-    at: usize,
-}
-
-impl Bytes<'_> {
-    fn byte(&mut self) -> u8 {
-        let b = self.data.get(self.at).copied().unwrap_or(0);
-        self.at += 1;
-        b
-    }
-
-    /// A whole number in `lo..=hi`.
-    fn within(&mut self, lo: usize, hi: usize) -> usize {
-        lo + self.byte() as usize % (hi - lo + 1)
-    }
-
-    /// A coordinate on a grid of 1/16 from −2 to 2: coarse, so points coincide.
-    fn coordinate(&mut self) -> f32 {
-        (self.byte() as f32 - 128.0) / 32.0
-    }
-}
 
 /// The file `bytes` describe (any bytes make one).
 pub fn random_file(bytes: &[u8]) -> Vec<u8> {
@@ -42,7 +19,7 @@ pub fn random_file(bytes: &[u8]) -> Vec<u8> {
 
 /// The document `bytes` describe.
 pub fn random_document(bytes: &[u8]) -> Document {
-    let mut r = Bytes { data: bytes, at: 0 };
+    let mut r = Choices::new(bytes);
     let bones = r.within(1, 4);
     let mut doc = Document {
         generator: "lodlab random mesh".into(),

@@ -18,71 +18,13 @@
 //! primitives, 24 vertices and 32 triangles a primitive), so that a fuzzer runs import, bake
 //! and export on each in milliseconds.
 
+use super::Choices;
 use super::file::{DocMesh, DocPrimitive, DocSkin, Document};
 use crate::model::{
     AlphaMode, Channel, ChannelTarget, Clip, Influence, Interpolation, Material, Rgba8Image,
     SkinnedMesh, Trs,
 };
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
-
-/// Reads the bytes as choices, then zeros once they run out.
-struct Choices<'a> {
-    data: &'a [u8],
-    at: usize,
-}
-
-impl Choices<'_> {
-    fn byte(&mut self) -> u8 {
-        let b = self.data.get(self.at).copied().unwrap_or(0);
-        self.at += 1;
-        b
-    }
-
-    /// A whole number in `lo..=hi`.
-    fn within(&mut self, lo: usize, hi: usize) -> usize {
-        lo + self.byte() as usize % (hi - lo + 1)
-    }
-
-    /// One time in `n`.
-    fn one_in(&mut self, n: u8) -> bool {
-        self.byte().is_multiple_of(n)
-    }
-
-    /// A number from −1 to 1 on a grid of 1/128.
-    fn signed(&mut self) -> f32 {
-        (self.byte() as f32 - 128.0) / 128.0
-    }
-
-    fn vec3(&mut self) -> Vec3 {
-        Vec3::new(self.signed(), self.signed(), self.signed())
-    }
-
-    /// A turn about an axis, up to half a turn (the identity when the axis comes out zero).
-    fn rotation(&mut self) -> Quat {
-        let axis = self.vec3().normalize_or_zero();
-        let angle = self.signed() * std::f32::consts::PI;
-        if axis == Vec3::ZERO {
-            Quat::IDENTITY
-        } else {
-            Quat::from_axis_angle(axis, angle)
-        }
-    }
-
-    /// A scale: mostly one; now and then uniform from 0.5 to 2, not uniform, or mirroring one
-    /// axis.
-    fn scale(&mut self) -> Vec3 {
-        match self.byte() % 8 {
-            0 => Vec3::splat(0.5 + 1.5 * (self.byte() as f32 / 255.0)),
-            1 => Vec3::new(
-                0.5 + self.byte() as f32 / 170.0,
-                0.5 + self.byte() as f32 / 170.0,
-                0.5 + self.byte() as f32 / 170.0,
-            ),
-            2 => Vec3::new(-1.0, 1.0, 1.0),
-            _ => Vec3::ONE,
-        }
-    }
-}
 
 /// The file `bytes` describe (any bytes make one).
 pub fn structure_file(bytes: &[u8]) -> Vec<u8> {
@@ -91,7 +33,7 @@ pub fn structure_file(bytes: &[u8]) -> Vec<u8> {
 
 /// The document `bytes` describe.
 pub fn structure_document(bytes: &[u8]) -> Document {
-    let mut r = Choices { data: bytes, at: 0 };
+    let mut r = Choices::new(bytes);
     let mut doc = Document {
         generator: "lodlab random structure".into(),
         ..Default::default()
