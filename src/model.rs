@@ -131,6 +131,20 @@ impl SkinnedMesh {
         self.indices.len() / 3
     }
 
+    /// Whether some triangle covers area in some pose. Two corners at one point with one skin
+    /// stay at one point in every pose: a triangle with two such corners never covers a pixel.
+    pub fn draws(&self) -> bool {
+        let collapsed = |a: u32, b: u32| {
+            let (a, b) = (a as usize, b as usize);
+            a == b
+                || (self.positions[a] == self.positions[b]
+                    && self.influences_of(a) == self.influences_of(b))
+        };
+        self.indices
+            .chunks_exact(3)
+            .any(|t| !collapsed(t[0], t[1]) && !collapsed(t[1], t[2]) && !collapsed(t[2], t[0]))
+    }
+
     pub fn influences_of(&self, vertex: usize) -> &[Influence] {
         let a = self.influence_offsets[vertex] as usize;
         let b = self.influence_offsets[vertex + 1] as usize;

@@ -23,8 +23,7 @@ fuzz_target!(|data: &[u8]| {
     let options = lodlab::runtime::levels::runtime_options(&model);
     for method in Method::ALL {
         let lods = bake_lods(&model, method, &options, &|_| {});
-        for level in &lods.levels {
-            let mesh = level.mesh.to_skinned(&model.skeleton);
+        for mesh in lodlab::app::export::level_meshes(&model, &lods) {
             let triangles = mesh.triangle_count();
             let bytes = to_glb(&Model {
                 mesh,

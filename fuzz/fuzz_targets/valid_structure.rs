@@ -8,6 +8,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use lodlab::app::export::level_meshes;
 use lodlab::bake::lod::{LodOptions, bake_lods, model_height};
 use lodlab::bake::simplify::Method;
 use lodlab::generate::glb::{to_glb, to_lod_glb};
@@ -42,11 +43,9 @@ fuzz_target!(|data: &[u8]| {
     for method in Method::ALL {
         let lods = bake_lods(&model, method, &options, &|_| {});
         assert!(!lods.levels.is_empty());
-        let meshes: Vec<SkinnedMesh> = lods
-            .levels
-            .iter()
-            .map(|l| l.mesh.to_skinned(&model.skeleton))
-            .collect();
+        assert!(lods.levels[0].mesh.draws(), "full detail draws");
+        // What `lodlab export` writes.
+        let meshes = level_meshes(&model, &lods);
         for mesh in &meshes {
             let bytes = to_glb(&Model {
                 mesh: mesh.clone(),

@@ -11,7 +11,7 @@
 //! [`AnimationSpaceMesh::to_skinned`]: crate::bake::animation_space::AnimationSpaceMesh::to_skinned
 
 use crate::bake::cache::{LodCache, Origin, source_hash};
-use crate::bake::lod::model_height;
+use crate::bake::lod::{SkinnedLods, model_height};
 use crate::bake::simplify::Method;
 use crate::error::InputError;
 use crate::generate::glb::{to_glb, to_lod_glb};
@@ -114,6 +114,24 @@ fn coverage_hints(switch_px: &[f32], aspect: f32) -> Vec<f32> {
     hints
 }
 
+/// The meshes `export` writes for `lods`' levels: each level skinned as glTF skins
+/// (linear blend skinning), finest first, down to the coarsest that still draws. Animation
+/// space holds more than a skin does: after influence simplification two vertices at one rest
+/// point can move apart in animation space and not as a skin, so a coarse level of a few
+/// triangles can draw nothing once skinned (found by the `valid_structure` fuzzer); such a
+/// level, and any after it, is left out.
+pub fn level_meshes(model: &Model, lods: &SkinnedLods) -> Vec<SkinnedMesh> {
+    let mut meshes: Vec<SkinnedMesh> = Vec::with_capacity(lods.levels.len());
+    for level in &lods.levels {
+        let mesh = level.mesh.to_skinned(&model.skeleton);
+        if !meshes.is_empty() && !mesh.draws() {
+            break;
+        }
+        meshes.push(mesh);
+    }
+    meshes
+}
+
 pub fn run(opts: &ExportOptions) -> Result<Exported> {
     let model = load_model(&opts.model)?;
     if crate::bake::billboard::is_tree(&model) {
@@ -137,23 +155,19 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
         .ok_or_else(|| anyhow::anyhow!("{}: an empty mesh", opts.model))?;
     let height = model_height(&model);
     let aspect = bounds.size().x.max(bounds.size().z) / height.max(1e-6);
-    let meshes: Vec<SkinnedMesh> = lods
-        .levels
-        .iter()
-        .map(|l| l.mesh.to_skinned(&model.skeleton))
-        .collect();
+    let meshes = level_meshes(&model, &lods);
+    let kept = &lods.levels[..meshes.len()];
     let stem = file_stem(&model.name);
     // The next level takes over where its error projects to the tolerance.
-    let switch_px: Vec<f32> = (0..lods.levels.len())
+    let switch_px: Vec<f32> = (0..kept.len())
         .map(|k| {
-            lods.levels
-                .get(k + 1)
+            kept.get(k + 1)
                 .map_or(0.0, |n| opts.tolerance_px * height / n.error.max(1e-9))
         })
         .collect();
     let hints = coverage_hints(&switch_px, aspect);
     let mut levels = Vec::with_capacity(meshes.len());
-    for (k, (level, mesh)) in lods.levels.iter().zip(&meshes).enumerate() {
+    for (k, (level, mesh)) in kept.iter().zip(&meshes).enumerate() {
         let next = hints[k];
         let bytes = to_glb(&with_mesh(&model, mesh.clone()));
         let file = opts
