@@ -629,10 +629,63 @@ fn random_structures_levels_read_back() {
     }
 }
 
+/// The `valid_structure` fuzzer's third find (290,000 runs in): a file whose skin had as many
+/// joints as the limit allowed, and whose unskinned parts each ride on a node of their own
+/// (so each node is one more bone). It loaded; its export holds every bone in one skin and
+/// was refused on reading back. The limit counts bones, what the file expands to: at the
+/// model's bone count it loads and its export reads back, one below it is refused naming the
+/// option.
+#[test]
+fn joint_limit_counts_the_bones_a_file_makes() {
+    let bytes: &[u8] = &[
+        36, 125, 35, 255, 255, 40, 255, 191, 255, 43, 41, 19, 67, 126, 126, 126, 1, 0, 1, 48, 126,
+        50, 210, 0, 0, 185, 97, 0, 169, 0, 100, 134, 134, 134, 134, 166, 134, 134, 134, 134, 134,
+        134, 141, 0, 0, 0, 0, 0, 0, 185, 97, 169, 87, 87, 87, 87, 87, 87, 87, 87, 87, 80, 79, 83,
+        73, 84, 73, 87, 87, 0, 2, 0, 245, 245, 245, 245, 245, 245, 134, 134, 134, 134, 134, 134,
+        134, 134, 43, 41, 19, 67, 126, 134, 169, 101, 134, 134, 65, 175, 166, 175, 87, 87, 0, 2, 0,
+        245, 245, 245, 245, 245, 245, 134, 134, 134, 134, 134, 134, 134, 134, 134, 134, 134, 134,
+        134, 134, 134, 134, 134, 134, 134, 134, 134, 134, 134, 134, 134, 6, 134, 134, 134, 134,
+        134, 134, 134, 134, 134, 43, 41, 19, 67, 126, 134, 134, 134, 134, 134, 134, 255, 255, 255,
+        14, 134, 232, 126, 126, 126, 126, 126, 126, 126, 50, 0, 0, 0, 185, 97, 0, 169, 0, 100, 185,
+        97, 169, 87, 87, 87, 87, 87, 87, 87, 87, 87, 80, 79, 83, 73, 84, 73, 87, 87, 0, 2, 0, 245,
+        245, 245, 245, 245, 245, 134, 134, 134, 134, 134, 134, 134, 134, 43, 41, 19, 67, 126, 134,
+        169, 101, 134, 134, 65, 76, 80, 79, 83, 255, 214, 84, 73, 73, 127, 12, 46, 255, 120, 181,
+        181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181,
+        181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181, 181,
+        181, 181, 181, 181, 181, 181, 181, 181, 181, 33, 251, 255, 255, 101, 100, 185, 97, 134,
+        134, 0, 47, 171, 206, 1, 3, 239, 67, 91, 67, 101,
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let file = wild::structure::structure_file(bytes);
+    let limits = lodlab::import::validate::limits();
+    let (model, _) =
+        lodlab::import::gltf::from_bytes("structure", file.clone(), dir.path(), &limits)
+            .expect("loads under the default limits");
+    let bones = model.skeleton.joints.len();
+    let at = lodlab::import::validate::Limits {
+        joints: bones,
+        ..limits
+    };
+    let below = lodlab::import::validate::Limits {
+        joints: bones - 1,
+        ..limits
+    };
+    let Err(e) = lodlab::import::gltf::from_bytes("structure", file.clone(), dir.path(), &below)
+    else {
+        panic!("loaded one bone below the model's {bones}");
+    };
+    assert!(e.contains("bones") && e.contains("--limit joints"), "{e}");
+    let (model, _) =
+        lodlab::import::gltf::from_bytes("structure", file, dir.path(), &at).expect("loads");
+    let export = lodlab::generate::glb::to_glb(&model);
+    lodlab::import::gltf::from_bytes("export", export, dir.path(), &at)
+        .expect("its export reads back under the same limits");
+}
+
 fn levels_by_budget_read_back(bytes: &[u8]) {
     let dir = tempfile::tempdir().unwrap();
     let limits = lodlab::import::validate::limits();
-    let file = wild::structure::structure_file(&bytes);
+    let file = wild::structure::structure_file(bytes);
     let (model, _) =
         lodlab::import::gltf::from_bytes("structure", file, dir.path(), &limits).expect("loads");
     let triangles = model.mesh.triangle_count() as u32;

@@ -31,8 +31,9 @@ pub struct Cli {
     pub view: ViewArgs,
     /// Raise (or lower) a bound on what one model file may ask for or expand to, NAME=VALUE,
     /// repeatable: file-mb (1024: the file and each file it refers to, MiB), nodes (100000),
-    /// joints (1024, all skins together), clip-seconds (600 a clip), clips-seconds (3600, all
-    /// clips), materials (256 textured ones; plain colours share one palette), texture-side
+    /// joints (1024: bones, all skins' joints and the nodes unskinned parts ride on),
+    /// clip-seconds (600 a clip), clips-seconds (3600, all clips), materials (256 textured
+    /// ones; plain colours share one palette), texture-side
     /// (8192 texels), texture-mb (1024: decoded texels of the textured materials), vertices
     /// and triangles (4000000 each, every primitive as often as nodes draw it), decoded-mb
     /// (1024: accessors and decoded compressed views).

@@ -64,6 +64,19 @@ pub fn from_bytes(
     let images = super::sources::read_images(&doc, base, &buffers, limits)?;
     let mut warnings = Vec::new();
     let mut model = build(name, &doc, &buffers, &images, &mut warnings)?;
+    // The skins' joints were counted before reading; an unskinned part riding on a node of
+    // its own makes that node a bone too, and bones are what the animation texture and an
+    // export hold.
+    let bones = model.skeleton.joints.len();
+    if bones > limits.joints {
+        return Err(validate::over(
+            format!(
+                "its skins' joints and the nodes its unskinned parts ride on make {bones} bones"
+            ),
+            limits.joints,
+            "joints",
+        ));
+    }
     let packed = super::palette::pack_plain_colours(&mut model);
     if packed > 0 {
         log::info!("{packed} plain-coloured materials share one palette texture");

@@ -71,7 +71,10 @@ impl Limits {
             "size of a model file and of each file it refers to, MiB",
         ),
         ("nodes", "nodes in a file"),
-        ("joints", "joints of all skins together"),
+        (
+            "joints",
+            "bones: all skins' joints, and the nodes unskinned parts ride on",
+        ),
         ("clip-seconds", "length of a clip"),
         ("clips-seconds", "length of all clips together"),
         ("materials", "textured materials of a model"),
