@@ -6,7 +6,7 @@ use super::MeshError;
 use super::geometry::{Located, Surface};
 use crate::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
 use crate::model::Model;
-use glam::{Affine3A, DVec3};
+use glam::{Affine3A, DVec3, Vec3};
 
 /// The geometric measurement: the distance from every sample of one surface to the other
 /// surface in each frame, both ways. See the module comment.
@@ -14,9 +14,10 @@ pub struct SurfaceProbe<'a> {
     base: &'a AnimationSpaceMesh,
     original: Surface,
     /// The original's render vertices in the rest pose, and posed: vertex `v` in frame `f` at
-    /// `v * frames + f`.
+    /// `v * frames + f`, in single precision as the bone matrices that pose them are (on a
+    /// 2-million-triangle model the frames of both probes took 410 MB in double).
     original_rest: Vec<DVec3>,
-    original_posed: Vec<DVec3>,
+    original_posed: Vec<Vec3>,
     /// A pool of samples of the original surface (triangle, weights, rest point), area-weighted
     /// and in random order, of which those on changed triangles are measured, `forward` at
     /// most.
@@ -53,8 +54,9 @@ struct PosedMesh {
     /// Whether a used vertex's influences differ from the original's.
     moved: Vec<bool>,
     rest: Vec<DVec3>,
-    /// Used vertex `i` in frame `f` at `i * frames + f`.
-    posed: Vec<DVec3>,
+    /// Used vertex `i` in frame `f` at `i * frames + f` (single precision, as
+    /// [`SurfaceProbe::original_posed`]).
+    posed: Vec<Vec3>,
 }
 
 /// A sample of a surface: its triangle (render vertices), weights and rest-pose point.
@@ -172,12 +174,11 @@ impl<'a> SurfaceProbe<'a> {
             })
             .collect();
         let original_triangles = triangles.iter().map(|t| sorted(*t)).collect();
-        let original_posed = (0..base.vertex_count())
-            .flat_map(|v| {
-                let infl = base.influences_of(v);
-                frames.iter().map(move |g| pose_point(g, infl))
-            })
-            .collect();
+        let mut original_posed = Vec::with_capacity(base.vertex_count() * frames.len());
+        for v in 0..base.vertex_count() {
+            let infl = base.influences_of(v);
+            original_posed.extend(frames.iter().map(|g| pose_point(g, infl).as_vec3()));
+        }
         let position = crate::import::weld::position_groups(
             &rest,
             crate::import::weld::tolerance_for(&rest) * 10.0,
@@ -281,11 +282,11 @@ impl<'a> SurfaceProbe<'a> {
         let simplified_fans = Fans::new(triangles, &self.position, self.positions());
         let to_simplified = Reach {
             frames,
-            posed: &|v, f| mesh.posed[mesh.slot[v as usize] as usize * frames + f],
+            posed: &|v, f| mesh.posed[mesh.slot[v as usize] as usize * frames + f].as_dvec3(),
         };
         let to_original = Reach {
             frames,
-            posed: &|v, f| self.original_posed[v as usize * frames + f],
+            posed: &|v, f| self.original_posed[v as usize * frames + f].as_dvec3(),
         };
         // The largest distances sit at cell corners, foremost at the vertices a collapse
         // removed (the original's) and at those an influence removal moved (the simplified
@@ -305,9 +306,9 @@ impl<'a> SurfaceProbe<'a> {
             if let Some(follow) = follow {
                 candidates = self.with_fans(candidates, &simplified_fans, triangles, t.map(follow));
             }
-            let point = |f| {
+            let point = |f: usize| -> DVec3 {
                 (0..3)
-                    .map(|k| self.original_posed[t[k] as usize * frames + f] * w[k])
+                    .map(|k| self.original_posed[t[k] as usize * frames + f].as_dvec3() * w[k])
                     .sum()
             };
             let worst = to_simplified.worst(point, &candidates, enough, &mut sum);
@@ -402,21 +403,16 @@ impl<'a> SurfaceProbe<'a> {
                 }
             })
             .collect();
-        let posed: Vec<DVec3> = used
-            .iter()
-            .zip(&moved)
-            .flat_map(|(&v, &moved)| {
+        let mut posed: Vec<Vec3> = Vec::with_capacity(used.len() * frames);
+        for (&v, &moved) in used.iter().zip(&moved) {
+            let original = &self.original_posed[v as usize * frames..(v as usize + 1) * frames];
+            if moved {
                 let infl = influences(v);
-                let original = &self.original_posed[v as usize * frames..(v as usize + 1) * frames];
-                (0..frames).map(move |f| {
-                    if moved {
-                        pose_point(&self.frames[f], infl)
-                    } else {
-                        original[f]
-                    }
-                })
-            })
-            .collect();
+                posed.extend(self.frames.iter().map(|g| pose_point(g, infl).as_vec3()));
+            } else {
+                posed.extend_from_slice(original);
+            }
+        }
         PosedMesh {
             slot,
             used,
@@ -496,8 +492,9 @@ impl<'a> SurfaceProbe<'a> {
                         let far = match mesh.slot.get(to as usize) {
                             Some(&i) if i != u32::MAX => (0..frames)
                                 .map(|f| {
-                                    mesh.posed[i as usize * frames + f].distance_squared(
-                                        self.original_posed[v as usize * frames + f],
+                                    let a = mesh.posed[i as usize * frames + f].as_dvec3();
+                                    a.distance_squared(
+                                        self.original_posed[v as usize * frames + f].as_dvec3(),
                                     )
                                 })
                                 .fold(0.0, f64::max),
@@ -508,7 +505,8 @@ impl<'a> SurfaceProbe<'a> {
                         let far = if self.every_vertex && far > enough {
                             let p = self.original_rest[v as usize];
                             let near = simplified.nearest(p, 1);
-                            let point = |f: usize| self.original_posed[v as usize * frames + f];
+                            let point =
+                                |f: usize| self.original_posed[v as usize * frames + f].as_dvec3();
                             let mut unused = 0.0;
                             far.min(to_simplified.worst(point, &near, f64::INFINITY, &mut unused))
                         } else {
@@ -559,8 +557,9 @@ impl<'a> SurfaceProbe<'a> {
                 let i = mesh.slot[v as usize] as usize;
                 let shift = (0..frames)
                     .map(|f| {
-                        mesh.posed[i * frames + f]
-                            .distance_squared(self.original_posed[v as usize * frames + f])
+                        mesh.posed[i * frames + f].as_dvec3().distance_squared(
+                            self.original_posed[v as usize * frames + f].as_dvec3(),
+                        )
                     })
                     .fold(0.0, f64::max);
                 (shift, v)
