@@ -265,16 +265,24 @@ impl<'a> Replay<'a> {
     /// The current mesh's distance from full detail, exact above `resolution` (see
     /// [`SurfaceProbe::measure`]).
     fn measure(&self, probe: &SurfaceProbe, resolution: f32) -> f32 {
+        let start = std::time::Instant::now();
         let tris: Vec<[u32; 3]> = self.triangles().collect();
         let follow = |r: u32| self.follow(r);
-        probe
+        let max = probe
             .measure(
                 &tris,
                 |r| self.influences_of(r),
                 Some(&follow),
                 resolution as f64,
             )
-            .max as f32
+            .max as f32;
+        log::debug!(
+            "measured {} triangles in {} frames: {max:.3e} in {:.2} s",
+            tris.len(),
+            probe.frame_count(),
+            start.elapsed().as_secs_f64()
+        );
+        max
     }
 
     /// The current mesh as a compact level: used vertices only, GPU order.

@@ -59,6 +59,9 @@ struct PosedMesh {
     posed: Vec<Vec3>,
 }
 
+/// Removed vertices whose bounds are tightened at a time (see [`SurfaceProbe::measure`]).
+const TIGHTEN_CHUNK: usize = 4096;
+
 /// A sample of a surface: its triangle (render vertices), weights and rest-pose point.
 type SurfaceSample = ([u32; 3], [f64; 3], DVec3);
 
@@ -291,7 +294,7 @@ impl<'a> SurfaceProbe<'a> {
         // The largest distances sit at cell corners, foremost at the vertices a collapse
         // removed (the original's) and at those an influence removal moved (the simplified
         // mesh's): they are measured as well, for the maximum.
-        let removed = self.removed_vertices(&mesh, &simplified, &to_simplified, follow, enough);
+        let removed = self.removed_vertices(&mesh, follow);
         let moved_samples = self.moved_vertices(&mesh, &simplified_fans, triangles);
         let nearest = |surface: &Surface, p: DVec3| surface.nearest(p, self.candidates);
         let half = self.backward / 2;
@@ -344,18 +347,50 @@ impl<'a> SurfaceProbe<'a> {
             .map(|s| backward_sample(s).1)
             .reduce(|| 0.0, f64::max);
         // Removed vertices, furthest bound first, in batches, until no bound left can beat
-        // the largest distance found: that maximum is then exact over every vertex.
+        // the largest distance found: that maximum is then exact over every vertex. Where
+        // every vertex counts, a bound is tightened (by the nearest triangle at rest, often
+        // much nearer than the vertex it became) only for vertices whose first bound can
+        // still beat the maximum: on a 2-million-triangle model, a level's million removed
+        // vertices mostly cannot, and tightening them all was most of its measurement.
         let mut max2 = forward_max.max(backward_max).max(moved_max);
-        for batch in removed.chunks(64) {
-            if batch[0].0 <= max2 {
+        let (mut tightened, mut exact) = (0, 0);
+        let tighten = |&(far, v, sample): &(f64, u32, SurfaceSample)| {
+            if !self.every_vertex || far <= enough {
+                return (far, sample);
+            }
+            let near = simplified.nearest(sample.2, 1);
+            let point = |f: usize| self.original_posed[v as usize * frames + f].as_dvec3();
+            let mut unused = 0.0;
+            (
+                far.min(to_simplified.worst(point, &near, f64::INFINITY, &mut unused)),
+                sample,
+            )
+        };
+        for chunk in removed.chunks(TIGHTEN_CHUNK) {
+            let live = chunk.partition_point(|r| r.0 > max2);
+            if live == 0 {
                 break;
             }
-            let m = batch
-                .par_iter()
-                .map(|(_, s)| forward_sample(&s).1)
-                .reduce(|| 0.0, f64::max);
-            max2 = max2.max(m);
+            tightened += live;
+            let mut bounded: Vec<(f64, SurfaceSample)> =
+                chunk[..live].par_iter().map(tighten).collect();
+            bounded.sort_by(|a, b| b.0.total_cmp(&a.0));
+            for batch in bounded.chunks(64) {
+                if batch[0].0 <= max2 {
+                    break;
+                }
+                exact += batch.len();
+                let m = batch
+                    .par_iter()
+                    .map(|(_, s)| forward_sample(&s).1)
+                    .reduce(|| 0.0, f64::max);
+                max2 = max2.max(m);
+            }
         }
+        log::trace!(
+            "{} removed vertices: {tightened} bounds tightened, {exact} measured exactly",
+            removed.len()
+        );
         let mean = |sum: f64, count: usize| if count > 0 { sum / count as f64 } else { 0.0 };
         let ms = 0.5
             * (forward_share * mean(forward_sum, forward_count)
@@ -451,18 +486,16 @@ impl<'a> SurfaceProbe<'a> {
         candidates
     }
 
-    /// The original's vertices at the positions the simplification removed, as samples. With
-    /// `follow`: every one with a bound on its distance (squared), furthest bound first
-    /// (`self.forward` of them unless every vertex is wanted); without, a spread of them,
+    /// The original's vertices at the positions the simplification removed, as samples with
+    /// their vertex. With `follow`: every one with a bound on its distance (squared): the
+    /// distance from the vertex it became, in its worst frame; furthest bound first,
+    /// `self.forward` of them unless every vertex is wanted. Without, a spread of them,
     /// unbounded.
     fn removed_vertices(
         &self,
         mesh: &PosedMesh,
-        simplified: &Surface,
-        to_simplified: &Reach,
         follow: Option<&(dyn Fn(u32) -> u32 + Sync)>,
-        enough: f64,
-    ) -> Vec<(f64, SurfaceSample)> {
+    ) -> Vec<(f64, u32, SurfaceSample)> {
         use rayon::prelude::*;
         let frames = self.frames.len();
         let positions = self.positions();
@@ -482,8 +515,6 @@ impl<'a> SurfaceProbe<'a> {
             .collect();
         let budget = self.forward.max(1);
         let bounded: Vec<(f64, u32)> = match follow {
-            // The distance from the vertex it became (in its worst frame) bounds a removed
-            // vertex's distance from the simplified surface.
             Some(follow) => {
                 let mut bound: Vec<(f64, u32)> = gone
                     .par_iter()
@@ -500,22 +531,10 @@ impl<'a> SurfaceProbe<'a> {
                                 .fold(0.0, f64::max),
                             _ => f64::INFINITY,
                         };
-                        // So does the distance from the nearest triangle at rest, often much
-                        // less: checked where it could matter.
-                        let far = if self.every_vertex && far > enough {
-                            let p = self.original_rest[v as usize];
-                            let near = simplified.nearest(p, 1);
-                            let point =
-                                |f: usize| self.original_posed[v as usize * frames + f].as_dvec3();
-                            let mut unused = 0.0;
-                            far.min(to_simplified.worst(point, &near, f64::INFINITY, &mut unused))
-                        } else {
-                            far
-                        };
                         (far, v)
                     })
                     .collect();
-                bound.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+                bound.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
                 if !self.every_vertex {
                     bound.truncate(budget);
                 }
@@ -534,7 +553,7 @@ impl<'a> SurfaceProbe<'a> {
             .map(|(bound, v)| {
                 let t = self.original_fans.of(self.position[v as usize])[0];
                 let (tri, w) = self.at_vertex(&self.original.triangles, t, v);
-                (bound, (tri, w, self.original_rest[v as usize]))
+                (bound, v, (tri, w, self.original_rest[v as usize]))
             })
             .collect()
     }
