@@ -13,10 +13,11 @@ use glam::{Affine3A, DVec3, Vec3};
 pub struct SurfaceProbe<'a> {
     base: &'a AnimationSpaceMesh,
     original: Surface,
-    /// The original's render vertices in the rest pose, and posed: vertex `v` in frame `f` at
-    /// `v * frames + f`, in single precision as the bone matrices that pose them are (on a
-    /// 2-million-triangle model the frames of both probes took 410 MB in double).
+    /// The original's render vertices in the rest pose.
     original_rest: Vec<DVec3>,
+    /// The original's render vertices posed: vertex `v` in frame `f` at `v * frames + f`, in
+    /// single precision as the bone matrices that pose them are (on a 2-million-triangle
+    /// model the frames of both probes took 410 MB in double).
     original_posed: Vec<Vec3>,
     /// A pool of samples of the original surface (triangle, weights, rest point), area-weighted
     /// and in random order, of which those on changed triangles are measured, `forward` at
@@ -355,7 +356,7 @@ impl<'a> SurfaceProbe<'a> {
         let mut max2 = forward_max.max(backward_max).max(moved_max);
         let (mut tightened, mut exact) = (0, 0);
         let tighten = |&(far, v, sample): &(f64, u32, SurfaceSample)| {
-            if !self.every_vertex || far <= enough {
+            if !self.every_vertex || follow.is_none() || far <= enough {
                 return (far, sample);
             }
             let near = simplified.nearest(sample.2, 1);
