@@ -165,7 +165,7 @@ fn shots_are_deterministic() {
 #[test]
 fn shot_files_are_the_same_bytes_for_the_same_arguments() {
     let dir = tempfile::tempdir().unwrap();
-    let cache = dir.path().join("cache");
+    let cache = common::shared_cache();
     let scenes: [&[&str]; 2] = [
         &[
             "--scene",

@@ -2,6 +2,8 @@
 //! its character's clip where the character stands, and that far characters of a crowd become
 //! their impostors under selection, and stop when the panel turns them off.
 
+mod common;
+
 use lodlab::bake::CharacterBake;
 use lodlab::bake::crowd_impostor::{
     AnimatedImpostor, ImpostorOptions, bake_animated_impostor, sheet_layout,
@@ -131,11 +133,10 @@ fn an_impostor_plays_its_characters_clip_where_it_stands() {
 fn far_characters_become_their_impostors() {
     let _serial = serial();
     let gpu = gpu();
-    let dir = tempfile::tempdir().unwrap();
     let spec = SceneSpec {
         models: vec!["walker".into()],
         count: 300,
-        cache_dir: Some(dir.path().to_path_buf()),
+        cache_dir: Some(common::shared_cache()),
         ..Default::default()
     };
     let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();

@@ -1,6 +1,8 @@
 //! Levels of detail on the GPU (lavapipe in CI): transition endpoints on pixels, batching, and
 //! headless shots of every method, transition, debug view and comparison.
 
+mod common;
+
 use lodlab::app::shot::{ShotOptions, ShotReport, run as shot};
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{DebugView, FrameView, Gpu, Region, Side};
@@ -10,14 +12,10 @@ use lodlab::runtime::world::World;
 use lodlab::scene::{Drive, Instance, LodDraw, LodMethod, LodPolicy, Transition};
 use std::collections::HashSet;
 use std::path::PathBuf;
-use std::sync::OnceLock;
 
 /// One cache for the whole file, so each (model, method) is baked once.
 fn cache() -> PathBuf {
-    static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
-    DIR.get_or_init(|| tempfile::tempdir().unwrap())
-        .path()
-        .to_path_buf()
+    common::shared_cache()
 }
 
 fn spec(models: &[&str], count: usize) -> SceneSpec {

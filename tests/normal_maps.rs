@@ -2,6 +2,8 @@
 //! full detail's, models without usable texture coordinates keep their vertex normals, and the
 //! world and its panel line follow the toggle.
 
+mod common;
+
 use lodlab::bake::CharacterBake;
 use lodlab::bake::lod::{SkinnedLods, bake_lods};
 use lodlab::bake::lod_pack::LodPack;
@@ -100,11 +102,10 @@ fn a_model_without_texture_coordinates_keeps_its_vertex_normals() {
 fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
     let _serial = serial();
     let gpu = gpu();
-    let dir = tempfile::tempdir().unwrap();
     let spec = SceneSpec {
         models: vec!["walker".into()],
         count: 60,
-        cache_dir: Some(dir.path().to_path_buf()),
+        cache_dir: Some(common::shared_cache()),
         ..Default::default()
     };
     let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();

@@ -3,6 +3,8 @@
 //! and walkers, three trees), with no GPU error, the GPU's memory the same at the same point
 //! of each cycle, and the resident set steady. The 10,000-frame run is `tools/soak.sh`.
 
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -29,7 +31,7 @@ fn two_cycles_of_every_setting_hold_memory_steady() {
             "40",
             "--cache",
         ])
-        .arg(dir.path().join("cache"))
+        .arg(common::shared_cache())
         .arg("--csv")
         .arg(&csv)
         .output()

@@ -2,6 +2,8 @@
 //! skinned wood mesh, foliage quads bound to one bone each, four generations of branches, and a
 //! seamless wind loop that is faster and wider at the twigs than at the trunk.
 
+mod common;
+
 use glam::Vec3;
 use lodlab::anim::local_pose;
 use lodlab::generate::tree::{FOLIAGE_MATERIAL, broadleaf, conifer};
@@ -273,7 +275,7 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
             spec: SceneSpec {
                 scene: lodlab::scene::SceneKind::Forest,
                 count: 4,
-                cache_dir: Some(dir.path().to_path_buf()),
+                cache_dir: Some(common::shared_cache()),
                 ..Default::default()
             },
             out: out.clone(),
@@ -330,7 +332,7 @@ fn forest_trees_use_their_cloud_levels() {
             spec: SceneSpec {
                 scene: lodlab::scene::SceneKind::Forest,
                 count: 16,
-                cache_dir: Some(dir.path().to_path_buf()),
+                cache_dir: Some(common::shared_cache()),
                 ..Default::default()
             },
             out: out.clone(),

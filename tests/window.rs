@@ -1,6 +1,8 @@
 //! The real window, egui panel included, rendered under Xvfb (or the display there is) and read
 //! back through `lodlab view --screenshot`.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -29,7 +31,7 @@ fn viewer_window_shows_the_scene_and_the_panel() {
     let shot = dir.path().join("window.png");
     let out = run_viewer(
         &["view", "--scene", "crowd", "--count", "12"],
-        dir.path(),
+        &common::shared_cache(),
         &shot,
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -52,7 +54,7 @@ fn viewer_compares_two_methods_side_by_side() {
         "--transition",
         "alpha",
     ];
-    let out = run_viewer(&args, dir.path(), &shot);
+    let out = run_viewer(&args, &common::shared_cache(), &shot);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "viewer failed: {stderr}");
     check_screenshot(&shot);
@@ -120,7 +122,7 @@ fn viewer_recovers_from_a_lost_device() {
     let shot = dir.path().join("recovered.png");
     let out = run_viewer_with(
         &["view", "--scene", "crowd", "--count", "12"],
-        dir.path(),
+        &common::shared_cache(),
         &shot,
         8,
         &[("LODLAB_LOSE_DEVICE_AT_FRAME", "3")],

@@ -202,3 +202,28 @@ pub fn validate(tools: &Path, files: &[PathBuf]) -> Vec<(u64, u64, Value)> {
         })
         .collect()
 }
+
+/// One bake cache for every test of a `cargo test` run whose subject is not the cache itself:
+/// the default trees' billboard-cloud chains and the characters' levels are baked once for the
+/// whole suite instead of once per test (a tree chain takes about 12 s here on lavapipe, and
+/// half a dozen tests draw the same trees).
+///
+/// The folder is named after the build of the `lodlab` binary (its size and modification
+/// time; cargo relinks it whenever the library changes), so a rebuilt crate never reads what
+/// an earlier build baked, even where the change forgot to bump the cache format.
+pub fn shared_cache() -> PathBuf {
+    let exe = Path::new(env!("CARGO_BIN_EXE_lodlab"));
+    let meta = std::fs::metadata(exe).expect("the lodlab binary is built for the tests");
+    let stamp = meta
+        .modified()
+        .ok()
+        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+        .map_or(0, |d| d.as_nanos());
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "bake-cache-{:x}-{:x}",
+        meta.len(),
+        stamp
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
