@@ -163,8 +163,11 @@ pub fn choose_prefixes(seq: &Sequence, opts: &LodOptions) -> Vec<usize> {
 pub struct Replay<'a> {
     base: &'a AnimationSpaceMesh,
     mesh: Mesh,
-    /// Influences of every render vertex as of the steps applied.
-    influences: Vec<Vec<AsInfluence>>,
+    /// Influences of the render vertices that an influence simplification changed, as of the
+    /// steps applied; every other vertex has the base mesh's. Only the changes are held: the
+    /// cut search clones a replay for each probe, and on a 2-million-triangle model a copy of
+    /// every vertex's list was about 100 MB a clone.
+    influences: rustc_hash::FxHashMap<u32, Vec<AsInfluence>>,
     /// Where each render vertex went when its position collapsed.
     collapsed_to: Vec<u32>,
     applied: usize,
@@ -179,7 +182,7 @@ impl<'a> Replay<'a> {
         Replay {
             base,
             mesh,
-            influences: (0..n).map(|v| base.influences_of(v).to_vec()).collect(),
+            influences: rustc_hash::FxHashMap::default(),
             collapsed_to: vec![u32::MAX; n],
             applied: 0,
         }
@@ -213,7 +216,7 @@ impl<'a> Replay<'a> {
                     wedges, influences, ..
                 } => {
                     for (&w, list) in wedges.iter().zip(influences) {
-                        self.influences[w as usize] = list.clone();
+                        self.influences.insert(w, list.clone());
                     }
                 }
                 StepKind::Prune { wedges, anchor } => {
@@ -242,7 +245,10 @@ impl<'a> Replay<'a> {
     }
 
     pub fn influences_of(&self, r: u32) -> &[AsInfluence] {
-        &self.influences[r as usize]
+        match self.influences.get(&r) {
+            Some(list) => list,
+            None => self.base.influences_of(r as usize),
+        }
     }
 
     pub fn is_used(&self, r: u32) -> bool {

@@ -131,6 +131,13 @@ pub enum EdgeKind {
     NonManifold,
 }
 
+/// A position's triangles: about six on a mesh of even valence, held inline so that a mesh is
+/// a few flat arrays rather than a million small allocations (the level cutter clones one
+/// for every probe of a cut, and on a 2-million-triangle model the lists were most of it).
+pub type Fan = SmallVec<[u32; 6]>;
+/// A position's render vertices: one, or two on a seam, almost always.
+pub type Wedges = SmallVec<[u32; 2]>;
+
 /// The mutable mesh being simplified.
 #[derive(Clone)]
 pub struct Mesh {
@@ -140,9 +147,9 @@ pub struct Mesh {
     /// Render vertex → its position (the lowest render vertex with the same influences).
     pub position: Vec<u32>,
     /// Position → its render vertices (empty for ids that are not positions).
-    pub wedges: Vec<Vec<u32>>,
+    pub wedges: Vec<Wedges>,
     /// Position → its alive triangles.
-    pub incident: Vec<Vec<u32>>,
+    pub incident: Vec<Fan>,
     pub kind: Vec<Kind>,
     /// Positions still in the mesh.
     pub alive: Vec<bool>,
@@ -160,7 +167,7 @@ impl Mesh {
     /// no area and would make edges look non-manifold.
     pub fn new(indices: &[u32], position: Vec<u32>) -> Mesh {
         let n = position.len();
-        let mut wedges = vec![Vec::new(); n];
+        let mut wedges = vec![Wedges::new(); n];
         let mut tris = Vec::with_capacity(indices.len() / 3);
         let mut seen = std::collections::HashSet::with_capacity(indices.len() / 3);
         let mut dropped = 0;
@@ -182,7 +189,7 @@ impl Mesh {
             }
             tris.push(tri);
         }
-        let mut incident = vec![Vec::new(); n];
+        let mut incident = vec![Fan::new(); n];
         let mut refs = vec![0u32; n];
         for (i, t) in tris.iter().enumerate() {
             for &v in t {
@@ -451,7 +458,7 @@ impl Mesh {
         released.dedup();
         for &r in &released {
             let p = self.pos(r) as usize;
-            self.wedges[p].retain(|&w| w != r);
+            self.wedges[p].retain(|w| *w != r);
         }
         (died, released)
     }
@@ -468,7 +475,7 @@ impl Mesh {
             }
             let p = self.pos(r);
             if p != owner {
-                self.incident[p as usize].retain(|&x| x != t);
+                self.incident[p as usize].retain(|x| *x != t);
             }
         }
     }
@@ -493,7 +500,7 @@ impl Mesh {
         released.dedup();
         for &r in &released {
             let p = self.pos(r) as usize;
-            self.wedges[p].retain(|&w| w != r);
+            self.wedges[p].retain(|w| *w != r);
         }
         (died, released)
     }

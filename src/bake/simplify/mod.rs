@@ -224,6 +224,12 @@ struct Simplifier<'a> {
     stats: Stats,
     /// Every cost is rounded to a multiple of this before it is ranked: see [`Self::rank`].
     cost_grid: f64,
+    /// Vertices priced whole (all their candidates), those of them priced because their
+    /// entry came out stale, and queued collapses checked again before they were applied:
+    /// for the debug log.
+    priced: u64,
+    repriced: u64,
+    verified: u64,
 }
 
 /// The costs' grid as a share of the model's rest-pose diagonal: a fifth of a micrometre on a
@@ -372,6 +378,9 @@ pub fn simplify_feeding(
         stamp: 0,
         stats,
         cost_grid: COST_GRID * diagonal.max(f64::MIN_POSITIVE),
+        priced: 0,
+        repriced: 0,
+        verified: 0,
     };
     let mut sequence = Sequence {
         method,
@@ -385,7 +394,19 @@ pub fn simplify_feeding(
     // On a worker of rayon's pool, the candidates priced in parallel after each collapse
     // (see `evaluate_collapses`) cost a push onto the worker's own queue, which an idle
     // worker steals from; from any other thread, each would wake the pool and wait.
+    let start = std::time::Instant::now();
     sequence.steps = rayon::scope(|_| s.run(progress, feed));
+    log::debug!(
+        "{method}: {} steps from {} triangles in {:.2} s; {} vertices priced ({} again when \
+         their entry came out stale), {} candidates, {} collapses checked again",
+        sequence.steps.len(),
+        sequence.base_triangles.len(),
+        start.elapsed().as_secs_f64(),
+        s.priced,
+        s.repriced,
+        s.stats.evaluations,
+        s.verified,
+    );
     s.stats.cache_hits = s.cache.hits;
     s.stats.cache_misses = s.cache.misses;
     sequence.stats = s.stats;
@@ -492,12 +513,14 @@ impl Simplifier<'_> {
                         continue;
                     }
                     if self.stale[u] {
+                        self.repriced += 1;
                         self.evaluate_collapse(e.vertex);
                         continue;
                     }
                     // Neighbourhoods two rings away may have changed the legality since this
                     // was queued: check again before applying.
                     let target = self.target[u];
+                    self.verified += 1;
                     match self.collapse_cost(e.vertex, target) {
                         Some(c) if (c - e.cost).abs() <= 1e-9 * c.max(e.cost) + 1e-300 => {}
                         _ => {
@@ -566,14 +589,16 @@ impl Simplifier<'_> {
     fn collapse_cost(&mut self, u1: u32, u2: u32) -> Option<f64> {
         self.stats.evaluations += 1;
         let mut w = std::mem::take(&mut self.workspace);
-        let cost = self.unoriented_cost(u1, u2, &mut w.scratch);
+        let cost = self.unoriented_cost(u1, u2, &mut w.scratch).filter(|_| {
+            let ctx = self.context();
+            ctx.check_link(u1, u2, &mut w.neighbours).is_ok()
+                && ctx.check_orientation(u1, u2).is_ok()
+        });
         self.workspace = w;
-        let cost = cost?;
-        self.context().check_orientation(u1, u2).ok()?;
-        Some(cost)
+        cost
     }
 
-    /// [`Self::collapse_cost`] without the orientation check.
+    /// [`Self::collapse_cost`] without the link and orientation checks.
     fn unoriented_cost(&self, u1: u32, u2: u32, scratch: &mut Scratch) -> Option<f64> {
         if u2 == u32::MAX || !self.mesh.alive[u2 as usize] {
             return None;
@@ -605,9 +630,9 @@ impl Simplifier<'_> {
             .collect();
         costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let ctx = self.context();
-        let best = costs
-            .into_iter()
-            .find(|&(_, u2)| ctx.check_orientation(u, u2).is_ok());
+        let best = costs.into_iter().find(|&(_, u2)| {
+            self.mesh.link_condition(u, u2, &w.neighbours) && ctx.check_orientation(u, u2).is_ok()
+        });
         (best, w.neighbours.len() as u64)
     }
 
@@ -616,6 +641,7 @@ impl Simplifier<'_> {
         let mut w = std::mem::take(&mut self.workspace);
         let (best, evaluations) = self.best_collapse(u, &mut w);
         self.workspace = w;
+        self.priced += 1;
         self.stats.evaluations += evaluations;
         self.queue_collapse(u, best);
     }
@@ -640,6 +666,7 @@ impl Simplifier<'_> {
             )
             .collect();
         for (&u, (best, evaluations)) in vertices.iter().zip(found) {
+            self.priced += 1;
             self.stats.evaluations += evaluations;
             self.queue_collapse(u, best);
         }
@@ -842,7 +869,7 @@ impl Simplifier<'_> {
         // Every wedge keeps its own normal (a hard edge, a flat-shaded facet): the position's
         // `p_i` with the wedge's own `n_i`, both moved by the factor. Giving every wedge the
         // first one's normals smoothed a faceted model at its first level.
-        let wedges = self.mesh.wedges[ui].clone();
+        let wedges = self.mesh.wedges[ui].to_vec();
         let mut moved: Vec<Vec<Influence64>> = Vec::with_capacity(wedges.len());
         for &w in &wedges {
             let own: Vec<Influence64> = self.infl[ui]
