@@ -20,7 +20,7 @@ use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
 /// Bump whenever the bake's output or its encoding changes.
-pub const FORMAT_VERSION: u32 = 8;
+pub const FORMAT_VERSION: u32 = 9;
 const MAGIC: &[u8; 8] = b"LODLABLC";
 const HEADER: usize = 8 + 4 + 32 + 32 + 8;
 

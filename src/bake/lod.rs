@@ -19,7 +19,8 @@ use super::lod_error::SurfaceProbe;
 use super::simplify::expectation::ExpectationMatrix;
 use super::simplify::mesh::Mesh;
 use super::simplify::{
-    Feed, Method, Sequence, SimplifyInput, Step, StepKind, pose_samples, simplify_feeding,
+    Feed, Method, Sequence, SimplifyInput, Stats, Step, StepKind, gather, pose_samples,
+    simplify_feeding,
 };
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
@@ -537,6 +538,12 @@ impl<'s> GrowingSequence<'s> {
         &self.seq
     }
 
+    /// [`Self::whole`], owned.
+    pub fn into_whole(mut self) -> Sequence {
+        self.wait(|_| false);
+        self.seq.into_owned()
+    }
+
     /// How many steps keep the bound within `e`, no more than keep `floor` triangles. Bounds
     /// never fall along the sequence: the first step over `e` settles it.
     fn within(&mut self, e: f32, floor: u32) -> usize {
@@ -657,7 +664,12 @@ pub fn progressive_mesh(
 ) -> (AnimationSpaceMesh, Sequence, f64) {
     let base = full_detail(model);
     let start = std::time::Instant::now();
-    let sequence = simplify_model(model, &base, method, progress, &mut |_| {});
+    let mut sequence = None;
+    let stats = simplify_model(model, &base, method, progress, &mut |feed| {
+        gather(&mut sequence, feed)
+    });
+    let mut sequence = sequence.expect("the simplifier hands over its start");
+    sequence.stats = stats;
     let seconds = start.elapsed().as_secs_f64();
     (base, sequence, seconds)
 }
@@ -668,14 +680,14 @@ pub fn full_detail(model: &Model) -> AnimationSpaceMesh {
 }
 
 /// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to `feed`
-/// as it is built.
+/// as it is built; returns its statistics (see [`simplify_feeding`]).
 fn simplify_model(
     model: &Model,
     base: &AnimationSpaceMesh,
     method: Method,
     progress: &(dyn Fn(f32) + Sync),
     feed: &mut (dyn FnMut(Feed) + Send),
-) -> Sequence {
+) -> Stats {
     let expectation = match method {
         Method::RestPose => ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>()),
         _ => ExpectationMatrix::estimate(model),
@@ -738,15 +750,18 @@ pub fn bake_lods_sharing<'a>(
             // No start: the simplifier stopped before its first step (it panicked).
             let first = start_rx.recv().ok()?;
             let mut seq = GrowingSequence::fed(first, steps_rx);
-            Some(cut_growing_levels(base, &mut seq, opts, probes))
+            let levels = cut_growing_levels(base, &mut seq, opts, probes);
+            // The cutter holds the only copy of the steps: the rest of them, if the floor
+            // came before the end.
+            Some((levels, seq.into_whole()))
         });
         // A closed channel means the cutter panicked: joining it below says so.
-        let sequence = simplify_model(model, base, method, progress, &mut |feed| match feed {
+        let stats = simplify_model(model, base, method, progress, &mut |feed| match feed {
             Feed::Start(first) => {
-                let _ = start_tx.send(first.clone());
+                let _ = start_tx.send(first);
             }
             Feed::Steps(steps) => {
-                let _ = steps_tx.send(steps.to_vec());
+                let _ = steps_tx.send(steps);
             }
         });
         drop(steps_tx);
@@ -760,10 +775,11 @@ pub fn bake_lods_sharing<'a>(
                 }
             }
         }
-        let levels = match cutter.join() {
-            Ok(levels) => levels.expect("the simplifier hands over its start"),
+        let (levels, mut sequence) = match cutter.join() {
+            Ok(cut) => cut.expect("the simplifier hands over its start"),
             Err(panic) => std::panic::resume_unwind(panic),
         };
+        sequence.stats = stats;
         (sequence, levels)
     });
     let bake_seconds = start.elapsed().as_secs_f64();

@@ -198,7 +198,7 @@ struct Simplifier<'a> {
     materials: &'a [u16],
     textured: &'a [bool],
     /// Position `u` in pose `s` at `u * poses.len() + s`.
-    posed: Vec<DVec3>,
+    posed: Vec<Vec3>,
     infl: Vec<Vec<Influence64>>,
     metric: Metric<'a>,
     pm: &'a ExpectationMatrix,
@@ -246,15 +246,35 @@ pub fn simplify(
     method: Method,
     progress: &(dyn Fn(f32) + Sync),
 ) -> Sequence {
-    simplify_feeding(input, method, progress, &mut |_| {})
+    let mut sequence = None;
+    let stats = simplify_feeding(input, method, progress, &mut |feed| {
+        gather(&mut sequence, feed)
+    });
+    let mut sequence = sequence.expect("the simplifier hands over its start");
+    sequence.stats = stats;
+    sequence
 }
 
-/// What [`simplify_feeding`] hands over as it runs.
-pub enum Feed<'a> {
+/// What [`simplify_feeding`] hands over as it runs: the sequence in pieces, each once, so
+/// that it is held in one place only (on a 2-million-triangle model a million steps, about
+/// 100 MB).
+pub enum Feed {
     /// The sequence before its first step: everything but the steps and the statistics.
-    Start(&'a Sequence),
+    Start(Sequence),
     /// The next steps, in order, a batch at a time.
-    Steps(&'a [Step]),
+    Steps(Vec<Step>),
+}
+
+/// Puts a piece that [`simplify_feeding`] handed over into `sequence`.
+pub fn gather(sequence: &mut Option<Sequence>, feed: Feed) {
+    match feed {
+        Feed::Start(start) => *sequence = Some(start),
+        Feed::Steps(steps) => {
+            if let Some(s) = sequence {
+                s.steps.extend(steps);
+            }
+        }
+    }
 }
 
 /// Fewer vertices than this to price are priced on the calling thread.
@@ -263,14 +283,15 @@ const PARALLEL_PRICING: usize = 64;
 /// Steps handed over at a time by [`simplify_feeding`].
 const FEED_BATCH: usize = 64;
 
-/// [`simplify`], handing the sequence to `feed` as it is built, so that a caller can work on
-/// its first steps while the rest are found.
+/// [`simplify`], handing the sequence to `feed` as it is built (and keeping none of it), so
+/// that a caller can work on its first steps while the rest are found. Returns the
+/// statistics, which the start handed over lacks.
 pub fn simplify_feeding(
     input: &SimplifyInput,
     method: Method,
     progress: &(dyn Fn(f32) + Sync),
     feed: &mut (dyn FnMut(Feed) + Send),
-) -> Sequence {
+) -> Stats {
     let am = input.mesh;
     let n = am.vertex_count();
     let infl = influences64(am);
@@ -301,10 +322,13 @@ pub fn simplify_feeding(
     mesh.classify_all();
     let uv: Vec<DVec2> = am.uvs.iter().map(|u| u.as_dvec2()).collect();
     let charts = TextureCharts::measure(&mesh, &uv, &rest);
-    let posed: Vec<DVec3> = (0..n)
+    let posed: Vec<Vec3> = (0..n)
         .flat_map(|v| {
             let infl = &infl[v];
-            input.poses.iter().map(move |g| rest_position(g, infl))
+            input
+                .poses
+                .iter()
+                .map(move |g| rest_position(g, infl).as_vec3())
         })
         .collect();
 
@@ -382,25 +406,23 @@ pub fn simplify_feeding(
         repriced: 0,
         verified: 0,
     };
-    let mut sequence = Sequence {
+    let triangles = base_triangles.len();
+    feed(Feed::Start(Sequence {
         method,
         positions,
         base_triangles,
         base_influences: s.influences as u32,
         steps: Vec::new(),
         stats: Stats::default(),
-    };
-    feed(Feed::Start(&sequence));
+    }));
     // On a worker of rayon's pool, the candidates priced in parallel after each collapse
     // (see `evaluate_collapses`) cost a push onto the worker's own queue, which an idle
     // worker steals from; from any other thread, each would wake the pool and wait.
     let start = std::time::Instant::now();
-    sequence.steps = rayon::scope(|_| s.run(progress, feed));
+    let steps = rayon::scope(|_| s.run(progress, feed));
     log::debug!(
-        "{method}: {} steps from {} triangles in {:.2} s; {} vertices priced ({} again when \
-         their entry came out stale), {} candidates, {} collapses checked again",
-        sequence.steps.len(),
-        sequence.base_triangles.len(),
+        "{method}: {steps} steps from {triangles} triangles in {:.2} s; {} vertices priced ({} \
+         again when their entry came out stale), {} candidates, {} collapses checked again",
         start.elapsed().as_secs_f64(),
         s.priced,
         s.repriced,
@@ -409,8 +431,7 @@ pub fn simplify_feeding(
     );
     s.stats.cache_hits = s.cache.hits;
     s.stats.cache_misses = s.cache.misses;
-    sequence.stats = s.stats;
-    sequence
+    s.stats
 }
 
 /// Where a model's texture coordinates are a parameterisation.
@@ -468,7 +489,7 @@ impl Simplifier<'_> {
         &mut self,
         progress: &(dyn Fn(f32) + Sync),
         feed: &mut (dyn FnMut(Feed) + Send),
-    ) -> Vec<Step> {
+    ) -> usize {
         let n = self.mesh.position.len() as u32;
         let positions: Vec<u32> = (0..n)
             .filter(|&u| self.mesh.alive[u as usize] && self.mesh.pos(u) == u)
@@ -481,7 +502,8 @@ impl Simplifier<'_> {
             self.queue_prune(part);
         }
         let start = self.mesh.alive_triangles.max(1) as f32;
-        let mut steps = Vec::new();
+        let mut steps = 0;
+        let mut batch = Vec::with_capacity(FEED_BATCH);
         let mut max_cost = 0.0f32;
         while let Some(Reverse(e)) = self.heap.pop() {
             let u = e.vertex as usize;
@@ -533,24 +555,28 @@ impl Simplifier<'_> {
             };
             let cost = e.cost as f32;
             max_cost = max_cost.max(cost);
-            steps.push(Step {
+            batch.push(Step {
                 kind,
                 cost,
                 max_cost,
                 triangles: self.mesh.alive_triangles as u32,
                 influences: self.influences as u32,
             });
-            if steps.len() % FEED_BATCH == 0 {
-                feed(Feed::Steps(&steps[steps.len() - FEED_BATCH..]));
+            steps += 1;
+            if batch.len() == FEED_BATCH {
+                feed(Feed::Steps(std::mem::replace(
+                    &mut batch,
+                    Vec::with_capacity(FEED_BATCH),
+                )));
             }
-            if steps.len() % 512 == 0 {
+            if steps % 512 == 0 {
                 progress(1.0 - self.mesh.alive_triangles as f32 / start);
             }
             if self.mesh.alive_triangles == 0 {
                 break;
             }
         }
-        feed(Feed::Steps(&steps[steps.len() / FEED_BATCH * FEED_BATCH..]));
+        feed(Feed::Steps(batch));
         progress(1.0);
         steps
     }
@@ -892,7 +918,7 @@ impl Simplifier<'_> {
         self.rest[ui] = rest_position(self.rest_bones, &self.infl[ui]);
         let poses = self.poses.len();
         for (s, g) in self.poses.iter().enumerate() {
-            self.posed[ui * poses + s] = rest_position(g, &self.infl[ui]);
+            self.posed[ui * poses + s] = rest_position(g, &self.infl[ui]).as_vec3();
         }
         self.influences -= wedges.len() as u64;
         // Figure 4: every collapse whose fan holds this vertex changes. Their queue entries are
