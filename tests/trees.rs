@@ -474,8 +474,11 @@ fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
 /// first and spectral ones at the coarse end, animation errors per level, the thesis's static
 /// series, the skeleton-only levels and every description type beside it, the plot, the
 /// contact sheet of every level and the motion plot.
+///
+/// Named to sort first: libtest starts tests in name order, and this one (over a minute) started
+/// last ran alone at the end while the other thread idled.
 #[test]
-fn the_tree_report_writes_its_three_files() {
+fn a_report_of_a_tree_writes_its_three_files() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("report");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
