@@ -809,12 +809,11 @@ pub struct LevelProbes<'a> {
 
 impl<'a> LevelProbes<'a> {
     pub fn new(model: &Model, base: &'a AnimationSpaceMesh) -> LevelProbes<'a> {
-        LevelProbes {
-            search: SurfaceProbe::new(model, base, 250, 250, pose_samples(model, 6))
-                .with_candidates(3),
-            label: SurfaceProbe::new(model, base, 800, 800, pose_samples(model, 10))
-                .with_candidates(4)
-                .every_vertex(),
-        }
+        let search =
+            SurfaceProbe::new(model, base, 250, 250, pose_samples(model, 6)).with_candidates(3);
+        let label = SurfaceProbe::sharing(&search, 800, 800, pose_samples(model, 10))
+            .with_candidates(4)
+            .every_vertex();
+        LevelProbes { search, label }
     }
 }

@@ -12,9 +12,9 @@ use glam::{Affine3A, DVec3, Vec3};
 /// surface in each frame, both ways. See the module comment.
 pub struct SurfaceProbe<'a> {
     base: &'a AnimationSpaceMesh,
-    original: Surface,
-    /// The original's render vertices in the rest pose.
-    original_rest: Vec<DVec3>,
+    /// What depends on the full-detail mesh alone, shared by probes of one model (see
+    /// [`SurfaceProbe::sharing`]).
+    shared: std::sync::Arc<Original>,
     /// The original's render vertices posed: vertex `v` in frame `f` at `v * frames + f`, in
     /// single precision as the bone matrices that pose them are (on a 2-million-triangle
     /// model the frames of both probes took 410 MB in double).
@@ -27,19 +27,28 @@ pub struct SurfaceProbe<'a> {
     /// Samples drawn from a simplified surface's changed triangles: half by area, half along
     /// edges.
     backward: usize,
-    /// The original's triangles, by their sorted corners.
-    original_triangles: rustc_hash::FxHashSet<[u32; 3]>,
     /// Rest-pose triangles searched for a sample's closest point in each frame: a pose moves
     /// the closest point of the other surface, but not far from where it was at rest.
     candidates: usize,
     /// Measure every vertex the simplification removed (until none left can beat the largest
     /// distance found), not just a spread of them.
     every_vertex: bool,
+    frames: Vec<Vec<Affine3A>>,
+}
+
+/// The full-detail surface as every probe of a model sees it: its rest pose, the index its
+/// closest points are found in, its triangles and fans. On a 2-million-triangle model, about
+/// 200 MB that a model's two level probes each held.
+struct Original {
+    surface: Surface,
+    /// The original's render vertices in the rest pose.
+    original_rest: Vec<DVec3>,
+    /// The original's triangles, by their sorted corners.
+    original_triangles: rustc_hash::FxHashSet<[u32; 3]>,
     /// Every render vertex's welded position, and the original triangles round each position.
     position: Vec<u32>,
     original_fans: Fans,
     rest_bones: Vec<Affine3A>,
-    frames: Vec<Vec<Affine3A>>,
 }
 
 /// Original samples pooled per sample measured (see [`SurfaceProbe`]): the changed part of
@@ -168,41 +177,67 @@ impl<'a> SurfaceProbe<'a> {
             .chunks_exact(3)
             .map(|t| [t[0], t[1], t[2]])
             .collect();
-        let original = Surface::new(&triangles, |v| rest[v as usize].as_dvec3());
-        let forward_pool = original
-            .samples(forward * FORWARD_POOL, 0x10d1ab, None)
-            .into_iter()
-            .map(|(t, w)| {
-                let p = (0..3).map(|k| rest[t[k] as usize].as_dvec3() * w[k]).sum();
-                (t, w, p)
-            })
-            .collect();
+        let surface = Surface::new(&triangles, |v| rest[v as usize].as_dvec3());
         let original_triangles = triangles.iter().map(|t| sorted(*t)).collect();
-        let mut original_posed = Vec::with_capacity(base.vertex_count() * frames.len());
-        for v in 0..base.vertex_count() {
-            let infl = base.influences_of(v);
-            original_posed.extend(frames.iter().map(|g| pose_point(g, infl).as_vec3()));
-        }
         let position = crate::import::weld::position_groups(
             &rest,
             crate::import::weld::tolerance_for(&rest) * 10.0,
         );
         let positions = position.iter().max().map_or(0, |&m| m as usize + 1);
         let original_fans = Fans::new(&triangles, &position, positions);
+        let shared = std::sync::Arc::new(Original {
+            surface,
+            original_rest: rest.iter().map(|p| p.as_dvec3()).collect(),
+            original_triangles,
+            position,
+            original_fans,
+            rest_bones,
+        });
+        Self::with_original(base, shared, forward, backward, frames)
+    }
+
+    /// A probe of the same full-detail mesh as `other`, sharing what depends on it alone, with
+    /// its own samples and frames.
+    pub fn sharing(
+        other: &SurfaceProbe<'a>,
+        forward: usize,
+        backward: usize,
+        frames: Vec<Vec<Affine3A>>,
+    ) -> SurfaceProbe<'a> {
+        Self::with_original(other.base, other.shared.clone(), forward, backward, frames)
+    }
+
+    fn with_original(
+        base: &'a AnimationSpaceMesh,
+        shared: std::sync::Arc<Original>,
+        forward: usize,
+        backward: usize,
+        frames: Vec<Vec<Affine3A>>,
+    ) -> SurfaceProbe<'a> {
+        let rest = &shared.original_rest;
+        let forward_pool = shared
+            .surface
+            .samples(forward * FORWARD_POOL, 0x10d1ab, None)
+            .into_iter()
+            .map(|(t, w)| {
+                let p = (0..3).map(|k| rest[t[k] as usize] * w[k]).sum();
+                (t, w, p)
+            })
+            .collect();
+        let mut original_posed = Vec::with_capacity(base.vertex_count() * frames.len());
+        for v in 0..base.vertex_count() {
+            let infl = base.influences_of(v);
+            original_posed.extend(frames.iter().map(|g| pose_point(g, infl).as_vec3()));
+        }
         SurfaceProbe {
             base,
-            original,
-            original_rest: rest.iter().map(|p| p.as_dvec3()).collect(),
+            shared,
             original_posed,
             forward_pool,
             forward,
             backward,
-            original_triangles,
             candidates: 6,
             every_vertex: false,
-            position,
-            original_fans,
-            rest_bones,
             frames,
         }
     }
@@ -266,7 +301,7 @@ impl<'a> SurfaceProbe<'a> {
         };
         let kept: rustc_hash::FxHashSet<[u32; 3]> = triangles
             .iter()
-            .filter(|t| unmoved(t) && self.original_triangles.contains(&sorted(**t)))
+            .filter(|t| unmoved(t) && self.shared.original_triangles.contains(&sorted(**t)))
             .map(|t| sorted(*t))
             .collect();
         let changed: Vec<bool> = triangles
@@ -283,7 +318,7 @@ impl<'a> SurfaceProbe<'a> {
         let forward_share = forward.len() as f64 / self.forward_pool.len().max(1) as f64;
         let backward_share = simplified.area_share(&changed);
         let forward = &forward[..forward.len().min(self.forward)];
-        let simplified_fans = Fans::new(triangles, &self.position, self.positions());
+        let simplified_fans = Fans::new(triangles, &self.shared.position, self.positions());
         let to_simplified = Reach {
             frames,
             posed: &|v, f| mesh.posed[mesh.slot[v as usize] as usize * frames + f].as_dvec3(),
@@ -324,9 +359,9 @@ impl<'a> SurfaceProbe<'a> {
                 .map(|k| mesh.rest[mesh.slot[t[k] as usize] as usize] * w[k])
                 .sum();
             let candidates = self.with_fans(
-                nearest(&self.original, p),
-                &self.original_fans,
-                &self.original.triangles,
+                nearest(&self.shared.surface, p),
+                &self.shared.original_fans,
+                &self.shared.surface.triangles,
                 *t,
             );
             let point = |f| (0..3).map(|k| (to_simplified.posed)(t[k], f) * w[k]).sum();
@@ -404,7 +439,7 @@ impl<'a> SurfaceProbe<'a> {
 
     /// How many welded positions the original has.
     fn positions(&self) -> usize {
-        self.original_fans.start.len() - 1
+        self.shared.original_fans.start.len() - 1
     }
 
     /// The simplified mesh's vertices, in the rest pose and posed in every frame.
@@ -433,9 +468,9 @@ impl<'a> SurfaceProbe<'a> {
             .zip(&moved)
             .map(|(&v, &moved)| {
                 if moved {
-                    pose_point(&self.rest_bones, influences(v))
+                    pose_point(&self.shared.rest_bones, influences(v))
                 } else {
-                    self.original_rest[v as usize]
+                    self.shared.original_rest[v as usize]
                 }
             })
             .collect();
@@ -462,7 +497,7 @@ impl<'a> SurfaceProbe<'a> {
     fn at_vertex(&self, tris: &[[u32; 3]], t: u32, v: u32) -> ([u32; 3], [f64; 3]) {
         let tri = tris[t as usize];
         let k = (0..3)
-            .find(|&k| self.position[tri[k] as usize] == self.position[v as usize])
+            .find(|&k| self.shared.position[tri[k] as usize] == self.shared.position[v as usize])
             .unwrap_or(0);
         let mut w = [0.0; 3];
         w[k] = 1.0;
@@ -478,7 +513,7 @@ impl<'a> SurfaceProbe<'a> {
         corners: [u32; 3],
     ) -> Vec<[u32; 3]> {
         for v in corners {
-            for &t in fans.of(self.position[v as usize]) {
+            for &t in fans.of(self.shared.position[v as usize]) {
                 if !candidates.contains(&of[t as usize]) {
                     candidates.push(of[t as usize]);
                 }
@@ -502,16 +537,16 @@ impl<'a> SurfaceProbe<'a> {
         let positions = self.positions();
         let mut present = vec![false; positions];
         for &v in &mesh.used {
-            present[self.position[v as usize] as usize] = true;
+            present[self.shared.position[v as usize] as usize] = true;
         }
         // One render vertex of every position the simplification removed.
         let gone: Vec<u32> = (0..positions as u32)
             .filter(|&p| !present[p as usize])
             .filter_map(|p| {
-                let t = *self.original_fans.of(p).first()?;
-                self.original.triangles[t as usize]
+                let t = *self.shared.original_fans.of(p).first()?;
+                self.shared.surface.triangles[t as usize]
                     .into_iter()
-                    .find(|&v| self.position[v as usize] == p)
+                    .find(|&v| self.shared.position[v as usize] == p)
             })
             .collect();
         let budget = self.forward.max(1);
@@ -552,9 +587,12 @@ impl<'a> SurfaceProbe<'a> {
         bounded
             .into_iter()
             .map(|(bound, v)| {
-                let t = self.original_fans.of(self.position[v as usize])[0];
-                let (tri, w) = self.at_vertex(&self.original.triangles, t, v);
-                (bound, v, (tri, w, self.original_rest[v as usize]))
+                let t = self
+                    .shared
+                    .original_fans
+                    .of(self.shared.position[v as usize])[0];
+                let (tri, w) = self.at_vertex(&self.shared.surface.triangles, t, v);
+                (bound, v, (tri, w, self.shared.original_rest[v as usize]))
             })
             .collect()
     }
@@ -590,7 +628,9 @@ impl<'a> SurfaceProbe<'a> {
             .iter()
             .take(self.backward / 4)
             .filter_map(|&(_, v)| {
-                let t = *simplified_fans.of(self.position[v as usize]).first()?;
+                let t = *simplified_fans
+                    .of(self.shared.position[v as usize])
+                    .first()?;
                 Some(self.at_vertex(triangles, t, v))
             })
             .collect()
