@@ -609,8 +609,11 @@ impl CutSearch<'_> {
         if m <= e {
             return Some((first, m));
         }
-        // Over e: the coarsest probe within 2e stands in if nothing within e turns up.
-        let mut fallback = (m <= 2.0 * e).then_some((first, Some(m)));
+        drop(first);
+        // Over e: the coarsest probe within 2e stands in if nothing within e turns up. It is
+        // kept as its prefix and replayed again if it is needed: a replay of a 2-million-
+        // triangle model is about 100 MB, and several methods cut their levels at once.
+        let mut fallback = (m <= 2.0 * e).then_some((guess, Some(m)));
         let mut good: Option<Replay<'a>> = None;
         let mut bad = guess;
         for _ in 1..CUT_PROBES {
@@ -629,13 +632,18 @@ impl CutSearch<'_> {
             } else {
                 bad = candidate;
                 if m <= 2.0 * e && fallback.is_none() {
-                    fallback = Some((r, None));
+                    fallback = Some((candidate, None));
                 }
             }
         }
         let (r, measured) = match good {
             Some(r) => (r, None),
-            None => fallback?,
+            None => {
+                let (prefix, measured) = fallback?;
+                let mut r = from.clone();
+                r.advance_to(seq, prefix);
+                (r, measured)
+            }
         };
         let m = measured.unwrap_or_else(|| r.measure(&self.probes.label, RESOLUTION * e));
         Some((r, m))
