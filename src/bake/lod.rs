@@ -19,7 +19,7 @@ use super::lod_error::SurfaceProbe;
 use super::simplify::expectation::ExpectationMatrix;
 use super::simplify::mesh::Mesh;
 use super::simplify::{
-    Feed, Method, Sequence, SimplifyInput, Stats, Step, StepKind, gather, pose_samples,
+    Feed, Method, Sequence, SimplifyInput, Stats, Step, StepKind, gathered, pose_samples,
     simplify_feeding,
 };
 use crate::model::Model;
@@ -672,12 +672,7 @@ pub fn progressive_mesh(
 ) -> (AnimationSpaceMesh, Sequence, f64) {
     let base = full_detail(model);
     let start = std::time::Instant::now();
-    let mut sequence = None;
-    let stats = simplify_model(model, &base, method, progress, &mut |feed| {
-        gather(&mut sequence, feed)
-    });
-    let mut sequence = sequence.expect("the simplifier hands over its start");
-    sequence.stats = stats;
+    let sequence = gathered(|feed| simplify_model(model, &base, method, progress, feed));
     let seconds = start.elapsed().as_secs_f64();
     (base, sequence, seconds)
 }

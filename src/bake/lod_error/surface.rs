@@ -42,12 +42,12 @@ pub struct SurfaceProbe<'a> {
 struct Original {
     surface: Surface,
     /// The original's render vertices in the rest pose.
-    original_rest: Vec<DVec3>,
+    rest: Vec<DVec3>,
     /// The original's triangles, by their sorted corners.
-    original_triangles: rustc_hash::FxHashSet<[u32; 3]>,
+    triangle_set: rustc_hash::FxHashSet<[u32; 3]>,
     /// Every render vertex's welded position, and the original triangles round each position.
     position: Vec<u32>,
-    original_fans: Fans,
+    fans: Fans,
     rest_bones: Vec<Affine3A>,
 }
 
@@ -178,19 +178,19 @@ impl<'a> SurfaceProbe<'a> {
             .map(|t| [t[0], t[1], t[2]])
             .collect();
         let surface = Surface::new(&triangles, |v| rest[v as usize].as_dvec3());
-        let original_triangles = triangles.iter().map(|t| sorted(*t)).collect();
+        let triangle_set = triangles.iter().map(|t| sorted(*t)).collect();
         let position = crate::import::weld::position_groups(
             &rest,
             crate::import::weld::tolerance_for(&rest) * 10.0,
         );
         let positions = position.iter().max().map_or(0, |&m| m as usize + 1);
-        let original_fans = Fans::new(&triangles, &position, positions);
+        let fans = Fans::new(&triangles, &position, positions);
         let shared = std::sync::Arc::new(Original {
             surface,
-            original_rest: rest.iter().map(|p| p.as_dvec3()).collect(),
-            original_triangles,
+            rest: rest.iter().map(|p| p.as_dvec3()).collect(),
+            triangle_set,
             position,
-            original_fans,
+            fans,
             rest_bones,
         });
         Self::with_original(base, shared, forward, backward, frames)
@@ -214,7 +214,7 @@ impl<'a> SurfaceProbe<'a> {
         backward: usize,
         frames: Vec<Vec<Affine3A>>,
     ) -> SurfaceProbe<'a> {
-        let rest = &shared.original_rest;
+        let rest = &shared.rest;
         let forward_pool = shared
             .surface
             .samples(forward * FORWARD_POOL, 0x10d1ab, None)
@@ -301,7 +301,7 @@ impl<'a> SurfaceProbe<'a> {
         };
         let kept: rustc_hash::FxHashSet<[u32; 3]> = triangles
             .iter()
-            .filter(|t| unmoved(t) && self.shared.original_triangles.contains(&sorted(**t)))
+            .filter(|t| unmoved(t) && self.shared.triangle_set.contains(&sorted(**t)))
             .map(|t| sorted(*t))
             .collect();
         let changed: Vec<bool> = triangles
@@ -360,7 +360,7 @@ impl<'a> SurfaceProbe<'a> {
                 .sum();
             let candidates = self.with_fans(
                 nearest(&self.shared.surface, p),
-                &self.shared.original_fans,
+                &self.shared.fans,
                 &self.shared.surface.triangles,
                 *t,
             );
@@ -439,7 +439,7 @@ impl<'a> SurfaceProbe<'a> {
 
     /// How many welded positions the original has.
     fn positions(&self) -> usize {
-        self.shared.original_fans.start.len() - 1
+        self.shared.fans.start.len() - 1
     }
 
     /// The simplified mesh's vertices, in the rest pose and posed in every frame.
@@ -470,7 +470,7 @@ impl<'a> SurfaceProbe<'a> {
                 if moved {
                     pose_point(&self.shared.rest_bones, influences(v))
                 } else {
-                    self.shared.original_rest[v as usize]
+                    self.shared.rest[v as usize]
                 }
             })
             .collect();
@@ -543,7 +543,7 @@ impl<'a> SurfaceProbe<'a> {
         let gone: Vec<u32> = (0..positions as u32)
             .filter(|&p| !present[p as usize])
             .filter_map(|p| {
-                let t = *self.shared.original_fans.of(p).first()?;
+                let t = *self.shared.fans.of(p).first()?;
                 self.shared.surface.triangles[t as usize]
                     .into_iter()
                     .find(|&v| self.shared.position[v as usize] == p)
@@ -587,12 +587,9 @@ impl<'a> SurfaceProbe<'a> {
         bounded
             .into_iter()
             .map(|(bound, v)| {
-                let t = self
-                    .shared
-                    .original_fans
-                    .of(self.shared.position[v as usize])[0];
+                let t = self.shared.fans.of(self.shared.position[v as usize])[0];
                 let (tri, w) = self.at_vertex(&self.shared.surface.triangles, t, v);
-                (bound, v, (tri, w, self.shared.original_rest[v as usize]))
+                (bound, v, (tri, w, self.shared.rest[v as usize]))
             })
             .collect()
     }

@@ -424,10 +424,9 @@ impl Context<'_> {
     /// [`Self::check_orientation`], the simplifier runs it on the cheapest candidates only,
     /// until one passes (most do): pricing every candidate first and checking after finds the
     /// same collapse, and the link condition was 6% of a bake when every candidate paid it.
-    /// `neighbours` is scratch space.
-    pub fn check_link(&self, u1: u32, u2: u32, neighbours: &mut Vec<u32>) -> Result<(), Rejection> {
-        self.mesh.neighbours(u1, neighbours);
-        if self.mesh.link_condition(u1, u2, neighbours) {
+    /// `n1` holds the neighbours of `u1` ([`Mesh::neighbours`]).
+    pub fn check_link(&self, u1: u32, u2: u32, n1: &[u32]) -> Result<(), Rejection> {
+        if self.mesh.link_condition(u1, u2, n1) {
             Ok(())
         } else {
             Err(Rejection::Link)

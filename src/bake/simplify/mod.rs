@@ -246,13 +246,7 @@ pub fn simplify(
     method: Method,
     progress: &(dyn Fn(f32) + Sync),
 ) -> Sequence {
-    let mut sequence = None;
-    let stats = simplify_feeding(input, method, progress, &mut |feed| {
-        gather(&mut sequence, feed)
-    });
-    let mut sequence = sequence.expect("the simplifier hands over its start");
-    sequence.stats = stats;
-    sequence
+    gathered(|feed| simplify_feeding(input, method, progress, feed))
 }
 
 /// What [`simplify_feeding`] hands over as it runs: the sequence in pieces, each once, so
@@ -265,16 +259,21 @@ pub enum Feed {
     Steps(Vec<Step>),
 }
 
-/// Puts a piece that [`simplify_feeding`] handed over into `sequence`.
-pub fn gather(sequence: &mut Option<Sequence>, feed: Feed) {
-    match feed {
-        Feed::Start(start) => *sequence = Some(start),
+/// The whole sequence that `simplify` (a call of [`simplify_feeding`]) hands over to the
+/// feed it is given, with the statistics it returns.
+pub fn gathered(simplify: impl FnOnce(&mut (dyn FnMut(Feed) + Send)) -> Stats) -> Sequence {
+    let mut sequence: Option<Sequence> = None;
+    let stats = simplify(&mut |feed| match feed {
+        Feed::Start(start) => sequence = Some(start),
         Feed::Steps(steps) => {
-            if let Some(s) = sequence {
+            if let Some(s) = &mut sequence {
                 s.steps.extend(steps);
             }
         }
-    }
+    });
+    let mut sequence = sequence.expect("the simplifier hands over its start");
+    sequence.stats = stats;
+    sequence
 }
 
 /// Fewer vertices than this to price are priced on the calling thread.
@@ -617,8 +616,8 @@ impl Simplifier<'_> {
         let mut w = std::mem::take(&mut self.workspace);
         let cost = self.unoriented_cost(u1, u2, &mut w.scratch).filter(|_| {
             let ctx = self.context();
-            ctx.check_link(u1, u2, &mut w.neighbours).is_ok()
-                && ctx.check_orientation(u1, u2).is_ok()
+            self.mesh.neighbours(u1, &mut w.neighbours);
+            ctx.check_link(u1, u2, &w.neighbours).is_ok() && ctx.check_orientation(u1, u2).is_ok()
         });
         self.workspace = w;
         cost
@@ -657,7 +656,7 @@ impl Simplifier<'_> {
         costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let ctx = self.context();
         let best = costs.into_iter().find(|&(_, u2)| {
-            self.mesh.link_condition(u, u2, &w.neighbours) && ctx.check_orientation(u, u2).is_ok()
+            ctx.check_link(u, u2, &w.neighbours).is_ok() && ctx.check_orientation(u, u2).is_ok()
         });
         (best, w.neighbours.len() as u64)
     }
