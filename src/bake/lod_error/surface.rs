@@ -327,10 +327,6 @@ impl<'a> SurfaceProbe<'a> {
             frames,
             posed: &|v, f| self.original_posed[v as usize * frames + f].as_dvec3(),
         };
-        // The largest distances sit at cell corners, foremost at the vertices a collapse
-        // removed (the original's) and at those an influence removal moved (the simplified
-        // mesh's): they are measured as well, for the maximum.
-        let removed = self.removed_vertices(&mesh, follow);
         let moved_samples = self.moved_vertices(&mesh, &simplified_fans, triangles);
         let nearest = |surface: &Surface, p: DVec3| surface.nearest(p, self.candidates);
         let half = self.backward / 2;
@@ -382,13 +378,19 @@ impl<'a> SurfaceProbe<'a> {
             .par_iter()
             .map(|s| backward_sample(s).1)
             .reduce(|| 0.0, f64::max);
+        // The largest distances sit at cell corners, foremost at the vertices a collapse
+        // removed (the original's) and at those an influence removal moved (the simplified
+        // mesh's): they are measured as well, for the maximum (the moved ones above, with the
+        // samples, and the removed ones now, those of them that can beat what the samples
+        // found).
+        let mut max2 = forward_max.max(backward_max).max(moved_max);
+        let removed = self.removed_vertices(&mesh, follow, (&simplified_fans, triangles), max2);
         // Removed vertices, furthest bound first, in batches, until no bound left can beat
         // the largest distance found: that maximum is then exact over every vertex. Where
         // every vertex counts, a bound is tightened (by the nearest triangle at rest, often
         // much nearer than the vertex it became) only for vertices whose first bound can
         // still beat the maximum: on a 2-million-triangle model, a level's million removed
         // vertices mostly cannot, and tightening them all was most of its measurement.
-        let mut max2 = forward_max.max(backward_max).max(moved_max);
         let (mut tightened, mut exact) = (0, 0);
         let tighten = |&(far, v, sample): &(f64, u32, SurfaceSample)| {
             if !self.every_vertex || follow.is_none() || far <= enough {
@@ -523,14 +525,22 @@ impl<'a> SurfaceProbe<'a> {
     }
 
     /// The original's vertices at the positions the simplification removed, as samples with
-    /// their vertex. With `follow`: every one with a bound on its distance (squared): the
-    /// distance from the vertex it became, in its worst frame; furthest bound first,
-    /// `self.forward` of them unless every vertex is wanted. Without, a spread of them,
-    /// unbounded.
+    /// their vertex. With `follow`: each with a bound on its distance (squared) in its worst
+    /// frame, furthest bound first, those whose bound is above `beyond` only (no other can
+    /// change the largest distance found), `self.forward` of them unless every vertex is
+    /// wanted. Without, a spread of them, unbounded.
+    ///
+    /// The bound is the distance from the vertex it became (`follow`), and where every vertex
+    /// is wanted, the distance from a point of a triangle round that vertex (of `near`, the
+    /// simplified mesh's fans and triangles): the point nearest at rest, followed in every
+    /// frame. A collapse's region is covered by its target's fan, so that point is mostly
+    /// as near as the surface gets, and few bounds are left to tighten by a search.
     fn removed_vertices(
         &self,
         mesh: &PosedMesh,
         follow: Option<&(dyn Fn(u32) -> u32 + Sync)>,
+        near: (&Fans, &[[u32; 3]]),
+        beyond: f64,
     ) -> Vec<(f64, u32, SurfaceSample)> {
         use rayon::prelude::*;
         let frames = self.frames.len();
@@ -550,30 +560,65 @@ impl<'a> SurfaceProbe<'a> {
             })
             .collect();
         let budget = self.forward.max(1);
+        let posed = |v: u32, f: usize| mesh.posed[mesh.slot[v as usize] as usize * frames + f];
+        let original = |v: u32, f: usize| self.original_posed[v as usize * frames + f].as_dvec3();
+        // The largest distance (squared) over the frames from `v` to the point of weights `w`
+        // on the simplified mesh's triangle `t`.
+        let followed = |v: u32, t: [u32; 3], w: [f64; 3]| {
+            (0..frames)
+                .map(|f| {
+                    let q: DVec3 = (0..3).map(|k| posed(t[k], f).as_dvec3() * w[k]).sum();
+                    q.distance_squared(original(v, f))
+                })
+                .fold(0.0, f64::max)
+        };
+        let (fans, triangles) = near;
         let bounded: Vec<(f64, u32)> = match follow {
             Some(follow) => {
-                let mut bound: Vec<(f64, u32)> = gone
-                    .par_iter()
-                    .map(|&v| {
-                        let to = follow(v);
-                        let far = match mesh.slot.get(to as usize) {
-                            Some(&i) if i != u32::MAX => (0..frames)
-                                .map(|f| {
-                                    let a = mesh.posed[i as usize * frames + f].as_dvec3();
-                                    a.distance_squared(
-                                        self.original_posed[v as usize * frames + f].as_dvec3(),
-                                    )
-                                })
-                                .fold(0.0, f64::max),
-                            _ => f64::INFINITY,
-                        };
-                        (far, v)
-                    })
-                    .collect();
-                bound.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-                if !self.every_vertex {
+                let bound = |&v: &u32| {
+                    let to = follow(v);
+                    if mesh.slot.get(to as usize).is_none_or(|&i| i == u32::MAX) {
+                        return (f64::INFINITY, v);
+                    }
+                    let mut far = followed(v, [to; 3], [1.0, 0.0, 0.0]);
+                    if self.every_vertex && far > beyond {
+                        let p = self.shared.rest[v as usize];
+                        let closest = fans
+                            .of(self.shared.position[to as usize])
+                            .iter()
+                            .map(|&t| {
+                                let tri = triangles[t as usize];
+                                let located = Located {
+                                    corners: tri.map(|c| {
+                                        mesh.rest[mesh.slot[c as usize] as usize].to_array()
+                                    }),
+                                };
+                                let (q, w) = located.closest(p);
+                                (q.distance_squared(p), tri, w)
+                            })
+                            .min_by(|a, b| a.0.total_cmp(&b.0));
+                        if let Some((_, tri, w)) = closest {
+                            far = far.min(followed(v, tri, w));
+                        }
+                    }
+                    (far, v)
+                };
+                let by_bound =
+                    |a: &(f64, u32), b: &(f64, u32)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1));
+                let mut bound: Vec<(f64, u32)> = if self.every_vertex {
+                    gone.par_iter()
+                        .map(bound)
+                        .filter(|&(far, _)| far > beyond)
+                        .collect()
+                } else {
+                    gone.par_iter().map(bound).collect()
+                };
+                if !self.every_vertex && bound.len() > budget {
+                    bound.select_nth_unstable_by(budget, by_bound);
                     bound.truncate(budget);
                 }
+                bound.par_sort_unstable_by(by_bound);
+                bound.retain(|&(far, _)| far > beyond);
                 bound
             }
             None => {
