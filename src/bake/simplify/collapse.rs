@@ -212,11 +212,8 @@ pub struct Context<'a> {
     pub rest: &'a [DVec3],
     /// Rest-pose normals, by render vertex.
     pub normals: &'a [DVec3],
-    /// Posed positions: position `u` in sampled pose `s` at `u * poses + s`, in single
-    /// precision, as the pose matrices that make them are (on a 2-million-triangle model, 412
-    /// MB a method in double; only orientation and slivers are read from them).
-    pub posed: &'a [Vec3],
-    pub poses: usize,
+    /// Posed positions, by position and sampled pose (see [`Posed`]).
+    pub posed: &'a Posed,
 }
 
 /// A triangle of v1's fan before or after the collapse, rotated so that v1 (or v2) comes
@@ -452,16 +449,7 @@ impl Context<'_> {
                 self.rest[a as usize],
                 self.rest[b as usize],
             )?;
-            let at = |p: u32| &self.posed[p as usize * self.poses..(p as usize + 1) * self.poses];
-            let (p1, p2, pa, pb) = (at(u1), at(u2), at(a), at(b));
-            for s in 0..self.poses {
-                check_triangle(
-                    p1[s].as_dvec3(),
-                    p2[s].as_dvec3(),
-                    pa[s].as_dvec3(),
-                    pb[s].as_dvec3(),
-                )?;
-            }
+            self.posed.check_triangle(u1, u2, a, b)?;
         }
         Ok(())
     }
@@ -750,6 +738,136 @@ fn fan_orientation(old: &[FanTriangle], p1: DVec2) -> Result<(f64, f64), Rejecti
         return Err(Rejection::BadFan);
     }
     Ok((sign, extent2))
+}
+
+/// Positions in the sampled poses, in single precision as the pose matrices that make them
+/// are (on a 2-million-triangle model, 412 MB a method in double; only orientation and
+/// slivers are read from them). Stored by coordinate in blocks of [`LANES`] poses (the last
+/// pose repeated to fill the last block), so that [`Posed::check_triangle`] tests a block of
+/// poses at once.
+pub struct Posed {
+    /// Poses stored per position: the poses, rounded up to whole blocks.
+    stride: usize,
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+}
+
+/// Poses a block of [`Posed`] holds.
+const LANES: usize = 8;
+
+impl Posed {
+    /// `positions` positions in `poses` poses, `point(u, s)` the position `u` in pose `s`.
+    pub fn new(positions: usize, poses: usize, point: impl Fn(usize, usize) -> Vec3) -> Posed {
+        let stride = poses.div_ceil(LANES).max(1) * LANES;
+        let size = positions * stride;
+        let mut posed = Posed {
+            stride,
+            x: Vec::with_capacity(size),
+            y: Vec::with_capacity(size),
+            z: Vec::with_capacity(size),
+        };
+        for u in 0..positions {
+            for s in 0..stride {
+                let p = if poses == 0 {
+                    Vec3::ZERO
+                } else {
+                    point(u, s.min(poses - 1))
+                };
+                posed.x.push(p.x);
+                posed.y.push(p.y);
+                posed.z.push(p.z);
+            }
+        }
+        posed
+    }
+
+    /// Sets position `u` in every pose (`points` in pose order).
+    pub fn set(&mut self, u: usize, points: &[Vec3]) {
+        let Some(&last) = points.last() else {
+            return;
+        };
+        for s in 0..self.stride {
+            let p = points.get(s).copied().unwrap_or(last);
+            let i = u * self.stride + s;
+            (self.x[i], self.y[i], self.z[i]) = (p.x, p.y, p.z);
+        }
+    }
+
+    fn get(&self, u: u32, s: usize) -> DVec3 {
+        let i = u as usize * self.stride + s;
+        DVec3::new(self.x[i] as f64, self.y[i] as f64, self.z[i] as f64)
+    }
+
+    /// [`check_triangle`] of `(x1, a, b)` becoming `(x2, a, b)` (positions) in every pose.
+    ///
+    /// Each block of poses is first tested in single precision with a margin: a triangle
+    /// clearly facing the same way (its normals' dot product far above its rounding error,
+    /// bounded by the edges' lengths) and clearly no sliver (1% off the bound) passes; only a
+    /// pose that is not clear is tested as [`check_triangle`] tests it, in double precision,
+    /// so the verdict is the same. Nearly every pose of nearly every triangle is clear, and
+    /// these tests were a tenth of a bake.
+    fn check_triangle(&self, x1: u32, x2: u32, a: u32, b: u32) -> Result<(), Rejection> {
+        let stride = self.stride;
+        let block = |c: &[f32], u: u32, at: usize| -> [f32; LANES] {
+            let i = u as usize * stride + at;
+            c[i..i + LANES].try_into().expect("a whole block")
+        };
+        for at in (0..stride).step_by(LANES) {
+            let get = |u: u32| {
+                (
+                    block(&self.x, u, at),
+                    block(&self.y, u, at),
+                    block(&self.z, u, at),
+                )
+            };
+            let (p1, p2, pa, pb) = (get(x1), get(x2), get(a), get(b));
+            let mut clear = [false; LANES];
+            for k in 0..LANES {
+                let sub = |p: &([f32; LANES], [f32; LANES], [f32; LANES]),
+                           q: &([f32; LANES], [f32; LANES], [f32; LANES])| {
+                    [p.0[k] - q.0[k], p.1[k] - q.1[k], p.2[k] - q.2[k]]
+                };
+                let cross = |u: [f32; 3], v: [f32; 3]| {
+                    [
+                        u[1] * v[2] - u[2] * v[1],
+                        u[2] * v[0] - u[0] * v[2],
+                        u[0] * v[1] - u[1] * v[0],
+                    ]
+                };
+                let dot = |u: [f32; 3], v: [f32; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+                let (e1, e2) = (sub(&pa, &p1), sub(&pb, &p1));
+                let (f1, f2) = (sub(&pa, &p2), sub(&pb, &p2));
+                let g = sub(&pb, &pa);
+                let (n_old, n_new) = (cross(e1, e2), cross(f1, f2));
+                let d = dot(n_old, n_new);
+                // |n| ≤ |u||v|, and single precision's error in d is a few 1e-7 of
+                // |e1||e2||f1||f2|: a margin of 2e-5 of that is clear.
+                let scale = dot(e1, e1) * dot(e2, e2) * dot(f1, f1) * dot(f2, f2);
+                let facing = d > 0.0
+                    && scale > f32::MIN_POSITIVE
+                    && scale < f32::MAX
+                    && d * d > 4e-10 * scale;
+                let edges = dot(f1, f1) + dot(g, g) + dot(f2, f2);
+                let bound = SLIVER as f32 * edges;
+                let round = 12.0 * dot(n_new, n_new) > 1.01 * bound * bound;
+                clear[k] = facing && round;
+            }
+            if clear.iter().all(|&c| c) {
+                continue;
+            }
+            for (k, _) in clear.iter().enumerate().filter(|(_, c)| !**c) {
+                let s = at + k;
+                check_triangle(
+                    self.get(x1, s),
+                    self.get(x2, s),
+                    self.get(a, s),
+                    self.get(b, s),
+                )?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Triangle `(x1, a, b)` becoming `(x2, a, b)`: it must not turn over, nor become a sliver

@@ -35,7 +35,7 @@ use metric::{Metric, rest_position};
 pub use sequence::{Sequence, Stats, Step, StepKind};
 
 use crate::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
-use collapse::{Context, Scratch};
+use collapse::{Context, Posed, Scratch};
 use expectation::ExpectationMatrix;
 use glam::{Affine3A, DVec2, DVec3, Vec3, Vec4};
 use influence::{FactorCache, Influence64};
@@ -197,8 +197,8 @@ struct Simplifier<'a> {
     /// Per render vertex, its material; per material, whether it is textured.
     materials: &'a [u16],
     textured: &'a [bool],
-    /// Position `u` in pose `s` at `u * poses.len() + s`.
-    posed: Vec<Vec3>,
+    /// Positions in the sampled poses.
+    posed: Posed,
     infl: Vec<Vec<Influence64>>,
     metric: Metric<'a>,
     pm: &'a ExpectationMatrix,
@@ -329,15 +329,9 @@ pub fn simplify_feeding(
     mesh.classify_all();
     let uv: Vec<DVec2> = am.uvs.iter().map(|u| u.as_dvec2()).collect();
     let charts = TextureCharts::measure(&mesh, &uv, &rest);
-    let posed: Vec<Vec3> = (0..n)
-        .flat_map(|v| {
-            let infl = &infl[v];
-            input
-                .poses
-                .iter()
-                .map(move |g| rest_position(g, infl).as_vec3())
-        })
-        .collect();
+    let posed = Posed::new(n, input.poses.len(), |v, s| {
+        rest_position(&input.poses[s], &infl[v]).as_vec3()
+    });
 
     let influences: u64 = (0..n)
         .filter(|&v| mesh.refs[v] > 0)
@@ -627,7 +621,6 @@ impl Simplifier<'_> {
             rest: &self.rest,
             normals: &self.normals,
             posed: &self.posed,
-            poses: self.poses.len(),
         }
     }
 
@@ -948,10 +941,12 @@ impl Simplifier<'_> {
         for &x in &ring {
             self.moved[x as usize] = true;
         }
-        let poses = self.poses.len();
-        for (s, g) in self.poses.iter().enumerate() {
-            self.posed[ui * poses + s] = rest_position(g, &self.infl[ui]).as_vec3();
-        }
+        let posed: Vec<Vec3> = self
+            .poses
+            .iter()
+            .map(|g| rest_position(g, &self.infl[ui]).as_vec3())
+            .collect();
+        self.posed.set(ui, &posed);
         self.influences -= wedges.len() as u64;
         // Figure 4: every collapse whose fan holds this vertex changes. Their queue entries are
         // left as they are and checked when they come out (`run` recomputes a collapse's cost
