@@ -7,7 +7,7 @@
 
 use crate::model::SkinnedMesh;
 use glam::Vec3;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 /// Positions closer than this fraction of the bounding-box diagonal count as the same point.
 pub const WELD_TOLERANCE: f32 = 1e-6;
@@ -69,7 +69,7 @@ pub fn tolerance_for(positions: &[Vec3]) -> f32 {
 /// for which `same(first, v)` holds (itself if none).
 pub fn weld_map(positions: &[Vec3], same: impl Fn(usize, usize) -> bool) -> Vec<u32> {
     let groups = position_groups(positions, tolerance_for(positions));
-    let mut members: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut members: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
     let mut rep = Vec::with_capacity(positions.len());
     for (v, &g) in groups.iter().enumerate() {
         let list = members.entry(g).or_default();

@@ -19,7 +19,7 @@
 use super::influence::Influence64;
 use glam::DVec3;
 use smallvec::SmallVec;
-use std::collections::HashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Rest positions closer than this fraction of the bounding-box diagonal are one point.
 pub const WELD_TOLERANCE: f32 = 1e-5;
@@ -34,7 +34,7 @@ pub fn weld_positions(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
     let points: Vec<glam::Vec3> = rest.iter().map(|p| p.as_vec3()).collect();
     let diagonal = crate::model::Bounds::of(points.iter().copied()).map_or(0.0, |b| b.diagonal());
     let groups = crate::import::weld::position_groups(&points, diagonal * WELD_TOLERANCE);
-    let mut members: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut members: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
     let mut position = Vec::with_capacity(rest.len());
     for (v, &g) in groups.iter().enumerate() {
         let list = members.entry(g).or_default();
@@ -169,7 +169,8 @@ impl Mesh {
         let n = position.len();
         let mut wedges = vec![Wedges::new(); n];
         let mut tris = Vec::with_capacity(indices.len() / 3);
-        let mut seen = std::collections::HashSet::with_capacity(indices.len() / 3);
+        let mut seen =
+            FxHashSet::with_capacity_and_hasher(indices.len() / 3, Default::default());
         let mut dropped = 0;
         for t in indices.chunks_exact(3) {
             let tri = [t[0], t[1], t[2]];
@@ -519,7 +520,7 @@ impl Mesh {
             self.position.len(),
             tris.iter().map(|t| &t[..]),
         );
-        let mut index: HashMap<u32, usize> = HashMap::new();
+        let mut index: FxHashMap<u32, usize> = FxHashMap::default();
         let mut parts: Vec<Vec<u32>> = Vec::new();
         for u in 0..self.position.len() as u32 {
             if !self.alive[u as usize] || self.pos(u) != u {
