@@ -112,6 +112,12 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             (i, method, bar, line)
         })
         .collect();
+    // Run dearest first (longest processing time first): a model's methods by the work they
+    // do, AS+IS (influence removals besides the collapses) before AS before rest-pose, so that
+    // the cheapest is the one that starts when a core comes free and the last to end is not a
+    // long one started late. The results keep the jobs' order.
+    let mut jobs: Vec<(usize, _)> = jobs.into_iter().enumerate().collect();
+    jobs.sort_by_key(|(_, (i, method, ..))| (*i, std::cmp::Reverse(*method)));
     let done = std::sync::atomic::AtomicBool::new(false);
     let results: Vec<anyhow::Result<Result<Baked, TreeBaked>>> = std::thread::scope(|scope| {
         scope.spawn(|| lines.print_until(&done));
@@ -124,8 +130,8 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             }
         }
         let _stop = Stop(&done);
-        jobs.into_par_iter()
-            .map(|(i, method, bar, line)| {
+        let bake_one = |(i, method, bar, line): (usize, Option<Method>, ProgressBar, usize)|
+         -> anyhow::Result<Result<Baked, TreeBaked>> {
                 let (model, hash) = &models[i];
                 let progress = |f: f32| {
                     bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
@@ -193,8 +199,13 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                     lods,
                     from_cache,
                 }))
-            })
-            .collect()
+        };
+        let mut results: Vec<(usize, anyhow::Result<Result<Baked, TreeBaked>>)> = jobs
+            .into_par_iter()
+            .map(|(k, job)| (k, bake_one(job)))
+            .collect();
+        results.sort_by_key(|(k, _)| *k);
+        results.into_iter().map(|(_, r)| r).collect()
     });
     let mut out = BakeResults {
         characters: Vec::new(),

@@ -759,7 +759,8 @@ const LANES: usize = 8;
 impl Posed {
     /// `positions` positions in `poses` poses, `point(u, s)` the position `u` in pose `s`.
     pub fn new(positions: usize, poses: usize, point: impl Fn(usize, usize) -> Vec3) -> Posed {
-        let stride = poses.div_ceil(LANES).max(1) * LANES;
+        // No poses, no blocks: only the rest pose is checked.
+        let stride = poses.div_ceil(LANES) * LANES;
         let size = positions * stride;
         let mut posed = Posed {
             stride,
@@ -769,11 +770,7 @@ impl Posed {
         };
         for u in 0..positions {
             for s in 0..stride {
-                let p = if poses == 0 {
-                    Vec3::ZERO
-                } else {
-                    point(u, s.min(poses - 1))
-                };
+                let p = point(u, s.min(poses - 1));
                 posed.x.push(p.x);
                 posed.y.push(p.y);
                 posed.z.push(p.z);
@@ -823,11 +820,12 @@ impl Posed {
             };
             let (p1, p2, pa, pb) = (get(x1), get(x2), get(a), get(b));
             let mut clear = [false; LANES];
-            for k in 0..LANES {
-                let sub = |p: &([f32; LANES], [f32; LANES], [f32; LANES]),
-                           q: &([f32; LANES], [f32; LANES], [f32; LANES])| {
-                    [p.0[k] - q.0[k], p.1[k] - q.1[k], p.2[k] - q.2[k]]
-                };
+            for (k, clear) in clear.iter_mut().enumerate() {
+                let sub =
+                    |p: &([f32; LANES], [f32; LANES], [f32; LANES]),
+                     q: &([f32; LANES], [f32; LANES], [f32; LANES])| {
+                        [p.0[k] - q.0[k], p.1[k] - q.1[k], p.2[k] - q.2[k]]
+                    };
                 let cross = |u: [f32; 3], v: [f32; 3]| {
                     [
                         u[1] * v[2] - u[2] * v[1],
@@ -851,7 +849,7 @@ impl Posed {
                 let edges = dot(f1, f1) + dot(g, g) + dot(f2, f2);
                 let bound = SLIVER as f32 * edges;
                 let round = 12.0 * dot(n_new, n_new) > 1.01 * bound * bound;
-                clear[k] = facing && round;
+                *clear = facing && round;
             }
             if clear.iter().all(|&c| c) {
                 continue;

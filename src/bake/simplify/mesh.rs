@@ -18,8 +18,8 @@
 
 use super::influence::Influence64;
 use glam::DVec3;
-use smallvec::SmallVec;
 use rustc_hash::{FxHashMap, FxHashSet};
+use smallvec::SmallVec;
 
 /// Rest positions closer than this fraction of the bounding-box diagonal are one point.
 pub const WELD_TOLERANCE: f32 = 1e-5;
@@ -169,8 +169,7 @@ impl Mesh {
         let n = position.len();
         let mut wedges = vec![Wedges::new(); n];
         let mut tris = Vec::with_capacity(indices.len() / 3);
-        let mut seen =
-            FxHashSet::with_capacity_and_hasher(indices.len() / 3, Default::default());
+        let mut seen = FxHashSet::with_capacity_and_hasher(indices.len() / 3, Default::default());
         let mut dropped = 0;
         for t in indices.chunks_exact(3) {
             let tri = [t[0], t[1], t[2]];
