@@ -910,3 +910,46 @@ pub fn barycentric(p: DVec2, a: DVec2, b: DVec2, c: DVec2) -> [f64; 3] {
     let wc = (b - a).perp_dot(p - a) / d;
     [1.0 - wb - wc, wb, wc]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The block test in single precision gives the verdict of [`check_triangle`] in double
+    /// precision, pose by pose: on random triangles, on nearly flat ones turning over or not,
+    /// on slivers at the bound, and with corners far from the origin.
+    #[test]
+    fn posed_checks_agree_with_double_precision() {
+        let mut rng = fastrand::Rng::with_seed(11);
+        let mut f = |scale: f32| (rng.f32() - 0.5) * scale;
+        for case in 0..4000 {
+            let poses = 1 + case % 19;
+            let offset = if case % 3 == 0 { 1000.0 } else { 0.0 };
+            // Positions 0..4: x1, x2, a, b; some cases nearly degenerate.
+            let flat = case % 4 == 1;
+            let thin = case % 4 == 2;
+            let points: Vec<Vec<Vec3>> = (0..4)
+                .map(|corner| {
+                    (0..poses)
+                        .map(|_| {
+                            let mut p = Vec3::new(f(2.0), f(2.0), f(2.0));
+                            if flat {
+                                p.z = f(1e-4);
+                            }
+                            if thin && corner == 3 {
+                                p = Vec3::new(1.0 + f(0.04), f(0.04), 0.0);
+                            }
+                            p + Vec3::splat(offset)
+                        })
+                        .collect()
+                })
+                .collect();
+            let posed = Posed::new(4, poses, |u, s| points[u][s]);
+            let double = (0..poses).try_for_each(|s| {
+                let at = |u: usize| points[u][s].as_dvec3();
+                check_triangle(at(0), at(1), at(2), at(3))
+            });
+            assert_eq!(posed.check_triangle(0, 1, 2, 3), double, "case {case}");
+        }
+    }
+}
