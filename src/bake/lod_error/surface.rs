@@ -605,20 +605,13 @@ impl<'a> SurfaceProbe<'a> {
                 };
                 let by_bound =
                     |a: &(f64, u32), b: &(f64, u32)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1));
-                let mut bound: Vec<(f64, u32)> = if self.every_vertex {
-                    gone.par_iter()
-                        .map(bound)
-                        .filter(|&(far, _)| far > beyond)
-                        .collect()
-                } else {
-                    gone.par_iter().map(bound).collect()
-                };
+                let mut bound: Vec<(f64, u32)> = gone.par_iter().map(bound).collect();
                 if !self.every_vertex && bound.len() > budget {
                     bound.select_nth_unstable_by(budget, by_bound);
                     bound.truncate(budget);
                 }
-                bound.par_sort_unstable_by(by_bound);
                 bound.retain(|&(far, _)| far > beyond);
+                bound.par_sort_unstable_by(by_bound);
                 bound
             }
             None => {
