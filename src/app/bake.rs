@@ -5,7 +5,7 @@
 use crate::bake::animation_space::AnimationSpaceMesh;
 use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin, source_hash};
-use crate::bake::lod::{LevelProbes, SkinnedLods, bake_lods_sharing, full_detail, lod_options};
+use crate::bake::lod::{SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options};
 use crate::bake::simplify::Method;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
@@ -99,10 +99,10 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             bars.suspend(|| eprintln!("warning: {w}"));
         }
     };
-    // Each character's full-detail mesh and level probes, made by the first of its methods'
-    // bakes that misses the cache and shared by the others (see `bake_lods_sharing`).
+    // Each character's full-detail mesh and what its methods' bakes share, made by the first of
+    // them that misses the cache (see `bake_lods_sharing`).
     let bases: Vec<OnceLock<AnimationSpaceMesh>> = models.iter().map(|_| OnceLock::new()).collect();
-    let probes: Vec<OnceLock<LevelProbes>> = models.iter().map(|_| OnceLock::new()).collect();
+    let shared: Vec<SharedBake> = models.iter().map(|_| SharedBake::default()).collect();
     let lines = ProgressLines::new();
     let jobs: Vec<_> = jobs
         .into_iter()
@@ -112,12 +112,20 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             (i, method, bar, line)
         })
         .collect();
-    // Run dearest first (longest processing time first): a model's methods by the work they
-    // do, AS+IS (influence removals besides the collapses) before AS before rest-pose, so that
-    // the cheapest is the one that starts when a core comes free and the last to end is not a
-    // long one started late. The results keep the jobs' order.
+    // Run dearest first (longest processing time first), so that the cheapest is the one that
+    // starts when a core comes free and the last to end is not a long one started late. AS+IS
+    // (influence removals besides the collapses) is the dearest; AS is as dear on its own, but
+    // it starts from the first pricing AS+IS makes (see `SharedBake`), a quarter of its work, so
+    // it runs after rest-pose. The results keep the jobs' order.
     let mut jobs: Vec<(usize, _)> = jobs.into_iter().enumerate().collect();
-    jobs.sort_by_key(|(_, (i, method, ..))| (*i, std::cmp::Reverse(*method)));
+    jobs.sort_by_key(|(_, (i, method, ..))| {
+        let rank = match method {
+            Some(Method::InfluenceSimplification) | None => 0,
+            Some(Method::RestPose) => 1,
+            Some(Method::AnimationSpace) => 2,
+        };
+        (*i, rank)
+    });
     let done = std::sync::atomic::AtomicBool::new(false);
     let results: Vec<anyhow::Result<Result<Baked, TreeBaked>>> = std::thread::scope(|scope| {
         scope.spawn(|| lines.print_until(&done));
@@ -182,7 +190,12 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                 let Ok((lods, origin)) = cache.load_or_build(&path, &key, || {
                     let base = bases[i].get_or_init(|| full_detail(model));
                     Ok::<_, std::convert::Infallible>(bake_lods_sharing(
-                        model, base, &probes[i], method, &options, &progress,
+                        model,
+                        base,
+                        &shared[i],
+                        method,
+                        &options,
+                        &progress,
                     ))
                 });
                 warn(&origin);

@@ -19,8 +19,8 @@ use super::lod_error::SurfaceProbe;
 use super::simplify::expectation::ExpectationMatrix;
 use super::simplify::mesh::Mesh;
 use super::simplify::{
-    Feed, Method, Sequence, SimplifyInput, Stats, Step, StepKind, gathered, pose_samples,
-    simplify_feeding,
+    Feed, FirstPricing, Method, Prepared, Sequence, SimplifyInput, Stats, Step, StepKind, gathered,
+    pose_samples, simplify_prepared,
 };
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
@@ -683,7 +683,7 @@ pub fn full_detail(model: &Model) -> AnimationSpaceMesh {
 }
 
 /// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to `feed`
-/// as it is built; returns its statistics (see [`simplify_feeding`]).
+/// as it is built; returns its statistics (see [`super::simplify::simplify_feeding`]).
 fn simplify_model(
     model: &Model,
     base: &AnimationSpaceMesh,
@@ -691,10 +691,60 @@ fn simplify_model(
     progress: &(dyn Fn(f32) + Sync),
     feed: &mut (dyn FnMut(Feed) + Send),
 ) -> Stats {
-    let expectation = match method {
-        Method::RestPose => ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>()),
-        _ => ExpectationMatrix::estimate(model),
-    };
+    SharedBake::default().simplify(model, base, method, progress, feed)
+}
+
+/// What the bakes of one model by several methods share, made by the first bake that needs
+/// each (see [`bake_lods_sharing`]): the probes its levels are measured with, what the
+/// simplifier prepares of its full detail ([`Prepared`]), the expectation matrix `P` and the
+/// first pricing of every position by each metric ([`FirstPricing`]; AS and AS+IS share one).
+/// On a 2-million-triangle model the probes are about a gigabyte and several seconds, the
+/// preparation five seconds and half a gigabyte, and the first pricing a quarter of a
+/// method's simplification: three methods baking at once each made them again.
+#[derive(Default)]
+pub struct SharedBake<'a> {
+    probes: OnceLock<LevelProbes<'a>>,
+    prepared: OnceLock<Prepared>,
+    expectation: OnceLock<ExpectationMatrix>,
+    /// By metric: the rest pose's, animation space's.
+    starts: [OnceLock<FirstPricing>; 2],
+}
+
+impl<'a> SharedBake<'a> {
+    /// The probes the levels of `model` (full detail `base`) are measured with.
+    fn probes(&self, model: &Model, base: &'a AnimationSpaceMesh) -> &LevelProbes<'a> {
+        self.probes.get_or_init(|| LevelProbes::new(model, base))
+    }
+
+    /// [`simplify_model`], from what the bakes share.
+    fn simplify(
+        &self,
+        model: &Model,
+        base: &AnimationSpaceMesh,
+        method: Method,
+        progress: &(dyn Fn(f32) + Sync),
+        feed: &mut (dyn FnMut(Feed) + Send),
+    ) -> Stats {
+        let prepared = self.prepared.get_or_init(|| prepare(model, base));
+        let none;
+        let (expectation, start) = match method {
+            Method::RestPose => {
+                none = ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>());
+                (&none, &self.starts[0])
+            }
+            Method::AnimationSpace | Method::InfluenceSimplification => (
+                self.expectation
+                    .get_or_init(|| ExpectationMatrix::estimate(model)),
+                &self.starts[1],
+            ),
+        };
+        simplify_prepared(prepared, expectation, start, method, progress, feed)
+    }
+}
+
+/// What the simplifier makes of `base` (the full detail of `model`) whatever the method
+/// ([`Prepared`]).
+pub fn prepare(model: &Model, base: &AnimationSpaceMesh) -> Prepared {
     let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
     let poses = pose_samples(model, POSE_SAMPLES);
     let textured: Vec<bool> = model
@@ -702,14 +752,7 @@ fn simplify_model(
         .iter()
         .map(|m| m.texture.is_some())
         .collect();
-    let input = SimplifyInput {
-        mesh: base,
-        rest_bones: &rest_bones,
-        expectation: &expectation,
-        poses: &poses,
-        textured: &textured,
-    };
-    simplify_feeding(&input, method, progress, feed)
+    Prepared::new(base, &rest_bones, &poses, &textured)
 }
 
 /// Builds the progressive mesh of `model` by `method` and cuts its levels. The levels are cut
@@ -723,21 +766,19 @@ pub fn bake_lods(
 ) -> SkinnedLods {
     let start = std::time::Instant::now();
     let base = full_detail(model);
-    let probes = OnceLock::new();
-    let mut lods = bake_lods_sharing(model, &base, &probes, method, opts, progress);
+    let shared = SharedBake::default();
+    let mut lods = bake_lods_sharing(model, &base, &shared, method, opts, progress);
     lods.bake_seconds = start.elapsed().as_secs_f64();
     lods
 }
 
 /// [`bake_lods`] of a model whose bakes by several methods share its full-detail mesh `base`
-/// ([`full_detail`]) and the probes its levels are measured with, which the first bake to need
-/// them makes (the others' cutters wait for them while their simplifiers go on). The probes
-/// hold the full-detail surface in 16 poses and an index of it: on a 2-million-triangle model
-/// about a gigabyte and several seconds, which three methods baking at once each made again.
+/// ([`full_detail`]) and `shared` ([`SharedBake`]): what one bake makes there the others
+/// take, and a cutter waits for the probes while its simplifier goes on.
 pub fn bake_lods_sharing<'a>(
     model: &Model,
     base: &'a AnimationSpaceMesh,
-    probes: &OnceLock<LevelProbes<'a>>,
+    shared: &SharedBake<'a>,
     method: Method,
     opts: &LodOptions,
     progress: &(dyn Fn(f32) + Sync),
@@ -749,7 +790,7 @@ pub fn bake_lods_sharing<'a>(
         let (start_tx, start_rx) = mpsc::channel::<Sequence>();
         let (steps_tx, steps_rx) = mpsc::channel::<Vec<Step>>();
         let cutter = scope.spawn(move || {
-            let probes = probes.get_or_init(|| LevelProbes::new(model, base));
+            let probes = shared.probes(model, base);
             // No start: the simplifier stopped before its first step (it panicked).
             let first = start_rx.recv().ok()?;
             let mut seq = GrowingSequence::fed(first, steps_rx);
@@ -759,7 +800,7 @@ pub fn bake_lods_sharing<'a>(
             Some((levels, seq.into_whole()))
         });
         // A closed channel means the cutter panicked: joining it below says so.
-        let stats = simplify_model(model, base, method, progress, &mut |feed| match feed {
+        let stats = shared.simplify(model, base, method, progress, &mut |feed| match feed {
             Feed::Start(first) => {
                 let _ = start_tx.send(first);
             }

@@ -224,26 +224,64 @@ struct FanTriangle {
     p: [DVec2; 3],
 }
 
+impl Chart<'_> {
+    /// Which kind of chart this is: with the wedge, what v1's old fan is cached under (the
+    /// flattening of a wedge or of the whole fan is itself cached per v1).
+    fn kind(self) -> u8 {
+        match self {
+            Chart::Texture => 0,
+            Chart::Polar(_) => 1,
+            Chart::Whole(_) => 2,
+        }
+    }
+}
+
 /// The cache key of the whole fan's flattening among the wedges' ones.
 const WHOLE_FAN: u32 = u32::MAX;
 
 /// Scratch space reused between evaluations, and what the evaluations of one v1's candidates
-/// share: its neighbours and its wedges' flattenings.
+/// share: its neighbours, its wedges' flattenings and each chart's old fan.
 #[derive(Default)]
 pub struct Scratch {
     pub corners: Vec<Corner>,
     /// v1 and the stamp the cached fan data below belong to.
     fan_of: Option<(u32, u64)>,
     flats: Vec<(u32, Option<Flattening>)>,
-    old: Vec<FanTriangle>,
+    /// v1's side of each chart evaluated so far (the first `old_len`; the rest are spare
+    /// space for the next v1).
+    old_fans: Vec<OldFan>,
+    old_len: usize,
     new: Vec<FanTriangle>,
-    /// Outline candidates: render vertex, how many fan triangles reach it by an edge from
-    /// v1 (1, or 2 for more), and its parameter point.
-    outline: Vec<(u32, u32, DVec2)>,
-    /// Ends of the old edges from v1 and of the new ones from v2: render vertex and its
-    /// parameter point relative to v1's or v2's.
-    ends_old: Vec<(u32, DVec2)>,
+    /// Ends of the new edges from v2: render vertex and its parameter point relative to v2's.
     ends_new: Vec<(u32, DVec2)>,
+}
+
+/// v1's fan in one chart before the collapse, the same for every candidate v2: each of the
+/// candidates (about six a vertex, a vertex priced again whenever its fan changes) looked its
+/// points up and walked its outline again before.
+struct OldFan {
+    /// The wedge (or [`WHOLE_FAN`]) and the kind of chart ([`Chart::kind`]).
+    key: (u32, u8),
+    tris: Vec<FanTriangle>,
+    /// [`fan_orientation`] of `tris`.
+    orientation: Result<(f64, f64), Rejection>,
+    /// Outline candidates: render vertices that one fan triangle alone reaches by an edge
+    /// from v1, with that count and their parameter points.
+    outline: Vec<(u32, u32, DVec2)>,
+    /// Ends of the old edges from v1: render vertex and its parameter point relative to v1's.
+    ends: Vec<(u32, DVec2)>,
+}
+
+impl Default for OldFan {
+    fn default() -> Self {
+        OldFan {
+            key: (WHOLE_FAN, u8::MAX),
+            tris: Vec::new(),
+            orientation: Err(Rejection::BadFan),
+            outline: Vec::new(),
+            ends: Vec::new(),
+        }
+    }
 }
 
 impl Context<'_> {
@@ -271,6 +309,7 @@ impl Context<'_> {
         let map = self.wedge_map(u1, u2).ok_or(Rejection::Wedges)?;
         if scratch.fan_of != Some((u1, self.stamp)) {
             scratch.flats.clear();
+            scratch.old_len = 0;
             scratch.fan_of = Some((u1, self.stamp));
         }
         scratch.corners.clear();
@@ -468,9 +507,93 @@ impl Context<'_> {
         chart: Chart,
         s: &mut Scratch,
     ) -> Result<(), Rejection> {
-        let p2 = self.fans(u1, u2, r1, r2, chart, s)?;
-        let p1 = s.old[0].p[0];
-        let (sign, extent2) = fan_orientation(&s.old, p1)?;
+        let key = (r1.unwrap_or(WHOLE_FAN), chart.kind());
+        let i = match s.old_fans[..s.old_len].iter().position(|o| o.key == key) {
+            Some(i) => i,
+            None => {
+                if s.old_len == s.old_fans.len() {
+                    s.old_fans.push(OldFan::default());
+                }
+                let i = s.old_len;
+                s.old_len += 1;
+                self.old_fan(u1, r1, chart, key, &mut s.old_fans[i]);
+                i
+            }
+        };
+        // Taken out while the candidate's own data is written into the same scratch space.
+        let old = std::mem::take(&mut s.old_fans[i]);
+        let result = self.wedge_corners_from(&old, u1, u2, r2, chart, s);
+        s.old_fans[i] = old;
+        result
+    }
+
+    /// v1's side of one chart's evaluation, which every candidate of v1 shares: the fan
+    /// before the collapse with its parameter points, its orientation and extent, its outline
+    /// and the ends of its edges from v1.
+    fn old_fan(&self, u1: u32, r1: Option<u32>, chart: Chart, key: (u32, u8), out: &mut OldFan) {
+        let mesh = self.mesh;
+        out.key = key;
+        out.tris.clear();
+        out.outline.clear();
+        out.ends.clear();
+        out.orientation = Err(Rejection::BadFan);
+        for &t in &mesh.incident[u1 as usize] {
+            let tri = mesh.tris[t as usize];
+            if r1.is_some_and(|r1| !tri.contains(&r1)) {
+                continue;
+            }
+            // Rotate so v1 comes first; winding kept.
+            let k = tri.iter().position(|&r| mesh.pos(r) == u1).unwrap_or(0);
+            let r = [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]];
+            let (Ok(a), Ok(b), Ok(c)) = (
+                self.point(chart, r[0]),
+                self.point(chart, r[1]),
+                self.point(chart, r[2]),
+            ) else {
+                out.tris.clear();
+                return;
+            };
+            out.tris.push(FanTriangle { r, p: [a, b, c] });
+        }
+        let Some(first) = out.tris.first() else {
+            return;
+        };
+        let p1 = first.p[0];
+        out.orientation = fan_orientation(&out.tris, p1);
+        // Outline candidates: render vertices reached from v1 by one fan triangle's edge only.
+        for tri in &out.tris {
+            for j in 1..3 {
+                let a = tri.r[j];
+                match out.outline.iter().position(|o| o.0 == a) {
+                    Some(i) => out.outline[i].1 = 2,
+                    None => out.outline.push((a, 1, tri.p[j])),
+                }
+            }
+        }
+        out.outline.retain(|o| o.1 < 2);
+        for tri in &out.tris {
+            for j in 1..3 {
+                let a = tri.r[j];
+                if !out.ends.iter().any(|e| e.0 == a) {
+                    out.ends.push((a, tri.p[j] - p1));
+                }
+            }
+        }
+    }
+
+    /// [`Self::wedge_corners`] from v1's side of the chart, `old`.
+    fn wedge_corners_from(
+        &self,
+        old: &OldFan,
+        u1: u32,
+        u2: u32,
+        r2: u32,
+        chart: Chart,
+        s: &mut Scratch,
+    ) -> Result<(), Rejection> {
+        let p2 = self.new_fan(old, u2, r2, chart, s)?;
+        let p1 = old.tris[0].p[0];
+        let (sign, extent2) = old.orientation?;
         let min_area = 1e-10 * extent2;
         // No fold-over in parameter space.
         for tri in &s.new {
@@ -480,10 +603,10 @@ impl Context<'_> {
             }
         }
         if !matches!(chart, Chart::Whole(_)) {
-            self.check_outline(u2, p1, p2, chart, extent2, s)?;
+            self.check_outline(old, u2, p1, p2, chart, extent2)?;
         }
-        self.corner_of_v1(u1, p1, chart, s)?;
-        self.edge_crossings(u1, u2, r2, p1, p2, chart, s);
+        self.corner_of_v1(old, u1, p1, chart, s)?;
+        self.edge_crossings(old, u1, u2, r2, p1, p2, chart, s);
         Ok(())
     }
 
@@ -505,44 +628,32 @@ impl Context<'_> {
         }
     }
 
-    /// The fan of `u1` before the collapse (the triangles on `r1`, or all of them) and after,
-    /// into `s.old` and `s.new`, each triangle with its parameter points looked up once:
-    /// everything after works on these. Returns v2's point.
-    fn fans(
+    /// The fan of `u1` after the collapse into `s.new`: the old fan's triangles that do not
+    /// reach `u2`, with v2 (render vertex `r2`) in place of v1. Returns v2's point.
+    fn new_fan(
         &self,
-        u1: u32,
+        old: &OldFan,
         u2: u32,
-        r1: Option<u32>,
         r2: u32,
         chart: Chart,
         s: &mut Scratch,
     ) -> Result<DVec2, Rejection> {
         let mesh = self.mesh;
-        s.old.clear();
         s.new.clear();
         let p2 = self.point(chart, r2)?;
-        for &t in &mesh.incident[u1 as usize] {
-            let tri = mesh.tris[t as usize];
-            if r1.is_some_and(|r1| !tri.contains(&r1)) {
-                continue;
-            }
-            // Rotate so v1 comes first; winding kept.
-            let k = tri.iter().position(|&r| mesh.pos(r) == u1).unwrap_or(0);
-            let r = [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]];
-            let pts = [
-                self.point(chart, r[0])?,
-                self.point(chart, r[1])?,
-                self.point(chart, r[2])?,
-            ];
-            s.old.push(FanTriangle { r, p: pts });
+        if old.tris.is_empty() {
+            return Err(Rejection::BadFan);
+        }
+        for tri in &old.tris {
+            let r = tri.r;
             if mesh.pos(r[1]) != u2 && mesh.pos(r[2]) != u2 {
                 s.new.push(FanTriangle {
                     r: [r2, r[1], r[2]],
-                    p: [p2, pts[1], pts[2]],
+                    p: [p2, tri.p[1], tri.p[2]],
                 });
             }
         }
-        if s.new.is_empty() || s.old.is_empty() {
+        if s.new.is_empty() {
             return Err(Rejection::BadFan);
         }
         Ok(p2)
@@ -554,31 +665,21 @@ impl Context<'_> {
     /// outline goes with it.)
     fn check_outline(
         &self,
+        old: &OldFan,
         u2: u32,
         p1: DVec2,
         p2: DVec2,
         chart: Chart,
         extent2: f64,
-        s: &mut Scratch,
     ) -> Result<(), Rejection> {
         let mesh = self.mesh;
-        s.outline.clear();
-        for tri in &s.old {
-            for j in 1..3 {
-                let a = tri.r[j];
-                match s.outline.iter().position(|o| o.0 == a) {
-                    Some(i) => s.outline[i].1 = 2,
-                    None => s.outline.push((a, 1, tri.p[j])),
-                }
-            }
-        }
-        s.outline.retain(|o| o.1 < 2);
-        match s.outline.len() {
+        let outline = &old.outline;
+        match outline.len() {
             0 => Ok(()),
             2 => {
                 let (Some(&(_, _, q)), true) = (
-                    s.outline.iter().find(|o| mesh.pos(o.0) != u2),
-                    s.outline.iter().any(|o| mesh.pos(o.0) == u2),
+                    outline.iter().find(|o| mesh.pos(o.0) != u2),
+                    outline.iter().any(|o| mesh.pos(o.0) == u2),
                 ) else {
                     return Err(Rejection::NotAlongOutline);
                 };
@@ -602,6 +703,7 @@ impl Context<'_> {
     /// Corner 1: v1's parameter point, inside (or on the edge of) one new triangle.
     fn corner_of_v1(
         &self,
+        old: &OldFan,
         u1: u32,
         p1: DVec2,
         chart: Chart,
@@ -618,7 +720,7 @@ impl Context<'_> {
         }
         let (tri, bary) = best.ok_or(Rejection::BadFan)?;
         let uv = |r: u32| self.slide_uv(chart, r);
-        let r1 = s.old[0].r[0];
+        let r1 = old.tris[0].r[0];
         s.corners.push(Corner {
             terms: [
                 (u1, 1.0),
@@ -637,6 +739,7 @@ impl Context<'_> {
     #[allow(clippy::too_many_arguments)]
     fn edge_crossings(
         &self,
+        old: &OldFan,
         u1: u32,
         u2: u32,
         r2: u32,
@@ -646,16 +749,7 @@ impl Context<'_> {
         s: &mut Scratch,
     ) {
         let mesh = self.mesh;
-        s.ends_old.clear();
         s.ends_new.clear();
-        for tri in &s.old {
-            for j in 1..3 {
-                let a = tri.r[j];
-                if mesh.pos(a) != u2 && !s.ends_old.iter().any(|e| e.0 == a) {
-                    s.ends_old.push((a, tri.p[j] - p1));
-                }
-            }
-        }
         for tri in &s.new {
             for j in 1..3 {
                 let b = tri.r[j];
@@ -665,9 +759,9 @@ impl Context<'_> {
             }
         }
         let uv = |r: u32| self.slide_uv(chart, r);
-        let r1 = s.old[0].r[0];
+        let r1 = old.tris[0].r[0];
         let w = p2 - p1;
-        for &(a, da) in &s.ends_old {
+        for &(a, da) in old.ends.iter().filter(|e| mesh.pos(e.0) != u2) {
             let la = da.length_squared();
             for &(b, db) in &s.ends_new {
                 if a == b {
@@ -745,6 +839,7 @@ fn fan_orientation(old: &[FanTriangle], p1: DVec2) -> Result<(f64, f64), Rejecti
 /// slivers are read from them). Stored by coordinate in blocks of [`LANES`] poses (the last
 /// pose repeated to fill the last block), so that [`Posed::check_triangle`] tests a block of
 /// poses at once.
+#[derive(Clone)]
 pub struct Posed {
     /// Poses stored per position: the poses, rounded up to whole blocks.
     stride: usize,

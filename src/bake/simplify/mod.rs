@@ -44,9 +44,10 @@ use rayon::prelude::*;
 use rstar::RTree;
 use rstar::primitives::GeomWithData;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 /// The three ways of ranking simplifications the paper compares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
@@ -183,23 +184,25 @@ type Located = GeomWithData<[f64; 3], u32>;
 struct Simplifier<'a> {
     method: Method,
     mesh: Mesh,
-    uv: Vec<DVec2>,
+    uv: &'a [DVec2],
     /// Per triangle of `mesh`: its texture coordinates span area.
-    uv_valid: Vec<bool>,
+    uv_valid: &'a [bool],
     uv_tolerance: f64,
     /// Metres of surface per texture unit where a texture can slide; 0 for none.
     slide_scale: f64,
-    rest: Vec<DVec3>,
+    /// Rest positions, influences and posed positions: the prepared ones until an influence
+    /// removal changes them (AS+IS alone does), then the simplifier's own copy.
+    rest: Cow<'a, [DVec3]>,
     /// Rest-pose normals, by render vertex.
-    normals: Vec<DVec3>,
+    normals: &'a [DVec3],
     rest_bones: &'a [Affine3A],
     poses: &'a [Vec<Affine3A>],
     /// Per render vertex, its material; per material, whether it is textured.
     materials: &'a [u16],
     textured: &'a [bool],
     /// Positions in the sampled poses.
-    posed: Posed,
-    infl: Vec<Vec<Influence64>>,
+    posed: Cow<'a, Posed>,
+    infl: Cow<'a, [Vec<Influence64>]>,
     metric: Metric<'a>,
     pm: &'a ExpectationMatrix,
     cache: FactorCache,
@@ -218,9 +221,9 @@ struct Simplifier<'a> {
     priced_at: Vec<u64>,
     moved: Vec<bool>,
     /// Connected parts (positions) and each position's part.
-    parts: Vec<Vec<u32>>,
-    part_of: Vec<u32>,
-    located: RTree<Located>,
+    parts: &'a [Vec<u32>],
+    part_of: &'a [u32],
+    located: &'a RTree<Located>,
     /// The serial steps' scratch space.
     workspace: Workspace,
     /// Scratch spaces for the candidates priced in parallel, one per task at a time.
@@ -299,95 +302,188 @@ pub fn simplify_feeding(
     progress: &(dyn Fn(f32) + Sync),
     feed: &mut (dyn FnMut(Feed) + Send),
 ) -> Stats {
-    let am = input.mesh;
-    let n = am.vertex_count();
-    let infl = influences64(am);
-    let rest: Vec<DVec3> = infl
-        .iter()
-        .map(|i| rest_position(input.rest_bones, i))
-        .collect();
-    let normals: Vec<DVec3> = (0..n)
-        .map(|v| {
-            am.influences_of(v)
-                .iter()
-                .map(|i| {
-                    let m = input.rest_bones[i.bone as usize].matrix3;
-                    (m * i.n).as_dvec3()
-                })
-                .sum::<DVec3>()
-                .normalize_or_zero()
-        })
-        .collect();
-    let positions = mesh::weld_positions(&rest, &infl);
-    let diagonal = rest
-        .iter()
-        .fold(None, |b: Option<(DVec3, DVec3)>, &p| {
-            Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))))
-        })
-        .map_or(0.0, |(lo, hi)| (hi - lo).length());
-    let mut mesh = Mesh::new(&am.indices, positions.clone());
-    mesh.classify_all();
-    let uv: Vec<DVec2> = am.uvs.iter().map(|u| u.as_dvec2()).collect();
-    let charts = TextureCharts::measure(&mesh, &uv, &rest);
-    let posed = Posed::new(n, input.poses.len(), |v, s| {
-        rest_position(&input.poses[s], &infl[v]).as_vec3()
-    });
+    let prepared = Prepared::new(input.mesh, input.rest_bones, input.poses, input.textured);
+    let start = OnceLock::new();
+    simplify_prepared(&prepared, input.expectation, &start, method, progress, feed)
+}
 
-    let influences: u64 = (0..n)
-        .filter(|&v| mesh.refs[v] > 0)
-        .map(|v| infl[mesh.pos(v as u32) as usize].len() as u64)
-        .sum();
-    let parts = mesh.components();
-    let mut part_of = vec![u32::MAX; n];
-    for (i, part) in parts.iter().enumerate() {
-        for &u in part {
-            part_of[u as usize] = i as u32;
+/// What the simplifier makes of a character before its first step, whatever the method: the
+/// mesh's topology and kinds, its welded positions, texture charts, posed positions and
+/// connected parts. On a 2-million-triangle model that is about five seconds and half a
+/// gigabyte, which each of the three methods made again; a bake of several methods makes it
+/// once and each method's simplifier starts from it ([`simplify_prepared`]).
+pub struct Prepared {
+    rest_bones: Vec<Affine3A>,
+    poses: Vec<Vec<Affine3A>>,
+    materials: Vec<u16>,
+    textured: Vec<bool>,
+    infl: Vec<Vec<Influence64>>,
+    rest: Vec<DVec3>,
+    normals: Vec<DVec3>,
+    positions: Vec<u32>,
+    mesh: Mesh,
+    uv: Vec<DVec2>,
+    charts: TextureCharts,
+    posed: Posed,
+    influences: u64,
+    parts: Vec<Vec<u32>>,
+    part_of: Vec<u32>,
+    located: RTree<Located>,
+    stats: Stats,
+    diagonal: f64,
+    seconds: f64,
+}
+
+impl Prepared {
+    /// Prepares `am` (a character's full-detail mesh) with its rest-pose bone matrices, sampled
+    /// poses and which materials are textured (as [`SimplifyInput`] has them).
+    pub fn new(
+        am: &AnimationSpaceMesh,
+        rest_bones: &[Affine3A],
+        poses: &[Vec<Affine3A>],
+        textured: &[bool],
+    ) -> Prepared {
+        let start = std::time::Instant::now();
+        let n = am.vertex_count();
+        let infl = influences64(am);
+        let rest: Vec<DVec3> = infl.iter().map(|i| rest_position(rest_bones, i)).collect();
+        let normals: Vec<DVec3> = (0..n)
+            .map(|v| {
+                am.influences_of(v)
+                    .iter()
+                    .map(|i| {
+                        let m = rest_bones[i.bone as usize].matrix3;
+                        (m * i.n).as_dvec3()
+                    })
+                    .sum::<DVec3>()
+                    .normalize_or_zero()
+            })
+            .collect();
+        let positions = mesh::weld_positions(&rest, &infl);
+        let diagonal = rest
+            .iter()
+            .fold(None, |b: Option<(DVec3, DVec3)>, &p| {
+                Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))))
+            })
+            .map_or(0.0, |(lo, hi)| (hi - lo).length());
+        let mut mesh = Mesh::new(&am.indices, positions.clone());
+        mesh.classify_all();
+        let uv: Vec<DVec2> = am.uvs.iter().map(|u| u.as_dvec2()).collect();
+        let charts = TextureCharts::measure(&mesh, &uv, &rest);
+        let posed = Posed::new(n, poses.len(), |v, s| {
+            rest_position(&poses[s], &infl[v]).as_vec3()
+        });
+        let influences: u64 = (0..n)
+            .filter(|&v| mesh.refs[v] > 0)
+            .map(|v| infl[mesh.pos(v as u32) as usize].len() as u64)
+            .sum();
+        let parts = mesh.components();
+        let mut part_of = vec![u32::MAX; n];
+        for (i, part) in parts.iter().enumerate() {
+            for &u in part {
+                part_of[u as usize] = i as u32;
+            }
+        }
+        let located = RTree::bulk_load(
+            parts
+                .iter()
+                .flatten()
+                .map(|&u| Located::new(rest[u as usize].to_array(), u))
+                .collect(),
+        );
+        let stats = Stats {
+            dropped_triangles: mesh.dropped_triangles as u32,
+            locked_positions: (0..n)
+                .filter(|&u| mesh.alive[u] && matches!(mesh.kind[u], Kind::Complex | Kind::Locked))
+                .count() as u32,
+            texture_parameterisation: charts.valid.iter().any(|&v| v),
+            parts: parts.len() as u32,
+            ..Stats::default()
+        };
+        let seconds = start.elapsed().as_secs_f64();
+        log::debug!("the simplifier's preparation of {n} vertices took {seconds:.2} s");
+        Prepared {
+            rest_bones: rest_bones.to_vec(),
+            poses: poses.to_vec(),
+            materials: am.materials.clone(),
+            textured: textured.to_vec(),
+            infl,
+            rest,
+            normals,
+            positions,
+            mesh,
+            uv,
+            charts,
+            posed,
+            influences,
+            parts,
+            part_of,
+            located,
+            stats,
+            diagonal,
+            seconds,
         }
     }
-    let located = RTree::bulk_load(
-        parts
-            .iter()
-            .flatten()
-            .map(|&u| Located::new(rest[u as usize].to_array(), u))
-            .collect(),
-    );
-    let stats = Stats {
-        dropped_triangles: mesh.dropped_triangles as u32,
-        locked_positions: (0..n)
-            .filter(|&u| mesh.alive[u] && matches!(mesh.kind[u], Kind::Complex | Kind::Locked))
-            .count() as u32,
-        texture_parameterisation: charts.valid.iter().any(|&v| v),
-        parts: parts.len() as u32,
-        ..Stats::default()
-    };
+
+    /// How long the preparation took, in seconds.
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+}
+
+/// A vertex's cheapest legal collapse (its cost and target), and how many candidates were
+/// priced to find it.
+type Priced = (Option<(f64, u32)>, u64);
+
+/// Every position's cheapest collapse in a prepared character at full detail, by one metric:
+/// where a simplification starts, a quarter of its pricing on a large model. AS and AS+IS rank
+/// by the same metric (influence removals are queued beside the collapses, and none has
+/// happened yet), so a bake of both prices the full-detail mesh once. It holds for the
+/// [`Prepared`] character, metric and expectation matrix it was made with, and for no other.
+pub struct FirstPricing {
+    found: Vec<Priced>,
+}
+
+/// [`simplify_feeding`] from a prepared character ([`Prepared`]), ranked by `method` with the
+/// expectation matrix `expectation` (unused by the rest-pose method). `start` is the first
+/// pricing of every position: made here if it is empty, and left for the other methods that
+/// rank by the same metric (see [`FirstPricing`]).
+pub fn simplify_prepared(
+    prepared: &Prepared,
+    expectation: &ExpectationMatrix,
+    start: &OnceLock<FirstPricing>,
+    method: Method,
+    progress: &(dyn Fn(f32) + Sync),
+    feed: &mut (dyn FnMut(Feed) + Send),
+) -> Stats {
+    let p = prepared;
+    let n = p.infl.len();
     let metric = match method {
         Method::RestPose => Metric::RestPose,
-        _ => Metric::AnimationSpace {
-            pm: input.expectation,
-        },
+        _ => Metric::AnimationSpace { pm: expectation },
     };
-    let base_triangles = mesh.tris.clone();
+    let base_triangles = p.mesh.tris.clone();
     let mut s = Simplifier {
         method,
-        mesh,
-        uv,
-        uv_valid: charts.valid,
-        uv_tolerance: charts.tolerance,
-        slide_scale: if input.textured.iter().any(|&t| t) {
-            charts.metres_per_unit
+        mesh: p.mesh.clone(),
+        uv: &p.uv,
+        uv_valid: &p.charts.valid,
+        uv_tolerance: p.charts.tolerance,
+        slide_scale: if p.textured.iter().any(|&t| t) {
+            p.charts.metres_per_unit
         } else {
             0.0
         },
-        rest,
-        normals,
-        rest_bones: input.rest_bones,
-        poses: input.poses,
-        materials: &am.materials,
-        textured: input.textured,
-        posed,
-        infl,
+        rest: Cow::Borrowed(&p.rest),
+        normals: &p.normals,
+        rest_bones: &p.rest_bones,
+        poses: &p.poses,
+        materials: &p.materials,
+        textured: &p.textured,
+        posed: Cow::Borrowed(&p.posed),
+        infl: Cow::Borrowed(&p.infl),
         metric,
-        pm: input.expectation,
+        pm: expectation,
         cache: FactorCache::default(),
         heap: BinaryHeap::new(),
         collapse_version: vec![0; n],
@@ -397,15 +493,15 @@ pub fn simplify_feeding(
         touched: vec![0; n],
         priced_at: vec![0; n],
         moved: vec![false; n],
-        parts,
-        part_of,
-        located,
+        parts: &p.parts,
+        part_of: &p.part_of,
+        located: &p.located,
         workspace: Workspace::default(),
         workspaces: Mutex::new(Vec::new()),
-        influences,
+        influences: p.influences,
         stamp: 0,
-        stats,
-        cost_grid: COST_GRID * diagonal.max(f64::MIN_POSITIVE),
+        stats: p.stats.clone(),
+        cost_grid: COST_GRID * p.diagonal.max(f64::MIN_POSITIVE),
         priced: 0,
         repriced: 0,
         verified: 0,
@@ -414,21 +510,21 @@ pub fn simplify_feeding(
     let triangles = base_triangles.len();
     feed(Feed::Start(Sequence {
         method,
-        positions,
+        positions: p.positions.clone(),
         base_triangles,
-        base_influences: s.influences as u32,
+        base_influences: p.influences as u32,
         steps: Vec::new(),
         stats: Stats::default(),
     }));
     // On a worker of rayon's pool, the candidates priced in parallel after each collapse
     // (see `evaluate_collapses`) cost a push onto the worker's own queue, which an idle
     // worker steals from; from any other thread, each would wake the pool and wait.
-    let start = std::time::Instant::now();
-    let steps = rayon::scope(|_| s.run(progress, feed));
+    let clock = std::time::Instant::now();
+    let steps = rayon::scope(|_| s.run(start, progress, feed));
     log::debug!(
         "{method}: {steps} steps from {triangles} triangles in {:.2} s; {} vertices priced ({} \
          again when their entry came out stale), {} candidates, {} collapses checked again ({} applied unchecked)",
-        start.elapsed().as_secs_f64(),
+        clock.elapsed().as_secs_f64(),
         s.priced,
         s.repriced,
         s.stats.evaluations,
@@ -493,6 +589,7 @@ impl TextureCharts {
 impl Simplifier<'_> {
     fn run(
         &mut self,
+        start: &OnceLock<FirstPricing>,
         progress: &(dyn Fn(f32) + Sync),
         feed: &mut (dyn FnMut(Feed) + Send),
     ) -> usize {
@@ -500,7 +597,12 @@ impl Simplifier<'_> {
         let positions: Vec<u32> = (0..n)
             .filter(|&u| self.mesh.alive[u as usize] && self.mesh.pos(u) == u)
             .collect();
-        self.evaluate_collapses(&positions);
+        // Every position priced at full detail: shared with any other simplification from the
+        // same start (see [`FirstPricing`]).
+        let first = start.get_or_init(|| FirstPricing {
+            found: self.price_in_parallel(&positions),
+        });
+        self.queue_priced(&positions, &first.found);
         for &u in &positions {
             self.evaluate_influence(u);
         }
@@ -612,14 +714,14 @@ impl Simplifier<'_> {
         Context {
             stamp: self.stamp,
             mesh: &self.mesh,
-            uv: &self.uv,
-            uv_valid: &self.uv_valid,
+            uv: self.uv,
+            uv_valid: self.uv_valid,
             uv_tolerance: self.uv_tolerance,
             slide_scale: self.slide_scale,
             materials: self.materials,
             textured: self.textured,
             rest: &self.rest,
-            normals: &self.normals,
+            normals: self.normals,
             posed: &self.posed,
         }
     }
@@ -656,7 +758,7 @@ impl Simplifier<'_> {
     /// `u`'s cheapest legal collapse, as its cost and target, and how many candidates were
     /// priced. Reads the simplifier only, so the candidates of many vertices can be priced at
     /// once.
-    fn best_collapse(&self, u: u32, w: &mut Workspace) -> (Option<(f64, u32)>, u64) {
+    fn best_collapse(&self, u: u32, w: &mut Workspace) -> Priced {
         let ui = u as usize;
         if !self.mesh.alive[ui] || matches!(self.mesh.kind[ui], Kind::Complex | Kind::Locked) {
             return (None, 0);
@@ -697,14 +799,25 @@ impl Simplifier<'_> {
             }
             return;
         }
-        let found: Vec<(Option<(f64, u32)>, u64)> = vertices
+        let found = self.price_in_parallel(vertices);
+        self.queue_priced(vertices, &found);
+    }
+
+    /// [`Self::best_collapse`] of each of `vertices`, in parallel.
+    fn price_in_parallel(&self, vertices: &[u32]) -> Vec<Priced> {
+        vertices
             .par_iter()
             .map_init(
                 || Pooled::take(&self.workspaces),
                 |w, &u| self.best_collapse(u, &mut w.workspace),
             )
-            .collect();
-        for (&u, (best, evaluations)) in vertices.iter().zip(found) {
+            .collect()
+    }
+
+    /// Queues the collapses `found` of `vertices` (as [`Self::best_collapse`] priced them), in
+    /// order.
+    fn queue_priced(&mut self, vertices: &[u32], found: &[Priced]) {
+        for (&u, &(best, evaluations)) in vertices.iter().zip(found) {
             self.priced += 1;
             self.stats.evaluations += evaluations;
             self.queue_collapse(u, best);
@@ -928,10 +1041,11 @@ impl Simplifier<'_> {
         }
         let next = factor.apply(&self.infl[ui], k);
         for (&w, m) in wedges.iter().zip(&moved) {
-            self.infl[w as usize] = m.clone();
+            self.infl.to_mut()[w as usize] = m.clone();
         }
-        self.infl[ui] = next;
-        self.rest[ui] = rest_position(self.rest_bones, &self.infl[ui]);
+        let infl = self.infl.to_mut();
+        infl[ui] = next;
+        self.rest.to_mut()[ui] = rest_position(self.rest_bones, &infl[ui]);
         // Every collapse whose fan holds this position must be checked before it is applied.
         let mut ring = Vec::new();
         self.mesh.neighbours(u, &mut ring);
@@ -944,7 +1058,7 @@ impl Simplifier<'_> {
             .iter()
             .map(|g| rest_position(g, &self.infl[ui]).as_vec3())
             .collect();
-        self.posed.set(ui, &posed);
+        self.posed.to_mut().set(ui, &posed);
         self.influences -= wedges.len() as u64;
         // Figure 4: every collapse whose fan holds this vertex changes. Their queue entries are
         // left as they are and checked when they come out (`run` recomputes a collapse's cost
