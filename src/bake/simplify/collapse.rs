@@ -620,11 +620,13 @@ impl Context<'_> {
 
     /// The texture coordinate a corner's texture deviation is measured in: under the
     /// texture's own correspondence texture coordinates never slide, and the whole fan's map
-    /// measures geometry alone.
+    /// measures geometry alone. Nor do they on an untextured model (no slide to price), which
+    /// then reads no texture coordinates: a load for every term of every corner, mostly
+    /// missing the cache on a large model.
     fn slide_uv(&self, chart: Chart, r: u32) -> DVec2 {
         match chart {
-            Chart::Polar(_) => self.uv[r as usize],
-            Chart::Texture | Chart::Whole(_) => DVec2::ZERO,
+            Chart::Polar(_) if self.slide_scale > 0.0 => self.uv[r as usize],
+            Chart::Polar(_) | Chart::Texture | Chart::Whole(_) => DVec2::ZERO,
         }
     }
 
