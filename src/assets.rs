@@ -17,8 +17,8 @@ pub enum Kind {
     /// A subdivided, closed, skinned character (`horse`, `walker`).
     Creature,
     /// A cyclically animated skeletal tree with alpha-textured foliage (`broadleaf`, `conifer`, and
-    /// `sapling`, the size of the Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated
-    /// Billboard Clouds for Foliage Simplification" (2007),'s tree).
+    /// `sapling`, the size of the tree in Bennett-Therkildsen, Carlsen & Schmid's thesis
+    /// "Animated Billboard Clouds for Foliage Simplification" (2007)).
     Tree,
     /// A character with the awkward properties of assets made elsewhere, for testing the LOD
     /// pipeline: `split-tube` (indexed, split along hard edges and a UV seam, mostly zero-area

@@ -7,7 +7,10 @@
 //! 2. [`bake`]: pure CPU code to animation textures and vertex textures (plain data);
 //! 3. [`scene`]: instances, cameras, paths;
 //! 4. [`render`]: everything wgpu;
-//! 5. [`app`]: the front ends (viewer, `shot`, `gen-assets`).
+//! 5. [`runtime`]: what runs a scene (its spec loaded, the world drawn each frame, levels
+//!    installed and baked in the background, headless frames and the measurements that draw
+//!    worlds);
+//! 6. [`app`]: the front ends (viewer, `shot`, `bake`, `bench`, `record`, `study`, …).
 
 pub mod anim;
 pub mod app;

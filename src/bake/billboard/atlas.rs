@@ -10,7 +10,7 @@
 //! a billboard shades like the leaves it replaces under any sun. The lighting is a second
 //! image, stored as the material after the atlas ([`BILLBOARD_LIGHTING`]).
 //!
-//! The Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
+//! Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
 //! Simplification" (2007), recommended an atlas but did not build one (§3.5); its textures came out
 //! dark and blurred. Here every billboard gets `texels_per_unit` texels per scene unit, a gutter
 //! round it, and its leaves drawn unlit with their own texture's alpha as the cut-out.

@@ -1,5 +1,5 @@
-//! Spectral billboard clouds: the Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated
-//! Billboard Clouds for Foliage Simplification" (2007),'s Spectral Clustering Algorithm (§6.2) with
+//! Spectral billboard clouds: the Spectral Clustering Algorithm (§6.2) of Bennett-Therkildsen,
+//! Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007), with
 //! the shared-bone improvement (§6.4), which the thesis designed and never built.
 //!
 //! 1. Leaves are gathered into animation zones (App. C.2), and every zone's centroid trajectory

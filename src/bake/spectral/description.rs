@@ -1,6 +1,6 @@
-//! The Bennett-Therkildsen, Carlsen & Schmid's thesis "Animated Billboard Clouds for Foliage
-//! Simplification" (2007),'s three animation description types (§6.1), each a way to say how a leaf
-//! (or a billboard standing for several) moves, with the four functions the spectral clustering
+//! The three animation description types (§6.1) of Bennett-Therkildsen, Carlsen & Schmid's
+//! thesis "Animated Billboard Clouds for Foliage Simplification" (2007), each a way to say how a
+//! leaf (or a billboard standing for several) moves, with the four functions the spectral clustering
 //! needs (§4.1): `describe` a trajectory, the `deviation` between two descriptions (the k-means
 //! distance), the weighted `average` of several (the k-means centroid and a billboard's motion),
 //! and `apply` (here [`Description::axis_spectra`], the per-axis cosines a vertex shader sums).
