@@ -672,7 +672,8 @@ pub fn progressive_mesh(
 ) -> (AnimationSpaceMesh, Sequence, f64) {
     let base = full_detail(model);
     let start = std::time::Instant::now();
-    let sequence = gathered(|feed| simplify_model(model, &base, method, progress, feed));
+    let sequence =
+        gathered(|feed| SharedBake::default().simplify(model, &base, method, progress, feed));
     let seconds = start.elapsed().as_secs_f64();
     (base, sequence, seconds)
 }
@@ -682,22 +683,11 @@ pub fn full_detail(model: &Model) -> AnimationSpaceMesh {
     AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu()
 }
 
-/// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to `feed`
-/// as it is built; returns its statistics (see [`super::simplify::simplify_feeding`]).
-fn simplify_model(
-    model: &Model,
-    base: &AnimationSpaceMesh,
-    method: Method,
-    progress: &(dyn Fn(f32) + Sync),
-    feed: &mut (dyn FnMut(Feed) + Send),
-) -> Stats {
-    SharedBake::default().simplify(model, base, method, progress, feed)
-}
-
 /// What the bakes of one model by several methods share, made by the first bake that needs
 /// each (see [`bake_lods_sharing`]): the probes its levels are measured with, what the
 /// simplifier prepares of its full detail ([`Prepared`]), the expectation matrix `P` and the
-/// first pricing of every position by each metric ([`FirstPricing`]; AS and AS+IS share one).
+/// first pricing of every position in animation space ([`FirstPricing`]), which AS and AS+IS
+/// share.
 /// On a 2-million-triangle model the probes are about a gigabyte and several seconds, the
 /// preparation five seconds and half a gigabyte, and the first pricing a quarter of a
 /// method's simplification: three methods baking at once each made them again.
@@ -706,8 +696,7 @@ pub struct SharedBake<'a> {
     probes: OnceLock<LevelProbes<'a>>,
     prepared: OnceLock<Prepared>,
     expectation: OnceLock<ExpectationMatrix>,
-    /// By metric: the rest pose's, animation space's.
-    starts: [OnceLock<FirstPricing>; 2],
+    as_start: OnceLock<FirstPricing>,
 }
 
 impl<'a> SharedBake<'a> {
@@ -716,7 +705,9 @@ impl<'a> SharedBake<'a> {
         self.probes.get_or_init(|| LevelProbes::new(model, base))
     }
 
-    /// [`simplify_model`], from what the bakes share.
+    /// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to
+    /// `feed` as it is built, from what the bakes share; returns its statistics (see
+    /// [`super::simplify::simplify_feeding`]).
     fn simplify(
         &self,
         model: &Model,
@@ -726,25 +717,26 @@ impl<'a> SharedBake<'a> {
         feed: &mut (dyn FnMut(Feed) + Send),
     ) -> Stats {
         let prepared = self.prepared.get_or_init(|| prepare(model, base));
-        let none;
-        let (expectation, start) = match method {
+        match method {
+            // No other method ranks by the rest pose: its first pricing is its own.
             Method::RestPose => {
-                none = ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>());
-                (&none, &self.starts[0])
+                let none = ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>());
+                let start = OnceLock::new();
+                simplify_prepared(prepared, &none, &start, method, progress, feed)
             }
-            Method::AnimationSpace | Method::InfluenceSimplification => (
-                self.expectation
-                    .get_or_init(|| ExpectationMatrix::estimate(model)),
-                &self.starts[1],
-            ),
-        };
-        simplify_prepared(prepared, expectation, start, method, progress, feed)
+            Method::AnimationSpace | Method::InfluenceSimplification => {
+                let pm = self
+                    .expectation
+                    .get_or_init(|| ExpectationMatrix::estimate(model));
+                simplify_prepared(prepared, pm, &self.as_start, method, progress, feed)
+            }
+        }
     }
 }
 
 /// What the simplifier makes of `base` (the full detail of `model`) whatever the method
 /// ([`Prepared`]).
-pub fn prepare(model: &Model, base: &AnimationSpaceMesh) -> Prepared {
+fn prepare(model: &Model, base: &AnimationSpaceMesh) -> Prepared {
     let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
     let poses = pose_samples(model, POSE_SAMPLES);
     let textured: Vec<bool> = model

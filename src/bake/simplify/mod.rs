@@ -331,7 +331,6 @@ pub struct Prepared {
     located: RTree<Located>,
     stats: Stats,
     diagonal: f64,
-    seconds: f64,
 }
 
 impl Prepared {
@@ -400,8 +399,10 @@ impl Prepared {
             parts: parts.len() as u32,
             ..Stats::default()
         };
-        let seconds = start.elapsed().as_secs_f64();
-        log::debug!("the simplifier's preparation of {n} vertices took {seconds:.2} s");
+        log::debug!(
+            "the simplifier's preparation of {n} vertices took {:.2} s",
+            start.elapsed().as_secs_f64()
+        );
         Prepared {
             rest_bones: rest_bones.to_vec(),
             poses: poses.to_vec(),
@@ -421,13 +422,7 @@ impl Prepared {
             located,
             stats,
             diagonal,
-            seconds,
         }
-    }
-
-    /// How long the preparation took, in seconds.
-    pub fn seconds(&self) -> f64 {
-        self.seconds
     }
 }
 
