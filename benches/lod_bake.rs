@@ -7,8 +7,8 @@
 //!   the whole bake: simplification and cutting the levels (which measures each);
 //! - the peak resident memory of the process after the 50k-vertex AS+IS bake.
 
-use lodlab::bake::lod::{LodOptions, bake_lods};
-use lodlab::bake::simplify::Method;
+use lodlab::bake::character::lod::{LodOptions, bake_lods};
+use lodlab::bake::character::simplify::Method;
 use lodlab::generate::cylinder::bent_cylinder;
 use lodlab::model::Model;
 use std::time::Instant;

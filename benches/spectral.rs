@@ -6,18 +6,18 @@
 //! lines) of a broadleaf grown to about 10,000 leaves.
 
 use anyhow::{Result, anyhow};
-use lodlab::bake::billboard::{foliage, tree_height};
-use lodlab::bake::spectral::cluster::{ClusterParams, cluster};
-use lodlab::bake::spectral::description::{Description, DescriptionType};
-use lodlab::bake::spectral::dft::Dft;
-use lodlab::bake::spectral::{DEFAULT_SAMPLES, Zones, leaf_centroid, trajectories};
+use lodlab::bake::foliage::billboard::{foliage, tree_height};
+use lodlab::bake::foliage::spectral::cluster::{ClusterParams, cluster};
+use lodlab::bake::foliage::spectral::description::{Description, DescriptionType};
+use lodlab::bake::foliage::spectral::dft::Dft;
+use lodlab::bake::foliage::spectral::{DEFAULT_SAMPLES, Zones, leaf_centroid, trajectories};
 use rayon::prelude::*;
 use std::time::Instant;
 
 fn main() -> Result<()> {
     {
-        use lodlab::bake::billboard::cloud::CloudParams;
-        use lodlab::bake::spectral::cloud::{SpectralParams, spectral_cloud};
+        use lodlab::bake::foliage::billboard::cloud::CloudParams;
+        use lodlab::bake::foliage::spectral::cloud::{SpectralParams, spectral_cloud};
         let tree = lodlab::generate::tree::dense_broadleaf(93);
         let f = foliage(&tree).map_err(|e| anyhow!(e))?;
         let h = tree_height(&tree);

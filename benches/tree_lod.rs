@@ -4,8 +4,8 @@
 //! the ratios net of the frame without trees (sky, ground: the same at every level).
 
 use anyhow::{Result, anyhow};
-use lodlab::bake::billboard::chain::{ChainOptions, CloudLevel, tree_chain};
-use lodlab::bake::billboard::foliage;
+use lodlab::bake::foliage::billboard::chain::{ChainOptions, CloudLevel, tree_chain};
+use lodlab::bake::foliage::billboard::foliage;
 use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};

@@ -5,11 +5,11 @@
 
 use anyhow::Result;
 use glam::{Affine3A, Quat, Vec3, Vec4};
-use lodlab::bake::CharacterBake;
-use lodlab::bake::lod::bake_lods;
-use lodlab::bake::lod::lod_options;
-use lodlab::bake::lod_pack::LodPack;
-use lodlab::bake::simplify::Method;
+use lodlab::bake::character::lod::bake_lods;
+use lodlab::bake::character::lod::lod_options;
+use lodlab::bake::character::simplify::Method;
+use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{FrameView, Gpu, Region, SceneRenderer, Side};
 use lodlab::scene::crowd::Instance;
@@ -32,7 +32,7 @@ fn main() -> Result<()> {
     renderer.add_levels(&gpu, 0, slot, &pack)?;
     let mut instances = Vec::new();
     let mut draws = Vec::new();
-    let height = lodlab::bake::lod::model_height(&model);
+    let height = lodlab::bake::character::lod::model_height(&model);
     let spacing = height * 0.9;
     let n = lods.levels.len();
     for (k, level) in lods.levels.iter().enumerate() {

@@ -1,5 +1,5 @@
 // Billboard textures: every leaf a billboard shows, drawn orthographically onto the billboard's
-// rectangle in the atlas (see src/bake/billboard/atlas.rs). Unlit base colour, blended over
+// rectangle in the atlas (see src/bake/foliage/billboard/atlas.rs). Unlit base colour, blended over
 // what is there with the leaf texture's own (soft) alpha, so that the atlas keeps the leaf
 // contour to a fraction of a texel and the renderer's alpha test at one half finds it again.
 // The colour comes out multiplied by alpha; the caller divides it out.

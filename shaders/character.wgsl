@@ -28,7 +28,7 @@ struct VsOut {
     @location(7) @interpolate(flat) normal_layer: vec2<f32>,
 };
 
-// The normal maps of the set's coarse levels (see src/bake/normal_map.rs).
+// The normal maps of the set's coarse levels (see src/bake/character/normal_map.rs).
 @group(1) @binding(7) var normal_tex: texture_2d_array<f32>;
 
 fn lod_varying(inst: Instance) -> vec4<f32> {
@@ -115,7 +115,7 @@ fn morphed_to(vi: u32, coarse_vi: u32, inst: Instance) -> VsOut {
     );
 }
 
-// Clump billboards are drawn by view (src/bake/billboard/clumps.rs): a billboard whose header
+// Clump billboards are drawn by view (src/bake/foliage/billboard/clumps.rs): a billboard whose header
 // holds a view window w ≠ 0 (where other billboards hold 0, and leaves and wood their crown
 // occlusion) is drawn only from views within |w| radians of its normal, horizontally, either
 // side, seen from the instance's origin, so that all four corners agree; the windows of one
@@ -131,7 +131,7 @@ fn view_from_origin(inst: Instance) -> vec2<f32> {
     return frame.camera_pos.xz - instance_point(inst, vec3<f32>(0.0)).xz;
 }
 
-// `header` is the vertex's second header texel (see src/bake/vertex_texture.rs): the foliage
+// `header` is the vertex's second header texel (see src/bake/gpu_data/vertex_texture.rs): the foliage
 // shaders fetch it once for this, the flat normal and the crown's light.
 fn view_coverage(header: vec4<f32>, inst: Instance, normal: vec3<f32>) -> f32 {
     let w = select(0.0, header.w, header.z > 0.5);
@@ -232,7 +232,7 @@ fn shaded(in: VsOut) -> vec4<f32> {
 }
 
 // The normal of a coarse level's fragment lit through its normal map: the stored normal
-// (full detail's, see src/bake/normal_map.rs) in the frame of the triangle, rebuilt here from
+// (full detail's, see src/bake/character/normal_map.rs) in the frame of the triangle, rebuilt here from
 // the derivatives of the skinned position and of the texture coordinate, as the bake built it
 // in the rest pose: n the interpolated normal, t = ∂P/∂u made orthogonal to n, b = ±n × t by
 // the triangle's handedness in texture space. Where the texture coordinates give no frame (no
@@ -270,7 +270,7 @@ fn tangent_frame(in: VsOut) -> TangentFrame {
 
 // The stored normal of layer `layer` plus one at the fragment, (0, 0, 1) for none.
 fn stored_normal(in: VsOut, f: TangentFrame, layer: f32) -> vec3<f32> {
-    // Stored as 128 + 127·x (see `encode` in src/bake/normal_map.rs).
+    // Stored as 128 + 127·x (see `encode` in src/bake/character/normal_map.rs).
     let m = (textureSampleGrad(normal_tex, material_sampler, in.uv, u32(max(layer - 1.0, 0.0)), f.duv1, f.duv2).xyz * 255.0 - 128.0) / 127.0;
     return select(vec3<f32>(0.0, 0.0, 1.0), m, layer > 0.5);
 }
@@ -391,7 +391,7 @@ fn dissolved(in: FoliageOut) -> bool {
 // triangles, and on a software rasterizer the per-pixel lighting was about two fifths of the
 // frame. Both faces are lit (foliage is two-sided) and the fragment picks the one it sees; the
 // debug view's colour and the fog factor come along. All light is scaled by the crown's
-// occlusion at the vertex (src/bake/billboard/occlusion.rs; 0 for everything but trees).
+// occlusion at the vertex (src/bake/foliage/billboard/occlusion.rs; 0 for everything but trees).
 // Billboards lit through their atlas (a normal per texel) have a pipeline of their own,
 // `vs_foliage_lit` below.
 struct FoliageOut {
@@ -417,7 +417,7 @@ fn side_light(n: vec3<f32>, v: vec3<f32>) -> vec4<f32> {
 }
 
 // The light the crown leaves a vertex of second header texel `header`: 1 − its occlusion (see
-// src/bake/vertex_texture.rs); a billboard's is in its atlas (its slot holds its view window).
+// src/bake/gpu_data/vertex_texture.rs); a billboard's is in its atlas (its slot holds its view window).
 fn crown_light(header: vec4<f32>) -> f32 {
     return select(1.0 - header.w, 1.0, header.z > 0.5);
 }
@@ -484,7 +484,7 @@ fn fs_foliage_coverage(in: FoliageOut, @builtin(front_facing) front: bool) -> @l
     return vec4<f32>(foliage_color(in, texel.rgb, front), a);
 }
 
-// A billboard cloud lit through its atlas (src/bake/billboard/atlas.rs): the billboards'
+// A billboard cloud lit through its atlas (src/bake/foliage/billboard/atlas.rs): the billboards'
 // texels hold the normal m the leaf drawn there is lit by, in the billboard's frame (t, b, n),
 // in the material layer after the atlas's (the crown's occlusion is in the atlas's colour);
 // each pixel is lit by it, as the leaves it stands for were lit per vertex, under whatever

@@ -1,4 +1,4 @@
-// Octahedral impostors (src/bake/billboard/impostor.rs): a tree's far level, one quad facing the
+// Octahedral impostors (src/bake/impostor/octahedral.rs): a tree's far level, one quad facing the
 // eye that shows the tree as baked from the three grid views round the direction it is seen
 // from, blended by their barycentric weights, so that walking round a tree never pops.
 //
@@ -284,7 +284,7 @@ fn fs_impostor_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
     return vec4<f32>(impostor_lit(in, normals, texel), a);
 }
 
-// Animated impostors (src/bake/crowd_impostor.rs): a character's last level, one quad that shows
+// Animated impostors (src/bake/impostor/animated.rs): a character's last level, one quad that shows
 // the view of the grid nearest the line of sight (the heaviest of the three a tree blends,
 // mirror of `nearest_view`) at the two baked frames round the instance's time, cross-faded. The
 // quad is square to that view, through the sphere's centre, and covers only the rectangle of

@@ -1,7 +1,7 @@
-// Impostor views (src/bake/billboard/impostor.rs): the tree at rest drawn orthographically
+// Impostor views (src/bake/impostor/octahedral.rs): the tree at rest drawn orthographically
 // from every view of the grid into that view's cell of one target, depth-tested. Instance i is
 // view i. The colour target takes the unlit material colour darkened by the crown's occlusion
-// (src/bake/billboard/occlusion.rs: the tree's own leaves are darkened by it when drawn, and
+// (src/bake/foliage/billboard/occlusion.rs: the tree's own leaves are darkened by it when drawn, and
 // it scales all their light) (its alpha marks what is covered),
 // the second target the model-space normal turned towards the eye, as n / 2 + 1/2, and in its
 // alpha the point's height towards the eye (mirror of `encode_height`).

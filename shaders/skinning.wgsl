@@ -3,7 +3,7 @@
 // v = Σ_i G_i p_i and n = Σ_i G_i n_i, where the p_i / n_i of a vertex come from the vertex
 // texture (read by vertex_index) and the bone matrices G_i from the animation texture, blended
 // between the two frames around the current time. Layouts are documented in
-// src/bake/anim_texture.rs and src/bake/vertex_texture.rs; `AnimationTexture::sample_with` is the
+// src/bake/gpu_data/anim_texture.rs and src/bake/gpu_data/vertex_texture.rs; `AnimationTexture::sample_with` is the
 // CPU mirror of `clip_frames` below, and `CharacterBake::evaluate` of `skin_vertex`.
 //
 // A cross-fade between two clips (a walker stopping to wave) blends the two clips' bone
@@ -18,7 +18,7 @@
 
 @group(1) @binding(0) var anim_tex: texture_2d<f32>;
 @group(1) @binding(1) var vertex_tex: texture_2d<f32>;
-// Spectra texture (src/bake/spectral/texture.rs): one row per billboard, texel axis·K + j holding
+// Spectra texture (src/bake/foliage/spectral/texture.rs): one row per billboard, texel axis·K + j holding
 // line j of that axis as (cycles, amplitude, phase, 0); one empty texel (K = 0) where nothing
 // moves by spectra.
 @group(1) @binding(5) var spectra_tex: texture_2d<f32>;
@@ -194,12 +194,12 @@ fn skin_vertex(vertex_index: u32, frames: ClipFrames) -> SkinnedVertex {
 }
 
 // The normal-map layer that lights a vertex plus one, 0 for none (see
-// src/bake/vertex_texture.rs and src/bake/normal_map.rs).
+// src/bake/gpu_data/vertex_texture.rs and src/bake/character/normal_map.rs).
 fn normal_layer(vertex_index: u32) -> f32 {
     return texel(vertex_tex, layout_of(vertex_tex), 2u * vertex_index + 1u).z;
 }
 
-// The vertex a vertex morphs into at the next coarser level (see src/bake/vertex_texture.rs);
+// The vertex a vertex morphs into at the next coarser level (see src/bake/gpu_data/vertex_texture.rs);
 // a vertex of the coarsest level is its own target.
 fn geomorph_target(vertex_index: u32) -> u32 {
     return u32(texel(vertex_tex, layout_of(vertex_tex), 2u * vertex_index + 1u).x);

@@ -20,6 +20,7 @@ pub mod bake;
 pub mod choice;
 pub mod error;
 pub mod generate;
+pub mod geometry;
 pub mod import;
 pub mod model;
 pub mod render;

@@ -148,7 +148,7 @@ fn report(a: ReportArgs) -> anyhow::Result<ExitCode> {
     // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
     // report; a character the simplification report.
     let model = lodlab::import::load_model(&name)?;
-    if lodlab::bake::billboard::foliage(&model).is_ok() {
+    if lodlab::bake::foliage::billboard::foliage(&model).is_ok() {
         let r = lodlab::app::tree_report::run(&model, &a.out)?;
         let last = r.levels.last().map_or(0, |l| l.billboards);
         println!(

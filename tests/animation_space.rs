@@ -4,7 +4,7 @@
 mod common;
 
 use lodlab::anim::linear_blend_skinning;
-use lodlab::bake::animation_space::AnimationSpaceMesh;
+use lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use lodlab::model::{Bounds, Model};
 
 fn models() -> Vec<Model> {

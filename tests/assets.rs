@@ -40,7 +40,7 @@ fn generation_is_deterministic() {
 
 /// Edges by welded position: every one must be shared by exactly two triangles.
 fn position_edges(m: &Model) -> HashMap<(u32, u32), u32> {
-    let groups = lodlab::import::weld::position_groups(&m.mesh.positions, 1e-7);
+    let groups = lodlab::geometry::weld::position_groups(&m.mesh.positions, 1e-7);
     let mut edges = HashMap::new();
     for t in m.mesh.indices.chunks_exact(3) {
         for k in 0..3 {
@@ -75,7 +75,7 @@ fn creatures_are_closed_manifold_meshes_of_the_right_size() {
             m.name
         );
         // Closed: Euler characteristic of a sphere.
-        let groups = lodlab::import::weld::position_groups(&m.mesh.positions, 1e-7);
+        let groups = lodlab::geometry::weld::position_groups(&m.mesh.positions, 1e-7);
         let v = *groups.iter().max().unwrap() as i64 + 1;
         let chi = v - edges.len() as i64 + tris as i64;
         assert_eq!(chi, 2, "{}: Euler characteristic {chi}", m.name);
@@ -146,7 +146,7 @@ fn seams_cannot_open_under_skinning() {
     // Vertices split at a UV seam share their position; they must share their influences too,
     // or skinning would tear the seam open into a crack.
     for m in generated() {
-        let groups = lodlab::import::weld::position_groups(&m.mesh.positions, 1e-7);
+        let groups = lodlab::geometry::weld::position_groups(&m.mesh.positions, 1e-7);
         let mut first: HashMap<u32, usize> = HashMap::new();
         for (v, &g) in groups.iter().enumerate() {
             let f = *first.entry(g).or_insert(v);

@@ -3,8 +3,8 @@
 
 use glam::{Vec2, Vec3};
 use lodlab::anim::bone_matrices;
-use lodlab::bake::billboard::cloud::CloudParams;
-use lodlab::bake::billboard::{
+use lodlab::bake::foliage::billboard::cloud::CloudParams;
+use lodlab::bake::foliage::billboard::{
     Grouping, SkeletonCloud, foliage, grouped_cloud, skeleton_cloud, tree_height,
 };
 use lodlab::import::load_model;
@@ -216,7 +216,7 @@ fn foliage_that_the_method_does_not_expect() {
 /// managed 7%).
 #[test]
 fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
-    use lodlab::bake::billboard::chain::{CloudKind, CloudLevel, cloud_level};
+    use lodlab::bake::foliage::billboard::chain::{CloudKind, CloudLevel, cloud_level};
     use lodlab::runtime::colour_error::colour_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     for name in ["broadleaf", "conifer"] {
@@ -279,7 +279,7 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
 /// counts, ending at ten billboards or fewer, each level's atlas within the texture limit.
 #[test]
 fn the_chain_falls_to_a_handful_of_billboards() {
-    use lodlab::bake::billboard::chain::{ChainOptions, tree_chain};
+    use lodlab::bake::foliage::billboard::chain::{ChainOptions, tree_chain};
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("broadleaf").unwrap();
     let f = foliage(&tree).unwrap();
@@ -305,7 +305,7 @@ fn the_chain_falls_to_a_handful_of_billboards() {
     let clump_levels: Vec<_> = chain
         .iter()
         .filter_map(|l| match l.kind {
-            Some(lodlab::bake::billboard::chain::CloudKind::Clumps { clumps, views }) => {
+            Some(lodlab::bake::foliage::billboard::chain::CloudKind::Clumps { clumps, views }) => {
                 Some((l, clumps, views))
             }
             _ => None,
@@ -323,7 +323,9 @@ fn the_chain_falls_to_a_handful_of_billboards() {
         assert_eq!(l.cloud.drawn_billboards(), clumps);
         assert_eq!(l.cloud.view_windows.len(), l.cloud.billboards);
         assert!(l.cloud.view_windows.iter().all(|w| w.abs() > 0.1));
-        let c = lodlab::bake::billboard::clumps::clump_cloud(&tree, &f, clumps, views, opts.seed);
+        let c = lodlab::bake::foliage::billboard::clumps::clump_cloud(
+            &tree, &f, clumps, views, opts.seed,
+        );
         assert!(
             c.epsilon() <= l.epsilon,
             "{clumps} clumps: ε bound {:.3} m over the level's {:.3} m",
@@ -340,7 +342,7 @@ fn the_chain_falls_to_a_handful_of_billboards() {
     }
     for l in &chain[1..] {
         let materials = &l.cloud.model.materials;
-        let a = lodlab::bake::billboard::atlas::lit_atlas_material(materials).unwrap();
+        let a = lodlab::bake::foliage::billboard::atlas::lit_atlas_material(materials).unwrap();
         let atlas = materials[a].texture.as_ref().unwrap();
         let lighting = materials[a + 1].texture.as_ref().unwrap();
         assert!(atlas.width <= 2048 && atlas.height <= 2048);
@@ -365,17 +367,18 @@ fn the_chain_falls_to_a_handful_of_billboards() {
         // across the tree, so that the coarse end looked at closer (forced, or with the
         // tolerance raised) still shows leaves; an atlas at the largest size may have been
         // drawn less sharp, to fit.
-        let h = lodlab::bake::billboard::tree_height(&tree);
+        let h = lodlab::bake::foliage::billboard::tree_height(&tree);
         let clumps = matches!(
             l.kind,
-            Some(lodlab::bake::billboard::chain::CloudKind::Clumps { .. })
+            Some(lodlab::bake::foliage::billboard::chain::CloudKind::Clumps { .. })
         );
         let floor = if clumps { 256.0 / h } else { 0.0 };
         let where_it_comes_in = (2.0 * opts.tolerance_px / l.epsilon)
             .max(8.0)
             .min(800.0 / h);
         let sharpest = atlas_texels_per_unit(&l.cloud.model, a, [atlas.width, atlas.height]);
-        let full = atlas.width.max(atlas.height) >= lodlab::bake::billboard::atlas::MAX_ATLAS;
+        let full =
+            atlas.width.max(atlas.height) >= lodlab::bake::foliage::billboard::atlas::MAX_ATLAS;
         let asked = if full {
             floor
         } else {
@@ -425,7 +428,7 @@ fn wood(m: &Model) -> usize {
 /// trunk stays.
 #[test]
 fn simplified_wood_keeps_its_vertices() {
-    use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
+    use lodlab::bake::foliage::billboard::wood::{WoodChain, without_foliage};
     let tree = load_model("conifer").unwrap();
     let chain = WoodChain::new(&tree);
     let h = tree_height(&tree);
@@ -479,7 +482,7 @@ fn simplified_wood_keeps_its_vertices() {
 /// original's, while its triangles fall far below it.
 #[test]
 fn coarse_wood_holds_the_crown() {
-    use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
+    use lodlab::bake::foliage::billboard::wood::{WoodChain, without_foliage};
     for name in ["broadleaf", "sapling"] {
         let tree = load_model(name).unwrap();
         let chain = WoodChain::new(&tree);
@@ -511,7 +514,7 @@ fn coarse_wood_holds_the_crown() {
 /// and holds the crown as the welded tree's does.
 #[test]
 fn wood_split_at_every_seam_still_holds_the_crown() {
-    use lodlab::bake::billboard::wood::{WoodChain, without_foliage};
+    use lodlab::bake::foliage::billboard::wood::{WoodChain, without_foliage};
     let tree = load_model("broadleaf").unwrap();
     let mut split = tree.clone();
     let mut mesh = lodlab::model::SkinnedMesh::empty();
@@ -554,8 +557,8 @@ fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
 /// chains baked) started last ran alone at the end while the other thread idled.
 #[test]
 fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
-    use lodlab::bake::billboard::chain::{ChainOptions, load_or_build_chain};
     use lodlab::bake::cache::{LodCache, Origin, source_hash};
+    use lodlab::bake::foliage::billboard::chain::{ChainOptions, load_or_build_chain};
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
@@ -590,7 +593,7 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     assert!(
         matches!(
             last.kind,
-            Some(lodlab::bake::billboard::chain::CloudKind::Impostor { .. })
+            Some(lodlab::bake::foliage::billboard::chain::CloudKind::Impostor { .. })
         ),
         "{:?}",
         last.kind
@@ -633,7 +636,7 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     assert!(
         matches!(
             last.kind,
-            Some(lodlab::bake::billboard::chain::CloudKind::Clumps { .. })
+            Some(lodlab::bake::foliage::billboard::chain::CloudKind::Clumps { .. })
         ),
         "{:?}",
         last.kind
@@ -650,8 +653,8 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
 /// has none.
 #[test]
 fn billboard_outlines_are_the_four_sides_of_every_billboard() {
-    use lodlab::bake::CharacterBake;
-    use lodlab::bake::billboard::{atlas, cloud_model};
+    use lodlab::bake::foliage::billboard::{atlas, cloud_model};
+    use lodlab::bake::gpu_data::drawable::CharacterBake;
     let m = load_model("sapling").unwrap();
     let c = cloud(&m, 0.08, 1);
     let layout = atlas::layout(&c.billboards, 64.0).unwrap();
@@ -716,8 +719,8 @@ fn billboard_outlines_are_the_four_sides_of_every_billboard() {
 /// were left blank disagrees on all of them.
 #[test]
 fn an_impostor_shows_the_tree_it_was_baked_from() {
-    use lodlab::bake::billboard::chain::CloudLevel;
-    use lodlab::bake::billboard::impostor::{ViewGrid, bake_impostor};
+    use lodlab::bake::foliage::billboard::chain::CloudLevel;
+    use lodlab::bake::impostor::octahedral::{ViewGrid, bake_impostor};
     use lodlab::runtime::colour_error::whole_tree_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("sapling").unwrap();
@@ -797,8 +800,8 @@ fn an_impostor_shows_the_tree_it_was_baked_from() {
 /// it disagreed on 0.53 of the conifer's pixels at 37.5 px, baked at rest on 0.20.
 #[test]
 fn an_impostor_stands_where_its_tree_is_drawn() {
-    use lodlab::bake::billboard::chain::CloudLevel;
-    use lodlab::bake::billboard::impostor::{ViewGrid, bake_impostor};
+    use lodlab::bake::foliage::billboard::chain::CloudLevel;
+    use lodlab::bake::impostor::octahedral::{ViewGrid, bake_impostor};
     use lodlab::runtime::colour_error::whole_tree_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("conifer").unwrap();
@@ -823,10 +826,10 @@ fn an_impostor_stands_where_its_tree_is_drawn() {
 /// lit by its planes, under the scene's sun and under a low sun from the other side.
 #[test]
 fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
-    use lodlab::bake::CharacterBake;
-    use lodlab::bake::billboard::atlas::{BILLBOARD_LIGHTING, lit_atlas_material};
-    use lodlab::bake::billboard::chain::{CloudKind, cloud_level};
-    use lodlab::bake::billboard::occlusion::CrownDensity;
+    use lodlab::bake::foliage::billboard::atlas::{BILLBOARD_LIGHTING, lit_atlas_material};
+    use lodlab::bake::foliage::billboard::chain::{CloudKind, cloud_level};
+    use lodlab::bake::foliage::billboard::occlusion::CrownDensity;
+    use lodlab::bake::gpu_data::drawable::CharacterBake;
     use lodlab::runtime::foliage_lighting::foliage_lighting;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     // Every other leaf wound the other way, its normal kept: files put normals and winding
@@ -919,7 +922,7 @@ fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
 /// The full tree is darkened inside its crown by the same term, per vertex; characters are not.
 #[test]
 fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
-    use lodlab::bake::CharacterBake;
+    use lodlab::bake::gpu_data::drawable::CharacterBake;
     let tree = CharacterBake::new(&load_model("broadleaf").unwrap()).unwrap();
     let o = &tree.animation_space.crown_occlusion;
     assert_eq!(o.len(), tree.animation_space.vertex_count());
@@ -935,13 +938,13 @@ fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
     assert!(walker.animation_space.crown_occlusion.is_empty());
 }
 
-/// View-selected clumps (src/bake/billboard/clumps.rs): drawn one plane a clump, chosen by the
+/// View-selected clumps (src/bake/foliage/billboard/clumps.rs): drawn one plane a clump, chosen by the
 /// view, a clump level covers the sapling's leaves more closely than the same planes all drawn
 /// at once (the "star", which fills the crown's gaps) and than a cloud drawing as many
 /// billboards, from the colour metric's views round the tree and over its loop.
 #[test]
 fn clumps_drawn_by_view_cover_the_tree_better_than_all_their_planes_or_a_cloud() {
-    use lodlab::bake::billboard::chain::{CloudKind, cloud_level};
+    use lodlab::bake::foliage::billboard::chain::{CloudKind, cloud_level};
     use lodlab::runtime::colour_error::colour_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let raster = AtlasRasterizer::new(&gpu);

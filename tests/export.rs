@@ -5,7 +5,7 @@
 mod common;
 
 use common::{gltf_tools, validate};
-use lodlab::bake::animation_space::AnimationSpaceMesh;
+use lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::load_model;
 use serde_json::Value;

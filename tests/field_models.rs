@@ -7,8 +7,8 @@
 mod common;
 
 use common::{gltf_tools, validate};
-use lodlab::bake::lod::bake_lods;
-use lodlab::bake::simplify::{Method, SimplifyInput};
+use lodlab::bake::character::lod::bake_lods;
+use lodlab::bake::character::simplify::{Method, SimplifyInput};
 use lodlab::generate::wild;
 use lodlab::import::load_model;
 use lodlab::model::{Model, SkinnedMesh};
@@ -111,7 +111,7 @@ fn the_field_models_load_as_what_they_stand_for() {
     // character stands.
     let mocap = load_model("mocap").unwrap();
     assert_eq!(mocap.skeleton.bone_count(), 65);
-    let am = lodlab::bake::animation_space::AnimationSpaceMesh::from_skinned(
+    let am = lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh::from_skinned(
         &mocap.mesh,
         &mocap.skeleton,
     );
@@ -131,12 +131,12 @@ fn the_field_models_load_as_what_they_stand_for() {
         off < 1e-4,
         "rest positions {off} m from the skinned rest pose"
     );
-    let height = lodlab::bake::lod::model_height(&mocap);
+    let height = lodlab::bake::character::lod::model_height(&mocap);
     assert!((1.6..2.0).contains(&height), "{height}");
 
     // The low-poly character: flat-shaded, every position on several facets' normals.
     let lowpoly = load_model("lowpoly").unwrap();
-    let groups = lodlab::import::weld::position_groups(&lowpoly.mesh.positions, 1e-6);
+    let groups = lodlab::geometry::weld::position_groups(&lowpoly.mesh.positions, 1e-6);
     let positions = groups.iter().max().unwrap() + 1;
     assert!(lowpoly.mesh.vertex_count() as u32 >= 2 * positions);
 }
@@ -506,10 +506,10 @@ fn shading_at_switch(
     levels: std::ops::Range<usize>,
 ) -> Vec<lodlab::runtime::shading_error::LevelShading> {
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe will do)");
-    let full = lodlab::bake::CharacterBake::new(model).unwrap();
+    let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(model).unwrap();
     let opts = lodlab::runtime::levels::runtime_options(model);
     let lods = bake_lods(model, method, &opts, &|_| {});
-    let height = lodlab::bake::lod::model_height(model);
+    let height = lodlab::bake::character::lod::model_height(model);
     let at: Vec<(usize, f32)> = levels
         .filter(|&k| k < lods.levels.len())
         .map(|k| {
@@ -531,7 +531,7 @@ fn influence_simplification_keeps_a_faceted_models_shading() {
     let model = load_model("lowpoly").unwrap();
     let at = |method| {
         let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter");
-        let full = lodlab::bake::CharacterBake::new(&model).unwrap();
+        let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(&model).unwrap();
         let opts = lodlab::runtime::levels::runtime_options(&model);
         let lods = bake_lods(&model, method, &opts, &|_| {});
         lodlab::runtime::shading_error::shading_errors(
@@ -689,9 +689,12 @@ fn levels_by_budget_read_back(bytes: &[u8]) {
     let (model, _) =
         lodlab::import::gltf::from_bytes("structure", file, dir.path(), &limits).expect("loads");
     let triangles = model.mesh.triangle_count() as u32;
-    let options = lodlab::bake::lod::LodOptions {
+    let options = lodlab::bake::character::lod::LodOptions {
         budgets: Some(vec![(triangles * 2 / 3).max(1), (triangles / 3).max(1), 1]),
-        ..lodlab::bake::lod::LodOptions::from_pixels(1.5, lodlab::bake::lod::model_height(&model))
+        ..lodlab::bake::character::lod::LodOptions::from_pixels(
+            1.5,
+            lodlab::bake::character::lod::model_height(&model),
+        )
     };
     for method in Method::ALL {
         let lods = bake_lods(&model, method, &options, &|_| {});

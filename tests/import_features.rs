@@ -6,7 +6,7 @@ mod common;
 use common::{edit_glb, six_influence_model, tiny_model};
 use glam::{Quat, Vec3, Vec4};
 use lodlab::anim::linear_blend_skinning;
-use lodlab::bake::animation_space::AnimationSpaceMesh;
+use lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::gltf::load;
 use lodlab::model::{Channel, ChannelTarget, Interpolation};
@@ -156,7 +156,7 @@ fn welding_keeps_uv_seams_split() {
         return;
     };
     let m = load(&fox).unwrap();
-    let groups = lodlab::import::weld::position_groups(&m.mesh.positions, 1e-6);
+    let groups = lodlab::geometry::weld::position_groups(&m.mesh.positions, 1e-6);
     let positions = *groups.iter().max().unwrap() as usize + 1;
     // Fewer positions than vertices: the extra vertices are the two sides of UV seams.
     assert!(positions < m.mesh.vertex_count());
@@ -206,8 +206,8 @@ fn half_transparent(mode: lodlab::model::AlphaMode, cutoff: f32) -> lodlab::mode
 /// cut anything out: an OPAQUE material's alpha is ignored however low it is.
 #[test]
 fn alpha_modes_round_trip_and_only_masks_cut_out() {
-    use lodlab::bake::billboard::is_tree;
-    use lodlab::bake::materials::MaterialLayers;
+    use lodlab::bake::foliage::billboard::is_tree;
+    use lodlab::bake::gpu_data::materials::MaterialLayers;
     use lodlab::model::AlphaMode;
     for (mode, cutoff, cuts, name) in [
         (AlphaMode::Opaque, 0.5, false, "OPAQUE"),
@@ -317,9 +317,9 @@ fn an_unskinned_mesh_loads_as_a_one_bone_prop() {
     };
     let (a, b) = (extent(&original), extent(&prop));
     assert!((a.x / a.y - b.z / b.y).abs() < 1e-3, "{a} {b}");
-    let lods = lodlab::bake::lod::bake_lods(
+    let lods = lodlab::bake::character::lod::bake_lods(
         &prop,
-        lodlab::bake::simplify::Method::AnimationSpace,
+        lodlab::bake::character::simplify::Method::AnimationSpace,
         &lodlab::runtime::levels::runtime_options(&prop),
         &|_| {},
     );

@@ -4,11 +4,11 @@
 
 mod common;
 
-use lodlab::bake::CharacterBake;
-use lodlab::bake::crowd_impostor::{
+use lodlab::bake::character::simplify::Method;
+use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::impostor::animated::{
     AnimatedImpostor, ImpostorOptions, bake_animated_impostor, sheet_layout,
 };
-use lodlab::bake::simplify::Method;
 use lodlab::import::load_model;
 use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
@@ -292,7 +292,7 @@ fn the_background_bake_hands_over_levels_then_the_impostor() {
 /// would leave the view narrower), and each view's quad holds what any page covers there.
 #[test]
 fn every_limb_of_a_t_pose_is_inside_every_view() {
-    use lodlab::bake::billboard::impostor::{ViewGrid, posed};
+    use lodlab::bake::impostor::octahedral::{ViewGrid, posed};
     let _serial = serial();
     let model = load_model("mocap").unwrap();
     let options = ImpostorOptions::default();

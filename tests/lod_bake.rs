@@ -2,14 +2,14 @@
 //! them, their geomorph maps, and meshes the simplifier must survive.
 
 use glam::{Affine3A, Quat, Vec2, Vec3, Vec4};
-use lodlab::bake::animation_space::{AnimationSpaceMesh, AsInfluence};
-use lodlab::bake::lod::{
+use lodlab::bake::character::lod::{
     LevelProbes, LodLevel, LodOptions, bake_lods, choose_prefixes, cut_levels, extract,
     progressive_mesh,
 };
-use lodlab::bake::lod_error::ErrorProbe;
-use lodlab::bake::simplify::expectation::ExpectationMatrix;
-use lodlab::bake::simplify::{Method, Sequence, SimplifyInput, StepKind, simplify};
+use lodlab::bake::character::lod_error::ErrorProbe;
+use lodlab::bake::character::simplify::expectation::ExpectationMatrix;
+use lodlab::bake::character::simplify::{Method, Sequence, SimplifyInput, StepKind, simplify};
+use lodlab::bake::gpu_data::animation_space::{AnimationSpaceMesh, AsInfluence};
 use lodlab::generate::cylinder::bent_cylinder;
 use std::collections::HashMap;
 
@@ -318,7 +318,7 @@ fn animation_space_beats_the_rest_pose_on_a_bending_joint() {
         let prefix = (0..=seq.steps.len())
             .find(|&p| seq.influences_after(p) <= target)
             .unwrap();
-        let mut replay = lodlab::bake::lod::Replay::new(&base, &seq);
+        let mut replay = lodlab::bake::character::lod::Replay::new(&base, &seq);
         replay.advance_to(&seq, prefix);
         let tris: Vec<[u32; 3]> = replay.triangles().collect();
         probe.measure(&tris, |r| replay.influences_of(r)).rms
@@ -418,7 +418,7 @@ fn disconnected_parts_simplify_independently() {
         }
         // Later one part is removed whole (never crushed into slivers); the last part left
         // stays.
-        let prunes: Vec<&lodlab::bake::simplify::Step> = seq
+        let prunes: Vec<&lodlab::bake::character::simplify::Step> = seq
             .steps
             .iter()
             .filter(|s| matches!(s.kind, StepKind::Prune { .. }))

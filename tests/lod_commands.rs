@@ -1,8 +1,8 @@
 //! `lodlab bake` and `lodlab report` as a user runs them, and the on-disk cache behind them.
 
 use lodlab::bake::cache::{LodCache, Origin, key, source_hash};
-use lodlab::bake::lod::LodOptions;
-use lodlab::bake::simplify::Method;
+use lodlab::bake::character::lod::LodOptions;
+use lodlab::bake::character::simplify::Method;
 use lodlab::generate::cylinder::bent_cylinder;
 use lodlab::generate::glb::to_glb;
 use std::path::{Path, PathBuf};

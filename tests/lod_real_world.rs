@@ -6,9 +6,9 @@
 //! surface must stay closed; errors must be true and growing; and the coarsest level must reach
 //! a tenth of the source's triangles, or 300.
 
-use lodlab::bake::lod::{LodLevel, bake_lods};
-use lodlab::bake::silhouette::distance;
-use lodlab::bake::simplify::{Method, SimplifyInput, pose_samples};
+use lodlab::bake::character::lod::{LodLevel, bake_lods};
+use lodlab::bake::character::silhouette::distance;
+use lodlab::bake::character::simplify::{Method, SimplifyInput, pose_samples};
 use lodlab::import::load_model;
 use lodlab::runtime::levels::runtime_options;
 use std::collections::HashMap;
@@ -23,8 +23,8 @@ const MAX_SIDE: u32 = 320;
 fn position_edges(model: &lodlab::model::Model, level: &LodLevel) -> HashMap<(u32, u32), u32> {
     let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
     let rest = level.mesh.rest_positions(&rest_bones);
-    let tolerance = lodlab::import::weld::tolerance_for(&rest) * 10.0;
-    let groups = lodlab::import::weld::position_groups(&rest, tolerance);
+    let tolerance = lodlab::geometry::weld::tolerance_for(&rest) * 10.0;
+    let groups = lodlab::geometry::weld::position_groups(&rest, tolerance);
     let mut edges = HashMap::new();
     for t in level.mesh.indices.chunks_exact(3) {
         for k in 0..3 {
@@ -117,9 +117,9 @@ fn the_models_have_the_properties_they_stand_for() {
     // coordinates, and copies of a position that differ by a rounding error.
     let tube = load_model("split-tube").unwrap();
     let m = &tube.mesh;
-    let groups = lodlab::import::weld::position_groups(
+    let groups = lodlab::geometry::weld::position_groups(
         &m.positions,
-        lodlab::import::weld::tolerance_for(&m.positions),
+        lodlab::geometry::weld::tolerance_for(&m.positions),
     );
     let positions = groups.iter().max().unwrap() + 1;
     let mut copies = vec![0u32; positions as usize];
@@ -151,7 +151,7 @@ fn the_models_have_the_properties_they_stand_for() {
 
     // armour: dozens of separate parts, no texture coordinates at all.
     let armour = load_model("armour").unwrap();
-    let pieces = lodlab::bake::billboard::connected_pieces(
+    let pieces = lodlab::bake::foliage::billboard::connected_pieces(
         armour.mesh.vertex_count(),
         armour.mesh.indices.chunks_exact(3),
     );
@@ -162,7 +162,7 @@ fn the_models_have_the_properties_they_stand_for() {
     // patchwork: a texture in many charts, most positions on a chart outline.
     let patchwork = load_model("patchwork").unwrap();
     assert!(patchwork.materials[0].texture.is_some());
-    let charts = lodlab::bake::billboard::connected_pieces(
+    let charts = lodlab::bake::foliage::billboard::connected_pieces(
         patchwork.mesh.vertex_count(),
         patchwork.mesh.indices.chunks_exact(3),
     );

@@ -1,10 +1,10 @@
 //! Levels of detail at run time, on the CPU: no pop during a morph, and how levels are packed.
 
 use glam::{Affine3A, Vec3, Vec4};
-use lodlab::bake::CharacterBake;
-use lodlab::bake::lod::bake_lods;
-use lodlab::bake::lod_pack::LodPack;
-use lodlab::bake::simplify::Method;
+use lodlab::bake::character::lod::bake_lods;
+use lodlab::bake::character::simplify::Method;
+use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::import::load_model;
 use lodlab::runtime::levels::runtime_options;
 use lodlab::scene::{Camera, Instance, LodDraw, LodModel, LodPolicy, LodTracker, ScreenProjection};

@@ -4,11 +4,11 @@
 
 mod common;
 
-use lodlab::bake::CharacterBake;
-use lodlab::bake::lod::{SkinnedLods, bake_lods};
-use lodlab::bake::lod_pack::LodPack;
-use lodlab::bake::normal_map::{NORMAL_MAP_SIZE, UvProblem};
-use lodlab::bake::simplify::{Method, SimplifyInput};
+use lodlab::bake::character::lod::{SkinnedLods, bake_lods};
+use lodlab::bake::character::normal_map::{NORMAL_MAP_SIZE, UvProblem};
+use lodlab::bake::character::simplify::{Method, SimplifyInput};
+use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::import::load_model;
 use lodlab::model::Model;
 use lodlab::render::Gpu;

@@ -2,12 +2,12 @@
 //! offsets and wind strength against their CPU reference, and billboards that stay rigid.
 
 use glam::{Affine3A, Quat, Vec3, Vec4};
-use lodlab::bake::CharacterBake;
-use lodlab::bake::billboard::chain::{CloudKind, CloudLevel, cloud_level};
-use lodlab::bake::billboard::cloud::CloudParams;
-use lodlab::bake::billboard::{foliage, tree_height};
-use lodlab::bake::spectral::cloud::SpectralParams;
-use lodlab::bake::spectral::texture::NO_ROW;
+use lodlab::bake::foliage::billboard::chain::{CloudKind, CloudLevel, cloud_level};
+use lodlab::bake::foliage::billboard::cloud::CloudParams;
+use lodlab::bake::foliage::billboard::{foliage, tree_height};
+use lodlab::bake::foliage::spectral::cloud::SpectralParams;
+use lodlab::bake::foliage::spectral::texture::NO_ROW;
+use lodlab::bake::gpu_data::drawable::CharacterBake;
 use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::capture::capture_skinned_in_wind;

@@ -2,11 +2,13 @@
 //! methods at once, in parallel, and print them as a table. A tree gets its chain of
 //! billboard-cloud levels instead (the same for every method), as the viewer uses it.
 
-use crate::bake::animation_space::AnimationSpaceMesh;
-use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin, source_hash};
-use crate::bake::lod::{SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options};
-use crate::bake::simplify::Method;
+use crate::bake::character::lod::{
+    SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options,
+};
+use crate::bake::character::simplify::Method;
+use crate::bake::foliage::billboard::is_tree;
+use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
 use crate::render::atlas::AtlasRasterizer;
@@ -42,7 +44,7 @@ pub struct TreeBaked {
     pub source_triangles: usize,
     pub bones: usize,
     pub height: f32,
-    pub levels: Vec<crate::bake::billboard::chain::TreeLevel>,
+    pub levels: Vec<crate::bake::foliage::billboard::chain::TreeLevel>,
     pub from_cache: bool,
     pub seconds: f64,
 }
@@ -156,8 +158,8 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                 let Some(method) = method else {
                     let start = std::time::Instant::now();
                     let gpu = gpu.as_ref().expect("a GPU when there are trees");
-                    let opts = crate::bake::billboard::chain::ChainOptions::default();
-                    let (levels, origin) = crate::bake::billboard::chain::load_or_build_chain(
+                    let opts = crate::bake::foliage::billboard::chain::ChainOptions::default();
+                    let (levels, origin) = crate::bake::foliage::billboard::chain::load_or_build_chain(
                         &AtlasRasterizer::new(gpu),
                         &crate::runtime::colour_error::GpuColourError::new(gpu),
                         &cache,
@@ -179,7 +181,7 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                         model: model.name.clone(),
                         source_triangles: model.mesh.triangle_count(),
                         bones: model.skeleton.bone_count(),
-                        height: crate::bake::billboard::tree_height(model),
+                        height: crate::bake::foliage::billboard::tree_height(model),
                         levels,
                         from_cache,
                         seconds,
@@ -241,7 +243,7 @@ pub fn budget_warnings(results: &BakeResults) -> Vec<String> {
         let Some(budgets) = &b.lods.options.budgets else {
             continue;
         };
-        let floor = crate::bake::lod::floor_triangles(&b.lods.sequence, &b.lods.options);
+        let floor = crate::bake::character::lod::floor_triangles(&b.lods.sequence, &b.lods.options);
         let under: Vec<String> = budgets
             .iter()
             .filter(|&&t| t < floor)
@@ -442,8 +444,10 @@ pub fn summary(results: &BakeResults) -> Summary {
                     .iter()
                     .map(|l| CloudSummary {
                         epsilon: l.epsilon / t.height,
-                        kind: crate::bake::billboard::chain::CloudKind::name(l.kind.as_ref())
-                            .to_string(),
+                        kind: crate::bake::foliage::billboard::chain::CloudKind::name(
+                            l.kind.as_ref(),
+                        )
+                        .to_string(),
                         billboards: l.cloud.billboards,
                         triangles: l.cloud.model.mesh.triangle_count(),
                         atlas_bytes: l.cloud.texture_bytes,
@@ -482,7 +486,7 @@ pub fn table(results: &BakeResults) -> String {
                 "{:<5} {:>9.3} {:<32} {:>10} {:>9} {:>10} {:>8}\n",
                 k,
                 l.epsilon / t.height,
-                crate::bake::billboard::chain::CloudKind::name(l.kind.as_ref()),
+                crate::bake::foliage::billboard::chain::CloudKind::name(l.kind.as_ref()),
                 l.cloud.billboards,
                 l.cloud.model.mesh.triangle_count(),
                 l.cloud.texture_bytes / 1024,

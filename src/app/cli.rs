@@ -1,8 +1,8 @@
 //! The command line's arguments: every subcommand and its options, with clap. `main.rs`
 //! parses them and hands each command to its front end.
 
-use crate::bake::billboard::chain::{ChainOptions, MIN_EPSILON_GROWTH};
-use crate::bake::spectral::description::DescriptionType;
+use crate::bake::foliage::billboard::chain::{ChainOptions, MIN_EPSILON_GROWTH};
+use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::render::DebugView;
 use crate::runtime::headless::ShotLod;
 use crate::runtime::spec::SceneSpec;
@@ -351,7 +351,7 @@ pub struct BakeArgs {
         value_delimiter = ',',
         default_value = "rest-pose,as,as+is"
     )]
-    pub methods: Vec<crate::bake::simplify::Method>,
+    pub methods: Vec<crate::bake::character::simplify::Method>,
     /// e₁, the error bound of LOD 1 in pixels for the model filling 1000 pixels of screen
     /// height; each further level doubles it. (Not the run-time --tolerance of view, shot and
     /// bench: the projected error a level may show.)
@@ -379,7 +379,7 @@ pub struct ExportArgs {
     pub model_flag: Option<String>,
     /// Simplification method of the levels.
     #[arg(long, value_enum, default_value = "as+is")]
-    pub method: crate::bake::simplify::Method,
+    pub method: crate::bake::character::simplify::Method,
     /// Folder to write the files into (made if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -553,7 +553,7 @@ pub struct FoliageArgs {
     #[arg(long, default_value = "axis-phase", value_enum)]
     pub description: DescriptionType,
     /// Frequency lines kept per axis by spectral clouds (K, 1 to 16).
-    #[arg(long, default_value_t = crate::bake::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
+    #[arg(long, default_value_t = crate::bake::foliage::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
     pub bins: u16,
     /// Plain SCA: spectral billboards hang from the root with all their leaves' motion in their
     /// spectra, instead of following the leaves' shared bone (Bennett-Therkildsen, Carlsen &
@@ -867,7 +867,7 @@ fn parse_camera(s: &str) -> Result<Camera, String> {
 
 /// `--impostors`: how characters' animated impostors are baked, or none.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Impostors(pub Option<crate::bake::crowd_impostor::ImpostorOptions>);
+pub struct Impostors(pub Option<crate::bake::impostor::animated::ImpostorOptions>);
 
 fn parse_impostors(s: &str) -> Result<Impostors, String> {
     if s.eq_ignore_ascii_case("off") || s.eq_ignore_ascii_case("none") {

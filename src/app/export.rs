@@ -8,11 +8,11 @@
 //! since influence simplification gives a vertex a position per bone. A vertex with more than
 //! four influences gets several `JOINTS_n`/`WEIGHTS_n` sets, four influences a set.
 //!
-//! [`AnimationSpaceMesh::to_skinned`]: crate::bake::animation_space::AnimationSpaceMesh::to_skinned
+//! [`AnimationSpaceMesh::to_skinned`]: crate::bake::gpu_data::animation_space::AnimationSpaceMesh::to_skinned
 
 use crate::bake::cache::{LodCache, Origin, source_hash};
-use crate::bake::lod::{SkinnedLods, model_height};
-use crate::bake::simplify::Method;
+use crate::bake::character::lod::{SkinnedLods, model_height};
+use crate::bake::character::simplify::Method;
 use crate::error::InputError;
 use crate::generate::glb::{to_glb, to_lod_glb};
 use crate::import::{load_model, source_path};
@@ -134,7 +134,7 @@ pub fn level_meshes(model: &Model, lods: &SkinnedLods) -> Vec<SkinnedMesh> {
 
 pub fn run(opts: &ExportOptions) -> Result<Exported> {
     let model = load_model(&opts.model)?;
-    if crate::bake::billboard::is_tree(&model) {
+    if crate::bake::foliage::billboard::is_tree(&model) {
         anyhow::bail!(
             "{}: a tree; export writes a character's levels (a tree's are billboard clouds)",
             opts.model
@@ -150,7 +150,7 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
         log::warn!("{w}");
     }
     // The bounding box seen from the side, in the scene's units (the importer's).
-    let rest = crate::bake::simplify::SimplifyInput::rest_bones(&model.skeleton);
+    let rest = crate::bake::character::simplify::SimplifyInput::rest_bones(&model.skeleton);
     let bounds = crate::model::Bounds::of(lods.levels[0].mesh.rest_positions(&rest))
         .ok_or_else(|| anyhow::anyhow!("{}: an empty mesh", opts.model))?;
     let height = model_height(&model);

@@ -9,10 +9,10 @@
 //! The curves measure through the texture where the model's texture coordinates are a
 //! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
 
-use crate::bake::animation_space::AnimationSpaceMesh;
-use crate::bake::lod::{LodOptions, Replay, SkinnedLods, bake_lods, progressive_mesh};
-use crate::bake::lod_error::{Correspondence, MeshError, Probe};
-use crate::bake::simplify::{Method, Sequence, SimplifyInput, pose_samples};
+use crate::bake::character::lod::{LodOptions, Replay, SkinnedLods, bake_lods, progressive_mesh};
+use crate::bake::character::lod_error::{Correspondence, MeshError, Probe};
+use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
+use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use crate::import::load_model;
 use crate::model::{Model, SkinnedMesh};
 use anyhow::{Context, Result};
@@ -31,7 +31,7 @@ pub const SAMPLES: usize = 6000;
 /// Tolerances in pixels at which every level's silhouette is compared with full detail.
 pub const SILHOUETTE_TOLERANCES: [f32; 3] = [1.5, 4.0, 8.0];
 /// Poses (spread over the clips) the silhouettes are compared in, each from
-/// [`crate::bake::silhouette::VIEWS`].
+/// [`crate::bake::character::silhouette::VIEWS`].
 const SILHOUETTE_POSES: usize = 3;
 
 #[derive(Clone, Debug)]
@@ -81,7 +81,7 @@ pub struct LevelReport {
     /// to this level, at each of [`SILHOUETTE_TOLERANCES`].
     pub silhouette_px: Vec<f32>,
     /// How many of those pixels one drawn pixel spanned at each tolerance: 1 unless the
-    /// drawing had to be capped at [`crate::bake::silhouette::MAX_SIDE`] pixels, as for a
+    /// drawing had to be capped at [`crate::bake::character::silhouette::MAX_SIDE`] pixels, as for a
     /// level whose error is tiny. A distance of about one drawn pixel is the measurement's
     /// resolution, not the level's.
     pub silhouette_resolution_px: Vec<f32>,
@@ -178,13 +178,13 @@ fn motion(model: &Model) -> (f64, f64) {
         .map(|&p| skel.root_transform.transform_point3(p))
         .collect();
     let mut far = 0.0f64;
-    for g in crate::bake::lod_error::animation_frames(model) {
+    for g in crate::bake::character::lod_error::animation_frames(model) {
         let posed = crate::anim::linear_blend_skinning(&model.mesh, skel, &g);
         for (a, b) in rest.iter().zip(&posed) {
             far = far.max(a.distance(*b) as f64);
         }
     }
-    let height = crate::bake::lod::model_height(model) as f64;
+    let height = crate::bake::character::lod::model_height(model) as f64;
     (far, far / height.max(1e-9))
 }
 
@@ -202,7 +202,8 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     let gpu = crate::render::Gpu::headless()
         .map_err(|e| log::warn!("no GPU adapter, so no shading errors: {e:#}"))
         .ok();
-    let full = crate::bake::CharacterBake::new(&model).map_err(anyhow::Error::msg)?;
+    let full =
+        crate::bake::gpu_data::drawable::CharacterBake::new(&model).map_err(anyhow::Error::msg)?;
     let mut methods = BTreeMap::new();
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
     for method in Method::ALL {
@@ -306,7 +307,7 @@ fn level_reports(lods: &SkinnedLods, poses: &[Vec<glam::Affine3A>]) -> Vec<Level
         .iter()
         .enumerate()
         .map(|(k, l)| {
-            use crate::bake::silhouette::{MAX_SIDE, distance};
+            use crate::bake::character::silhouette::{MAX_SIDE, distance};
             let distances: Vec<_> = if k == 0 {
                 Vec::new()
             } else {
@@ -876,7 +877,7 @@ fn timings_markdown(
          |---|---|---|---|---|---|---|---|---|---|\n\
          | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} | {} |\n",
         report.model,
-        crate::bake::simplify::influence::CACHE_SIZE,
+        crate::bake::character::simplify::influence::CACHE_SIZE,
         report.model,
         report.vertices,
         report.bones,
@@ -1011,10 +1012,10 @@ fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String {
          exceed {} pixels, the drawing is capped, and the bracket says how many pixels one \
          drawn pixel spans: the measurement's resolution there.\n",
         lod_opts.base_error * 1000.0,
-        crate::bake::lod::POSE_SAMPLES,
+        crate::bake::character::lod::POSE_SAMPLES,
         SILHOUETTE_POSES,
-        crate::bake::silhouette::VIEWS.len(),
-        crate::bake::silhouette::MAX_SIDE,
+        crate::bake::character::silhouette::VIEWS.len(),
+        crate::bake::character::silhouette::MAX_SIDE,
     );
     for (name, m) in &report.methods {
         if m.levels.is_empty() {

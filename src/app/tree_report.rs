@@ -15,13 +15,13 @@
 
 use super::report::{plot_error, register_font, write_plot};
 use crate::atomic::write as write_atomic;
-use crate::bake::billboard::chain::{
+use crate::bake::foliage::billboard::chain::{
     ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, tree_chain,
 };
-use crate::bake::billboard::cloud::CloudParams;
-use crate::bake::billboard::{Foliage, Grouping, foliage, tree_height};
-use crate::bake::spectral::cloud::SpectralParams;
-use crate::bake::spectral::description::DescriptionType;
+use crate::bake::foliage::billboard::cloud::CloudParams;
+use crate::bake::foliage::billboard::{Foliage, Grouping, foliage, tree_height};
+use crate::bake::foliage::spectral::cloud::SpectralParams;
+use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::runtime::colour_error::{at_switch, colour_error, colour_error_over};
@@ -57,7 +57,7 @@ pub struct LevelReport {
     /// in (0 for the full tree; see [`crate::runtime::colour_error::SwitchErrors`]).
     pub colour_error_from_switch: f32,
     /// Mean RMS distance over the loop between a leaf and its projection on its billboard,
-    /// in tree heights (see [`crate::bake::spectral::metrics`]).
+    /// in tree heights (see [`crate::bake::foliage::spectral::metrics`]).
     pub anim_rms: f32,
     /// Mean dominating-axis spectral amplitude error (thesis §5.1.4), in [0, 1).
     pub anim_spectral: f32,
@@ -145,7 +145,7 @@ pub struct ThesisRow {
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct AtCount {
     pub clumps: usize,
-    /// Its ε bound ([`crate::bake::billboard::clumps::ClumpCloud::epsilon`]), in tree heights.
+    /// Its ε bound ([`crate::bake::foliage::billboard::clumps::ClumpCloud::epsilon`]), in tree heights.
     pub epsilon: f32,
     pub close: f32,
     pub from_switch: f32,
@@ -264,7 +264,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     }
     let description_types = description_types(&raster, tree, &f, &chain, &opts)?;
     let static_clouds = static_clouds(&gpu, &raster, tree, &f, &chain)?;
-    let clouds: Vec<(usize, &crate::bake::billboard::chain::CloudLevel)> = chain
+    let clouds: Vec<(usize, &crate::bake::foliage::billboard::chain::CloudLevel)> = chain
         .iter()
         .enumerate()
         .filter(|(_, l)| l.cloud.billboards > 0 && l.cloud.impostor.is_none())
@@ -467,8 +467,13 @@ fn clumps_at_count(
 ) -> Result<AtCount> {
     let h = tree_height(tree);
     let clumps = (billboards.round() as usize).max(1);
-    let c =
-        crate::bake::billboard::clumps::clump_cloud(tree, f, clumps, opts.clump_views, opts.seed);
+    let c = crate::bake::foliage::billboard::clumps::clump_cloud(
+        tree,
+        f,
+        clumps,
+        opts.clump_views,
+        opts.seed,
+    );
     let eps = c.epsilon().max(1e-4 * h);
     let params = CloudParams {
         epsilon: eps,
@@ -480,10 +485,13 @@ fn clumps_at_count(
     // the chain's own clump levels carry 256 texels across the tree
     // (`ChainOptions::min_atlas_texels`), which the metric's close look still magnifies, so
     // this one scores their shapes alone.
-    let density =
-        crate::bake::billboard::atlas::AtlasDensity::for_level(800.0 / h, eps, opts.tolerance_px);
-    let wood = crate::bake::billboard::wood::WoodChain::new(tree).tree_at(tree, eps);
-    let crown = crate::bake::billboard::occlusion::CrownDensity::of(tree);
+    let density = crate::bake::foliage::billboard::atlas::AtlasDensity::for_level(
+        800.0 / h,
+        eps,
+        opts.tolerance_px,
+    );
+    let wood = crate::bake::foliage::billboard::wood::WoodChain::new(tree).tree_at(tree, eps);
+    let crown = crate::bake::foliage::billboard::occlusion::CrownDensity::of(tree);
     let kind = CloudKind::Clumps {
         clumps,
         views: opts.clump_views,
@@ -526,7 +534,7 @@ fn static_clouds(
 ) -> Result<Vec<StaticCloudReport>> {
     let h = tree_height(tree);
     let still = at_rest(tree);
-    let crown = crate::bake::billboard::occlusion::CrownDensity::of(&still);
+    let crown = crate::bake::foliage::billboard::occlusion::CrownDensity::of(&still);
     let mut static_clouds = Vec::new();
     for l in &chain[1..] {
         // The thesis's algorithm as its stability runs set it (§8.4.1): view penalty on, no

@@ -1,7 +1,7 @@
 //! The on-disk cache of level-of-detail bakes, so the viewer starts fast.
 //!
 //! One file per (model, method, parameters): progressive-mesh levels ([`SkinnedLods`]), or a
-//! tree's chain of billboard-cloud levels (see `crate::bake::billboard::chain`). Its name carries a key: a hash of the source
+//! tree's chain of billboard-cloud levels (see `crate::bake::foliage::billboard::chain`). Its name carries a key: a hash of the source
 //! file's bytes (and of the external buffers a `.gltf` names), the bake parameters and
 //! [`FORMAT_VERSION`]. A changed model or parameter therefore looks for another file. Inside,
 //! a header repeats the version and the key and holds a hash of the payload, so a file from
@@ -12,9 +12,9 @@
 //! payload length (u64 LE) | payload (postcard-encoded, then LZ4-compressed: billboard-cloud
 //! atlases are mostly empty texels).
 
-use super::lod::{LodOptions, SkinnedLods};
-use super::simplify::Method;
-use super::simplify::expectation::MIN_SAMPLES;
+use crate::bake::character::lod::{LodOptions, SkinnedLods};
+use crate::bake::character::simplify::Method;
+use crate::bake::character::simplify::expectation::MIN_SAMPLES;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -269,7 +269,7 @@ impl LodCache {
     ) -> (SkinnedLods, Origin) {
         let (path, key) = self.levels_file(&model.name, source, method, options);
         let Ok(found) = self.load_or_build(&path, &key, || {
-            Ok::<_, std::convert::Infallible>(super::lod::bake_lods(
+            Ok::<_, std::convert::Infallible>(crate::bake::character::lod::bake_lods(
                 model, method, options, progress,
             ))
         });

@@ -9,8 +9,8 @@
 //! stops with one line naming the file and the problem instead of a panic further down.
 
 use super::validate;
-use super::weld::{compute_normals, weld_map};
 use crate::error::InputError;
+use crate::geometry::weld::{compute_normals, weld_map};
 use crate::model::{
     AlphaMode, Bounds, Channel, ChannelTarget, Clip, Influence, Interpolation, Material, Model,
     Node, Rgba8Image, Skeleton, SkinnedMesh, Trs,

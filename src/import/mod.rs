@@ -5,7 +5,6 @@ pub mod gltfpack;
 pub mod palette;
 pub mod sources;
 pub mod validate;
-pub mod weld;
 
 use crate::error::InputError;
 use crate::model::Model;

@@ -3,7 +3,7 @@
 //! Files from kit-bashing tools and asset stores often colour a character by material alone: a
 //! knight of a thousand materials, each a base colour factor and no texture. lodlab draws a
 //! character in one draw with its materials as the layers of one texture array, every layer
-//! the size of the largest texture ([`crate::bake::materials`]), so each plain colour would
+//! the size of the largest texture ([`crate::bake::gpu_data::materials`]), so each plain colour would
 //! cost a whole layer, and a thousand of them more memory than any GPU lends. Here the plain,
 //! solid ones become blocks of one palette texture, and each of their vertices takes the texture
 //! coordinate of its block's centre: one layer for all of them, and the colour of every
@@ -12,7 +12,7 @@
 //! A block is [`BLOCK`] texels on a side, so its centre keeps its own colour through the mip
 //! levels a character is drawn with until it is a few dozen pixels high. The simplifier sees a
 //! textured material whose charts each show one colour: a chart torn onto another colour's
-//! wedge pays for what it recolours (`crate::bake::simplify::collapse`), as a material border
+//! wedge pays for what it recolours (`crate::bake::character::simplify::collapse`), as a material border
 //! between the separate materials did.
 
 use crate::model::{Material, Model, Rgba8Image, linear_to_srgb};

@@ -1,16 +1,18 @@
 //! Bakes a billboard cloud's atlas on the GPU: the leaf triangles of every billboard (laid out
-//! by [`crate::bake::billboard::atlas`]) rasterised into two textures, colour and lighting,
+//! by [`crate::bake::foliage::billboard::atlas`]) rasterised into two textures, colour and lighting,
 //! and read back; and an
-//! octahedral impostor's views ([`crate::bake::billboard::impostor`]), the whole tree drawn
+//! octahedral impostor's views ([`crate::bake::impostor::octahedral`]), the whole tree drawn
 //! from every view into its cell, colour and normal. The results are plain image data; the
 //! bake's caller cleans them up and caches them.
 
 use super::gpu::Gpu;
 use super::shaders;
 use super::targets::read_texture;
-use crate::bake::billboard::atlas::{AtlasImages, AtlasLayout, AtlasVertex, RasterizeAtlas};
-use crate::bake::billboard::impostor::{ViewCamera, ViewImages, ViewRequest, ViewVertex};
-use crate::bake::materials::MaterialLayers;
+use crate::bake::foliage::billboard::atlas::{
+    AtlasImages, AtlasLayout, AtlasVertex, RasterizeAtlas,
+};
+use crate::bake::gpu_data::materials::MaterialLayers;
+use crate::bake::impostor::octahedral::{ViewCamera, ViewImages, ViewRequest, ViewVertex};
 use crate::model::Rgba8Image;
 use anyhow::Result;
 use wgpu::util::DeviceExt;
@@ -168,9 +170,9 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
         gpu.queue.submit([enc.finish()]);
         gpu.take_error()?;
         let mut pixels = read_texture(gpu, &target)?;
-        crate::bake::billboard::atlas::unpremultiply(&mut pixels);
+        crate::bake::foliage::billboard::atlas::unpremultiply(&mut pixels);
         let mut light = read_texture(gpu, &lighting)?;
-        crate::bake::billboard::atlas::unpremultiply_linear(&mut light);
+        crate::bake::foliage::billboard::atlas::unpremultiply_linear(&mut light);
         let image = |pixels| Rgba8Image {
             width: layout.width,
             height: layout.height,

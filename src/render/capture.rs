@@ -4,7 +4,7 @@
 //! target (vertex `i` at `(i % width, i / width)`), coloured with its skinned position and its
 //! influence count. The vertex shader is `skin_vertex` from `shaders/skinning.wgsl`, the same
 //! function the character pipeline uses, so tests can compare the GPU's result with the CPU
-//! reference in [`crate::bake::animation_space`].
+//! reference in [`crate::bake::gpu_data::animation_space`].
 
 use super::gpu::Gpu;
 use super::renderer::SceneRenderer;

@@ -3,9 +3,9 @@
 
 use super::gpu::Gpu;
 use super::memory::GpuMemory;
-use crate::bake::CharacterBake;
-use crate::bake::lod_pack::{LodPack, PackedLevel};
-use crate::bake::texels::TexelGrid;
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::lod_pack::{LodPack, PackedLevel};
+use crate::bake::gpu_data::texels::TexelGrid;
 use wgpu::util::DeviceExt;
 
 /// A character's uniform: its shadow ellipse (mirror of `Shadow` in `shaders/shadow.wgsl`),
@@ -153,7 +153,7 @@ fn float_texture(gpu: &Gpu, label: &str, width: u32, height: u32, bytes: &[u8]) 
 /// Material layers as an sRGB texture array with their mipmaps.
 pub(crate) fn material_texture(
     gpu: &Gpu,
-    m: &crate::bake::materials::MaterialLayers,
+    m: &crate::bake::gpu_data::materials::MaterialLayers,
 ) -> wgpu::Texture {
     gpu.device.create_texture_with_data(
         &gpu.queue,
@@ -180,7 +180,7 @@ pub(crate) fn material_texture(
 /// for a set without any.
 fn normal_map_texture(
     gpu: &Gpu,
-    maps: Option<&crate::bake::normal_map::NormalMaps>,
+    maps: Option<&crate::bake::character::normal_map::NormalMaps>,
 ) -> wgpu::Texture {
     let (size, layers, mips, bytes) = match maps {
         Some(n) if n.layer_count > 0 => {

@@ -36,8 +36,8 @@ use super::gpu::Gpu;
 use super::pipelines::Pipelines;
 use super::timer::{FrameTimer, Pass};
 use super::uniforms::{FrameUniforms, FrameView, GpuInstance, Lighting};
-use crate::bake::CharacterBake;
-use crate::bake::lod_pack::LodPack;
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::lod_pack::LodPack;
 use crate::scene::lod::MAX_LEVELS;
 use crate::scene::{Instance, LodDraw};
 use anyhow::{Result, bail};
@@ -377,7 +377,7 @@ impl SceneRenderer {
     /// Uploads a baked character at full detail; returns its index for [`Instance::model`].
     pub fn add_character(&mut self, gpu: &Gpu, bake: &CharacterBake) -> Result<usize> {
         let name = &bake.name;
-        let grid = |what: &str, g: &crate::bake::texels::TexelGrid| {
+        let grid = |what: &str, g: &crate::bake::gpu_data::texels::TexelGrid| {
             gpu.texture_fits(&format!("{name}: {what}"), g.width, g.height, 1)
         };
         grid("the animation", &bake.animation.grid)?;

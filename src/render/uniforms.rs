@@ -99,7 +99,7 @@ impl FrameUniforms {
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuInstance {
     pub rows: [[f32; 4]; 3],
-    /// The clip as a frame range: [`crate::bake::anim_texture::AnimationTexture::clip_rows`].
+    /// The clip as a frame range: [`crate::bake::gpu_data::anim_texture::AnimationTexture::clip_rows`].
     pub clip: [f32; 4],
     /// Time offset in seconds, playback speed, wind strength (1: the clip as it is), spare.
     pub timing: [f32; 4],
@@ -166,13 +166,13 @@ impl GpuInstance {
     }
 }
 
-/// Vertex layout of [`crate::bake::StaticVertex`] for the plain calibration shader.
+/// Vertex layout of [`crate::bake::gpu_data::drawable::StaticVertex`] for the plain calibration shader.
 pub const STATIC_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
     wgpu::vertex_attr_array![7 => Float32x3, 8 => Float32x3, 9 => Float32x2];
 
 pub fn static_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<crate::bake::StaticVertex>() as u64,
+        array_stride: std::mem::size_of::<crate::bake::gpu_data::drawable::StaticVertex>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &STATIC_VERTEX_ATTRIBUTES,
     }

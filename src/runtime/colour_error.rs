@@ -4,8 +4,8 @@
 
 use super::spec::Loaded;
 use super::world::World;
-use crate::bake::billboard::chain::CloudLevel;
-use crate::bake::billboard::wood::only_foliage;
+use crate::bake::foliage::billboard::chain::CloudLevel;
+use crate::bake::foliage::billboard::wood::only_foliage;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
@@ -89,10 +89,10 @@ fn foliage_disagreement(
     // Masks only: the original's leaves are baked without the crown's occlusion, which would
     // darken them and cost a crown's worth of rays a measurement.
     let leaves = only_foliage(original);
-    let bake = crate::bake::CharacterBake::tree_level(&leaves, None, &[], &[])
+    let bake = crate::bake::gpu_data::drawable::CharacterBake::tree_level(&leaves, None, &[], &[])
         .map_err(|e| anyhow::anyhow!("{}: {e}", leaves.name))?;
     let mut a = metric_world(gpu, Loaded::forest_of_bake(&leaves, bake, 1))?;
-    let lod_bake = crate::bake::CharacterBake::tree_level(
+    let lod_bake = crate::bake::gpu_data::drawable::CharacterBake::tree_level(
         &lod_foliage,
         lod_motion.as_ref(),
         &[],
@@ -117,7 +117,7 @@ pub fn whole_tree_error(
     level: &CloudLevel,
     height_px: f32,
 ) -> Result<f32> {
-    use crate::bake::billboard::chain::MeasureColour;
+    use crate::bake::foliage::billboard::chain::MeasureColour;
     let errors = GpuColourError::new(gpu).colour_errors(tree, level, &[height_px])?;
     Ok(errors[0])
 }
@@ -149,7 +149,7 @@ impl<'g> GpuColourError<'g> {
     }
 }
 
-impl crate::bake::billboard::chain::MeasureColour for GpuColourError<'_> {
+impl crate::bake::foliage::billboard::chain::MeasureColour for GpuColourError<'_> {
     fn colour_errors(
         &self,
         tree: &Model,

@@ -14,7 +14,7 @@
 use super::colour_error::{METRIC_VIEWS, covers, framing, metric_camera, metric_world, picture};
 use super::impostor_placement::PITCH_DEG;
 use super::spec::Loaded;
-use crate::bake::billboard::chain::CloudLevel;
+use crate::bake::foliage::billboard::chain::CloudLevel;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;

@@ -25,9 +25,9 @@ use super::colour_error::{
 use super::levels::mapped_pack;
 use super::spec::Loaded;
 use super::world::World;
-use crate::bake::CharacterBake;
-use crate::bake::crowd_impostor::AnimatedImpostor;
-use crate::bake::lod::LodLevel;
+use crate::bake::character::lod::LodLevel;
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::impostor::animated::AnimatedImpostor;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;

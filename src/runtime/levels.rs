@@ -4,14 +4,14 @@
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
 use super::impostor_placement::{Placement, place_impostor};
-use crate::bake::CharacterBake;
-use crate::bake::billboard::chain::{ChainOptions, chain_file, load_or_build_chain};
-use crate::bake::billboard::is_tree;
 use crate::bake::cache::{LodCache, Origin};
-use crate::bake::crowd_impostor::{AnimatedImpostor, ImpostorOptions, load_or_bake_impostor};
-use crate::bake::lod::SkinnedLods;
-use crate::bake::lod_pack::LodPack;
-use crate::bake::simplify::Method;
+use crate::bake::character::lod::SkinnedLods;
+use crate::bake::character::simplify::Method;
+use crate::bake::foliage::billboard::chain::{ChainOptions, chain_file, load_or_build_chain};
+use crate::bake::foliage::billboard::is_tree;
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::lod_pack::LodPack;
+use crate::bake::impostor::animated::{AnimatedImpostor, ImpostorOptions, load_or_bake_impostor};
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::atlas::AtlasRasterizer;
@@ -35,8 +35,12 @@ pub struct LevelSource {
 /// `lodlab bake MODEL` beforehand fills the same cache entries; or, where the command line
 /// asked for levels by triangle count (`--levels triangles:N,N,…`, see [`set_level_budgets`]),
 /// those of `lodlab bake MODEL --triangles N,N,…`, whose cached cut they then read.
-pub fn runtime_options(model: &Model) -> crate::bake::lod::LodOptions {
-    crate::bake::lod::lod_options(model, DEFAULT_FIRST_ERROR_PX, level_budgets().as_deref())
+pub fn runtime_options(model: &Model) -> crate::bake::character::lod::LodOptions {
+    crate::bake::character::lod::lod_options(
+        model,
+        DEFAULT_FIRST_ERROR_PX,
+        level_budgets().as_deref(),
+    )
 }
 
 /// The triangle budgets levels are cut by (see [`set_level_budgets`]); `None`: by error.
@@ -72,7 +76,7 @@ pub enum Levels {
     /// A tree's billboard-cloud chain (level 0 the tree itself), with levels 1… baked for
     /// the GPU (on the baking thread: their atlases' mipmaps take a while).
     Tree {
-        chain: Vec<crate::bake::billboard::chain::TreeLevel>,
+        chain: Vec<crate::bake::foliage::billboard::chain::TreeLevel>,
         bakes: Vec<CharacterBake>,
     },
 }
@@ -243,7 +247,9 @@ fn impostor_level(
         h.update(b"lodlab impostor placement");
         h.update(&PLACEMENT_VERSION.to_le_bytes());
         h.update(&levels_key);
-        h.update(&crate::bake::crowd_impostor::impostor_key(&s.hash, options));
+        h.update(&crate::bake::impostor::animated::impostor_key(
+            &s.hash, options,
+        ));
         h.update(&tolerance.to_le_bytes());
         let key = *h.finalize().as_bytes();
         let path = cache.file(&s.model.name, "placement", &key);
@@ -255,7 +261,7 @@ fn impostor_level(
     };
     // Said whether placed now or read from the cache: where the impostor comes in is what a
     // user looking at a crowd needs to know.
-    let height = crate::bake::lod::model_height(&s.model);
+    let height = crate::bake::character::lod::model_height(&s.model);
     match (placement.epsilon, placement.largest_px(height)) {
         (Some(e), Some(px)) => {
             let replaces = lods.levels.iter().position(|l| l.error >= e);
@@ -324,7 +330,7 @@ fn tree_levels(
 }
 
 /// `lods` of `model` packed for the GPU, with normal maps for the coarse levels (see
-/// [`crate::bake::normal_map`]).
+/// [`crate::bake::character::normal_map`]).
 fn pack(model: &Model, lods: &SkinnedLods) -> Result<LodPack, String> {
     mapped_pack(model, &lods.levels, &lods.levels)
         .map_err(|e| format!("{} {}: {e}", lods.model, lods.method))
@@ -335,17 +341,17 @@ fn pack(model: &Model, lods: &SkinnedLods) -> Result<LodPack, String> {
 /// metric to draw.
 pub(crate) fn mapped_pack(
     model: &Model,
-    chain: &[crate::bake::lod::LodLevel],
-    levels: &[crate::bake::lod::LodLevel],
+    chain: &[crate::bake::character::lod::LodLevel],
+    levels: &[crate::bake::character::lod::LodLevel],
 ) -> Result<LodPack, String> {
-    let rest_bones = crate::bake::simplify::SimplifyInput::rest_bones(&model.skeleton);
+    let rest_bones = crate::bake::character::simplify::SimplifyInput::rest_bones(&model.skeleton);
     let full = &chain.first().ok_or("no levels")?.mesh;
     LodPack::with_normal_maps(
         levels,
         full,
         &rest_bones,
         model.materials.len(),
-        crate::bake::normal_map::NORMAL_MAP_SIZE,
+        crate::bake::character::normal_map::NORMAL_MAP_SIZE,
     )
 }
 

@@ -24,8 +24,8 @@ use super::colour_error::{
 use super::impostor_placement::{PITCH_DEG, colour_off};
 use super::levels::mapped_pack;
 use super::spec::Loaded;
-use crate::bake::CharacterBake;
-use crate::bake::lod::LodLevel;
+use crate::bake::character::lod::LodLevel;
+use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;

@@ -3,9 +3,9 @@
 //! the tests, so they all show the same thing.
 
 use super::levels::LevelSource;
-use crate::bake::CharacterBake;
 use crate::bake::cache::source_hash;
-use crate::bake::crowd_impostor::ImpostorOptions;
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::impostor::animated::ImpostorOptions;
 use crate::error::InputError;
 use crate::import::{load_model, source_path};
 use crate::model::Model;
@@ -253,7 +253,7 @@ impl Loaded {
     /// under.
     pub fn forest_of(
         model: &Model,
-        motion: Option<&crate::bake::spectral::texture::SpectralMotion>,
+        motion: Option<&crate::bake::foliage::spectral::texture::SpectralMotion>,
         count: usize,
     ) -> Result<Loaded> {
         let bake = CharacterBake::with_motion(model, motion)

@@ -3,11 +3,11 @@
 
 use super::levels::{Baked, LevelSource, Levels, bake_all};
 use super::spec::{Loaded, SceneSpec, default_camera, layout_crowd};
-use crate::bake::CharacterBake;
-use crate::bake::billboard::chain::{ChainOptions, CloudKind, TreeLevel};
 use crate::bake::cache::LodCache;
-use crate::bake::lod_pack::LodPack;
-use crate::bake::simplify::Method;
+use crate::bake::character::simplify::Method;
+use crate::bake::foliage::billboard::chain::{ChainOptions, CloudKind, TreeLevel};
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::lod_pack::LodPack;
 use crate::render::{FrameStats, FrameView, Gpu, Region, SceneRenderer, Side};
 use crate::scene::foliage::{FoliagePolicy, FoliageView};
 use crate::scene::{
@@ -52,7 +52,7 @@ pub struct NormalMapInfo {
     /// Bytes of the maps with their mipmaps.
     pub bytes: u64,
     /// Why no level has one, where none has.
-    pub unmapped: Option<crate::bake::normal_map::UvProblem>,
+    pub unmapped: Option<crate::bake::character::normal_map::UvProblem>,
 }
 
 /// A character's animated impostor on the GPU.
@@ -60,7 +60,7 @@ pub struct NormalMapInfo {
 pub struct InstalledImpostor {
     /// The renderer's character that draws it.
     pub character: usize,
-    pub options: crate::bake::crowd_impostor::ImpostorOptions,
+    pub options: crate::bake::impostor::animated::ImpostorOptions,
     /// Bytes of its pages with their mipmaps, as uploaded.
     pub bytes: u64,
 }
@@ -429,7 +429,7 @@ impl World {
         &mut self,
         gpu: &Gpu,
         m: usize,
-        impostor: &crate::bake::crowd_impostor::AnimatedImpostor,
+        impostor: &crate::bake::impostor::animated::AnimatedImpostor,
     ) -> Result<()> {
         if self.impostors[m].as_ref().map(|i| i.options) == Some(impostor.options) {
             return Ok(());

@@ -1,7 +1,7 @@
 //! How trees are shown: the foliage panel's level policy and view settings, the same on the
 //! command line.
 
-use crate::bake::billboard::chain::{ChainOptions, ChainStyle};
+use crate::bake::foliage::billboard::chain::{ChainOptions, ChainStyle};
 
 /// What trees become under a simplified method: the foliage panel's level policy.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

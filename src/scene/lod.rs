@@ -20,7 +20,7 @@
 //! on the far side of the threshold, so what is drawn never exceeds the tolerance.
 
 use super::crowd::Instance;
-use crate::bake::simplify::Method;
+use crate::bake::character::simplify::Method;
 use glam::Vec3;
 
 /// Levels a histogram keeps apart; coarser ones are counted in the last bin.

@@ -290,7 +290,7 @@ fn play_paced(path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::simplify::Method;
+    use crate::bake::character::simplify::Method;
 
     fn answer(participant: &str, choice: u8) -> Answer {
         Answer {

@@ -1,9 +1,9 @@
 //! The egui side panel: statistics, levels of detail, comparison, debug views, and the crowd's
 //! controls.
 
-use crate::bake::billboard::chain::MIN_EPSILON_GROWTH;
+use crate::bake::foliage::billboard::chain::MIN_EPSILON_GROWTH;
 
-use crate::bake::spectral::description::DescriptionType;
+use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::render::timer::PassTimes;
 use crate::render::{DebugView, FrameStats};
 use crate::runtime::world::LevelSummary;

@@ -1,0 +1,231 @@
+//! What the renderer draws of one model: its textures, its index list and how it is drawn.
+
+use super::anim_texture::{self, AnimationTexture};
+use super::animation_space::AnimationSpaceMesh;
+use super::materials::MaterialLayers;
+use super::vertex_texture::VertexTexture;
+use crate::bake::foliage::billboard;
+use crate::bake::foliage::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
+use crate::bake::impostor::{animated, octahedral};
+use crate::model::{Bounds, Material, Model};
+use glam::Vec3;
+
+/// A vertex for the trivial unskinned calibration shader: one fixed pose baked into plain
+/// positions (see [`vertex_texture::VertexTexture::static_vertices`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct StaticVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+}
+
+/// Everything the renderer needs to draw one skinned character.
+#[derive(Clone, Debug)]
+pub struct CharacterBake {
+    pub name: String,
+    pub animation: AnimationTexture,
+    pub vertices: VertexTexture,
+    pub indices: Vec<u32>,
+    pub materials: MaterialLayers,
+    /// Bounds over the sampled frames of every clip, in scene units, model-local.
+    pub bounds: Bounds,
+    pub animation_space: AnimationSpaceMesh,
+    /// Some material has cut-out alpha (foliage): drawn two-sided and alpha-tested.
+    pub alpha_tested: bool,
+    /// A spectral cloud's spectra texture (the vertices that read it have their rows in
+    /// `animation_space.spectral_rows`).
+    pub spectra: Option<SpectraTexture>,
+    /// A billboard cloud's billboard outlines as a line list over `indices`' vertices (empty
+    /// for everything else): what the viewer's "billboard outlines" draw.
+    pub outlines: Vec<u32>,
+    /// An octahedral impostor's frame: the renderer draws it as one camera-facing quad (see
+    /// [`octahedral`]).
+    pub impostor: Option<octahedral::ImpostorFrame>,
+    /// A character's animated impostor (its last level): the renderer draws it as one quad
+    /// facing the eye, showing the view and frames it stands in (see [`animated`]).
+    pub animated_impostor: Option<animated::AnimatedFrame>,
+    /// A billboard cloud whose billboards are lit through their atlas (a normal per texel,
+    /// [`billboard::atlas`]): drawn with the per-pixel foliage shader.
+    pub atlas_lit: bool,
+}
+
+impl CharacterBake {
+    /// Bytes its textures, meshes and index lists hold on the CPU.
+    pub fn heap_bytes(&self) -> u64 {
+        let am = &self.animation_space;
+        let mesh = std::mem::size_of_val(am.offsets.as_slice())
+            + std::mem::size_of_val(am.influences.as_slice())
+            + std::mem::size_of_val(am.uvs.as_slice())
+            + std::mem::size_of_val(am.materials.as_slice())
+            + std::mem::size_of_val(am.indices.as_slice())
+            + std::mem::size_of_val(am.spectral_rows.as_slice())
+            + std::mem::size_of_val(am.crown_occlusion.as_slice())
+            + std::mem::size_of_val(am.view_windows.as_slice());
+        let textures = self.animation.grid.texels.len() * 16
+            + self.vertices.grid.texels.len() * 16
+            + self.materials.mips.iter().map(Vec::len).sum::<usize>()
+            + self.spectra.as_ref().map_or(0, |s| s.bytes().len());
+        (mesh + textures + 4 * (self.indices.len() + self.outlines.len())) as u64
+    }
+
+    pub fn new(model: &Model) -> Result<Self, String> {
+        Self::with_motion(model, None)
+    }
+
+    /// [`Self::new`] for a level whose billboards also move by `motion` (a spectral cloud).
+    /// A tree (a model with leaves, not billboards) is darkened inside its crown (see
+    /// [`billboard::occlusion`]).
+    pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
+        let billboards = model
+            .materials
+            .iter()
+            .any(|m| m.name == billboard::BILLBOARD_MATERIAL);
+        let crown = (!billboards)
+            .then(|| billboard::occlusion::CrownDensity::of(model))
+            .flatten();
+        let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
+        Self::build(model, motion, true, &occlusion, &[])
+    }
+
+    /// [`Self::with_motion`] for a level of a tree, every vertex darkened by the crown by
+    /// `occlusion` (one per vertex of `model`, see [`billboard::occlusion`]; empty: none), and
+    /// its billboards drawn within their `view_windows` (one per vertex, see
+    /// [`billboard::clumps`]; empty: from every view).
+    pub fn tree_level(
+        model: &Model,
+        motion: Option<&SpectralMotion>,
+        occlusion: &[f32],
+        view_windows: &[f32],
+    ) -> Result<Self, String> {
+        if !view_windows.is_empty() && view_windows.len() != model.mesh.vertex_count() {
+            return Err("view windows do not fit the model's vertices".into());
+        }
+        Self::build(model, motion, true, occlusion, view_windows)
+    }
+
+    /// [`Self::new`] with the vertices in the model's order, not reordered for the GPU's
+    /// caches: for a mesh whose shader finds vertices by index (an impostor's quad).
+    pub fn in_order(model: &Model) -> Result<Self, String> {
+        Self::build(model, None, false, &[], &[])
+    }
+
+    fn build(
+        model: &Model,
+        motion: Option<&SpectralMotion>,
+        optimize: bool,
+        occlusion: &[f32],
+        view_windows: &[f32],
+    ) -> Result<Self, String> {
+        let mut am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
+        if let Some(m) = motion {
+            if m.vertex_rows.len() != am.vertex_count()
+                || m.vertex_rows
+                    .iter()
+                    .any(|&r| r != NO_ROW && r >= m.spectra.rows)
+            {
+                return Err("spectral motion does not fit the model's vertices".into());
+            }
+            am.spectral_rows = m.vertex_rows.clone();
+        }
+        if !occlusion.is_empty() {
+            if occlusion.len() != am.vertex_count() {
+                return Err("crown occlusion does not fit the model's vertices".into());
+            }
+            am.crown_occlusion = occlusion.iter().map(|o| o.clamp(0.0, 1.0)).collect();
+        }
+        if view_windows.iter().any(|&w| w != 0.0) {
+            am.view_windows = view_windows.to_vec();
+        }
+        let am = if optimize { am.optimized_for_gpu() } else { am };
+        let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
+        // A cloud's billboards lit through their atlas point at "layer 0" (see
+        // `vertex_texture`): the lighting is the material layer after the atlas's.
+        let atlas = billboard::atlas::lit_atlas_material(&model.materials);
+        let lit_layers: Vec<Option<u32>> = (0..model.materials.len())
+            .map(|m| (Some(m) == atlas).then_some(0))
+            .collect();
+        let vertices = VertexTexture::pack(
+            &[&am],
+            &[],
+            if atlas.is_some() {
+                std::slice::from_ref(&lit_layers)
+            } else {
+                &[]
+            },
+        )?;
+        let materials = MaterialLayers::bake(&model.materials);
+
+        // Bounds over a few frames of every clip: enough for framing, shadows and culling.
+        let mut points = Vec::new();
+        for (c, clip) in animation.clips.iter().enumerate() {
+            let steps = 8.min(clip.frame_count);
+            for k in 0..steps {
+                let t = clip.duration * k as f32 / steps as f32;
+                let (p, _) = am.evaluate(&animation.sample(c, t));
+                points.extend(p);
+            }
+        }
+        let bounds = Bounds::of(points).ok_or("model has no vertices")?;
+
+        Ok(CharacterBake {
+            name: model.name.clone(),
+            animation,
+            vertices,
+            indices: am.indices.clone(),
+            materials,
+            bounds,
+            alpha_tested: model.materials.iter().any(Material::cuts_out),
+            outlines: model
+                .materials
+                .iter()
+                .position(|m| m.name == billboard::BILLBOARD_MATERIAL)
+                .map_or_else(Vec::new, |b| {
+                    billboard::billboard_outlines(&am.indices, &am.materials, b as u16)
+                }),
+            animation_space: am,
+            spectra: motion.map(|m| m.spectra.clone()),
+            impostor: None,
+            animated_impostor: None,
+            atlas_lit: atlas.is_some(),
+        })
+    }
+
+    /// The CPU reference of the vertex shader's skinning (`skin_vertex` in
+    /// `shaders/skinning.wgsl`): positions and normals at `time` seconds into `clip`, the
+    /// motion scaled by the wind strength `wind`, spectral offsets included:
+    /// `v = Σ G_i (p_i + w_i · Δ(τ))`.
+    pub fn evaluate(&self, clip: usize, time: f32, wind: f32) -> (Vec<Vec3>, Vec<Vec3>) {
+        let g = self.animation.sample_with(clip, time, wind);
+        let am = &self.animation_space;
+        let Some(spectra) = &self.spectra else {
+            return am.evaluate(&g);
+        };
+        let tau = self.animation.loop_time(clip, time);
+        let mut moved = am.clone();
+        for v in 0..am.vertex_count() {
+            let row = am.spectral_rows.get(v).copied().unwrap_or(NO_ROW);
+            if row == NO_ROW {
+                continue;
+            }
+            let d = spectra.offset(row, tau, wind);
+            let (a, b) = (am.offsets[v] as usize, am.offsets[v + 1] as usize);
+            for inf in &mut moved.influences[a..b] {
+                inf.p += (d * inf.p.w).extend(0.0);
+            }
+        }
+        moved.evaluate(&g)
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    pub fn clip_names(&self) -> Vec<String> {
+        self.animation
+            .clips
+            .iter()
+            .map(|c| c.name.clone())
+            .collect()
+    }
+}

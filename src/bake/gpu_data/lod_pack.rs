@@ -1,0 +1,131 @@
+//! A model's levels of detail by one method, packed for the GPU: one vertex texture holding every
+//! level with its geomorph map (see [`super::vertex_texture`]) and one index buffer holding every
+//! level's triangles. The renderer uploads this once; drawing level k is then a range of the index
+//! buffer with k's base vertex, and morphing k towards k+h follows h geomorph hops in the vertex
+//! shader (Merry et al. §6.4, Houle & Poulin §5.1). Switching level, method or tolerance at run
+//! time therefore allocates nothing. A pack may carry normal maps for its coarse levels (see
+//! [`crate::bake::character::normal_map`]), which the vertex texture points each vertex at.
+
+use super::animation_space::AnimationSpaceMesh;
+use super::vertex_texture::VertexTexture;
+use crate::bake::character::lod::LodLevel;
+use crate::bake::character::normal_map::NormalMaps;
+use crate::bake::gpu_data::drawable::CharacterBake;
+
+/// Where one level lives in a [`LodPack`] and what drawing it costs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PackedLevel {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: u32,
+    pub vertices: u32,
+    pub influences: u32,
+    /// The level's error bound in scene units (0 for full detail).
+    pub error: f32,
+    /// Some of its vertices are lit through a normal map.
+    pub normal_mapped: bool,
+}
+
+impl PackedLevel {
+    pub fn triangles(&self) -> u32 {
+        self.index_count / 3
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodPack {
+    pub vertices: VertexTexture,
+    /// Every level's triangles, level after level, indices local to the level.
+    pub indices: Vec<u32>,
+    /// Finest first.
+    pub levels: Vec<PackedLevel>,
+    /// The coarse levels' normal maps, where baked.
+    pub normal_maps: Option<NormalMaps>,
+}
+
+impl LodPack {
+    /// The levels of a bake, each linked to the next by its geomorph map.
+    pub fn from_levels(levels: &[LodLevel]) -> Result<LodPack, String> {
+        let meshes: Vec<&AnimationSpaceMesh> = levels.iter().map(|l| &l.mesh).collect();
+        let maps: Vec<&[u32]> = levels.iter().map(|l| l.geomorph.as_slice()).collect();
+        let vertices = VertexTexture::pack(&meshes, &maps, &[])?;
+        let errors: Vec<f32> = levels.iter().map(|l| l.error).collect();
+        Ok(Self::assemble(vertices, &meshes, &errors, None))
+    }
+
+    /// [`Self::from_levels`] with normal maps `size` texels square for every level but full
+    /// detail, baked against `full` (the full-detail mesh, whose vertices the levels keep)
+    /// posed by `rest_bones`, for a model of `materials` materials.
+    pub fn with_normal_maps(
+        levels: &[LodLevel],
+        full: &AnimationSpaceMesh,
+        rest_bones: &[glam::Affine3A],
+        materials: usize,
+        size: u32,
+    ) -> Result<LodPack, String> {
+        let meshes: Vec<&AnimationSpaceMesh> = levels.iter().map(|l| &l.mesh).collect();
+        let mapped: Vec<Option<&AnimationSpaceMesh>> = levels
+            .iter()
+            .map(|l| (l.prefix > 0).then_some(&l.mesh))
+            .collect();
+        let normal_maps = crate::bake::character::normal_map::bake(
+            full,
+            &mapped,
+            rest_bones,
+            materials.max(1),
+            size,
+        );
+        let maps: Vec<&[u32]> = levels.iter().map(|l| l.geomorph.as_slice()).collect();
+        let vertices = VertexTexture::pack(&meshes, &maps, &normal_maps.layers)?;
+        let errors: Vec<f32> = levels.iter().map(|l| l.error).collect();
+        Ok(Self::assemble(
+            vertices,
+            &meshes,
+            &errors,
+            Some(normal_maps),
+        ))
+    }
+
+    /// The full-detail mesh of a character as a pack of one level (the `none` method).
+    pub fn full_detail(bake: &CharacterBake) -> LodPack {
+        Self::assemble(
+            bake.vertices.clone(),
+            &[&bake.animation_space],
+            &[0.0],
+            None,
+        )
+    }
+
+    fn assemble(
+        vertices: VertexTexture,
+        meshes: &[&AnimationSpaceMesh],
+        errors: &[f32],
+        normal_maps: Option<NormalMaps>,
+    ) -> LodPack {
+        let mut indices = Vec::with_capacity(meshes.iter().map(|m| m.indices.len()).sum());
+        let mut levels = Vec::with_capacity(meshes.len());
+        for (k, m) in meshes.iter().enumerate() {
+            levels.push(PackedLevel {
+                first_index: indices.len() as u32,
+                index_count: m.indices.len() as u32,
+                base_vertex: vertices.base_vertices[k],
+                vertices: m.vertex_count() as u32,
+                influences: m.influences.len() as u32,
+                error: errors[k],
+                normal_mapped: normal_maps.as_ref().is_some_and(|n| n.maps_level(k)),
+            });
+            indices.extend_from_slice(&m.indices);
+        }
+        LodPack {
+            vertices,
+            indices,
+            levels,
+            normal_maps,
+        }
+    }
+
+    /// The error bound of every level, finest first.
+    pub fn errors(&self) -> Vec<f32> {
+        self.levels.iter().map(|l| l.error).collect()
+    }
+}

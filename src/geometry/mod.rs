@@ -1,0 +1,3 @@
+//! Mesh helpers shared by the import and the bake.
+
+pub mod weld;
