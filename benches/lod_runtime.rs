@@ -45,7 +45,7 @@ fn main() -> Result<()> {
     let mut none_ms = 0.0;
     for method in LodMethod::ALL {
         world.lod.method = method;
-        world.ensure_levels(&gpu)?;
+        world.ensure_levels(&gpu, &lodlab::measure::GpuMeasurer)?;
         world.lod.reset();
         world.settle(HEIGHT, TIME, 0.0);
         let stats = world.upload(&gpu, WIDTH as f32 / HEIGHT as f32, TIME);

@@ -18,7 +18,7 @@
 
 @group(1) @binding(0) var anim_tex: texture_2d<f32>;
 @group(1) @binding(1) var vertex_tex: texture_2d<f32>;
-// Spectra texture (src/bake/foliage/spectral/texture.rs): one row per billboard, texel axis·K + j holding
+// Spectra texture (src/bake/gpu_data/spectra.rs): one row per billboard, texel axis·K + j holding
 // line j of that axis as (cycles, amplitude, phase, 0); one empty texel (K = 0) where nothing
 // moves by spectra.
 @group(1) @binding(5) var spectra_tex: texture_2d<f32>;

@@ -22,6 +22,7 @@ pub mod error;
 pub mod generate;
 pub mod geometry;
 pub mod import;
+pub mod measure;
 pub mod model;
 pub mod render;
 pub mod runtime;

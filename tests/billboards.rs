@@ -217,7 +217,7 @@ fn foliage_that_the_method_does_not_expect() {
 #[test]
 fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
     use lodlab::bake::foliage::billboard::chain::{CloudKind, CloudLevel, cloud_level};
-    use lodlab::runtime::colour_error::colour_error;
+    use lodlab::measure::colour_error::colour_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     for name in ["broadleaf", "conifer"] {
         let tree = load_model(name).unwrap();
@@ -342,7 +342,7 @@ fn the_chain_falls_to_a_handful_of_billboards() {
     }
     for l in &chain[1..] {
         let materials = &l.cloud.model.materials;
-        let a = lodlab::bake::foliage::billboard::atlas::lit_atlas_material(materials).unwrap();
+        let a = lodlab::bake::gpu_data::materials::lit_atlas_material(materials).unwrap();
         let atlas = materials[a].texture.as_ref().unwrap();
         let lighting = materials[a + 1].texture.as_ref().unwrap();
         assert!(atlas.width <= 2048 && atlas.height <= 2048);
@@ -575,7 +575,7 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     let load_with = |tree: &lodlab::model::Model, hash: &[u8; 32], opts: &ChainOptions| {
         load_or_build_chain(
             &AtlasRasterizer::new(&gpu),
-            &lodlab::runtime::colour_error::GpuColourError::new(&gpu),
+            &lodlab::measure::colour_error::GpuColourError::new(&gpu),
             &cache,
             tree,
             hash,
@@ -721,7 +721,7 @@ fn billboard_outlines_are_the_four_sides_of_every_billboard() {
 fn an_impostor_shows_the_tree_it_was_baked_from() {
     use lodlab::bake::foliage::billboard::chain::CloudLevel;
     use lodlab::bake::impostor::octahedral::{ViewGrid, bake_impostor};
-    use lodlab::runtime::colour_error::whole_tree_error;
+    use lodlab::measure::colour_error::whole_tree_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("sapling").unwrap();
     let grid = ViewGrid {
@@ -802,7 +802,7 @@ fn an_impostor_shows_the_tree_it_was_baked_from() {
 fn an_impostor_stands_where_its_tree_is_drawn() {
     use lodlab::bake::foliage::billboard::chain::CloudLevel;
     use lodlab::bake::impostor::octahedral::{ViewGrid, bake_impostor};
-    use lodlab::runtime::colour_error::whole_tree_error;
+    use lodlab::measure::colour_error::whole_tree_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let tree = load_model("conifer").unwrap();
     let grid = ViewGrid {
@@ -826,11 +826,11 @@ fn an_impostor_stands_where_its_tree_is_drawn() {
 /// lit by its planes, under the scene's sun and under a low sun from the other side.
 #[test]
 fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
-    use lodlab::bake::foliage::billboard::atlas::{BILLBOARD_LIGHTING, lit_atlas_material};
     use lodlab::bake::foliage::billboard::chain::{CloudKind, cloud_level};
     use lodlab::bake::foliage::billboard::occlusion::CrownDensity;
     use lodlab::bake::gpu_data::drawable::CharacterBake;
-    use lodlab::runtime::foliage_lighting::foliage_lighting;
+    use lodlab::bake::gpu_data::materials::{BILLBOARD_LIGHTING, lit_atlas_material};
+    use lodlab::measure::foliage_lighting::foliage_lighting;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     // Every other leaf wound the other way, its normal kept: files put normals and winding
     // each their own way, and the renderer lights a back face by the negated normal.
@@ -945,7 +945,7 @@ fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
 #[test]
 fn clumps_drawn_by_view_cover_the_tree_better_than_all_their_planes_or_a_cloud() {
     use lodlab::bake::foliage::billboard::chain::{CloudKind, cloud_level};
-    use lodlab::runtime::colour_error::colour_error;
+    use lodlab::measure::colour_error::colour_error;
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let raster = AtlasRasterizer::new(&gpu);
     let tree = load_model("sapling").unwrap();

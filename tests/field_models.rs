@@ -496,7 +496,7 @@ fn clips_come_from_another_file_by_joint_name() {
 }
 
 /// The levels of `model` by `method` with their colour errors (see
-/// `lodlab::runtime::shading_error`) where the renderer switches to each at `tolerance` px,
+/// `lodlab::measure::shading_error`) where the renderer switches to each at `tolerance` px,
 /// no larger than `largest` px.
 fn shading_at_switch(
     model: &Model,
@@ -504,7 +504,7 @@ fn shading_at_switch(
     tolerance: f32,
     largest: f32,
     levels: std::ops::Range<usize>,
-) -> Vec<lodlab::runtime::shading_error::LevelShading> {
+) -> Vec<lodlab::measure::shading_error::LevelShading> {
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe will do)");
     let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(model).unwrap();
     let opts = lodlab::runtime::levels::runtime_options(model);
@@ -519,7 +519,7 @@ fn shading_at_switch(
             )
         })
         .collect();
-    lodlab::runtime::shading_error::shading_errors_at(&gpu, model, &full, &lods.levels, &at)
+    lodlab::measure::shading_error::shading_errors_at(&gpu, model, &full, &lods.levels, &at)
         .unwrap()
 }
 
@@ -534,7 +534,7 @@ fn influence_simplification_keeps_a_faceted_models_shading() {
         let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(&model).unwrap();
         let opts = lodlab::runtime::levels::runtime_options(&model);
         let lods = bake_lods(&model, method, &opts, &|_| {});
-        lodlab::runtime::shading_error::shading_errors(
+        lodlab::measure::shading_error::shading_errors(
             &gpu,
             &model,
             &full,

@@ -9,11 +9,12 @@ use lodlab::bake::gpu_data::drawable::CharacterBake;
 use lodlab::bake::impostor::animated::{
     AnimatedImpostor, ImpostorOptions, bake_animated_impostor, sheet_layout,
 };
+use lodlab::bake::impostor::placement::Placement;
 use lodlab::import::load_model;
+use lodlab::measure::impostor_fit::impostor_error;
 use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-use lodlab::runtime::impostor_placement::{Placement, impostor_error};
 use lodlab::runtime::levels::{ImpostorLevel, Levels};
 use lodlab::runtime::spec::{Loaded, SceneSpec};
 use lodlab::runtime::world::World;
@@ -141,7 +142,9 @@ fn far_characters_become_their_impostors() {
     };
     let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();
     world.lod.method = LodMethod::AS_IS;
-    world.ensure_levels(gpu).unwrap();
+    world
+        .ensure_levels(gpu, &lodlab::measure::GpuMeasurer)
+        .unwrap();
     assert!(world.impostors()[0].is_none(), "the spec asked for none");
     // Far enough that most walkers sit at the coarsest mesh.
     world.camera =
@@ -242,6 +245,7 @@ fn the_background_bake_hands_over_levels_then_the_impostor() {
             Method::InfluenceSimplification,
             Default::default(),
             cache.clone(),
+            &lodlab::measure::GpuMeasurer,
         );
         let mut kinds = Vec::new();
         let mut statuses = std::collections::BTreeSet::new();

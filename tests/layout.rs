@@ -1,14 +1,15 @@
 //! The crate's layout follows its data flow: import (glTF, generators) → bake (plain CPU code)
-//! → scene → render (wgpu) → runtime (worlds, level installation) → app (front ends). A module
-//! may use its own layer and those before it, never one after: no import cycles between
-//! layers, and the bake never reaches the GPU except through the traits render implements.
-//! Test modules (`#[cfg(test)]`, at the end of a file) may use anything.
+//! → scene → render (wgpu) → runtime (worlds, level installation) → measure (measurements that
+//! draw worlds) → app (front ends). A module may use its own layer and those before it, never
+//! one after: no import cycles between layers, none between the files of a layer either, and
+//! the bake never reaches the GPU except through the traits of `bake::seams`, which render and
+//! measure implement. Test modules (`#[cfg(test)]`, at the end of a file) may use anything.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Layers in data-flow order; a module may use modules of its own rank or lower.
-const RANKS: [(&str, u32); 15] = [
+const RANKS: [(&str, u32); 17] = [
     ("model", 0),
     ("atomic", 0),
     ("choice", 0),
@@ -17,6 +18,7 @@ const RANKS: [(&str, u32); 15] = [
     ("named_serde", 0),
     ("error", 0),
     ("anim", 1),
+    ("geometry", 1),
     ("generate", 2),
     ("assets", 3),
     ("import", 4),
@@ -24,7 +26,8 @@ const RANKS: [(&str, u32); 15] = [
     ("scene", 6),
     ("render", 7),
     ("runtime", 8),
-    ("app", 9),
+    ("measure", 9),
+    ("app", 10),
 ];
 
 fn rank(module: &str) -> Option<u32> {
@@ -133,6 +136,181 @@ fn the_bake_never_names_the_gpu() {
             );
         }
     }
+}
+
+/// The module path of a file of `src/` (`["bake", "character", "lod"]` for
+/// `src/bake/character/lod.rs`; a `mod.rs` is its folder's module).
+fn module_path(src: &Path, file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src).unwrap().with_extension("");
+    let mut path: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if path.last().is_some_and(|l| l == "mod") {
+        path.pop();
+    }
+    path
+}
+
+/// The file that holds the longest prefix of module path `segments` that is a file of `src/`.
+fn file_of(src: &Path, segments: &[String]) -> Option<PathBuf> {
+    let mut found = None;
+    let mut dir = src.to_path_buf();
+    for s in segments {
+        let (file, module) = (dir.join(format!("{s}.rs")), dir.join(s).join("mod.rs"));
+        if file.is_file() {
+            found = Some(file);
+        } else if module.is_file() {
+            found = Some(module);
+        } else {
+            break;
+        }
+        dir = dir.join(s);
+    }
+    found
+}
+
+/// The files of `src/` a file's non-test code names: through `crate::`, `super::`, `self::`
+/// or a child module's name. A module's declarations and re-exports of its own children
+/// (`pub mod x;`, `pub use x::Y;`) are not uses: they are how Rust spells a folder.
+fn file_uses(src: &Path, file: &Path) -> Vec<PathBuf> {
+    let text = std::fs::read_to_string(file).unwrap();
+    let code = text.split("#[cfg(test)]").next().unwrap_or("");
+    let own = module_path(src, file);
+    let children: Vec<String> = code
+        .lines()
+        .filter_map(|l| {
+            let l = l.trim();
+            let rest = l
+                .strip_prefix("pub mod ")
+                .or_else(|| l.strip_prefix("mod "))?;
+            Some(rest.trim_end_matches(';').to_string())
+        })
+        .collect();
+    let mut out = Vec::new();
+    for line in code.lines() {
+        let line = line.split("//").next().unwrap_or("");
+        let trimmed = line.trim_start();
+        let declares = ["pub mod ", "mod ", "pub use ", "pub(crate) use "]
+            .iter()
+            .any(|p| trimmed.starts_with(p));
+        let words: Vec<&str> = line
+            .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == ':'))
+            .filter(|w| w.contains("::"))
+            .collect();
+        for word in words {
+            let parts: Vec<&str> = word.split("::").filter(|p| !p.is_empty()).collect();
+            let Some(&first) = parts.first() else {
+                continue;
+            };
+            let mut path: Vec<String> = match first {
+                "crate" => Vec::new(),
+                "super" | "self" => own.clone(),
+                w if children.iter().any(|c| c == w) => own.clone(),
+                _ => continue,
+            };
+            let mut rest = &parts[..];
+            if first == "crate" {
+                rest = &parts[1..];
+            }
+            while let Some((&p, tail)) = rest.split_first() {
+                match p {
+                    "super" => {
+                        path.pop();
+                    }
+                    "self" => {}
+                    _ => break,
+                }
+                rest = tail;
+            }
+            path.extend(rest.iter().map(|s| s.to_string()));
+            let Some(target) = file_of(src, &path) else {
+                continue;
+            };
+            if target == file {
+                continue;
+            }
+            let within = module_path(src, &target).starts_with(&own);
+            if declares && within {
+                continue;
+            }
+            out.push(target);
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// No two files of the crate use each other, however indirectly: each file can be read
+/// knowing only the files it uses, and the layers' order holds inside a layer too.
+#[test]
+fn no_file_imports_round_a_circle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let uses: BTreeMap<PathBuf, Vec<PathBuf>> = files
+        .iter()
+        .filter(|f| {
+            let name = f.strip_prefix(&src).unwrap();
+            name != Path::new("lib.rs") && name != Path::new("main.rs")
+        })
+        .map(|f| (f.clone(), file_uses(&src, f)))
+        .collect();
+    let edges: usize = uses.values().map(Vec::len).sum();
+    assert!(edges > 300, "only {edges} uses between files found");
+    // A depth-first search from every file: a file met again on the current path closes a
+    // circle.
+    let show = |p: &Path| p.strip_prefix(&src).unwrap().display().to_string();
+    let mut circles = Vec::new();
+    let mut done = std::collections::BTreeSet::new();
+    for start in uses.keys() {
+        let mut path: Vec<(PathBuf, usize)> = vec![(start.clone(), 0)];
+        while let Some((file, next)) = path.last().cloned() {
+            let targets = &uses[&file];
+            if next >= targets.len() || done.contains(&file) {
+                done.insert(file);
+                path.pop();
+                continue;
+            }
+            path.last_mut().unwrap().1 += 1;
+            let target = &targets[next];
+            if let Some(at) = path.iter().position(|(f, _)| f == target) {
+                let circle: Vec<String> = path[at..].iter().map(|(f, _)| show(f)).collect();
+                circles.push(format!("{} -> {}", circle.join(" -> "), show(target)));
+            } else if uses.contains_key(target) && !done.contains(target) {
+                path.push((target.clone(), 0));
+            }
+        }
+    }
+    circles.sort();
+    circles.dedup();
+    assert!(
+        circles.is_empty(),
+        "import circles:\n{}",
+        circles.join("\n")
+    );
+}
+
+/// The circle finder sees the circles it is there for: two files that use each other.
+#[test]
+fn file_uses_resolve_crate_super_and_child_paths() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lod = src.join("bake/character/lod.rs");
+    let used = file_uses(&src, &lod);
+    for f in [
+        "bake/character/simplify/mod.rs",
+        "bake/gpu_data/animation_space.rs",
+    ] {
+        assert!(used.contains(&src.join(f)), "{f} not among {used:?}");
+    }
+    // A module's own declarations of its children are not uses.
+    let bake = file_uses(&src, &src.join("bake/mod.rs"));
+    assert!(
+        !bake.contains(&src.join("bake/character/mod.rs")),
+        "{bake:?}"
+    );
 }
 
 /// The packages of the first `apt-get install` in `text` (continuation lines joined), the

@@ -56,7 +56,9 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
     .unwrap();
     let method = LodMethod::AS_IS;
     world.lod.method = method;
-    world.ensure_levels(&gpu).unwrap();
+    world
+        .ensure_levels(&gpu, &lodlab::measure::GpuMeasurer)
+        .unwrap();
     let (w, h) = (240u32, 240u32);
     let target = Offscreen::new(&gpu, w, h, samples);
     let mut instances: Vec<Instance> = Vec::new();
@@ -183,7 +185,9 @@ fn a_thousand_instances_take_a_handful_of_draws() {
     )
     .unwrap();
     world.lod.method = LodMethod::AS_IS;
-    world.ensure_levels(&gpu).unwrap();
+    world
+        .ensure_levels(&gpu, &lodlab::measure::GpuMeasurer)
+        .unwrap();
     // From high above, with the whole crowd in view (nothing culled).
     world.camera =
         lodlab::scene::Camera::new(glam::Vec3::ZERO, 20.0, 55.0, world.crowd.radius * 2.6);

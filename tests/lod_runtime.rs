@@ -178,7 +178,15 @@ fn background_bakes_finish_and_fill_the_cache() {
     let bake = |sources: Vec<LevelSource>, skip: Vec<bool>| {
         let method = Method::AnimationSpace;
         let chain = Default::default();
-        BackgroundBake::start(gpu.clone(), sources, skip, method, chain, cache.clone())
+        BackgroundBake::start(
+            gpu.clone(),
+            sources,
+            skip,
+            method,
+            chain,
+            cache.clone(),
+            &lodlab::measure::GpuMeasurer,
+        )
     };
     let (packs, fraction, status) = wait(bake(sources.clone(), vec![false, false]));
     assert_eq!(fraction, 1.0);
@@ -287,7 +295,9 @@ fn levels_count_as_cached_once_baked() {
     };
     let mut first = world(LodMethod::AS_IS);
     assert!(!first.levels_cached(), "an empty cache holds nothing");
-    first.ensure_levels(&gpu).unwrap();
+    first
+        .ensure_levels(&gpu, &lodlab::measure::GpuMeasurer)
+        .unwrap();
     assert!(world(LodMethod::AS_IS).levels_cached());
     assert!(
         world(LodMethod::None).levels_cached(),

@@ -10,11 +10,11 @@ use lodlab::bake::character::simplify::{Method, SimplifyInput};
 use lodlab::bake::gpu_data::drawable::CharacterBake;
 use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::import::load_model;
+use lodlab::measure::shading_error::shading_errors;
 use lodlab::model::Model;
 use lodlab::render::Gpu;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::runtime::levels::runtime_options;
-use lodlab::runtime::shading_error::shading_errors;
 use lodlab::runtime::spec::{Loaded, SceneSpec};
 use lodlab::runtime::world::World;
 use lodlab::scene::LodMethod;
@@ -110,7 +110,9 @@ fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
     };
     let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();
     world.lod.method = LodMethod::AS_IS;
-    world.ensure_levels(gpu).unwrap();
+    world
+        .ensure_levels(gpu, &lodlab::measure::GpuMeasurer)
+        .unwrap();
     let info = world
         .normal_maps(0, LodMethod::AS_IS.index())
         .expect("the levels came with maps");

@@ -6,8 +6,8 @@ use lodlab::bake::foliage::billboard::chain::{CloudKind, CloudLevel, cloud_level
 use lodlab::bake::foliage::billboard::cloud::CloudParams;
 use lodlab::bake::foliage::billboard::{foliage, tree_height};
 use lodlab::bake::foliage::spectral::cloud::SpectralParams;
-use lodlab::bake::foliage::spectral::texture::NO_ROW;
 use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::spectra::NO_ROW;
 use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
 use lodlab::render::capture::capture_skinned_in_wind;

@@ -707,7 +707,9 @@ fn the_foliage_policy_decides_what_trees_become() {
     let target = Offscreen::new(&gpu, w, h, 1);
     let shoot = |world: &mut World, foliage: &FoliageView| {
         world.apply_foliage(foliage);
-        world.ensure_levels(&gpu).unwrap();
+        world
+            .ensure_levels(&gpu, &lodlab::measure::GpuMeasurer)
+            .unwrap();
         let stats = world.prepare(&gpu, [w, h], 1.0, 0.0);
         world
             .renderer

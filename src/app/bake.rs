@@ -161,7 +161,7 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
                     let opts = crate::bake::foliage::billboard::chain::ChainOptions::default();
                     let (levels, origin) = crate::bake::foliage::billboard::chain::load_or_build_chain(
                         &AtlasRasterizer::new(gpu),
-                        &crate::runtime::colour_error::GpuColourError::new(gpu),
+                        &crate::measure::colour_error::GpuColourError::new(gpu),
                         &cache,
                         model,
                         hash,

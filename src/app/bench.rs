@@ -229,7 +229,13 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     if !(o.seconds.is_finite() && o.seconds > 0.0 && o.warmup.is_finite() && o.warmup >= 0.0) {
         bail!("--seconds must be positive and --warmup not negative");
     }
-    let mut scene = Headless::new(&o.spec, o.width, o.height, o.samples)?;
+    let mut scene = Headless::new(
+        &o.spec,
+        o.width,
+        o.height,
+        o.samples,
+        &crate::measure::GpuMeasurer,
+    )?;
     for &method in &o.methods {
         scene.show(&ShotLod {
             method,
@@ -244,6 +250,7 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
         target,
         world,
         samples: msaa,
+        ..
     } = scene;
     let home = world.camera;
     let path = CameraPath::new(o.path, &home, o.path_seconds);

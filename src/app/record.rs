@@ -104,7 +104,13 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
     if let Some(dir) = &o.frames_dir {
         prepare_frames_dir(dir)?;
     }
-    let mut scene = Headless::new(&o.spec, o.width, o.height, Some(o.samples))?;
+    let mut scene = Headless::new(
+        &o.spec,
+        o.width,
+        o.height,
+        Some(o.samples),
+        &crate::measure::GpuMeasurer,
+    )?;
     scene.show(lod)?;
     let Headless {
         gpu,

@@ -4,7 +4,7 @@
 //! baseline a user would otherwise reach for.
 //!
 //! Each level's lighting is measured too: its colour error against full detail lit by its own
-//! vertex normals and through its normal map ([`crate::runtime::shading_error`]).
+//! vertex normals and through its normal map ([`crate::measure::shading_error`]).
 //!
 //! The curves measure through the texture where the model's texture coordinates are a
 //! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
@@ -61,7 +61,7 @@ pub struct MethodReport {
     /// Every level but full detail's colour error against full detail, lit by its vertex
     /// normals and through its normal map, [`SHADING_PX`] high (empty for the meshopt
     /// baseline, or where no GPU adapter could draw them).
-    pub shading: Vec<crate::runtime::shading_error::LevelShading>,
+    pub shading: Vec<crate::measure::shading_error::LevelShading>,
 }
 
 /// The character's height on screen, pixels, at which every level's lighting is compared with
@@ -220,7 +220,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         let shading = match &gpu {
             Some(gpu) => {
                 let which: Vec<usize> = (1..lods.levels.len()).collect();
-                crate::runtime::shading_error::shading_errors(
+                crate::measure::shading_error::shading_errors(
                     gpu,
                     &model,
                     &full,
@@ -546,7 +546,7 @@ fn local_band(sorted: &[(f64, f64)], median: f64, x: f64) -> f64 {
 pub const VISIBLE_COLOUR: f64 = 1e-3;
 
 /// The total influences of the level a lighting row measures.
-fn influences_of(m: &MethodReport, s: &crate::runtime::shading_error::LevelShading) -> Option<f64> {
+fn influences_of(m: &MethodReport, s: &crate::measure::shading_error::LevelShading) -> Option<f64> {
     Some(m.levels.get(s.level)?.influences as f64)
 }
 
@@ -954,9 +954,9 @@ fn shading_markdown(report: &Report) -> String {
          largest (of those full detail mostly covers): where a mean hides a streak. Recoloured: \
          the share of the pixels both cover that show a colour full detail shows nowhere within \
          the level's error of them (a part's colour bleeding onto another's).\n",
-        crate::runtime::colour_error::METRIC_VIEWS,
-        crate::runtime::colour_error::METRIC_FRAMES,
-        crate::runtime::shading_error::TILE,
+        crate::measure::colour_error::METRIC_VIEWS,
+        crate::measure::colour_error::METRIC_FRAMES,
+        crate::measure::shading_error::TILE,
     );
     let measured: Vec<_> = report
         .methods
@@ -1100,7 +1100,7 @@ mod tests {
             silhouette_resolution_px: Vec::new(),
         };
         let shading = |(k, &(triangles, e)): (usize, &(u32, f32))| {
-            crate::runtime::shading_error::LevelShading {
+            crate::measure::shading_error::LevelShading {
                 level: k,
                 triangles: triangles as usize,
                 px: SHADING_PX,

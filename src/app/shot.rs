@@ -99,12 +99,14 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         target,
         mut world,
         samples,
+        ..
     } = {
         let mut h = Headless::new(
             &options.spec,
             options.width,
             options.height,
             options.samples,
+            &crate::measure::GpuMeasurer,
         )?;
         if let Some(c) = options.camera {
             h.world.camera = c;

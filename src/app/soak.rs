@@ -136,7 +136,13 @@ pub fn run(o: &SoakOptions) -> Result<SoakReport> {
         None => None,
     };
     let started = Instant::now();
-    let mut h = Headless::new(&o.spec, o.width, o.height, o.samples)?;
+    let mut h = Headless::new(
+        &o.spec,
+        o.width,
+        o.height,
+        o.samples,
+        &crate::measure::GpuMeasurer,
+    )?;
     let mut lod = ShotLod {
         settle_seconds: 0.0,
         ..ShotLod::default()

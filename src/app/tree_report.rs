@@ -22,9 +22,9 @@ use crate::bake::foliage::billboard::cloud::CloudParams;
 use crate::bake::foliage::billboard::{Foliage, Grouping, foliage, tree_height};
 use crate::bake::foliage::spectral::cloud::SpectralParams;
 use crate::bake::foliage::spectral::description::DescriptionType;
+use crate::measure::colour_error::{at_switch, colour_error, colour_error_over};
 use crate::model::Model;
 use crate::render::Gpu;
-use crate::runtime::colour_error::{at_switch, colour_error, colour_error_over};
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use serde::Serialize;
@@ -54,7 +54,7 @@ pub struct LevelReport {
     /// The colour error with the tree drawn that high (0 for the full tree).
     pub colour_error_at_switch: f32,
     /// The colour error at the metric's size, seen from as far off as where the level comes
-    /// in (0 for the full tree; see [`crate::runtime::colour_error::SwitchErrors`]).
+    /// in (0 for the full tree; see [`crate::measure::colour_error::SwitchErrors`]).
     pub colour_error_from_switch: f32,
     /// Mean RMS distance over the loop between a leaf and its projection on its billboard,
     /// in tree heights (see [`crate::bake::foliage::spectral::metrics`]).
@@ -111,7 +111,7 @@ pub struct TreeReport {
     pub against_thesis: Vec<ThesisRow>,
     /// Each cloud level's lighting against the full tree's under two suns, billboards lit
     /// by their planes and through their atlases, the tree [`LIGHTING_PX`] pixels high.
-    pub lighting: Vec<crate::runtime::foliage_lighting::LevelLighting>,
+    pub lighting: Vec<crate::measure::foliage_lighting::LevelLighting>,
 }
 
 /// How high the lighting comparison draws the tree, pixels.
@@ -178,7 +178,7 @@ pub fn at_billboards(points: &[(usize, f32)], billboards: f32) -> Option<f32> {
 pub fn thesis_table(report: &TreeReport) -> String {
     use std::fmt::Write as _;
     let cell = |e: Option<f32>| e.map_or("not reached".into(), |e| format!("{e:.3}"));
-    let framing = crate::runtime::colour_error::FRAMING;
+    let framing = crate::measure::colour_error::FRAMING;
     let mut out = format!(
         "{}: colour error against the thesis (§8.4.1: its 692-quad tree, one static cloud, \
          800×600). This tree's errors are read off its levels at the thesis's billboard counts: \
@@ -271,7 +271,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         .map(|(k, l)| (k, &l.cloud))
         .collect();
     let lighting =
-        crate::runtime::foliage_lighting::foliage_lighting(&gpu, tree, &clouds, LIGHTING_PX)?;
+        crate::measure::foliage_lighting::foliage_lighting(&gpu, tree, &clouds, LIGHTING_PX)?;
     let points = |f: &dyn Fn(&LevelReport) -> f32| -> Vec<(usize, f32)> {
         levels[1..]
             .iter()
@@ -315,8 +315,8 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             "binary coverage masks at {}x{}, {} views round the tree at ground level, {} times over the loop; share of the full tree's covered pixels that differ",
             METRIC_SIZE[0],
             METRIC_SIZE[1],
-            crate::runtime::colour_error::METRIC_VIEWS,
-            crate::runtime::colour_error::METRIC_FRAMES
+            crate::measure::colour_error::METRIC_VIEWS,
+            crate::measure::colour_error::METRIC_FRAMES
         ),
         static_clouds,
         skeleton_levels,

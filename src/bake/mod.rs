@@ -20,3 +20,4 @@ pub mod character;
 pub mod foliage;
 pub mod gpu_data;
 pub mod impostor;
+pub mod seams;

@@ -213,7 +213,7 @@ fn unpacked(
     if !(mentions(b"EXT_meshopt_compression") || mentions(b"KHR_mesh_quantization")) {
         return Ok(None);
     }
-    let Ok((json, _)) = super::gltfpack::split(bytes) else {
+    let Ok((json, _)) = super::container::split(bytes) else {
         // Not glTF at all: the gltf crate says what is wrong with it.
         return Ok(None);
     };

@@ -1,5 +1,6 @@
 //! Import: turning glTF files into [`crate::model::Model`]s.
 
+pub mod container;
 pub mod gltf;
 pub mod gltfpack;
 pub mod palette;

@@ -566,7 +566,7 @@ pub fn without_untargeted_channels(bytes: &[u8]) -> Option<Vec<u8>> {
     {
         return None;
     }
-    let (mut json, bin) = super::gltfpack::split(bytes).ok()?;
+    let (mut json, bin) = super::container::split(bytes).ok()?;
     let mut dropped = 0;
     for anim in json.get_mut("animations")?.as_array_mut()? {
         if let Some(channels) = anim.get_mut("channels").and_then(|c| c.as_array_mut()) {
@@ -580,7 +580,7 @@ pub fn without_untargeted_channels(bytes: &[u8]) -> Option<Vec<u8>> {
     }
     log::info!("{dropped} animation channel(s) without a target node ignored");
     if bytes.starts_with(b"glTF") {
-        super::gltfpack::glb_of(&json, bin).ok()
+        super::container::glb_of(&json, bin).ok()
     } else {
         serde_json::to_vec(&json).ok()
     }

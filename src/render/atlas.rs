@@ -8,11 +8,11 @@
 use super::gpu::Gpu;
 use super::shaders;
 use super::targets::read_texture;
-use crate::bake::foliage::billboard::atlas::{
-    AtlasImages, AtlasLayout, AtlasVertex, RasterizeAtlas,
-};
 use crate::bake::gpu_data::materials::MaterialLayers;
-use crate::bake::impostor::octahedral::{ViewCamera, ViewImages, ViewRequest, ViewVertex};
+use crate::bake::seams::{
+    AtlasImages, AtlasLayout, AtlasVertex, RasterizeAtlas, ViewCamera, ViewImages, ViewRequest,
+    ViewVertex,
+};
 use crate::model::Rgba8Image;
 use anyhow::Result;
 use wgpu::util::DeviceExt;

@@ -166,13 +166,14 @@ impl GpuInstance {
     }
 }
 
-/// Vertex layout of [`crate::bake::gpu_data::drawable::StaticVertex`] for the plain calibration shader.
+/// Vertex layout of [`crate::bake::gpu_data::vertex_texture::StaticVertex`] for the plain calibration shader.
 pub const STATIC_VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
     wgpu::vertex_attr_array![7 => Float32x3, 8 => Float32x3, 9 => Float32x2];
 
 pub fn static_vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<crate::bake::gpu_data::drawable::StaticVertex>() as u64,
+        array_stride: std::mem::size_of::<crate::bake::gpu_data::vertex_texture::StaticVertex>()
+            as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &STATIC_VERTEX_ATTRIBUTES,
     }

@@ -2,6 +2,7 @@
 //! level-of-detail choices a front end makes, and frame timing. `shot`, `bench`, `record`, the
 //! study and the tests all drive worlds through it.
 
+use super::levels::Measurer;
 use super::spec::{Loaded, SceneSpec};
 use super::world::World;
 use crate::render::targets::Offscreen;
@@ -50,17 +51,20 @@ pub struct Headless {
     pub world: World,
     /// Samples per pixel, as asked or chosen for the adapter (see [`Gpu::samples`]).
     pub samples: u32,
+    /// What a bake of levels measures (see [`Measurer`]).
+    measure: &'static dyn Measurer,
 }
 
 impl Headless {
     /// Loads the models of `spec` (bad input fails here, before any GPU work), opens a device
     /// and builds the world into a `width`×`height` target, with `samples` per pixel (`None`:
-    /// the adapter's default, see [`Gpu::samples`]).
+    /// the adapter's default, see [`Gpu::samples`]); a bake of levels measures through `measure`.
     pub fn new(
         spec: &SceneSpec,
         width: u32,
         height: u32,
         samples: Option<u32>,
+        measure: &'static dyn Measurer,
     ) -> Result<Headless> {
         let loaded = Loaded::new(spec.clone())?;
         let gpu = Gpu::headless()?;
@@ -78,6 +82,7 @@ impl Headless {
             target,
             world,
             samples,
+            measure,
         })
     }
 
@@ -97,7 +102,7 @@ impl Headless {
                 "--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)"
             );
         }
-        world.ensure_levels(&self.gpu)
+        world.ensure_levels(&self.gpu, self.measure)
     }
 }
 

@@ -3,8 +3,8 @@
 //! (the panel shows the progress). Characters get progressive-mesh levels by a method; trees
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
-use super::impostor_placement::{Placement, place_impostor};
 use crate::bake::cache::{LodCache, Origin};
+use crate::bake::character::lod::LodLevel;
 use crate::bake::character::lod::SkinnedLods;
 use crate::bake::character::simplify::Method;
 use crate::bake::foliage::billboard::chain::{ChainOptions, chain_file, load_or_build_chain};
@@ -12,6 +12,8 @@ use crate::bake::foliage::billboard::is_tree;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::gpu_data::lod_pack::LodPack;
 use crate::bake::impostor::animated::{AnimatedImpostor, ImpostorOptions, load_or_bake_impostor};
+use crate::bake::impostor::placement::{self, Placement};
+use crate::bake::seams::{MeasureColour, MeasureImpostor};
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::atlas::AtlasRasterizer;
@@ -19,6 +21,25 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
+
+/// The measurements a bake of levels draws on the GPU: a tree chain's colour errors and a
+/// character impostor's fit beside its levels. The `measure` layer makes them (its
+/// `GpuMeasurer`); the front end hands them in.
+pub trait Measurer: Sync {
+    /// The colour seam of a tree chain's bake, drawing on `gpu`.
+    fn colour<'g>(&self, gpu: &'g Gpu) -> Box<dyn MeasureColour + 'g>;
+
+    /// What placing `impostor` among `levels` (finest first) of `model` measures; `full` is
+    /// the model's full-detail bake.
+    fn impostor<'a>(
+        &self,
+        gpu: &'a Gpu,
+        model: &'a Model,
+        full: &'a CharacterBake,
+        levels: &'a [LodLevel],
+        impostor: &'a AnimatedImpostor,
+    ) -> anyhow::Result<Box<dyn MeasureImpostor + 'a>>;
+}
 
 /// A model as loaded, kept for baking its levels later.
 #[derive(Clone, Debug)]
@@ -97,6 +118,7 @@ pub type Baked = Option<Result<Levels, String>>;
 #[allow(clippy::too_many_arguments)]
 pub fn bake_all(
     gpu: &Gpu,
+    measure: &dyn Measurer,
     sources: &[LevelSource],
     skip: &[bool],
     method: Method,
@@ -121,7 +143,7 @@ pub fn bake_all(
         }
     };
     bake_each(
-        gpu, sources, skip, method, chain, cache, progress, warn, &deliver,
+        gpu, measure, sources, skip, method, chain, cache, progress, warn, &deliver,
     );
     done.into_inner().unwrap_or_default()
 }
@@ -135,6 +157,7 @@ pub fn bake_all(
 #[allow(clippy::too_many_arguments)]
 pub fn bake_each(
     gpu: &Gpu,
+    measure: &dyn Measurer,
     sources: &[LevelSource],
     skip: &[bool],
     method: Method,
@@ -156,7 +179,7 @@ pub fn bake_each(
             return;
         }
         let (levels, origin) = if is_tree(&s.model) {
-            match tree_levels(gpu, cache, s, chain, &|f| progress(i, f)) {
+            match tree_levels(gpu, measure, cache, s, chain, &|f| progress(i, f)) {
                 Ok((levels, origin)) => (Ok(levels), origin),
                 Err(e) => (Err(format!("{}: {e:#}", s.model.name)), Origin::Cache),
             }
@@ -195,7 +218,7 @@ pub fn bake_each(
     later.par_iter().with_max_len(1).for_each(|(i, lods)| {
         let s = &sources[*i];
         let level = s.impostor.and_then(|options| {
-            impostor_level(gpu, cache, s, lods, &options, warn)
+            impostor_level(gpu, measure, cache, s, lods, &options, warn)
                 .map_err(|e| warn(format!("{}: no impostor: {e:#}", s.model.name)))
                 .ok()
         });
@@ -214,6 +237,7 @@ const PLACEMENT_VERSION: u32 = 4;
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
 fn impostor_level(
     gpu: &Gpu,
+    measure: &dyn Measurer,
     cache: &LodCache,
     s: &LevelSource,
     lods: &SkinnedLods,
@@ -229,7 +253,19 @@ fn impostor_level(
     let place = || -> anyhow::Result<Placement> {
         let start = std::time::Instant::now();
         let full = CharacterBake::new(&s.model).map_err(anyhow::Error::msg)?;
-        let placement = place_impostor(gpu, &s.model, &full, &lods.levels, &impostor, tolerance)?;
+        let errors: Vec<f32> = lods.levels.iter().map(|l| l.error).collect();
+        let height = full.bounds.size().y.max(1e-3);
+        let placement = if errors.len() < 2 {
+            // Full detail alone: nothing for the impostor to stand for (and no worlds to draw).
+            Placement {
+                epsilon: None,
+                tolerance_px: tolerance,
+                measured: Vec::new(),
+            }
+        } else {
+            let mut fit = measure.impostor(gpu, &s.model, &full, &lods.levels, &impostor)?;
+            placement::place(&errors, height, tolerance, 1, &mut *fit)?.0
+        };
         log::debug!(
             "{} {}: impostor placed in {:.2} s; measured {:?}",
             s.model.name,
@@ -307,6 +343,7 @@ pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOp
 /// A tree's chain from the cache or built now, its levels 1… baked for the GPU.
 fn tree_levels(
     gpu: &Gpu,
+    measure: &dyn Measurer,
     cache: &LodCache,
     s: &LevelSource,
     opts: &ChainOptions,
@@ -314,7 +351,7 @@ fn tree_levels(
 ) -> anyhow::Result<(Levels, Origin)> {
     let (chain, origin) = load_or_build_chain(
         &AtlasRasterizer::new(gpu),
-        &super::colour_error::GpuColourError::new(gpu),
+        &*measure.colour(gpu),
         cache,
         &s.model,
         &s.hash,
@@ -387,6 +424,7 @@ impl BackgroundBake {
         method: Method,
         chain: ChainOptions,
         cache: LodCache,
+        measure: &'static dyn Measurer,
     ) -> BackgroundBake {
         let progress: Arc<Vec<AtomicU32>> =
             Arc::new((0..sources.len()).map(|_| AtomicU32::new(0)).collect());
@@ -429,7 +467,7 @@ impl BackgroundBake {
                 }
             };
             bake_each(
-                &gpu, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
+                &gpu, measure, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
             );
         });
         BackgroundBake {

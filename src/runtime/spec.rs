@@ -253,7 +253,7 @@ impl Loaded {
     /// under.
     pub fn forest_of(
         model: &Model,
-        motion: Option<&crate::bake::foliage::spectral::texture::SpectralMotion>,
+        motion: Option<&crate::bake::gpu_data::spectra::SpectralMotion>,
         count: usize,
     ) -> Result<Loaded> {
         let bake = CharacterBake::with_motion(model, motion)

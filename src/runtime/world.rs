@@ -1,7 +1,7 @@
 //! A world: the renderer with the scene's characters and trees, the crowd, the camera, and the
 //! levels of detail installed with their run-time choices.
 
-use super::levels::{Baked, LevelSource, Levels, bake_all};
+use super::levels::{Baked, LevelSource, Levels, Measurer, bake_all};
 use super::spec::{Loaded, SceneSpec, default_camera, layout_crowd};
 use crate::bake::cache::LodCache;
 use crate::bake::character::simplify::Method;
@@ -129,10 +129,10 @@ pub struct LodView {
     impostors: bool,
     /// Per model and method slot: its impostor's placement in that method's chain, where it
     /// has one on the GPU.
-    impostor_errors: Vec<[Option<crate::runtime::impostor_placement::Placement>; 4]>,
+    impostor_errors: Vec<[Option<crate::bake::impostor::placement::Placement>; 4]>,
     /// The tolerance `with_impostors` was worked out for (see [`Placement::epsilon_at`]).
     ///
-    /// [`Placement::epsilon_at`]: crate::runtime::impostor_placement::Placement::epsilon_at
+    /// [`Placement::epsilon_at`]: crate::bake::impostor::placement::Placement::epsilon_at
     impostors_at: f32,
     /// `models` with each character's impostor appended as its last level (see
     /// [`with_impostor`]), for the simplified methods.
@@ -547,7 +547,7 @@ impl World {
 
     /// Bakes (or reads from the cache) and uploads the levels of every method the view shows
     /// that is not there yet, and the trees' chains as wanted, waiting for them.
-    pub fn ensure_levels(&mut self, gpu: &Gpu) -> Result<()> {
+    pub fn ensure_levels(&mut self, gpu: &Gpu, measure: &dyn Measurer) -> Result<()> {
         while let Some(m) = self.missing_levels() {
             let warn = |w: String| eprintln!("warning: {w}");
             let skip = self.has_levels(m);
@@ -555,6 +555,7 @@ impl World {
             let cache = self.cache();
             let packs = bake_all(
                 gpu,
+                measure,
                 &self.sources,
                 &skip,
                 m,

@@ -2,8 +2,8 @@
 //! preference could be chance: a two-sided binomial (sign) test against p = ½, as Merry et al.
 //! §6.2 report theirs. Training answers are left out.
 
+use super::plan::{Condition, read_manifest};
 use super::session::{TEST, read_answers};
-use super::{Condition, read_manifest};
 use crate::app::report::{plot_error, register_font, write_plot};
 use crate::atomic::write as write_atomic;
 use anyhow::Result;

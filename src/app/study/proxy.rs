@@ -2,7 +2,7 @@
 //! study is scored, frame by frame, against a full-detail clip of the same model recorded with
 //! the same camera, crowd, size and frame rate (the plan's, method `none`) by two metrics:
 //!
-//! - SSIM (Wang et al. 2004, [`super::ssim`]) on luma: 1 for identical frames, higher is
+//! - SSIM (Wang et al. 2004, [`crate::measure::ssim`]) on luma: 1 for identical frames, higher is
 //!   better;
 //! - ꟻLIP (Andersson et al. 2020, NVIDIA's own code through the `nv-flip` crate) on sRGB
 //!   colour, at its default 67 pixels per degree: the mean per-pixel error in 0..1, lower is
@@ -18,12 +18,13 @@
 //! (SSIM over time, a line per clip). The full-detail clips are kept in `clips/` as
 //! `MODEL-reference.mp4`.
 
-use super::ssim::{Luma, ssim};
-use super::{CLIPS, Manifest, clip_options, read_manifest};
+use super::clip_options;
+use super::plan::{CLIPS, Manifest, read_manifest};
 use crate::app::record;
 use crate::app::report::{plot_error, register_font, write_plot};
 use crate::app::video::ClipReader;
 use crate::atomic::write as write_atomic;
+use crate::measure::ssim::{Luma, ssim};
 use crate::scene::LodMethod;
 use anyhow::{Result, anyhow, bail};
 use plotters::prelude::*;
@@ -98,7 +99,7 @@ pub struct ProxyOptions {
 
 /// `clips/horse-reference.mp4`: the full-detail clip of a model.
 pub fn reference_file(model: &str) -> String {
-    format!("{CLIPS}/{}-reference.mp4", super::model_stem(model))
+    format!("{CLIPS}/{}-reference.mp4", super::plan::model_stem(model))
 }
 
 /// Records the missing full-detail clips, scores every clip of the study in `o.dir`, and

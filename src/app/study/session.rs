@@ -1,6 +1,6 @@
 //! A participant's session: the trials in their order, the answers file, and resuming.
 
-use super::{ANSWERS, Manifest, SESSIONS};
+use super::plan::{ANSWERS, Manifest, SESSIONS};
 use crate::scene::LodMethod;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -169,7 +169,7 @@ pub struct Session {
 impl Session {
     /// Opens participant `id`'s session in study folder `dir`, with the answers already given.
     pub fn open(dir: &Path, id: &str) -> Result<Session> {
-        let manifest = super::read_manifest(dir)?;
+        let manifest = super::plan::read_manifest(dir)?;
         if !manifest.participants.iter().any(|p| p == id) {
             bail!(
                 "{}: no participant '{id}' in this study (participants: {})",

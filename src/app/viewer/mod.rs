@@ -259,7 +259,7 @@ impl Viewer {
             // A screenshot shows the levels asked for, so it waits for them; and levels all in
             // the cache load faster than a first frame at full detail draws, so the viewer
             // waits for those too. Anything to bake is baked in the background instead.
-            world.ensure_levels(gpu)?;
+            world.ensure_levels(gpu, &crate::measure::GpuMeasurer)?;
         }
         let targets = RenderTargets::new(
             &gpu.device,
@@ -418,6 +418,7 @@ impl Viewer {
                 method,
                 self.world.lod.chain(),
                 self.world.cache(),
+                &crate::measure::GpuMeasurer,
             ));
         }
         Ok(())
@@ -509,7 +510,8 @@ impl Viewer {
         self.world = world;
         self.apply_lod_settings();
         if self.world.levels_cached() {
-            self.world.ensure_levels(&self.win.gpu)?;
+            self.world
+                .ensure_levels(&self.win.gpu, &crate::measure::GpuMeasurer)?;
         }
         self.remake_targets();
         // A new egui context sends its whole font atlas again, to the new renderer.

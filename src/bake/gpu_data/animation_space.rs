@@ -32,7 +32,7 @@ pub struct AnimationSpaceMesh {
     pub materials: Vec<u16>,
     pub indices: Vec<u32>,
     /// Per vertex, the row of the spectra texture whose offset moves it
-    /// ([`crate::bake::foliage::spectral::texture::NO_ROW`]: none); empty where nothing moves by
+    /// ([`crate::bake::gpu_data::spectra::NO_ROW`]: none); empty where nothing moves by
     /// spectra (every character, and every level but a spectral cloud's).
     pub spectral_rows: Vec<u32>,
     /// Per vertex, the light the crown takes from it (see

@@ -2,23 +2,13 @@
 
 use super::anim_texture::{self, AnimationTexture};
 use super::animation_space::AnimationSpaceMesh;
-use super::materials::MaterialLayers;
+use super::materials::{BILLBOARD_MATERIAL, MaterialLayers, lit_atlas_material};
 use super::vertex_texture::VertexTexture;
-use crate::bake::foliage::billboard;
-use crate::bake::foliage::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
+use crate::bake::foliage::billboard::occlusion::CrownDensity;
+use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
 use crate::bake::impostor::{animated, octahedral};
 use crate::model::{Bounds, Material, Model};
 use glam::Vec3;
-
-/// A vertex for the trivial unskinned calibration shader: one fixed pose baked into plain
-/// positions (see [`vertex_texture::VertexTexture::static_vertices`]).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct StaticVertex {
-    pub position: [f32; 3],
-    pub normal: [f32; 3],
-    pub uv: [f32; 2],
-}
 
 /// Everything the renderer needs to draw one skinned character.
 #[derive(Clone, Debug)]
@@ -46,7 +36,7 @@ pub struct CharacterBake {
     /// facing the eye, showing the view and frames it stands in (see [`animated`]).
     pub animated_impostor: Option<animated::AnimatedFrame>,
     /// A billboard cloud whose billboards are lit through their atlas (a normal per texel,
-    /// [`billboard::atlas`]): drawn with the per-pixel foliage shader.
+    /// [`crate::bake::foliage::billboard::atlas`]): drawn with the per-pixel foliage shader.
     pub atlas_lit: bool,
 }
 
@@ -75,21 +65,16 @@ impl CharacterBake {
 
     /// [`Self::new`] for a level whose billboards also move by `motion` (a spectral cloud).
     /// A tree (a model with leaves, not billboards) is darkened inside its crown (see
-    /// [`billboard::occlusion`]).
+    /// [`crate::bake::foliage::billboard::occlusion`]).
     pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
-        let billboards = model
-            .materials
-            .iter()
-            .any(|m| m.name == billboard::BILLBOARD_MATERIAL);
-        let crown = (!billboards)
-            .then(|| billboard::occlusion::CrownDensity::of(model))
-            .flatten();
+        let billboards = model.materials.iter().any(|m| m.name == BILLBOARD_MATERIAL);
+        let crown = (!billboards).then(|| CrownDensity::of(model)).flatten();
         let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
         Self::build(model, motion, true, &occlusion, &[])
     }
 
     /// [`Self::with_motion`] for a level of a tree, every vertex darkened by the crown by
-    /// `occlusion` (one per vertex of `model`, see [`billboard::occlusion`]; empty: none), and
+    /// `occlusion` (one per vertex of `model`, see [`crate::bake::foliage::billboard::occlusion`]; empty: none), and
     /// its billboards drawn within their `view_windows` (one per vertex, see
     /// [`billboard::clumps`]; empty: from every view).
     pub fn tree_level(
@@ -141,7 +126,7 @@ impl CharacterBake {
         let animation = AnimationTexture::bake(model, anim_texture::DEFAULT_RATE);
         // A cloud's billboards lit through their atlas point at "layer 0" (see
         // `vertex_texture`): the lighting is the material layer after the atlas's.
-        let atlas = billboard::atlas::lit_atlas_material(&model.materials);
+        let atlas = lit_atlas_material(&model.materials);
         let lit_layers: Vec<Option<u32>> = (0..model.materials.len())
             .map(|m| (Some(m) == atlas).then_some(0))
             .collect();
@@ -179,9 +164,9 @@ impl CharacterBake {
             outlines: model
                 .materials
                 .iter()
-                .position(|m| m.name == billboard::BILLBOARD_MATERIAL)
+                .position(|m| m.name == BILLBOARD_MATERIAL)
                 .map_or_else(Vec::new, |b| {
-                    billboard::billboard_outlines(&am.indices, &am.materials, b as u16)
+                    billboard_outlines(&am.indices, &am.materials, b as u16)
                 }),
             animation_space: am,
             spectra: motion.map(|m| m.spectra.clone()),
@@ -228,4 +213,29 @@ impl CharacterBake {
             .map(|c| c.name.clone())
             .collect()
     }
+}
+
+/// The outlines of the billboards among `indices`, as a line list: every edge of a triangle of
+/// material `billboard` (`materials` per vertex) that no other such triangle shares. A
+/// billboard's two triangles share its diagonal, so what is left is its four sides. Billboards
+/// share no vertices, so their outlines never merge.
+pub fn billboard_outlines(indices: &[u32], materials: &[u16], billboard: u16) -> Vec<u32> {
+    let mut edges: std::collections::HashMap<(u32, u32), u32> = Default::default();
+    for t in indices.chunks_exact(3) {
+        if materials.get(t[0] as usize) != Some(&billboard) {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut lines: Vec<(u32, u32)> = edges
+        .into_iter()
+        .filter(|&(_, n)| n == 1)
+        .map(|(e, _)| e)
+        .collect();
+    // In a fixed order, whatever the hash map's.
+    lines.sort_unstable();
+    lines.into_iter().flat_map(|(a, b)| [a, b]).collect()
 }

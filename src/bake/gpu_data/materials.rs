@@ -292,6 +292,29 @@ pub(crate) fn preserve_coverage(level: &mut [u8], target: f32) {
     }
 }
 
+// Material roles: a billboard cloud's atlas and its lighting are told apart from the
+// model's own materials by name, in the model the cloud's bake writes
+// (`bake::foliage::billboard::cloud_model`).
+
+/// The name of a cloud model's atlas material: its triangles are the billboards, two to a quad.
+pub const BILLBOARD_MATERIAL: &str = "billboards";
+
+/// The name of the material after a cloud's atlas that holds its lighting: per texel, the
+/// normal the leaf drawn there is lit by when seen from the billboard's front, in its
+/// billboard's [`billboard_frame`](crate::bake::foliage::billboard::atlas::billboard_frame) (r, g, b along t, b and n, as x/2 + 1/2). The crown's
+/// occlusion, which scales all of a leaf's light, is multiplied into the atlas's colour.
+/// Stored sRGB-encoded, so that the renderer's sRGB material texture hands the shader these
+/// values in linear form.
+pub const BILLBOARD_LIGHTING: &str = "billboard lighting";
+
+/// The index of `materials`' billboard atlas where the material after it holds its lighting.
+pub fn lit_atlas_material(materials: &[crate::model::Material]) -> Option<usize> {
+    let atlas = materials
+        .iter()
+        .position(|m| m.name == BILLBOARD_MATERIAL)?;
+    (materials.get(atlas + 1)?.name == BILLBOARD_LIGHTING).then_some(atlas)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

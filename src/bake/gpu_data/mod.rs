@@ -6,5 +6,6 @@ pub mod animation_space;
 pub mod drawable;
 pub mod lod_pack;
 pub mod materials;
+pub mod spectra;
 pub mod texels;
 pub mod vertex_texture;

@@ -8,7 +8,7 @@
 //!   view window)`:
 //!   the vertex (index into this texture) that `v` morphs into at the next coarser level
 //!   (Houle & Poulin §5.1), itself on the coarsest level; the row of the spectra texture whose
-//!   offset moves it, 0 for none (see [`crate::bake::foliage::spectral::texture`]); the layer of the
+//!   offset moves it, 0 for none (see [`crate::bake::gpu_data::spectra`]); the layer of the
 //!   normal maps that lights it, 0 for none (see [`crate::bake::character::normal_map`]; on a billboard of
 //!   a cloud, 1: lit through its atlas, whose lighting is the next material layer, see
 //!   [`crate::bake::foliage::billboard::atlas`]); and the light the crown takes from it, 0 for none
@@ -24,9 +24,18 @@
 
 use super::animation_space::{AnimationSpaceMesh, transform_homogeneous};
 use super::texels::TexelGrid;
-use crate::bake::gpu_data::drawable::StaticVertex;
 use glam::{Affine3A, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
+
+/// A vertex for the trivial unskinned calibration shader: one fixed pose baked into plain
+/// positions (see [`VertexTexture::static_vertices`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct StaticVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+}
 
 /// Influence counts are packed below this; materials above.
 pub const MATERIAL_STRIDE: u32 = 256;
@@ -100,9 +109,7 @@ impl VertexTexture {
                     None => base_vertices[k] + v as u32,
                 };
                 let row = match mesh.spectral_rows.get(v) {
-                    Some(&r) if r != crate::bake::foliage::spectral::texture::NO_ROW => {
-                        r as f32 + 1.0
-                    }
+                    Some(&r) if r != crate::bake::gpu_data::spectra::NO_ROW => r as f32 + 1.0,
                     _ => 0.0,
                 };
                 let layer = normal_layers
@@ -192,7 +199,7 @@ mod tests {
             uvs: vec![Vec2::new(0.1, 0.2), Vec2::new(0.3, 0.4)],
             materials: vec![0, 3],
             indices: vec![],
-            spectral_rows: vec![crate::bake::foliage::spectral::texture::NO_ROW, 7],
+            spectral_rows: vec![crate::bake::gpu_data::spectra::NO_ROW, 7],
             crown_occlusion: vec![0.0, 0.25],
             view_windows: Vec::new(),
         };

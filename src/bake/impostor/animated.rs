@@ -23,20 +23,20 @@
 //! blend between them, as for skinning; a clip cross-fade shows the clip that weighs more.
 //!
 //! Error. Where the impostor joins a method's chain is measured by its colour error against
-//! full detail (`runtime::impostor_placement`). The bake also bounds how far a point of it can
+//! full detail (`measure::impostor_fit`). The bake also bounds how far a point of it can
 //! land off its place ([`ImpostorError`]), the worst case: its depth off the quad's plane
 //! times sin δ plus the radius times 1 − cos δ, when the line of sight is δ away from the view
 //! drawn; half the farthest a vertex moves between two frames (the blend cross-fades them);
 //! and half a texel. That bound says which option to raise (views, frames or cell) when the
 //! impostor comes in late.
 
-use crate::bake::foliage::billboard::atlas::RasterizeAtlas;
 use crate::bake::gpu_data::anim_texture::AnimationTexture;
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate, preserve_coverage};
 use crate::bake::impostor::octahedral::{
-    SUPERSAMPLE, ViewGrid, ViewImages, average_down, dilate_cells, encode_height, posed,
-    view_sphere, views_about,
+    SUPERSAMPLE, ViewGrid, average_down, dilate_cells, encode_height, posed, view_sphere,
+    views_about,
 };
+use crate::bake::seams::{RasterizeAtlas, ViewImages};
 use crate::model::{Influence, Material, Model, Rgba8Image, SkinnedMesh};
 use anyhow::{Result, anyhow};
 use glam::{Vec2, Vec3};

@@ -3,3 +3,4 @@
 
 pub mod animated;
 pub mod octahedral;
+pub mod placement;

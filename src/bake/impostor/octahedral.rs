@@ -18,8 +18,8 @@
 //! with the tree's wind as one bending card. `shaders/impostor.wgsl` mirrors [`hemi_oct_encode`],
 //! [`ViewGrid::blend`] and [`ViewGrid::view_axes`].
 
-use crate::bake::foliage::billboard::atlas::RasterizeAtlas;
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate, preserve_coverage};
+use crate::bake::seams::{RasterizeAtlas, ViewCamera, ViewImages, ViewRequest, ViewVertex};
 use crate::model::{
     Bounds, Influence, Material, Model, Rgba8Image, SkinnedMesh, linear_to_srgb, srgb_to_linear,
 };
@@ -129,53 +129,6 @@ pub struct ImpostorFrame {
     /// The tree's bounds at rest, model space: what culling and the blob shadow use (the
     /// quad's own mesh is only as wide as a card).
     pub bounds: [[f32; 3]; 2],
-}
-
-/// A vertex of the tree as the view bake draws it (`shaders/impostor_bake.wgsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ViewVertex {
-    /// Rest position, model space.
-    pub position: [f32; 3],
-    /// Material layer.
-    pub layer: u32,
-    pub normal: [f32; 3],
-    /// 1 where the material cuts its shape out with alpha (foliage).
-    pub cut_out: u32,
-    pub uv: [f32; 2],
-    /// The light the crown leaves it, 1 − occlusion ([`crate::bake::foliage::billboard::occlusion`]): the views' colour
-    /// is darkened by it, as the tree's own leaves are when drawn.
-    pub light: f32,
-}
-
-/// One view of the bake: its cell's corner in the target (pixels), the cell's size, and the
-/// orthographic camera's axes (right, up, towards the eye), each scaled by 1 / radius.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ViewCamera {
-    pub cell: [f32; 4],
-    pub right: [f32; 4],
-    pub up: [f32; 4],
-    pub toward: [f32; 4],
-}
-
-/// What the view bake draws: every triangle of the tree (as a list of vertices, three a
-/// triangle) from every view, into a `size` × `size` target, about `centre`.
-#[derive(Clone, Debug)]
-pub struct ViewRequest {
-    pub size: u32,
-    pub centre: Vec3,
-    pub vertices: Vec<ViewVertex>,
-    pub views: Vec<ViewCamera>,
-}
-
-/// The drawn views: unlit colour (sRGB, alpha 255 where the tree covers a texel, else 0) and
-/// the model-space normal turned towards the eye (n / 2 + 1/2 as unsigned bytes), its alpha
-/// the covered point's height towards the eye (see [`encode_height`]).
-#[derive(Clone, Debug)]
-pub struct ViewImages {
-    pub colour: Rgba8Image,
-    pub normal: Rgba8Image,
 }
 
 /// The view bake's input for `tree` at rest seen from every view of `grid`, each drawn

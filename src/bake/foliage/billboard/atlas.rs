@@ -16,6 +16,8 @@
 //! round it, and its leaves drawn unlit with their own texture's alpha as the cut-out.
 
 use super::cloud::Billboard;
+use crate::bake::gpu_data::materials::BILLBOARD_LIGHTING;
+use crate::bake::seams::{AtlasLayout, AtlasVertex};
 use glam::{Vec2, Vec3};
 
 /// Texels of gutter round every billboard's rectangle in the atlas, at the least.
@@ -69,14 +71,6 @@ impl AtlasDensity {
 /// ([`crate::bake::gpu_data::materials::MAX_LAYER_SIZE`]).
 pub const MAX_ATLAS: u32 = crate::bake::gpu_data::materials::MAX_LAYER_SIZE;
 
-/// The name of the material after a cloud's atlas that holds its lighting: per texel, the
-/// normal the leaf drawn there is lit by when seen from the billboard's front, in its
-/// billboard's [`billboard_frame`] (r, g, b along t, b and n, as x/2 + 1/2). The crown's
-/// occlusion, which scales all of a leaf's light, is multiplied into the atlas's colour.
-/// Stored sRGB-encoded, so that the renderer's sRGB material texture hands the shader these
-/// values in linear form.
-pub const BILLBOARD_LIGHTING: &str = "billboard lighting";
-
 /// The frame a billboard's texels keep their leaves' normals in: t, b across the billboard,
 /// made from its normal `n` alone, so that the vertex shader rebuilds it from the skinned
 /// normal (`vs_foliage_lit` in shaders/character.wgsl mirrors this): t = (ref × n) / |ref × n|
@@ -87,46 +81,6 @@ pub fn billboard_frame(n: Vec3) -> (Vec3, Vec3) {
     let reference = if n.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
     let t = reference.cross(n).normalize_or(Vec3::X);
     (t, n.cross(t))
-}
-
-/// The index of `materials`' billboard atlas where the material after it holds its lighting.
-pub fn lit_atlas_material(materials: &[crate::model::Material]) -> Option<usize> {
-    let atlas = materials
-        .iter()
-        .position(|m| m.name == super::BILLBOARD_MATERIAL)?;
-    (materials.get(atlas + 1)?.name == BILLBOARD_LIGHTING).then_some(atlas)
-}
-
-/// Where every billboard's texture lies in the atlas.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AtlasLayout {
-    pub width: u32,
-    pub height: u32,
-    /// Texels per scene unit actually used (less than asked for where the atlas would not
-    /// fit otherwise).
-    pub texels_per_unit: f32,
-    /// Per billboard, the texels its rectangle maps onto: x, y, width, height (without the
-    /// gutter).
-    pub rects: Vec<[u32; 4]>,
-    /// Texels of gutter round every rectangle.
-    pub gutter: u32,
-}
-
-impl AtlasLayout {
-    /// Texture coordinates of a billboard's four corners, in the order of
-    /// [`Billboard::corners`].
-    pub fn corner_uvs(&self, b: usize) -> [Vec2; 4] {
-        let [x, y, w, h] = self.rects[b];
-        let (aw, ah) = (self.width as f32, self.height as f32);
-        let (x0, y0) = (x as f32 / aw, y as f32 / ah);
-        let (x1, y1) = ((x + w) as f32 / aw, (y + h) as f32 / ah);
-        [
-            Vec2::new(x0, y1),
-            Vec2::new(x1, y1),
-            Vec2::new(x1, y0),
-            Vec2::new(x0, y0),
-        ]
-    }
 }
 
 /// Packs the billboards' rectangles, at `density`, into the smallest power-of-two atlas that
@@ -210,24 +164,6 @@ fn try_pack(sizes: &[[u32; 2]], width: u32, height: u32, gutter: u32) -> Option<
     Some(rects)
 }
 
-/// A vertex of a leaf triangle as drawn into the atlas.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct AtlasVertex {
-    /// Atlas pixels (x right, y down).
-    pub pixel: [f32; 2],
-    /// Depth in 0..1: leaves on the billboard's front side (along its normal) win.
-    pub depth: f32,
-    /// The leaf texture coordinate.
-    pub uv: [f32; 2],
-    /// The normal the leaf is lit by seen from the billboard's front, in the billboard's
-    /// [`billboard_frame`] (t, b, n): its vertex normal, negated where the billboard's front
-    /// sees the leaf's back face (the renderer lights a back face by the negated normal).
-    pub normal: [f32; 3],
-    /// The light the crown leaves the leaf here, 1 − occlusion.
-    pub light: f32,
-}
-
 /// One corner of a leaf triangle as the atlas draws it: where it is, its leaf-texture
 /// coordinate, its normal and the crown's occlusion there.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -288,16 +224,6 @@ pub fn atlas_triangles(
     out
 }
 
-/// What an atlas's render gives: the colour darkened by the crown (sRGB, straight alpha) and
-/// the lighting (linear bytes: rgb the normal in the billboard's frame as x/2 + 1/2; alpha
-/// the coverage),
-/// both transparent where no leaf is.
-#[derive(Clone, Debug)]
-pub struct AtlasImages {
-    pub colour: crate::model::Rgba8Image,
-    pub lighting: crate::model::Rgba8Image,
-}
-
 /// The lighting image as the material after the atlas stores it: sRGB-encoded (the renderer
 /// reads material layers as sRGB, and so gets the linear values back), opaque.
 pub fn lighting_material(mut lighting: crate::model::Rgba8Image) -> crate::model::Material {
@@ -336,36 +262,11 @@ pub fn unpremultiply(pixels: &mut [u8]) {
     }
 }
 
-/// What draws an atlas: the one GPU-made part of a billboard cloud, behind a narrow seam so
-/// that the bake stays plain CPU code (`render::atlas` implements it; a test may rasterise on
-/// the CPU).
-pub trait RasterizeAtlas {
-    /// `vertices` (triangles in atlas pixels, see [`atlas_triangles`]) textured by layer 0 of
-    /// `leaf`, mipmapped, into two `layout`-sized images (see [`AtlasImages`]), straight (not
-    /// premultiplied) alpha, transparent where no leaf is; each leaf blended over what is
-    /// there by its texture's alpha in both.
-    fn rasterize(
-        &self,
-        layout: &AtlasLayout,
-        vertices: &[AtlasVertex],
-        leaf: &crate::bake::gpu_data::materials::MaterialLayers,
-    ) -> anyhow::Result<AtlasImages>;
-
-    /// The views of an octahedral impostor ([`crate::bake::impostor::octahedral::view_request`]): every
-    /// triangle drawn from every view into its cell, textured by its layer of `materials`,
-    /// depth-tested, cut out where a cut-out layer's alpha is below one half; unlit colour
-    /// and the normal facing the eye, see [`crate::bake::impostor::octahedral::ViewImages`].
-    fn rasterize_views(
-        &self,
-        request: &crate::bake::impostor::octahedral::ViewRequest,
-        materials: &crate::bake::gpu_data::materials::MaterialLayers,
-    ) -> anyhow::Result<crate::bake::impostor::octahedral::ViewImages>;
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bake::foliage::billboard::cloud::{CloudParams, Leaf, stochastic_cloud};
+    use crate::bake::gpu_data::materials::{BILLBOARD_MATERIAL, lit_atlas_material};
 
     #[test]
     fn the_billboard_frame_is_orthonormal_and_turns_with_the_tree() {
@@ -465,11 +366,7 @@ mod tests {
         assert_eq!([t.pixels[3], t.pixels[7]], [255, 255]);
         let materials = vec![
             crate::model::Material::opaque("bark", [1.0; 4], None),
-            crate::model::Material::cut_out(
-                crate::bake::foliage::billboard::BILLBOARD_MATERIAL,
-                [1.0; 4],
-                None,
-            ),
+            crate::model::Material::cut_out(BILLBOARD_MATERIAL, [1.0; 4], None),
             m,
         ];
         assert_eq!(lit_atlas_material(&materials), Some(1));

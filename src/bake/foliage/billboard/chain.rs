@@ -3,9 +3,7 @@
 //! foliage as billboard clouds of growing ε, end to end: the cloud, its atlas (drawn through
 //! [`RasterizeAtlas`], then dilated), and the tree model that draws it; and the chain cached.
 
-use super::atlas::{
-    AtlasDensity, LeafCorner, RasterizeAtlas, atlas_triangles, layout, lighting_material,
-};
+use super::atlas::{AtlasDensity, LeafCorner, atlas_triangles, layout, lighting_material};
 use super::cloud::CloudParams;
 use super::occlusion::CrownDensity;
 use super::siblings::merge_siblings;
@@ -16,10 +14,12 @@ use crate::bake::cache::{LodCache, Origin};
 use crate::bake::foliage::spectral::cloud::{SpectralParams, lines_per_axis, spectral_cloud};
 use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::bake::foliage::spectral::metrics::{AnimationError, animation_error, traced_leaves};
-use crate::bake::foliage::spectral::texture::{NO_ROW, SpectraTexture, SpectralMotion};
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate};
+use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
 use crate::bake::impostor::octahedral::{self, ImpostorFrame, ViewGrid};
+use crate::bake::impostor::placement;
+use crate::bake::seams::{MeasureColour, MeasureImpostor, RasterizeAtlas};
 use crate::model::Model;
 use anyhow::{Result, anyhow};
 use serde::{Deserialize, Serialize};
@@ -131,10 +131,7 @@ struct BuiltCloud<'a> {
     foliage: std::borrow::Cow<'a, Foliage>,
     cloud: super::SkeletonCloud,
     /// A spectral cloud's lines per billboard, and lines per axis.
-    lines: Option<(
-        Vec<[Vec<crate::bake::foliage::spectral::bins::Line>; 3]>,
-        usize,
-    )>,
+    lines: Option<(Vec<[Vec<crate::bake::gpu_data::spectra::Line>; 3]>, usize)>,
     /// The clouds or clumps it was built as.
     groups: usize,
     /// Billboards to a clump, of which a view draws one (1 for clouds).
@@ -678,28 +675,15 @@ impl CloudLevel {
     }
 }
 
-/// Measures a level's colour error against the full tree (thesis §5.1.3), both drawn whole,
-/// wood and all, `height_px` pixels high: the one step of a chain's bake that draws animated
-/// trees (`runtime::colour_error` implements it).
-pub trait MeasureColour {
-    /// The error at each of `heights_px` (a level is uploaded once for all of them).
-    fn colour_errors(
-        &self,
-        tree: &Model,
-        level: &CloudLevel,
-        heights_px: &[f32],
-    ) -> Result<Vec<f32>>;
-}
-
-/// The impostor after a chain's clouds: the tree's octahedral impostor, and the
-/// level it takes over from. It comes in where a cloud level would have, at that level's ε,
-/// and stands for it and every coarser level: at the finest level k (from the coarse end on,
-/// never level 1) where the impostor's colour error, measured at the size where ε_k projects
-/// to the tolerance, is no worse than level k's own there. So the impostor's error at its
-/// switch size stays within the chain's own, and selection treats it like any level.
+/// The impostor after a chain's clouds: the tree's octahedral impostor, placed by the rule
+/// characters' impostors follow ([`placement`]): it takes the place of the finest level k,
+/// from the coarse end on and never level 1, where its colour error at k's switch size is no
+/// worse than level k's own; or, beating none there, comes in further off than the coarsest
+/// cloud. So the impostor's error at its switch size stays within the chain's own, and
+/// selection treats it like any level.
 ///
-/// Returns the impostor level and k, or `None` where it beats no cloud level (it is then
-/// not part of the chain).
+/// Returns the impostor level and the index it goes in at (the levels from there on give way
+/// to it), or `None` where it beats no cloud level (it is then not part of the chain).
 pub fn impostor_level(
     raster: &dyn RasterizeAtlas,
     measure: &dyn MeasureColour,
@@ -737,48 +721,77 @@ pub fn impostor_level(
         view_windows: Vec::new(),
         views: 1,
     };
-    let h = crate::bake::foliage::billboard::tree_height(tree);
-    let switch_px = |eps: f32| opts.tolerance_px * h / eps.max(1e-6);
-    // Its error at every cloud level's switch size, coarsest first.
-    let levels: Vec<usize> = (2..chain.len()).rev().collect();
-    let sizes: Vec<f32> = levels
-        .iter()
-        .map(|&k| switch_px(chain[k].epsilon))
-        .collect();
-    let errors = measure.colour_errors(tree, &level, &sizes)?;
-    let mut replaces = None;
-    for ((&k, &px), &error) in levels.iter().zip(&sizes).zip(&errors) {
-        let own = measure.colour_errors(tree, &chain[k].cloud, &[px])?[0];
+    let mut fit = TreeFit {
+        measure,
+        tree,
+        impostor: &level,
+        chain,
+    };
+    let errors: Vec<f32> = chain.iter().map(|l| l.epsilon).collect();
+    let height = crate::bake::foliage::billboard::tree_height(tree);
+    // Level 1 is the first cloud of the leaves, the finest step of foliage simplification the
+    // chain has: the impostor stands only for coarser ones.
+    let (placed, replaces) = placement::place(&errors, height, opts.tolerance_px, 2, &mut fit)?;
+    for m in &placed.measured {
         log::debug!(
-            "{}: at {px:.1} px (level {k}) the impostor's colour error is {error:.3}, the level's {own:.3}",
-            tree.name
+            "{}: at {:.1} px (level {}) the impostor's colour error is {:.3}, the level's {:.3}",
+            tree.name,
+            m.px,
+            m.level,
+            m.impostor,
+            m.mesh
         );
-        if error > own {
-            break;
-        }
-        replaces = Some(k);
     }
     log::debug!(
         "{}: impostor baked and placed in {:.2} s",
         tree.name,
         start.elapsed().as_secs_f64()
     );
-    Ok(replaces.map(|k| {
+    Ok(placed.epsilon.map(|epsilon| {
         let level = TreeLevel {
-            epsilon: chain[k].epsilon,
+            epsilon,
             kind: Some(CloudKind::Impostor {
                 frames: grid.frames,
             }),
             cloud: level,
             bake_seconds: start.elapsed().as_secs_f64(),
         };
-        (level, k)
+        (level, replaces.unwrap_or(chain.len()))
     }))
+}
+
+/// A tree's impostor measured beside its chain's levels through the colour seam: each drawn
+/// whole, wood and all, against the full tree.
+struct TreeFit<'a> {
+    measure: &'a dyn MeasureColour,
+    tree: &'a Model,
+    impostor: &'a CloudLevel,
+    chain: &'a [TreeLevel],
+}
+
+impl TreeFit<'_> {
+    fn error(&self, level: &CloudLevel, px: f32) -> Result<f32> {
+        let bake = level
+            .bake()
+            .map_err(|e| anyhow!("{}: {e}", level.model.name))?;
+        Ok(self
+            .measure
+            .colour_errors(self.tree, &level.model, bake, &[px])?[0])
+    }
+}
+
+impl MeasureImpostor for TreeFit<'_> {
+    fn errors(&mut self, level: usize, px: f32) -> Result<(f32, f32)> {
+        Ok((
+            self.error(self.impostor, px)?,
+            self.error(&self.chain[level].cloud, px)?,
+        ))
+    }
 }
 
 /// Bump whenever a chain's construction changes its output (the cache's own format version
 /// covers the encoding).
-const CHAIN_VERSION: u32 = 22;
+const CHAIN_VERSION: u32 = 23;
 
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
 /// key inside it.

@@ -385,38 +385,10 @@ pub fn tree_height(model: &Model) -> f32 {
 /// The tree with its foliage replaced by a billboard cloud: the wood as it was, and every
 /// billboard a quad skinned with weight 1 to its bone, textured from `atlas` (a new material
 /// after the wood's). Materials that cut leaves out are dropped with the leaves.
-/// The name of a cloud model's atlas material: its triangles are the billboards, two to a quad.
-pub const BILLBOARD_MATERIAL: &str = "billboards";
-
-/// The outlines of the billboards among `indices`, as a line list: every edge of a triangle of
-/// material `billboard` (`materials` per vertex) that no other such triangle shares. A
-/// billboard's two triangles share its diagonal, so what is left is its four sides. Billboards
-/// share no vertices, so their outlines never merge.
-pub fn billboard_outlines(indices: &[u32], materials: &[u16], billboard: u16) -> Vec<u32> {
-    let mut edges: std::collections::HashMap<(u32, u32), u32> = Default::default();
-    for t in indices.chunks_exact(3) {
-        if materials.get(t[0] as usize) != Some(&billboard) {
-            continue;
-        }
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    let mut lines: Vec<(u32, u32)> = edges
-        .into_iter()
-        .filter(|&(_, n)| n == 1)
-        .map(|(e, _)| e)
-        .collect();
-    // In a fixed order, whatever the hash map's.
-    lines.sort_unstable();
-    lines.into_iter().flat_map(|(a, b)| [a, b]).collect()
-}
-
 pub fn cloud_model(
     tree: &Model,
     cloud: &SkeletonCloud,
-    layout: &atlas::AtlasLayout,
+    layout: &crate::bake::seams::AtlasLayout,
     atlas: crate::model::Rgba8Image,
 ) -> Model {
     use crate::model::{Influence, Material, SkinnedMesh};
@@ -431,7 +403,11 @@ pub fn cloud_model(
         }
     }
     let atlas_material = materials.len() as u16;
-    materials.push(Material::cut_out(BILLBOARD_MATERIAL, [1.0; 4], Some(atlas)));
+    materials.push(Material::cut_out(
+        crate::bake::gpu_data::materials::BILLBOARD_MATERIAL,
+        [1.0; 4],
+        Some(atlas),
+    ));
     let mut mesh = SkinnedMesh::empty();
     mesh.copy_triangles_from(src, |t| {
         keep.get(src.materials[t[0] as usize] as usize)

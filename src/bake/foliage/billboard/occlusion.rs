@@ -49,7 +49,11 @@ impl CrownDensity {
     /// has none.
     pub fn of(tree: &Model) -> Option<CrownDensity> {
         let mesh = &tree.mesh;
-        let cut: Vec<bool> = tree.materials.iter().map(super::is_cut_out).collect();
+        let cut: Vec<bool> = tree
+            .materials
+            .iter()
+            .map(crate::model::Material::cuts_out)
+            .collect();
         let leaf_triangles: Vec<[Vec3; 3]> = mesh
             .indices
             .chunks_exact(3)

@@ -13,32 +13,7 @@
 
 use super::cyclic_mean;
 use super::dft::Spectrum;
-use serde::{Deserialize, Serialize};
-
-/// One kept frequency of one axis: offset(τ) += amplitude · cos(2π · cycles · τ + phase).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Line {
-    /// Whole cycles per loop.
-    pub cycles: u32,
-    pub amplitude: f32,
-    pub phase: f32,
-}
-
-impl Line {
-    /// A constant offset `value` (the mean pose): 0 cycles, the sign in the phase (0 or π),
-    /// as `a cos(2π·0·τ + φ)` evaluates it.
-    pub fn constant(value: f32) -> Line {
-        Line {
-            cycles: 0,
-            amplitude: value.abs(),
-            phase: if value < 0.0 {
-                std::f32::consts::PI
-            } else {
-                0.0
-            },
-        }
-    }
-}
+use crate::bake::gpu_data::spectra::Line;
 
 /// The K lines per axis of a motion given as axis spectra (bin 0, the mean, is left out).
 /// Empty bins give lines of amplitude 0, so every billboard has exactly `k` per axis.

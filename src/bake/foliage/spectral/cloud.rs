@@ -19,7 +19,7 @@
 //! the sag of a swaying branch. Every row's first line per axis is that mean, a line of 0
 //! cycles.
 
-use super::bins::{Line, reduce};
+use super::bins::reduce;
 use super::cluster::{ClusterParams, cluster};
 use super::description::{Description, DescriptionType};
 use super::dft::Dft;
@@ -29,6 +29,7 @@ use crate::bake::foliage::billboard::cloud::CloudParams;
 use crate::bake::foliage::billboard::{
     Foliage, SkeletonCloud, cloud_of_groups, root_bone, tree_height,
 };
+use crate::bake::gpu_data::spectra::Line;
 use crate::model::Model;
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;

@@ -15,11 +15,12 @@
 //!
 //! Both are averaged over the leaves.
 
-use super::bins::{Line, eval};
+use super::bins::eval;
 use super::description::{Description, DescriptionType};
 use super::dft::Dft;
 use super::ne;
 use crate::bake::foliage::billboard::{Foliage, SkeletonCloud, tree_height};
+use crate::bake::gpu_data::spectra::Line;
 use crate::model::Model;
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;

@@ -13,7 +13,7 @@
 //!   shader evaluates.
 //! - [`cluster`] groups leaves by how they move (§6.2, App. C), [`cloud`] builds a billboard
 //!   cloud per cluster whose billboards follow their leaves' shared bone and add the residual
-//!   motion as lines (§6.4), and [`texture`] lays those lines out for the vertex shader.
+//!   motion as lines (§6.4), and [`crate::bake::gpu_data::spectra`] lays those lines out for the vertex shader.
 
 pub mod bins;
 pub mod cloud;
@@ -21,7 +21,6 @@ pub mod cluster;
 pub mod description;
 pub mod dft;
 pub mod metrics;
-pub mod texture;
 
 use crate::anim::skinning_over_loop;
 use crate::model::Model;

@@ -12,12 +12,12 @@
 //! Both from five views round the tree 15° above the ground at two times of its loop.
 
 use super::colour_error::{METRIC_VIEWS, covers, framing, metric_camera, metric_world, picture};
-use super::impostor_placement::PITCH_DEG;
-use super::spec::Loaded;
+use super::impostor_fit::PITCH_DEG;
 use crate::bake::foliage::billboard::chain::CloudLevel;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;
+use crate::runtime::spec::Loaded;
 use anyhow::Result;
 use glam::Vec3;
 use serde::Serialize;

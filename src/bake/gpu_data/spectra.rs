@@ -12,9 +12,33 @@
 //! Which row a vertex reads is in the vertex texture (see `crate::bake::gpu_data::vertex_texture`):
 //! [`SpectralMotion::vertex_rows`] gives it per vertex of the level's model.
 
-use super::bins::Line;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
+
+/// One kept frequency of one axis: offset(τ) += amplitude · cos(2π · cycles · τ + phase).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Line {
+    /// Whole cycles per loop.
+    pub cycles: u32,
+    pub amplitude: f32,
+    pub phase: f32,
+}
+
+impl Line {
+    /// A constant offset `value` (the mean pose): 0 cycles, the sign in the phase (0 or π),
+    /// as `a cos(2π·0·τ + φ)` evaluates it.
+    pub fn constant(value: f32) -> Line {
+        Line {
+            cycles: 0,
+            amplitude: value.abs(),
+            phase: if value < 0.0 {
+                std::f32::consts::PI
+            } else {
+                0.0
+            },
+        }
+    }
+}
 
 /// Rows a spectra texture may have: the 2D texture limit every wgpu adapter offers.
 pub const MAX_ROWS: usize = 8192;
@@ -126,7 +150,7 @@ mod tests {
         assert_eq!(t.get(4, 0), [1.0, 0.1, -1.0, 0.0]);
         assert_eq!(t.get(5, 0), [5.0, 0.02, 2.0, 0.0]);
         for tau in [0.0, 0.13, 0.5, 0.77] {
-            let want = super::super::bins::eval(&a, tau);
+            let want = crate::bake::foliage::spectral::bins::eval(&a, tau);
             assert!(t.offset(0, tau, 1.0).distance(want) < 1e-6);
             assert!(t.offset(0, tau, 0.5).distance(want * 0.5) < 1e-6);
             assert_eq!(t.offset(1, tau, 1.0), Vec3::ZERO);

@@ -2,13 +2,14 @@
 //! Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007) §5.1.3), measured
 //! by drawing both in worlds of their own.
 
-use super::spec::Loaded;
-use super::world::World;
 use crate::bake::foliage::billboard::chain::CloudLevel;
 use crate::bake::foliage::billboard::wood::only_foliage;
+use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
+use crate::runtime::spec::Loaded;
+use crate::runtime::world::World;
 use anyhow::Result;
 
 /// Views and frames of the colour metric (thesis §5.1.3): five views evenly round the tree at
@@ -117,8 +118,11 @@ pub fn whole_tree_error(
     level: &CloudLevel,
     height_px: f32,
 ) -> Result<f32> {
-    use crate::bake::foliage::billboard::chain::MeasureColour;
-    let errors = GpuColourError::new(gpu).colour_errors(tree, level, &[height_px])?;
+    use crate::bake::seams::MeasureColour;
+    let bake = level
+        .bake()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", level.model.name))?;
+    let errors = GpuColourError::new(gpu).colour_errors(tree, &level.model, bake, &[height_px])?;
     Ok(errors[0])
 }
 
@@ -149,17 +153,15 @@ impl<'g> GpuColourError<'g> {
     }
 }
 
-impl crate::bake::foliage::billboard::chain::MeasureColour for GpuColourError<'_> {
+impl crate::bake::seams::MeasureColour for GpuColourError<'_> {
     fn colour_errors(
         &self,
         tree: &Model,
-        level: &CloudLevel,
+        level: &Model,
+        bake: CharacterBake,
         heights_px: &[f32],
     ) -> Result<Vec<f32>> {
         let gpu = self.gpu;
-        let bake = level
-            .bake()
-            .map_err(|e| anyhow::anyhow!("{}: {e}", level.model.name))?;
         let mut worlds = self
             .worlds
             .lock()
@@ -173,7 +175,7 @@ impl crate::bake::foliage::billboard::chain::MeasureColour for GpuColourError<'_
                 *worlds = Some(Measuring {
                     tree: tree.name.clone(),
                     original: metric_world(gpu, Loaded::forest_of(tree, None, 1)?)?,
-                    level: metric_world(gpu, Loaded::forest_of_bake(&level.model, bake, 1))?,
+                    level: metric_world(gpu, Loaded::forest_of_bake(level, bake, 1))?,
                 });
             }
         }
@@ -197,7 +199,7 @@ impl crate::bake::foliage::billboard::chain::MeasureColour for GpuColourError<'_
 }
 
 /// The image size and the camera's distance (in tree heights) at which [`whole_tree_error`]
-/// sees a tree `height_px` pixels high (and `impostor_placement` a character).
+/// sees a tree `height_px` pixels high (and `impostor_fit` a character).
 pub(crate) fn framing(height_px: f32) -> ([u32; 2], f32) {
     // The metric's camera frames the tree's height in this share of the image.
     let fov = crate::scene::Camera::new(glam::Vec3::ZERO, 0.0, 0.0, 1.0).fov_y;

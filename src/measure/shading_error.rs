@@ -3,7 +3,7 @@
 //! of animated characters", light their coarse levels through tangent-space normal maps, §6.4;
 //! see `bake::normal_map`).
 //!
-//! The error is the impostor placement's (see `impostor_placement`): the mean colour
+//! The error is the impostor placement's (see `impostor_fit`): the mean colour
 //! difference over the pixels either picture covers, divided by the pixels full detail covers,
 //! from five views round the character 15° above the ground at five times of its first clip.
 //! Both pictures of a level show the same triangles, so the difference between the two errors
@@ -21,14 +21,14 @@
 use super::colour_error::{
     METRIC_FRAMES, METRIC_VIEWS, framing, metric_camera, metric_world, picture,
 };
-use super::impostor_placement::{PITCH_DEG, colour_off};
-use super::levels::mapped_pack;
-use super::spec::Loaded;
+use super::impostor_fit::{PITCH_DEG, colour_off};
 use crate::bake::character::lod::LodLevel;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;
+use crate::runtime::levels::mapped_pack;
+use crate::runtime::spec::Loaded;
 use anyhow::Result;
 use serde::Serialize;
 
