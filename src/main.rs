@@ -353,6 +353,7 @@ fn view(a: ViewArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn main() -> ExitCode {
+    quiet_device_select();
     // Diagnostics (`RUST_LOG=debug`: the bake and the cache's decisions) go to stderr beside
     // the user-facing lines, which stay plain `eprintln!`s.
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
@@ -369,6 +370,24 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(1)
         }
+    }
+}
+
+/// Mesa's device-select Vulkan layer looks for a Wayland compositor whenever a Vulkan instance
+/// is made, and where `XDG_RUNTIME_DIR` is unset or no folder (containers, ssh sessions)
+/// libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment." four
+/// times: lines on stderr that read as lodlab's own errors, on every command. There is no
+/// compositor to find there, and lodlab picks its adapter itself, so the layer is switched
+/// off (its `NODEVICE_SELECT`) unless the user set it up or chose a device through it.
+fn quiet_device_select() {
+    let runtime_dir = std::env::var_os("XDG_RUNTIME_DIR");
+    let no_compositor = runtime_dir.is_none_or(|d| !std::path::Path::new(&d).is_dir());
+    let chosen = ["NODEVICE_SELECT", "MESA_VK_DEVICE_SELECT", "DRI_PRIME"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some());
+    if no_compositor && !chosen {
+        // SAFETY: the first statement of main, before any thread is started.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
 }
 

@@ -316,3 +316,31 @@ fn non_finite_and_absurd_options_are_refused() {
         );
     }
 }
+
+/// Where `XDG_RUNTIME_DIR` is not set (containers, ssh sessions), Mesa's device-select layer
+/// has libwayland print "error: XDG_RUNTIME_DIR is invalid…" as each Vulkan instance is made;
+/// lodlab switches that probe off for itself, so a headless command's stderr holds its own
+/// lines only.
+#[test]
+fn headless_commands_print_no_window_system_noise() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_png = dir.path().join("out.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args([
+            "shot", "--scene", "crowd", "--count", "1", "--size", "32x24",
+        ])
+        .arg("--out")
+        .arg(&out_png)
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(out_png.is_file());
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    assert!(
+        stderr.lines().all(|l| l.starts_with("lodlab: ")),
+        "lines that are not lodlab's: {stderr}"
+    );
+}

@@ -557,7 +557,7 @@ fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
 /// chains baked) started last ran alone at the end while the other thread idled.
 #[test]
 fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
-    use lodlab::bake::cache::{LodCache, Origin, source_hash};
+    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash};
     use lodlab::bake::foliage::billboard::chain::{ChainOptions, load_or_build_chain};
     let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
     let dir = tempfile::tempdir().unwrap();

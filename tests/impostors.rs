@@ -228,7 +228,7 @@ fn a_bad_impostor_option_is_one_line() {
 #[test]
 fn the_background_bake_hands_over_levels_then_the_impostor() {
     let _serial = serial();
-    use lodlab::bake::cache::{LodCache, source_hash};
+    use lodlab::bake::cache::{LodCache, keys::source_hash};
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Poll};
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));

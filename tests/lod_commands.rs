@@ -1,6 +1,7 @@
 //! `lodlab bake` and `lodlab report` as a user runs them, and the on-disk cache behind them.
 
-use lodlab::bake::cache::{LodCache, Origin, key, source_hash};
+use lodlab::bake::cache::keys::{levels_key, source_hash};
+use lodlab::bake::cache::{LodCache, Origin};
 use lodlab::bake::character::lod::LodOptions;
 use lodlab::bake::character::simplify::Method;
 use lodlab::generate::cylinder::bent_cylinder;
@@ -46,7 +47,7 @@ fn cache_hits_and_rebuilds_what_it_cannot_trust() {
     let path = cache.path(
         &model.name,
         Method::AnimationSpace,
-        &key(&source, Method::AnimationSpace, &options()),
+        &levels_key(&source, Method::AnimationSpace, &options()),
     );
     let good = std::fs::read(&path).unwrap();
     let damaged: Vec<(&str, Vec<u8>)> = vec![
@@ -86,16 +87,16 @@ fn cache_hits_and_rebuilds_what_it_cannot_trust() {
     let mut other = options();
     other.base_error *= 2.0;
     assert_ne!(
-        key(&source, Method::AnimationSpace, &options()),
-        key(&source, Method::AnimationSpace, &other)
+        levels_key(&source, Method::AnimationSpace, &options()),
+        levels_key(&source, Method::AnimationSpace, &other)
     );
     assert_ne!(
-        key(&source, Method::AnimationSpace, &options()),
-        key(&[8u8; 32], Method::AnimationSpace, &options())
+        levels_key(&source, Method::AnimationSpace, &options()),
+        levels_key(&[8u8; 32], Method::AnimationSpace, &options())
     );
     assert_ne!(
-        key(&source, Method::AnimationSpace, &options()),
-        key(&source, Method::RestPose, &options())
+        levels_key(&source, Method::AnimationSpace, &options()),
+        levels_key(&source, Method::RestPose, &options())
     );
 }
 

@@ -139,7 +139,7 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
 /// billboard-cloud chain per tree, and a second bake of the same method comes from the cache.
 #[test]
 fn background_bakes_finish_and_fill_the_cache() {
-    use lodlab::bake::cache::{LodCache, source_hash};
+    use lodlab::bake::cache::{LodCache, keys::source_hash};
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Levels, Poll};
     let dir = tempfile::tempdir().unwrap();
     let sources: Vec<LevelSource> = ["walker", "sapling"]

@@ -5,7 +5,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use lodlab::bake::cache::{Lookup, decode, encode};
-use lodlab::bake::lod::SkinnedLods;
+use lodlab::bake::character::lod::SkinnedLods;
 
 fuzz_target!(|data: &[u8]| {
     let key = [0x5a; 32];

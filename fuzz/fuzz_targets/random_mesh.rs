@@ -6,8 +6,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use lodlab::bake::lod::bake_lods;
-use lodlab::bake::simplify::Method;
+use lodlab::bake::character::lod::bake_lods;
+use lodlab::bake::character::simplify::Method;
 use lodlab::generate::glb::to_glb;
 use lodlab::generate::wild::random::random_file;
 use lodlab::import::gltf::from_bytes;

@@ -9,8 +9,8 @@
 
 use libfuzzer_sys::fuzz_target;
 use lodlab::app::export::level_meshes;
-use lodlab::bake::lod::{LodOptions, bake_lods, model_height};
-use lodlab::bake::simplify::Method;
+use lodlab::bake::character::lod::{LodOptions, bake_lods, model_height};
+use lodlab::bake::character::simplify::Method;
 use lodlab::generate::glb::{to_glb, to_lod_glb};
 use lodlab::generate::wild::structure::structure_file;
 use lodlab::import::gltf::from_bytes;

@@ -2,7 +2,7 @@
 //! methods at once, in parallel, and print them as a table. A tree gets its chain of
 //! billboard-cloud levels instead (the same for every method), as the viewer uses it.
 
-use crate::bake::cache::{LodCache, Origin, source_hash};
+use crate::bake::cache::{LodCache, Origin, keys::source_hash};
 use crate::bake::character::lod::{
     SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options,
 };

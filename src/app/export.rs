@@ -10,7 +10,7 @@
 //!
 //! [`AnimationSpaceMesh::to_skinned`]: crate::bake::gpu_data::animation_space::AnimationSpaceMesh::to_skinned
 
-use crate::bake::cache::{LodCache, Origin, source_hash};
+use crate::bake::cache::{LodCache, Origin, keys::source_hash};
 use crate::bake::character::lod::{SkinnedLods, model_height};
 use crate::bake::character::simplify::Method;
 use crate::error::InputError;

@@ -230,9 +230,6 @@ pub fn bake_each(
 /// A character's progress once its levels are handed over and its impostor is to come.
 const IMPOSTOR_PENDING: f32 = 0.9;
 
-/// Bump whenever placing an impostor changes its result.
-const PLACEMENT_VERSION: u32 = 4;
-
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
 fn impostor_level(
@@ -279,15 +276,11 @@ fn impostor_level(
         place()?
     } else {
         let (_, levels_key) = cache.levels_file(&s.model.name, &s.hash, lods.method, &lods.options);
-        let mut h = blake3::Hasher::new();
-        h.update(b"lodlab impostor placement");
-        h.update(&PLACEMENT_VERSION.to_le_bytes());
-        h.update(&levels_key);
-        h.update(&crate::bake::impostor::animated::impostor_key(
-            &s.hash, options,
-        ));
-        h.update(&tolerance.to_le_bytes());
-        let key = *h.finalize().as_bytes();
+        let key = crate::bake::cache::keys::placement_key(
+            &levels_key,
+            &crate::bake::impostor::animated::impostor_key(&s.hash, options),
+            tolerance,
+        );
         let path = cache.file(&s.model.name, "placement", &key);
         let (placement, origin) = cache.load_or_build(&path, &key, place)?;
         if let Origin::Baked { warning: Some(w) } = origin {

@@ -3,7 +3,7 @@
 //! the tests, so they all show the same thing.
 
 use super::levels::LevelSource;
-use crate::bake::cache::source_hash;
+use crate::bake::cache::keys::source_hash;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::impostor::animated::ImpostorOptions;
 use crate::error::InputError;

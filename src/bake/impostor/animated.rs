@@ -575,20 +575,9 @@ fn quad_model(model: &Model, sheets: Vec<Rgba8Image>) -> Model {
     }
 }
 
-/// Bump whenever the impostor's bake changes its output.
-const IMPOSTOR_VERSION: u32 = 5;
-
 /// The cache key of `model`'s impostor (its source hashing to `source`) baked with `options`.
 pub fn impostor_key(source: &[u8; 32], options: &ImpostorOptions) -> [u8; 32] {
-    let mut h = blake3::Hasher::new();
-    h.update(b"lodlab animated impostor");
-    h.update(&crate::bake::cache::FORMAT_VERSION.to_le_bytes());
-    h.update(&IMPOSTOR_VERSION.to_le_bytes());
-    h.update(source);
-    for n in [options.views, options.frames, options.cell] {
-        h.update(&n.to_le_bytes());
-    }
-    *h.finalize().as_bytes()
+    crate::bake::cache::keys::impostor_key(source, options.views, options.frames, options.cell)
 }
 
 /// `model`'s impostor from `cache` where a good one is there, else baked now and stored (a

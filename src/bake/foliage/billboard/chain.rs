@@ -789,10 +789,6 @@ impl MeasureImpostor for TreeFit<'_> {
     }
 }
 
-/// Bump whenever a chain's construction changes its output (the cache's own format version
-/// covers the encoding).
-const CHAIN_VERSION: u32 = 23;
-
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
 /// key inside it.
 pub fn chain_file(
@@ -801,20 +797,8 @@ pub fn chain_file(
     source: &[u8; 32],
     opts: &ChainOptions,
 ) -> Result<(std::path::PathBuf, [u8; 32])> {
-    let key = chain_key(source, opts)?;
+    let key = crate::bake::cache::keys::chain_key(source, opts).map_err(anyhow::Error::msg)?;
     Ok((cache.file(tree, "clouds", &key), key))
-}
-
-/// The cache key of a tree's chain: its source's hash, the chain options and the versions.
-pub fn chain_key(source: &[u8; 32], opts: &ChainOptions) -> Result<[u8; 32]> {
-    let mut h = blake3::Hasher::new();
-    h.update(b"lodlab tree chain");
-    h.update(&crate::bake::cache::FORMAT_VERSION.to_le_bytes());
-    h.update(&CHAIN_VERSION.to_le_bytes());
-    h.update(source);
-    // Options that failed to encode must not share a key with others: no fallback.
-    h.update(&postcard::to_stdvec(opts).map_err(|e| anyhow!("encoding chain options: {e}"))?);
-    Ok(*h.finalize().as_bytes())
 }
 
 /// The chain of `tree` (whose source file hashes to `source`) from `cache` if a good one is

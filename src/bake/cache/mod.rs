@@ -12,15 +12,15 @@
 //! payload length (u64 LE) | payload (postcard-encoded, then LZ4-compressed: billboard-cloud
 //! atlases are mostly empty texels).
 
+pub mod keys;
+
 use crate::bake::character::lod::{LodOptions, SkinnedLods};
 use crate::bake::character::simplify::Method;
-use crate::bake::character::simplify::expectation::MIN_SAMPLES;
+use keys::FORMAT_VERSION;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
-/// Bump whenever the bake's output or its encoding changes.
-pub const FORMAT_VERSION: u32 = 9;
 const MAGIC: &[u8; 8] = b"LODLABLC";
 const HEADER: usize = 8 + 4 + 32 + 32 + 8;
 
@@ -53,12 +53,7 @@ impl LodCache {
 
     /// The cache file for a bake.
     pub fn path(&self, model: &str, method: Method, key: &[u8; 32]) -> PathBuf {
-        let method = match method {
-            Method::RestPose => "rest-pose",
-            Method::AnimationSpace => "as",
-            Method::InfluenceSimplification => "as-is",
-        };
-        self.file(model, method, key)
+        self.file(model, &keys::file_kind(method), key)
     }
 
     /// The cache file of `model`'s levels by `method` with `options` (its source hashing to
@@ -70,7 +65,7 @@ impl LodCache {
         method: Method,
         options: &LodOptions,
     ) -> (PathBuf, [u8; 32]) {
-        let key = key(source, method, options);
+        let key = keys::levels_key(source, method, options);
         (self.path(model, method, &key), key)
     }
 
@@ -187,64 +182,6 @@ pub fn encode(key: &[u8; 32], payload: &[u8]) -> Vec<u8> {
     bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
     bytes.extend_from_slice(payload);
     bytes
-}
-
-/// The cache key of a bake: the source's hash, the method, the parameters and the format.
-pub fn key(source: &[u8; 32], method: Method, options: &LodOptions) -> [u8; 32] {
-    let mut h = blake3::Hasher::new();
-    h.update(b"lodlab skinned lods");
-    h.update(&FORMAT_VERSION.to_le_bytes());
-    h.update(&(MIN_SAMPLES as u64).to_le_bytes());
-    h.update(source);
-    h.update(method.name().as_bytes());
-    // Every field, so that no two option sets share a key.
-    h.update(&options.base_error.to_bits().to_le_bytes());
-    h.update(&options.floor_triangles.to_le_bytes());
-    let budgets = options.budgets.as_deref();
-    h.update(&[budgets.is_some() as u8]);
-    h.update(&(budgets.map_or(0, <[u32]>::len) as u64).to_le_bytes());
-    for t in budgets.unwrap_or_default() {
-        h.update(&t.to_le_bytes());
-    }
-    *h.finalize().as_bytes()
-}
-
-/// A hash of a model's source: the file's bytes, the files `--clips` adds clips from
-/// ([`crate::import::extra_clips`]), and for a `.gltf` the external files its buffers and
-/// images name (those that exist; a missing one fails the import anyway).
-///
-/// Files are read as the import reads them ([`crate::import::sources::read_regular`]): regular
-/// files within the limits and the folder policy, so that a FIFO or `/dev/zero` named by a
-/// buffer does not hang the hash before the import can refuse it.
-pub fn source_hash(path: &Path) -> std::io::Result<[u8; 32]> {
-    let limits = crate::import::validate::limits();
-    let read = |p: &Path| {
-        crate::import::sources::read_regular(p, &limits)
-            .map_err(|e| std::io::Error::other(format!("{}: {e}", p.display())))
-    };
-    let bytes = read(path)?;
-    let mut h = blake3::Hasher::new();
-    h.update(&bytes);
-    // Clips added from other files (`--clips`) change what the metric is estimated from.
-    for file in crate::import::extra_clips() {
-        let file = crate::import::source_path(&file.to_string_lossy());
-        h.update(b"clips");
-        h.update(&read(&file)?);
-    }
-    if let Ok(json) = serde_json::from_slice::<serde_json::Value>(&bytes) {
-        let dir = path.parent().unwrap_or(Path::new("."));
-        for list in ["buffers", "images"] {
-            for item in json[list].as_array().into_iter().flatten() {
-                if let Some(uri) = item["uri"].as_str().filter(|u| !u.starts_with("data:"))
-                    && let Ok(extra) = crate::import::sources::read_uri(uri, dir, &limits)
-                {
-                    h.update(uri.as_bytes());
-                    h.update(&extra);
-                }
-            }
-        }
-    }
-    Ok(*h.finalize().as_bytes())
 }
 
 /// Where a bake came from.
