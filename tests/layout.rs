@@ -9,12 +9,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Layers in data-flow order; a module may use modules of its own rank or lower.
-const RANKS: [(&str, u32); 17] = [
+const RANKS: [(&str, u32); 16] = [
     ("model", 0),
     ("atomic", 0),
     ("choice", 0),
-    // The macros `choice` exports at the crate root.
-    ("named_choice", 0),
+    // The macros `choice` exports at the crate root (`crate::choice!` is named as the module).
     ("named_serde", 0),
     ("error", 0),
     ("anim", 1),

@@ -57,41 +57,25 @@ pub enum CharacterShader {
     Plain,
 }
 
-/// What the characters are coloured by.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum DebugView {
-    /// Their materials.
-    #[default]
-    Shaded,
-    /// One colour per level of detail, blended while morphing.
-    LodTint,
-    /// Transition t from blue (0) to red (1); grey outside transitions.
-    TransitionTint,
-    /// Triangle edges, coloured by level (needs `POLYGON_MODE_LINE`).
-    Wireframe,
-    /// Animation-space influences per vertex, one (blue) to eight or more (red).
-    Influences,
+crate::choice! {
+    /// What the characters are coloured by.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+    pub enum DebugView {
+        /// Their materials.
+        #[default]
+        Shaded => "shaded",
+        /// One colour per level of detail, blended while morphing.
+        LodTint => "lod",
+        /// Transition t from blue (0) to red (1); grey outside transitions.
+        TransitionTint => "transition",
+        /// Triangle edges, coloured by level (needs `POLYGON_MODE_LINE`).
+        Wireframe => "wireframe",
+        /// Animation-space influences per vertex, one (blue) to eight or more (red).
+        Influences => "influences",
+    }
 }
 
 impl DebugView {
-    pub const ALL: [DebugView; 5] = [
-        DebugView::Shaded,
-        DebugView::LodTint,
-        DebugView::TransitionTint,
-        DebugView::Wireframe,
-        DebugView::Influences,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            DebugView::Shaded => "shaded",
-            DebugView::LodTint => "lod",
-            DebugView::TransitionTint => "transition",
-            DebugView::Wireframe => "wireframe",
-            DebugView::Influences => "influences",
-        }
-    }
-
     /// The mode `fs_main` in `shaders/character.wgsl` switches on.
     fn shader_mode(self) -> u32 {
         match self {
@@ -103,7 +87,6 @@ impl DebugView {
     }
 }
 
-crate::named_choice!(DebugView);
 crate::named_serde!(DebugView, "a debug view");
 
 /// Which part of the view a side covers.

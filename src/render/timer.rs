@@ -20,44 +20,27 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
 
-/// The render passes of a frame, in the order they are drawn.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Pass {
-    /// Opaque characters (and everything, for the plain calibration shader).
-    Characters,
-    /// Trees: full-detail foliage and billboard clouds, alpha tested.
-    Foliage,
-    /// The ground and the sky, behind everything drawn before them.
-    Environment,
-    /// Blob shadows blended over the ground.
-    Shadows,
-    /// The faded levels of alpha-blend transitions.
-    Transitions,
-    /// The viewer's panel.
-    Ui,
+crate::choice! {
+    /// The render passes of a frame, in the order they are drawn.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+    pub enum Pass {
+        /// Opaque characters (and everything, for the plain calibration shader).
+        Characters => "characters",
+        /// Trees: full-detail foliage and billboard clouds, alpha tested.
+        Foliage => "foliage",
+        /// The ground and the sky, behind everything drawn before them.
+        Environment => "sky and ground",
+        /// Blob shadows blended over the ground.
+        Shadows => "shadows",
+        /// The faded levels of alpha-blend transitions.
+        Transitions => "transitions",
+        /// The viewer's panel.
+        Ui => "ui",
+    }
 }
 
 impl Pass {
     pub const COUNT: usize = 6;
-    pub const ALL: [Pass; Pass::COUNT] = [
-        Pass::Characters,
-        Pass::Foliage,
-        Pass::Environment,
-        Pass::Shadows,
-        Pass::Transitions,
-        Pass::Ui,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Pass::Characters => "characters",
-            Pass::Foliage => "foliage",
-            Pass::Environment => "sky and ground",
-            Pass::Shadows => "shadows",
-            Pass::Transitions => "transitions",
-            Pass::Ui => "ui",
-        }
-    }
 
     fn bit(self) -> u32 {
         1 << self as u32

@@ -6,28 +6,16 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::f32::consts::TAU;
 
-/// The kinds of path, by the names the command line and the reports use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum PathKind {
-    /// Inwards, turning three quarters round the target (Merry et al. §6.2).
-    Spiral,
-    /// One turn, swinging from near to far and back.
-    Orbit,
-}
-
-impl PathKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            PathKind::Spiral => "spiral",
-            PathKind::Orbit => "orbit",
-        }
-    }
-}
-
-impl std::fmt::Display for PathKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+crate::choice! {
+    own_values;
+    /// The kinds of path, by the names the command line and the reports use.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+    #[serde(rename_all = "lowercase")]
+    pub enum PathKind {
+        /// Inwards, turning three quarters round the target (Merry et al. §6.2).
+        Spiral => "spiral",
+        /// One turn, swinging from near to far and back.
+        Orbit => "orbit",
     }
 }
 

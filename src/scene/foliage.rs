@@ -3,29 +3,25 @@
 
 use crate::bake::foliage::billboard::chain::{ChainOptions, ChainStyle};
 
-/// What trees become under a simplified method: the foliage panel's level policy.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum FoliagePolicy {
-    /// Trees keep every leaf (level 0) at every distance.
-    Full,
-    /// The skeleton-cloud chain ([`ChainStyle::Skeleton`]).
-    Skeleton,
-    /// The spectral-cloud chain ([`ChainStyle::Spectral`]).
-    Spectral,
-    /// Skeleton clouds near, spectral clouds far, view-selected clumps farthest
-    /// ([`ChainStyle::Automatic`]).
-    #[default]
-    Automatic,
+crate::choice! {
+    own_values;
+    /// What trees become under a simplified method: the foliage panel's level policy.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum FoliagePolicy {
+        /// Skeleton clouds near, spectral clouds far, view-selected clumps farthest
+        /// ([`ChainStyle::Automatic`]).
+        #[default]
+        Automatic => "automatic",
+        /// The skeleton-cloud chain ([`ChainStyle::Skeleton`]).
+        Skeleton => "skeleton clouds",
+        /// The spectral-cloud chain ([`ChainStyle::Spectral`]).
+        Spectral => "spectral clouds",
+        /// Trees keep every leaf (level 0) at every distance.
+        Full => "full",
+    }
 }
 
 impl FoliagePolicy {
-    pub const ALL: [FoliagePolicy; 4] = [
-        FoliagePolicy::Automatic,
-        FoliagePolicy::Skeleton,
-        FoliagePolicy::Spectral,
-        FoliagePolicy::Full,
-    ];
-
     /// The chain the trees switch along; None: they stay full.
     pub fn chain_style(self) -> Option<ChainStyle> {
         match self {
@@ -33,15 +29,6 @@ impl FoliagePolicy {
             FoliagePolicy::Skeleton => Some(ChainStyle::Skeleton),
             FoliagePolicy::Spectral => Some(ChainStyle::Spectral),
             FoliagePolicy::Automatic => Some(ChainStyle::Automatic),
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            FoliagePolicy::Full => "full",
-            FoliagePolicy::Skeleton => "skeleton clouds",
-            FoliagePolicy::Spectral => "spectral clouds",
-            FoliagePolicy::Automatic => "automatic",
         }
     }
 }

@@ -2,21 +2,24 @@
 
 use serde::{Deserialize, Serialize};
 
-/// The scenes lodlab knows.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum SceneKind {
-    /// The crowd walking round a clearing in the forest.
-    #[default]
-    Mixed,
-    /// Characters alone.
-    Crowd,
-    /// Trees alone.
-    Forest,
-    /// Copies of one model (Merry et al. §6.2: by default 100 horses).
-    Study,
+crate::choice! {
+    own_values;
+    /// The scenes lodlab knows.
+    #[derive(
+        Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
+    )]
+    #[serde(rename_all = "lowercase")]
+    pub enum SceneKind {
+        /// The crowd walking round a clearing in the forest.
+        #[default]
+        Mixed => "mixed",
+        /// Characters alone.
+        Crowd => "crowd",
+        /// Trees alone.
+        Forest => "forest",
+        /// Copies of one model (Merry et al. §6.2: by default 100 horses).
+        Study => "study",
+    }
 }
 
 /// Characters in a crowd unless told.
@@ -32,15 +35,6 @@ pub const DEFAULT_MODELS: &[&str] = &["horse", "walker"];
 pub const DEFAULT_TREES: &[&str] = &["broadleaf", "conifer"];
 
 impl SceneKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            SceneKind::Mixed => "mixed",
-            SceneKind::Crowd => "crowd",
-            SceneKind::Forest => "forest",
-            SceneKind::Study => "study",
-        }
-    }
-
     /// How many instances the scene shows unless told: characters, or trees in the forest.
     pub fn default_count(self) -> usize {
         match self {
@@ -58,11 +52,5 @@ impl SceneKind {
             SceneKind::Study => DEFAULT_MODELS[..1].to_vec(),
             SceneKind::Crowd => DEFAULT_MODELS.to_vec(),
         }
-    }
-}
-
-impl std::fmt::Display for SceneKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
     }
 }

@@ -59,73 +59,34 @@ impl LodMethod {
     }
 }
 
-impl std::fmt::Display for LodMethod {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+crate::choice! {
+    /// How an instance goes from one level to another.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub enum Transition {
+        Pop => "pop",
+        /// Houle & Poulin's alpha blend (§3): one level opaque, the other blended over it.
+        Alpha => "alpha",
+        Morph => "morph",
+        /// A screen-door cross-fade (as Bevy's dithered level changes): both levels opaque, each on
+        /// its own share of the pixels. Each level is drawn once, so it costs less than the alpha
+        /// blend where triangles are the limit; it looks grainy where the blend is smooth.
+        Dither => "dither",
     }
 }
 
-/// How an instance goes from one level to another.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Transition {
-    Pop,
-    /// Houle & Poulin's alpha blend (§3): one level opaque, the other blended over it.
-    Alpha,
-    Morph,
-    /// A screen-door cross-fade (as Bevy's dithered level changes): both levels opaque, each on
-    /// its own share of the pixels. Each level is drawn once, so it costs less than the alpha
-    /// blend where triangles are the limit; it looks grainy where the blend is smooth.
-    Dither,
-}
-
-impl Transition {
-    pub const ALL: [Transition; 4] = [
-        Transition::Pop,
-        Transition::Alpha,
-        Transition::Morph,
-        Transition::Dither,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Transition::Pop => "pop",
-            Transition::Alpha => "alpha",
-            Transition::Morph => "morph",
-            Transition::Dither => "dither",
-        }
-    }
-}
-
-crate::named_choice!(LodMethod);
-crate::named_choice!(Transition);
-crate::named_choice!(Drive);
+crate::choice!(LodMethod);
 crate::named_serde!(LodMethod, "a method");
 crate::named_serde!(Transition, "a transition");
 crate::named_serde!(Drive, "a transition drive");
 
-impl std::fmt::Display for Transition {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// What drives an alpha, morph or dither transition.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Drive {
-    /// Runs for [`LodPolicy::duration`] seconds once the level changes.
-    Time,
-    /// A function of distance over a band beyond each threshold (morph zones).
-    Zone,
-}
-
-impl Drive {
-    pub const ALL: [Drive; 2] = [Drive::Time, Drive::Zone];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Drive::Time => "time",
-            Drive::Zone => "zone",
-        }
+crate::choice! {
+    /// What drives an alpha, morph or dither transition.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub enum Drive {
+        /// Runs for [`LodPolicy::duration`] seconds once the level changes.
+        Time => "time",
+        /// A function of distance over a band beyond each threshold (morph zones).
+        Zone => "zone",
     }
 }
 

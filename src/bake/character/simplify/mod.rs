@@ -49,41 +49,19 @@ use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 use std::sync::{Mutex, OnceLock};
 
-/// The three ways of ranking simplifications the paper compares.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
-pub enum Method {
-    /// Edge collapses ranked by Euclidean deviation in the rest pose ("3D" in Table 1).
-    #[serde(rename = "rest-pose")]
-    RestPose,
-    /// Edge collapses ranked by the L2,2 deviation in animation space (§4).
-    #[serde(rename = "as")]
-    AnimationSpace,
-    /// As `AnimationSpace`, with influence simplifications in the same queue (§5).
-    #[serde(rename = "as+is")]
-    InfluenceSimplification,
-}
-
-impl Method {
-    pub const ALL: [Method; 3] = [
-        Method::RestPose,
-        Method::AnimationSpace,
-        Method::InfluenceSimplification,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::RestPose => "rest-pose",
-            Method::AnimationSpace => "as",
-            Method::InfluenceSimplification => "as+is",
-        }
-    }
-}
-
-crate::named_choice!(Method);
-
-impl std::fmt::Display for Method {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+crate::choice! {
+    /// The three ways of ranking simplifications the paper compares.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
+    pub enum Method {
+        /// Edge collapses ranked by Euclidean deviation in the rest pose ("3D" in Table 1).
+        #[serde(rename = "rest-pose")]
+        RestPose => "rest-pose",
+        /// Edge collapses ranked by the L2,2 deviation in animation space (§4).
+        #[serde(rename = "as")]
+        AnimationSpace => "as",
+        /// As `AnimationSpace`, with influence simplifications in the same queue (§5).
+        #[serde(rename = "as+is")]
+        InfluenceSimplification => "as+is",
     }
 }
 

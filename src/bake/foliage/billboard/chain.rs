@@ -323,33 +323,19 @@ fn level_of_cloud(
     })
 }
 
-/// Which clouds a tree's chain is made of (the viewer's level policy, less "full").
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum ChainStyle {
-    /// Skeleton clouds all the way: per bone with alike siblings merged, then coarser
-    /// branch subtrees (the chain before spectral clouds existed).
-    Skeleton,
-    /// Spectral clouds from level 1 on.
-    Spectral,
-    /// Skeleton clouds while grouping by bones pays, then spectral clouds at a distance (the
-    /// thesis's proposal §6.5 and Ch. 9: skeleton clouds near, spectral far), and view-selected
-    /// clumps at the coarse end ([`ChainOptions::clumps_from`]).
-    Automatic,
-}
-
-impl ChainStyle {
-    pub const ALL: [ChainStyle; 3] = [
-        ChainStyle::Automatic,
-        ChainStyle::Skeleton,
-        ChainStyle::Spectral,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ChainStyle::Skeleton => "skeleton",
-            ChainStyle::Spectral => "spectral",
-            ChainStyle::Automatic => "automatic",
-        }
+crate::choice! {
+    /// Which clouds a tree's chain is made of (the viewer's level policy, less "full").
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+    pub enum ChainStyle {
+        /// Skeleton clouds while grouping by bones pays, then spectral clouds at a distance (the
+        /// thesis's proposal §6.5 and Ch. 9: skeleton clouds near, spectral far), and view-selected
+        /// clumps at the coarse end ([`ChainOptions::clumps_from`]).
+        Automatic => "automatic",
+        /// Skeleton clouds all the way: per bone with alike siblings merged, then coarser
+        /// branch subtrees (the chain before spectral clouds existed).
+        Skeleton => "skeleton",
+        /// Spectral clouds from level 1 on.
+        Spectral => "spectral",
     }
 }
 

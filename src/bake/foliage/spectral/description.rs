@@ -16,39 +16,25 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::f32::consts::PI;
 
-/// Which description type.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum DescriptionType {
-    /// §6.1.2: the three axes' full spectra. Lossless, but time-shifted copies deviate and
-    /// averaged phases can change a line into a circle.
-    Naive,
-    /// §6.1.3: the line through the two samples farthest apart, and the spectrum of the motion
-    /// along it. Blind to time shifts; every motion becomes a line.
-    DominatingAxis,
-    /// §6.1.4: amplitudes per axis, and per frequency the phase differences between the axes
-    /// (which a time shift leaves alone), weighted by the smaller of the two axes' amplitudes
-    /// (the thesis leaves the weight open; a relationship means nothing where one axis is
-    /// still). Applied with a random base phase per frequency.
-    AxisPhase,
+crate::choice! {
+    /// Which description type.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+    pub enum DescriptionType {
+        /// §6.1.2: the three axes' full spectra. Lossless, but time-shifted copies deviate and
+        /// averaged phases can change a line into a circle.
+        Naive => "naive",
+        /// §6.1.3: the line through the two samples farthest apart, and the spectrum of the motion
+        /// along it. Blind to time shifts; every motion becomes a line.
+        DominatingAxis => "dominating-axis",
+        /// §6.1.4: amplitudes per axis, and per frequency the phase differences between the axes
+        /// (which a time shift leaves alone), weighted by the smaller of the two axes' amplitudes
+        /// (the thesis leaves the weight open; a relationship means nothing where one axis is
+        /// still). Applied with a random base phase per frequency.
+        AxisPhase => "axis-phase",
+    }
 }
 
-crate::named_choice!(DescriptionType);
-
 impl DescriptionType {
-    pub const ALL: [DescriptionType; 3] = [
-        DescriptionType::Naive,
-        DescriptionType::DominatingAxis,
-        DescriptionType::AxisPhase,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            DescriptionType::Naive => "naive",
-            DescriptionType::DominatingAxis => "dominating-axis",
-            DescriptionType::AxisPhase => "axis-phase",
-        }
-    }
-
     /// The description of a trajectory sampled `dft.samples()` times over one loop.
     pub fn describe(self, dft: &Dft, trajectory: &[Vec3]) -> Description {
         let axis = |c: usize| -> Spectrum {
