@@ -5,7 +5,7 @@
 # resident growth past 5 MB after it. The scene is small (COUNT=30 characters, TREES=20
 # trees): the same code paths as the default one, at a frame rate that fits the run in about
 # 15 minutes on lavapipe with 2 cores (COUNT=300 TREES=500, the default scene, takes about an
-# hour). CI runs a short version (tests/soak.rs). Extra arguments go to `lodlab soak`.
+# hour). CI runs a short version (tests/integration/soak.rs). Extra arguments go to `lodlab soak`.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cargo build --release --manifest-path "$root/Cargo.toml"

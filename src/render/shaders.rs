@@ -1,5 +1,5 @@
 //! WGSL sources, compiled into the binary. Each pipeline's module is its own file with the shared
-//! pieces it uses composed in front (WGSL has no includes). `tests/shaders.rs` validates every
+//! pieces it uses composed in front (WGSL has no includes). `tests/integration/shaders.rs` validates every
 //! composed module with naga.
 
 const COMMON: &str = include_str!("../../shaders/common.wgsl");

@@ -1,7 +1,7 @@
 // Validates glTF/GLB files with the Khronos glTF-Validator (npm package gltf-validator) and
 // prints one JSON line per file: counts of errors, warnings, infos and hints, and the errors'
-// and warnings' messages. Exits 1 when any file has an error. Used by tests/export.rs and
-// tests/import_features.rs where `npm ci --prefix tools/gltf` has installed it.
+// and warnings' messages. Exits 1 when any file has an error. Used by tests/integration/export.rs and
+// tests/integration/import_features.rs where `npm ci --prefix tools/gltf` has installed it.
 const fs = require('fs');
 const path = require('path');
 const validator = require('gltf-validator');

@@ -218,7 +218,7 @@ fn foliage_that_the_method_does_not_expect() {
 fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
     use lodlab::bake::foliage::billboard::chain::{CloudKind, CloudLevel, cloud_level};
     use lodlab::measure::colour_error::colour_error;
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     for name in ["broadleaf", "conifer"] {
         let tree = load_model(name).unwrap();
         if name == "broadleaf" {
@@ -280,7 +280,7 @@ fn at_epsilon_zero_the_cloud_reproduces_the_foliage() {
 #[test]
 fn the_chain_falls_to_a_handful_of_billboards() {
     use lodlab::bake::foliage::billboard::chain::{ChainOptions, tree_chain};
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let tree = load_model("broadleaf").unwrap();
     let f = foliage(&tree).unwrap();
     let chain = tree_chain(
@@ -559,7 +559,7 @@ fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
 fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     use lodlab::bake::cache::{LodCache, Origin, keys::source_hash};
     use lodlab::bake::foliage::billboard::chain::{ChainOptions, load_or_build_chain};
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let tree_and_hash = |name: &str| {
@@ -722,7 +722,7 @@ fn an_impostor_shows_the_tree_it_was_baked_from() {
     use lodlab::bake::foliage::billboard::chain::CloudLevel;
     use lodlab::bake::impostor::octahedral::{ViewGrid, bake_impostor};
     use lodlab::measure::colour_error::whole_tree_error;
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let tree = load_model("sapling").unwrap();
     let grid = ViewGrid {
         frames: 6,
@@ -803,7 +803,7 @@ fn an_impostor_stands_where_its_tree_is_drawn() {
     use lodlab::bake::foliage::billboard::chain::CloudLevel;
     use lodlab::bake::impostor::octahedral::{ViewGrid, bake_impostor};
     use lodlab::measure::colour_error::whole_tree_error;
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let tree = load_model("conifer").unwrap();
     let grid = ViewGrid {
         frames: 6,
@@ -831,7 +831,7 @@ fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
     use lodlab::bake::gpu_data::drawable::CharacterBake;
     use lodlab::bake::gpu_data::materials::{BILLBOARD_LIGHTING, lit_atlas_material};
     use lodlab::measure::foliage_lighting::foliage_lighting;
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     // Every other leaf wound the other way, its normal kept: files put normals and winding
     // each their own way, and the renderer lights a back face by the negated normal.
     let mut tree = load_model("sapling").unwrap();
@@ -946,7 +946,7 @@ fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
 fn clumps_drawn_by_view_cover_the_tree_better_than_all_their_planes_or_a_cloud() {
     use lodlab::bake::foliage::billboard::chain::{CloudKind, cloud_level};
     use lodlab::measure::colour_error::colour_error;
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let raster = AtlasRasterizer::new(&gpu);
     let tree = load_model("sapling").unwrap();
     let f = foliage(&tree).unwrap();

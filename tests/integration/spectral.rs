@@ -47,7 +47,7 @@ fn spectral_level(gpu: &Gpu) -> CloudLevel {
 /// be elsewhere, and a weaker wind moves them less.
 #[test]
 fn gpu_spectral_offsets_match_the_cpu_reference() {
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let level = spectral_level(&gpu);
     let motion = level.motion.as_ref().expect("a spectral level has motion");
     assert_eq!(motion.spectra.rows as usize, level.billboards);
@@ -115,7 +115,7 @@ fn gpu_spectral_offsets_match_the_cpu_reference() {
 /// and its spectrum move it, on the GPU.
 #[test]
 fn spectral_billboards_stay_rigid() {
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let level = spectral_level(&gpu);
     let world = World::new(
         &gpu,

@@ -6,8 +6,6 @@
 //! foliage policy is a chain of its own, and the two trees' six took a minute to bake here,
 //! the sapling's three a few seconds.
 
-mod common;
-
 use std::process::Command;
 
 #[test]
@@ -40,7 +38,7 @@ fn two_cycles_of_every_setting_hold_memory_steady() {
             "40",
             "--cache",
         ])
-        .arg(common::shared_cache())
+        .arg(crate::common::shared_cache())
         .arg("--csv")
         .arg(&csv)
         .output()

@@ -2,9 +2,7 @@
 //! back as it drew them. The Khronos glTF-Validator runs where `tools/gltf` is installed
 //! (`npm ci --prefix tools/gltf`; CI installs it and sets `LODLAB_REQUIRE_GLTF_TOOLS`).
 
-mod common;
-
-use common::{gltf_tools, validate};
+use crate::common::{gltf_tools, validate};
 use lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::load_model;
@@ -153,7 +151,7 @@ fn the_exported_full_detail_renders_as_the_original() {
 /// vertex of six influences keeps all six (two weight sets in glTF).
 #[test]
 fn linear_blend_skinning_survives_animation_space() {
-    let model = common::six_influence_model();
+    let model = crate::common::six_influence_model();
     let am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
     let back = am.to_skinned(&model.skeleton);
     for v in 0..model.mesh.vertex_count() {

@@ -1,8 +1,6 @@
 //! The importer on models nobody on this project made (`../shared/models/`).
 
-mod common;
-
-use common::shared_model;
+use crate::common::shared_model;
 use lodlab::import::gltf::load;
 
 #[test]

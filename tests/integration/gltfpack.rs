@@ -3,9 +3,7 @@
 //! by `EXT_meshopt_compression`) open and draw as the originals do. gltfpack runs where
 //! `tools/gltf` is installed (`npm ci --prefix tools/gltf`; CI installs it).
 
-mod common;
-
-use common::gltf_tools;
+use crate::common::gltf_tools;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -72,7 +70,7 @@ fn gltfpack_output_opens_and_draws_as_the_original() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut models: Vec<(PathBuf, &str)> =
         vec![(root.join("assets/walker.glb"), "200,10,3.2,0,0.9,0")];
-    if let Some(fox) = common::shared_model("Fox.glb") {
+    if let Some(fox) = crate::common::shared_model("Fox.glb") {
         models.push((fox, "60,15,2.2"));
     }
     for (model, camera) in &models {
@@ -120,7 +118,7 @@ fn a_corrupt_compressed_view_is_one_line() {
     let packed = dir.path().join("packed.glb");
     gltfpack(&tools, &root.join("assets/walker.glb"), &packed, true);
     let bytes = std::fs::read(&packed).unwrap();
-    let broken = common::edit_glb(&bytes, |json| {
+    let broken = crate::common::edit_glb(&bytes, |json| {
         let views = json["bufferViews"].as_array_mut().unwrap();
         let view = views
             .iter_mut()

@@ -1,8 +1,6 @@
 //! The real window, egui panel included, rendered under Xvfb (or the display there is) and read
 //! back through `lodlab view --screenshot`.
 
-mod common;
-
 use std::path::Path;
 use std::process::Command;
 
@@ -31,7 +29,7 @@ fn viewer_window_shows_the_scene_and_the_panel() {
     let shot = dir.path().join("window.png");
     let out = run_viewer(
         &["view", "--scene", "crowd", "--count", "12"],
-        &common::shared_cache(),
+        &crate::common::shared_cache(),
         &shot,
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -54,7 +52,7 @@ fn viewer_compares_two_methods_side_by_side() {
         "--transition",
         "alpha",
     ];
-    let out = run_viewer(&args, &common::shared_cache(), &shot);
+    let out = run_viewer(&args, &crate::common::shared_cache(), &shot);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "viewer failed: {stderr}");
     check_screenshot(&shot);
@@ -122,7 +120,7 @@ fn viewer_recovers_from_a_lost_device() {
     let shot = dir.path().join("recovered.png");
     let out = run_viewer_with(
         &["view", "--scene", "crowd", "--count", "12"],
-        &common::shared_cache(),
+        &crate::common::shared_cache(),
         &shot,
         8,
         &[("LODLAB_LOSE_DEVICE_AT_FRAME", "3")],

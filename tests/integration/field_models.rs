@@ -4,9 +4,7 @@
 //! of them when it simplifies and quantises load and bake, and clips come from a second file
 //! by joint name.
 
-mod common;
-
-use common::{gltf_tools, validate};
+use crate::common::{gltf_tools, validate};
 use lodlab::bake::character::lod::bake_lods;
 use lodlab::bake::character::simplify::{Method, SimplifyInput};
 use lodlab::generate::wild;
@@ -505,7 +503,7 @@ fn shading_at_switch(
     largest: f32,
     levels: std::ops::Range<usize>,
 ) -> Vec<lodlab::measure::shading_error::LevelShading> {
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe will do)");
+    let gpu = crate::common::gpu().clone();
     let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(model).unwrap();
     let opts = lodlab::runtime::levels::runtime_options(model);
     let lods = bake_lods(model, method, &opts, &|_| {});
@@ -530,7 +528,7 @@ fn shading_at_switch(
 fn influence_simplification_keeps_a_faceted_models_shading() {
     let model = load_model("lowpoly").unwrap();
     let at = |method| {
-        let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter");
+        let gpu = crate::common::gpu().clone();
         let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(&model).unwrap();
         let opts = lodlab::runtime::levels::runtime_options(&model);
         let lods = bake_lods(&model, method, &opts, &|_| {});

@@ -6,7 +6,7 @@ use lodlab::generate::{generate, glb::to_glb};
 use lodlab::model::Model;
 use std::collections::HashMap;
 
-/// The generated creatures (the trees have tests of their own in tests/trees.rs).
+/// The generated creatures (the trees have tests of their own in tests/integration/trees.rs).
 fn generated() -> Vec<Model> {
     BUILTINS
         .iter()
@@ -163,7 +163,7 @@ fn seams_cannot_open_under_skinning() {
 #[test]
 fn importer_reads_back_what_was_generated() {
     // The models made as a `Model` (the files laid out by `generate::wild` have tests of their
-    // own in tests/field_models.rs).
+    // own in tests/integration/field_models.rs).
     for b in BUILTINS {
         let Some(g) = generate(b.name) else { continue };
         let m = lodlab::import::load_model(b.name).expect("committed asset loads");

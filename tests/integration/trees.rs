@@ -2,8 +2,6 @@
 //! skinned wood mesh, foliage quads bound to one bone each, four generations of branches, and a
 //! seamless wind loop that is faster and wider at the twigs than at the trunk.
 
-mod common;
-
 use glam::Vec3;
 use lodlab::anim::local_pose;
 use lodlab::generate::tree::{FOLIAGE_MATERIAL, broadleaf, conifer};
@@ -275,7 +273,7 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
             spec: SceneSpec {
                 scene: lodlab::scene::SceneKind::Forest,
                 count: 4,
-                cache_dir: Some(common::shared_cache()),
+                cache_dir: Some(crate::common::shared_cache()),
                 ..Default::default()
             },
             out: out.clone(),
@@ -332,7 +330,7 @@ fn forest_trees_use_their_cloud_levels() {
             spec: SceneSpec {
                 scene: lodlab::scene::SceneKind::Forest,
                 count: 16,
-                cache_dir: Some(common::shared_cache()),
+                cache_dir: Some(crate::common::shared_cache()),
                 ..Default::default()
             },
             out: out.clone(),
@@ -386,11 +384,11 @@ fn forest_trees_use_their_cloud_levels() {
 #[test]
 fn a_dissolve_shows_each_pixel_from_exactly_one_level() {
     use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-    use lodlab::render::{FrameView, Gpu, Region, Side};
+    use lodlab::render::{FrameView, Region, Side};
     use lodlab::runtime::spec::{Loaded, SceneSpec};
     use lodlab::runtime::world::World;
     use lodlab::scene::{Instance, LodDraw};
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     for samples in [1, 4] {
         // Two different trees stand in for the two levels: the dissolve does not care.
         let spec = SceneSpec {
@@ -680,13 +678,12 @@ fn bake_builds_and_caches_a_tree_chain() {
 /// draw over billboards only, and the level tint colours the trees.
 #[test]
 fn the_foliage_policy_decides_what_trees_become() {
-    use lodlab::render::Gpu;
     use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
     use lodlab::runtime::spec::{Loaded, SceneSpec};
     use lodlab::runtime::world::World;
     use lodlab::scene::foliage::{FoliagePolicy, FoliageView};
     use lodlab::scene::{LodMethod, LodPolicy, Transition};
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let dir = tempfile::tempdir().unwrap();
     let spec = SceneSpec {
         scene: lodlab::scene::SceneKind::Forest,

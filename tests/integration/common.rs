@@ -234,3 +234,10 @@ pub fn shared_cache() -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// The one device the tests share (lavapipe in CI): made once per run, not once per test.
+/// A test that provokes device errors makes its own.
+pub fn gpu() -> &'static lodlab::render::Gpu {
+    static GPU: std::sync::OnceLock<lodlab::render::Gpu> = std::sync::OnceLock::new();
+    GPU.get_or_init(|| lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
+}

@@ -2,8 +2,6 @@
 //! its character's clip where the character stands, and that far characters of a crowd become
 //! their impostors under selection, and stop when the panel turns them off.
 
-mod common;
-
 use lodlab::bake::character::simplify::Method;
 use lodlab::bake::gpu_data::drawable::CharacterBake;
 use lodlab::bake::impostor::animated::{
@@ -26,8 +24,7 @@ use std::sync::OnceLock;
 const OPTIONS: &str = "8x6x24";
 
 fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
+    crate::common::gpu()
 }
 
 /// Held by every test that draws: they share one device, and lavapipe (Mesa 22.3) crashed in
@@ -137,7 +134,7 @@ fn far_characters_become_their_impostors() {
     let spec = SceneSpec {
         models: vec!["walker".into()],
         count: 300,
-        cache_dir: Some(common::shared_cache()),
+        cache_dir: Some(crate::common::shared_cache()),
         ..Default::default()
     };
     let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();

@@ -174,7 +174,7 @@ fn background_bakes_finish_and_fill_the_cache() {
         }
     };
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
-    let gpu = lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let bake = |sources: Vec<LevelSource>, skip: Vec<bool>| {
         let method = Method::AnimationSpace;
         let chain = Default::default();
@@ -275,13 +275,12 @@ fn packed_levels_address_their_own_vertices() {
 /// before, nor for a method never baked.
 #[test]
 fn levels_count_as_cached_once_baked() {
-    use lodlab::render::Gpu;
     use lodlab::render::targets::OFFSCREEN_FORMAT;
     use lodlab::runtime::spec::{Loaded, SceneSpec};
     use lodlab::runtime::world::World;
     use lodlab::scene::LodMethod;
     let dir = tempfile::tempdir().unwrap();
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let world = |method| {
         let spec = SceneSpec {
             models: vec!["walker".into(), "sapling".into()],

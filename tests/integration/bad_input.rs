@@ -1,8 +1,6 @@
 //! Bad input gets one line naming the file and the problem, exit code 1, and no panic.
 
-mod common;
-
-use common::{edit_glb, tiny_model};
+use crate::common::{edit_glb, tiny_model};
 use lodlab::generate::glb::to_glb;
 use lodlab::import::gltf::load;
 use lodlab::model::Influence;
@@ -61,7 +59,7 @@ fn truncated_and_non_gltf_files() {
     );
 }
 
-/// A file without a skin loads as a prop (see tests/import_features.rs); one without any mesh
+/// A file without a skin loads as a prop (see tests/integration/import_features.rs); one without any mesh
 /// in its scene is one line.
 #[test]
 fn gltf_without_a_mesh() {

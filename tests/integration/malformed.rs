@@ -5,16 +5,15 @@
 //! model it claims to be) or fails with one line that names the file and its actual problem,
 //! quickly, without a panic.
 //!
-//! `LODLAB_MALFORMED_DIR=DIR cargo test --test malformed` also leaves the files in DIR (the
+//! `LODLAB_MALFORMED_DIR=DIR cargo test --test integration malformed` also leaves the files in DIR (the
 //! fuzzer's seeds, or to try them on the command line).
 
-mod common;
 /// The second round: valid but odd files, files that expand far past their size, pipes,
 /// devices and files outside the model's folder, through `bake`, `shot` and `export`.
 #[path = "malformed/second_round.rs"]
 mod second_round;
 
-use common::{edit_glb, glb_of, tiny_model};
+use crate::common::{edit_glb, glb_of, tiny_model};
 use image::ImageEncoder;
 use lodlab::generate::glb::to_glb;
 use lodlab::import::gltf::load;
@@ -525,7 +524,7 @@ fn corpus() -> Vec<Case> {
 
     // Materials and images.
     // Textured materials each take a texture layer: 301 are over the limit. (Plain colours
-    // share one palette and load however many there are: tests/field_models.rs.)
+    // share one palette and load however many there are: tests/integration/field_models.rs.)
     case(
         "many-materials.glb",
         {

@@ -1,9 +1,7 @@
 //! glTF features end to end through files: several JOINTS_n/WEIGHTS_n sets, STEP and
 //! CUBICSPLINE and scale channels, several primitives merged, UV seams kept when welding.
 
-mod common;
-
-use common::{edit_glb, six_influence_model, tiny_model};
+use crate::common::{edit_glb, six_influence_model, tiny_model};
 use glam::{Quat, Vec3, Vec4};
 use lodlab::anim::linear_blend_skinning;
 use lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh;
@@ -152,7 +150,7 @@ fn primitives_of_one_skin_are_merged_with_their_materials() {
 
 #[test]
 fn welding_keeps_uv_seams_split() {
-    let Some(fox) = common::shared_model("Fox.glb") else {
+    let Some(fox) = crate::common::shared_model("Fox.glb") else {
         return;
     };
     let m = load(&fox).unwrap();
@@ -259,9 +257,9 @@ fn generated_foliage_is_written_as_a_two_sided_mask() {
     assert_eq!(leaves["doubleSided"], true);
     let bark = materials.iter().find(|m| m["name"] == "bark").unwrap();
     assert!(bark.get("alphaMode").is_none_or(|m| m == "OPAQUE"));
-    if let Some(tools) = common::gltf_tools() {
+    if let Some(tools) = crate::common::gltf_tools() {
         let (_dir, path) = write(&bytes, "sapling.glb");
-        for (errors, _, report) in common::validate(&tools, &[path]) {
+        for (errors, _, report) in crate::common::validate(&tools, &[path]) {
             assert_eq!(errors, 0, "{report}");
         }
     }

@@ -1,11 +1,9 @@
 //! Levels of detail on the GPU (lavapipe in CI): transition endpoints on pixels, batching, and
 //! headless shots of every method, transition, debug view and comparison.
 
-mod common;
-
 use lodlab::app::shot::{ShotOptions, ShotReport, run as shot};
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
-use lodlab::render::{DebugView, FrameView, Gpu, Region, Side};
+use lodlab::render::{DebugView, FrameView, Region, Side};
 use lodlab::runtime::headless::ShotLod;
 use lodlab::runtime::spec::{Loaded, SceneSpec};
 use lodlab::runtime::world::World;
@@ -15,7 +13,7 @@ use std::path::PathBuf;
 
 /// One cache for the whole file, so each (model, method) is baked once.
 fn cache() -> PathBuf {
-    common::shared_cache()
+    crate::common::shared_cache()
 }
 
 fn spec(models: &[&str], count: usize) -> SceneSpec {
@@ -45,7 +43,7 @@ fn differing(a: &image::RgbaImage, b: &image::RgbaImage, by: u8) -> usize {
 
 #[test]
 fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let samples = 4;
     let mut world = World::new(
         &gpu,
@@ -176,7 +174,7 @@ fn transitions_render_exactly_their_levels_at_t_0_and_t_1() {
 
 #[test]
 fn a_thousand_instances_take_a_handful_of_draws() {
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let mut world = World::new(
         &gpu,
         Loaded::new(spec(&["horse", "walker"], 1000)).unwrap(),

@@ -1,8 +1,6 @@
 //! Headless rendering on whatever adapter wgpu finds (Mesa lavapipe in CI, where
 //! `WGPU_BACKEND=vulkan` makes a missing driver fail loudly instead of falling back).
 
-mod common;
-
 use glam::{Affine3A, Quat, Vec3};
 use lodlab::app::shot::{ShotOptions, run as shot};
 use lodlab::render::Gpu;
@@ -23,8 +21,8 @@ fn spec(models: &[&str], count: usize, clip: Option<&str>) -> SceneSpec {
 
 #[test]
 fn gpu_skinning_matches_the_cpu_reference() {
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
-    let Some(fox) = common::shared_model("Fox.glb") else {
+    let gpu = crate::common::gpu().clone();
+    let Some(fox) = crate::common::shared_model("Fox.glb") else {
         return;
     };
     let fox = fox.display().to_string();
@@ -33,7 +31,7 @@ fn gpu_skinning_matches_the_cpu_reference() {
     let six = dir.path().join("six.glb");
     std::fs::write(
         &six,
-        lodlab::generate::glb::to_glb(&common::six_influence_model()),
+        lodlab::generate::glb::to_glb(&crate::common::six_influence_model()),
     )
     .unwrap();
     let six = six.display().to_string();
@@ -165,7 +163,7 @@ fn shots_are_deterministic() {
 #[test]
 fn shot_files_are_the_same_bytes_for_the_same_arguments() {
     let dir = tempfile::tempdir().unwrap();
-    let cache = common::shared_cache();
+    let cache = crate::common::shared_cache();
     let scenes: [&[&str]; 2] = [
         &[
             "--scene",
@@ -344,7 +342,7 @@ fn shot_reports_where_the_frame_goes() {
 #[test]
 fn gpu_clip_cross_fade_matches_the_cpu_reference() {
     use lodlab::render::capture::capture_skinned_fading;
-    let gpu = Gpu::headless().expect("a GPU adapter (lavapipe in CI)");
+    let gpu = crate::common::gpu().clone();
     let world = World::new(
         &gpu,
         Loaded::new(spec(&["walker", "horse"], 2, None)).unwrap(),

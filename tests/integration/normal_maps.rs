@@ -2,8 +2,6 @@
 //! full detail's, models without usable texture coordinates keep their vertex normals, and the
 //! world and its panel line follow the toggle.
 
-mod common;
-
 use lodlab::bake::character::lod::{SkinnedLods, bake_lods};
 use lodlab::bake::character::normal_map::{NORMAL_MAP_SIZE, UvProblem};
 use lodlab::bake::character::simplify::{Method, SimplifyInput};
@@ -18,11 +16,9 @@ use lodlab::runtime::levels::runtime_options;
 use lodlab::runtime::spec::{Loaded, SceneSpec};
 use lodlab::runtime::world::World;
 use lodlab::scene::LodMethod;
-use std::sync::OnceLock;
 
 fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
+    crate::common::gpu()
 }
 
 /// Held by every test that draws: they share one device, and lavapipe (Mesa 22.3) crashed in
@@ -105,7 +101,7 @@ fn the_world_lights_coarse_levels_through_maps_until_turned_off() {
     let spec = SceneSpec {
         models: vec!["walker".into()],
         count: 60,
-        cache_dir: Some(common::shared_cache()),
+        cache_dir: Some(crate::common::shared_cache()),
         ..Default::default()
     };
     let mut world = World::new(gpu, Loaded::new(spec).unwrap(), OFFSCREEN_FORMAT, 1).unwrap();

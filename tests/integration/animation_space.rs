@@ -1,8 +1,6 @@
 //! Animation space (Merry et al. §2.1.2) equals classic linear blend skinning, to 1e-5 of the
 //! model's size, on every model lodlab ships or is tested with, at several times of every clip.
 
-mod common;
-
 use lodlab::anim::linear_blend_skinning;
 use lodlab::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use lodlab::model::{Bounds, Model};
@@ -13,7 +11,7 @@ fn models() -> Vec<Model> {
         lodlab::import::load_model("walker").unwrap(),
     ];
     for name in ["Fox.glb", "SimpleSkin.gltf"] {
-        if let Some(path) = common::shared_model(name) {
+        if let Some(path) = crate::common::shared_model(name) {
             models.push(lodlab::import::gltf::load(&path).unwrap());
         }
     }
