@@ -1,9 +1,12 @@
 //! Import: turning glTF files into [`crate::model::Model`]s.
 
+pub mod clips;
 pub mod container;
 pub mod gltf;
 pub mod gltfpack;
+pub mod nodes;
 pub mod palette;
+pub mod primitives;
 pub mod sources;
 pub mod validate;
 
