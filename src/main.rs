@@ -161,7 +161,7 @@ fn report(a: ReportArgs) -> anyhow::Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    let report = lodlab::app::report::run(&lodlab::app::report::ReportOptions {
+    let report = lodlab::app::report::run(&lodlab::app::report::data::ReportOptions {
         model: name,
         out: a.out.clone(),
         baseline_meshopt: a.baseline.is_some(),

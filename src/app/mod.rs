@@ -5,6 +5,7 @@ pub mod bench;
 pub mod cli;
 pub mod export;
 pub mod gen_assets;
+pub mod plotting;
 pub mod record;
 pub mod report;
 pub mod shot;

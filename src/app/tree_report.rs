@@ -13,7 +13,7 @@
 //! counts) and the spectral levels rebuilt with each description type and as plain SCA
 //! (`description_types`).
 
-use super::report::{plot_error, register_font, write_plot};
+use super::plotting::{plot_error, register_font, write_plot};
 use crate::atomic::write as write_atomic;
 use crate::bake::foliage::billboard::chain::{
     ChainOptions, ChainStyle, CloudKind, TreeLevel, at_rest, cloud_level, tree_chain,

@@ -4,7 +4,7 @@
 
 use super::plan::{Condition, read_manifest};
 use super::session::{TEST, read_answers};
-use crate::app::report::{plot_error, register_font, write_plot};
+use crate::app::plotting::{plot_error, register_font, write_plot};
 use crate::atomic::write as write_atomic;
 use anyhow::Result;
 use plotters::prelude::*;
