@@ -1,0 +1,495 @@
+//! A world: the renderer with the scene's characters and trees, the crowd, the camera, and the
+//! levels of detail installed with their run-time choices.
+
+use super::levels::LevelSource;
+use super::spec::{Loaded, SceneSpec, default_camera, layout_crowd};
+use crate::bake::cache::LodCache;
+use crate::bake::foliage::billboard::chain::{ChainOptions, CloudKind, TreeLevel};
+use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::lod_pack::LodPack;
+use crate::render::{FrameStats, FrameView, Gpu, Region, SceneRenderer, Side};
+use crate::scene::foliage::FoliagePolicy;
+use crate::scene::{
+    Camera, Crowd, Instance, LodDraw, LodMethod, LodModel, LodPolicy, ScreenProjection,
+};
+use anyhow::{Result, bail};
+
+mod install;
+mod view;
+
+use view::impostor_draws;
+pub use view::{LodView, with_impostor};
+
+/// A loaded scene: the renderer with its characters, the crowd, a camera, and the levels of
+/// detail with their run-time choices.
+pub struct World {
+    pub spec: SceneSpec,
+    pub bakes: Vec<CharacterBake>,
+    pub sources: Vec<LevelSource>,
+    pub crowd: Crowd,
+    pub camera: Camera,
+    pub renderer: SceneRenderer,
+    pub lod: LodView,
+    instances: Vec<Instance>,
+    /// Per model: for a tree whose billboard-cloud chain is shown, the renderer's character of
+    /// every level (level 0 the tree itself).
+    tree_levels: Vec<Option<Vec<usize>>>,
+    /// Every tree chain on the GPU, the shown ones and a few earlier ones (switching back to
+    /// them is instant).
+    chains: Vec<InstalledChain>,
+    /// Renderer characters of chains let go, to be reused.
+    free_characters: Vec<usize>,
+    /// The instances and draws of a frame with trees turned into their level's character,
+    /// and far characters into their impostors.
+    drawn: [(Vec<Instance>, Vec<LodDraw>); 2],
+    /// Per model: a character's animated impostor on the GPU, its last level under every
+    /// simplified method.
+    impostors: Vec<Option<InstalledImpostor>>,
+    /// Per model and method slot: its levels' normal maps as uploaded.
+    normal_maps: Vec<Vec<Option<NormalMapInfo>>>,
+}
+
+/// A set of levels' normal maps, as the panel reports them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalMapInfo {
+    /// Levels lit through a map.
+    pub levels: usize,
+    /// Bytes of the maps with their mipmaps.
+    pub bytes: u64,
+    /// Why no level has one, where none has.
+    pub unmapped: Option<crate::bake::character::normal_map::UvProblem>,
+}
+
+/// A character's animated impostor on the GPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstalledImpostor {
+    /// The renderer's character that draws it.
+    pub character: usize,
+    pub options: crate::bake::impostor::animated::ImpostorOptions,
+    /// Bytes of its pages with their mipmaps, as uploaded.
+    pub bytes: u64,
+}
+
+/// Chains kept on the GPU per tree, the shown one included.
+const CHAINS_KEPT_PER_TREE: usize = 3;
+
+/// A tree's billboard-cloud chain on the GPU.
+struct InstalledChain {
+    model: usize,
+    /// How it was cut.
+    opts: ChainOptions,
+    /// The renderer's character of every level (level 0 the tree itself).
+    characters: Vec<usize>,
+    levels: Vec<LevelSummary>,
+}
+
+/// One level of a tree's chain, as the foliage panel lists it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelSummary {
+    /// ε in scene units (0: the full tree).
+    pub epsilon: f32,
+    /// What it is, in a word: full, skeleton or spectral.
+    pub kind: &'static str,
+    pub billboards: usize,
+    pub triangles: usize,
+    /// RMS animation error, in tree heights.
+    pub anim_rms: f32,
+}
+
+impl LevelSummary {
+    fn of(level: &TreeLevel) -> LevelSummary {
+        LevelSummary {
+            epsilon: level.epsilon,
+            kind: match level.kind {
+                None => "full",
+                Some(CloudKind::Skeleton(_)) => "skeleton",
+                Some(CloudKind::Spectral(_)) => "spectral",
+                Some(CloudKind::Clumps { .. }) => "clumps",
+                Some(CloudKind::Impostor { .. }) => "impostor",
+            },
+            billboards: level.cloud.billboards,
+            triangles: level.cloud.model.mesh.triangle_count(),
+            anim_rms: level.cloud.animation.rms,
+        }
+    }
+}
+
+impl World {
+    pub fn new(
+        gpu: &Gpu,
+        loaded: Loaded,
+        color_format: wgpu::TextureFormat,
+        sample_count: u32,
+    ) -> Result<World> {
+        let Loaded {
+            spec,
+            bakes,
+            sources,
+        } = loaded;
+        check_instance_count(gpu, &spec)?;
+        let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
+        for b in &bakes {
+            renderer.add_character(gpu, b)?;
+        }
+        let crowd = layout_crowd(&spec, &bakes, None);
+        let camera = default_camera(&crowd, &bakes);
+        let n_models = bakes.len();
+        let lod = LodView {
+            policy: LodPolicy::default(),
+            method: LodMethod::None,
+            compare: None,
+            foliage: FoliagePolicy::default(),
+            chain: ChainOptions::default(),
+            trees: bakes.iter().map(|b| b.alpha_tested).collect(),
+            trackers: Default::default(),
+            draws: Default::default(),
+            models: bakes
+                .iter()
+                .map(|b| {
+                    let mut slots: [Option<LodModel>; 4] = Default::default();
+                    slots[0] = Some(lod_model(b, &LodPack::full_detail(b)));
+                    slots
+                })
+                .collect(),
+            impostors: true,
+            impostor_errors: vec![Default::default(); n_models],
+            impostors_at: f32::NAN,
+            with_impostors: vec![Default::default(); n_models],
+        };
+        Ok(World {
+            spec,
+            bakes,
+            sources,
+            crowd,
+            camera,
+            renderer,
+            tree_levels: vec![None; n_models],
+            chains: Vec::new(),
+            free_characters: Vec::new(),
+            lod,
+            instances: Vec::new(),
+            drawn: Default::default(),
+            impostors: vec![None; n_models],
+            normal_maps: vec![Vec::new(); n_models],
+        })
+    }
+
+    /// The level-of-detail cache this world bakes into.
+    pub fn cache(&self) -> LodCache {
+        LodCache::new(self.spec.cache_dir.clone())
+    }
+
+    /// Where memory goes, in bytes by kind: on the GPU (see [`GpuMemory`]), the frame's
+    /// render targets (`targets`, the caller's), and the CPU's copies: the models as loaded
+    /// (kept to bake their levels) and their bakes (kept for re-uploads and the crowd); then
+    /// the process's resident size where the platform says it.
+    pub fn memory(&self, targets: u64) -> Vec<(&'static str, u64)> {
+        let mut rows: Vec<(&'static str, u64)> = self.renderer.memory().rows().to_vec();
+        rows.push(("render targets", targets));
+        rows.push((
+            "models (CPU)",
+            self.sources.iter().map(|s| s.model.heap_bytes()).sum(),
+        ));
+        rows.push((
+            "bakes (CPU)",
+            self.bakes.iter().map(CharacterBake::heap_bytes).sum(),
+        ));
+        if let Some(rss) = crate::render::memory::resident_bytes() {
+            rows.push(("resident (process)", rss));
+        }
+        rows
+    }
+
+    /// Re-lays the crowd for a new count, clip or model choice without reloading anything:
+    /// every character stays on the GPU.
+    pub fn relayout(&mut self, only: Option<usize>, count: usize, clip: Option<String>) {
+        self.spec.count = count;
+        self.spec.clip = clip;
+        self.crowd = layout_crowd(&self.spec, &self.bakes, only);
+    }
+
+    pub fn reset_camera(&mut self) {
+        self.camera = default_camera(&self.crowd, &self.bakes);
+    }
+
+    /// Chooses every instance's level for a frame at scene time `time`, `dt` seconds of
+    /// wall time after the last, seen in a view `height` pixels high.
+    pub fn select(&mut self, height: u32, time: f32, dt: f32) {
+        if self.lod.impostors_at != self.lod.policy.tolerance_px {
+            self.lod.refresh_impostors();
+        }
+        self.crowd.instances_at(time, &mut self.instances);
+        let screen = ScreenProjection::new(
+            self.camera.eye(),
+            self.camera.fov_y,
+            height as f32,
+            self.camera.near_far().0,
+        );
+        // The trackers and draws step out while selection reads the rest of the view.
+        let mut trackers = std::mem::take(&mut self.lod.trackers);
+        let mut draws = std::mem::take(&mut self.lod.draws);
+        let lod = &self.lod;
+        for (side, method) in lod.methods().enumerate() {
+            let slot = method.index();
+            trackers[side].update_with(
+                &lod.policy,
+                |m| lod.model(m, slot),
+                &self.instances,
+                &screen,
+                dt,
+                &mut draws[side],
+            );
+        }
+        self.lod.trackers = trackers;
+        self.lod.draws = draws;
+    }
+
+    /// Runs selection over the `seconds` before `time` at 60 frames per second, so that a
+    /// single rendered frame shows the transitions a viewer would be in the middle of.
+    pub fn settle(&mut self, height: u32, time: f32, seconds: f32) {
+        let dt = 1.0 / 60.0;
+        let frames = (seconds / dt).round() as usize;
+        for k in (0..=frames).rev() {
+            self.select(height, time - k as f32 * dt, dt);
+        }
+    }
+
+    /// Uploads everything for a frame (after [`World::select`]) and returns what it will draw.
+    pub fn upload(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> FrameStats {
+        let view = FrameView::from_camera(&self.camera, aspect, time);
+        let lod = &self.lod;
+        // Trees draw their level's own character (a billboard cloud) at full detail; between
+        // two levels (an alpha or a morph transition) they cross-dissolve, the two levels'
+        // characters drawn as two instances. Without tree levels the crowd goes to the
+        // renderer as it is.
+        // Far characters likewise draw their impostor's character: an instance at the
+        // impostor's level is one instance of it; one changing between its coarsest mesh and
+        // its impostor dissolves from one to the other on complementary pixels.
+        let has_impostors = lod.impostors && self.impostors.iter().any(Option::is_some);
+        let remap = self.tree_levels.iter().any(Option::is_some) || has_impostors;
+        for (i, method) in lod.methods().enumerate().filter(|_| remap) {
+            // Per model: its impostor's level under this side's method and its character.
+            let slot = method.index();
+            let far: Vec<Option<(u8, usize)>> = (0..self.impostors.len())
+                .map(|m| {
+                    let character = self.impostors[m].as_ref()?.character;
+                    Some((lod.impostor_level(m, slot)?, character))
+                })
+                .collect();
+            let (instances, draws) = &mut self.drawn[i];
+            instances.clear();
+            draws.clear();
+            for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
+                let Some(levels) = self.tree_levels.get(inst.model).and_then(Option::as_ref) else {
+                    match far.get(inst.model).copied().flatten() {
+                        Some((far, character)) => {
+                            let shown = Instance {
+                                model: character,
+                                ..*inst
+                            };
+                            impostor_draws(inst, &shown, *d, far, instances, draws);
+                        }
+                        None => {
+                            instances.push(*inst);
+                            draws.push(*d);
+                        }
+                    }
+                    continue;
+                };
+                let at = |k: u8| Instance {
+                    model: levels[(k as usize).min(levels.len() - 1)],
+                    ..*inst
+                };
+                match *d {
+                    LodDraw::Level(k) | LodDraw::Dissolve { level: k, .. } => {
+                        instances.push(at(k));
+                        draws.push(LodDraw::Level(k));
+                    }
+                    LodDraw::Alpha { from, to, p }
+                    | LodDraw::Dither { from, to, p }
+                    | LodDraw::Morph {
+                        fine: from,
+                        coarse: to,
+                        t: p,
+                    } => {
+                        for (level, incoming) in [(from, false), (to, true)] {
+                            instances.push(at(level));
+                            draws.push(LodDraw::Dissolve { level, p, incoming });
+                        }
+                    }
+                }
+            }
+        }
+        let drawn = &self.drawn;
+        let instances = &self.instances;
+        let side = |i: usize, m: LodMethod, region| Side {
+            method: if lod.has(m) { m.index() } else { 0 },
+            instances: if remap { &drawn[i].0 } else { instances },
+            draws: if remap { &drawn[i].1 } else { &lod.draws[i] },
+            region,
+        };
+        match lod.compare {
+            None => self
+                .renderer
+                .prepare(gpu, &view, &[side(0, lod.method, Region::Full)]),
+            Some(right) => self.renderer.prepare(
+                gpu,
+                &view,
+                &[
+                    side(0, lod.method, Region::Left),
+                    side(1, right, Region::Right),
+                ],
+            ),
+        }
+    }
+
+    /// Selection and upload for a frame `width`×`height` pixels, `dt` seconds after the last.
+    pub fn prepare(&mut self, gpu: &Gpu, size: [u32; 2], time: f32, dt: f32) -> FrameStats {
+        self.select(size[1], time, dt);
+        self.upload(gpu, size[0] as f32 / size[1].max(1) as f32, time)
+    }
+}
+
+/// What selection needs to know about a character's levels.
+fn lod_model(bake: &CharacterBake, pack: &LodPack) -> LodModel {
+    LodModel {
+        errors: pack.errors(),
+        center: bake.bounds.center(),
+        radius: bake.bounds.diagonal() * 0.5,
+    }
+}
+
+/// Fails, in one line, where the scene's instances would not fit the device's instance buffer
+/// (see [`SceneRenderer::max_instances`]), before any of them is laid out.
+pub fn check_instance_count(gpu: &Gpu, spec: &SceneSpec) -> Result<()> {
+    let max = SceneRenderer::max_instances(&gpu.device);
+    let trees = if spec.scene == crate::scene::SceneKind::Mixed {
+        spec.trees
+    } else {
+        0
+    };
+    let total = spec.count.saturating_add(trees);
+    if total > max {
+        bail!(
+            "{total} instances (--count {}{}) are more than this adapter's buffers hold: at most {max} (max_buffer_size {} MiB)",
+            spec.count,
+            if trees > 0 {
+                format!(", --trees {trees}")
+            } else {
+                String::new()
+            },
+            gpu.device.limits().max_buffer_size >> 20
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_character_changing_to_its_impostor_dissolves_between_the_two() {
+        let inst = Instance {
+            model: 0,
+            transform: glam::Affine3A::IDENTITY,
+            clip: 0,
+            time_offset: 0.0,
+            speed: 1.0,
+            wind: 1.0,
+            tint: glam::Vec4::ONE,
+            fade: None,
+        };
+        let shown = Instance { model: 7, ..inst };
+        let far = 5u8;
+        let run = |d: LodDraw| {
+            let (mut i, mut d2) = (Vec::new(), Vec::new());
+            impostor_draws(&inst, &shown, d, far, &mut i, &mut d2);
+            i.iter().map(|x| x.model).zip(d2).collect::<Vec<_>>()
+        };
+        // A mesh level stays the character; the impostor's level is its impostor.
+        assert_eq!(run(LodDraw::Level(3)), vec![(0, LodDraw::Level(3))]);
+        assert_eq!(run(LodDraw::Level(far)), vec![(7, LodDraw::Level(far))]);
+        // Between two mesh levels nothing changes.
+        let between = LodDraw::Alpha {
+            from: 2,
+            to: 3,
+            p: 0.4,
+        };
+        assert_eq!(run(between), vec![(0, between)]);
+        // Into the impostor (any transition): the mesh dissolves out as the impostor dissolves
+        // in, on complementary pixels.
+        for d in [
+            LodDraw::Alpha {
+                from: 4,
+                to: far,
+                p: 0.3,
+            },
+            LodDraw::Dither {
+                from: 4,
+                to: far,
+                p: 0.3,
+            },
+            LodDraw::Morph {
+                fine: 4,
+                coarse: far,
+                t: 0.3,
+            },
+        ] {
+            assert_eq!(
+                run(d),
+                vec![
+                    (
+                        0,
+                        LodDraw::Dissolve {
+                            level: 4,
+                            p: 0.3,
+                            incoming: false
+                        }
+                    ),
+                    (
+                        7,
+                        LodDraw::Dissolve {
+                            level: far,
+                            p: 0.3,
+                            incoming: true
+                        }
+                    ),
+                ]
+            );
+        }
+        // And back out of it.
+        let out = run(LodDraw::Alpha {
+            from: far,
+            to: 4,
+            p: 0.6,
+        });
+        assert_eq!(out[0].0, 7);
+        assert_eq!(
+            out[1],
+            (
+                0,
+                LodDraw::Dissolve {
+                    level: 4,
+                    p: 0.6,
+                    incoming: true
+                }
+            )
+        );
+    }
+
+    #[test]
+    fn an_impostor_stands_for_the_levels_it_is_no_better_than() {
+        let levels = LodModel {
+            errors: vec![0.0, 1.0, 2.0, 4.0],
+            center: glam::Vec3::ZERO,
+            radius: 1.0,
+        };
+        assert_eq!(
+            with_impostor(&levels, 8.0).errors,
+            vec![0.0, 1.0, 2.0, 4.0, 8.0]
+        );
+        assert_eq!(with_impostor(&levels, 4.0).errors, vec![0.0, 1.0, 2.0, 4.0]);
+        assert_eq!(with_impostor(&levels, 1.5).errors, vec![0.0, 1.0, 1.5]);
+    }
+}
