@@ -1,0 +1,210 @@
+//! Discrete levels of detail cut from a progressive mesh, with geomorph maps between them.
+//!
+//! A [`Sequence`] is every simplification in order. Level k is the longest prefix whose error
+//! stays within `e_k`, with `e_k` doubling from a base tolerance (or the first prefix within a
+//! triangle budget), down to a floor of about a hundred triangles. "Error" is the true one:
+//! the memoryless bound of the steps so far, or the measured distance from full detail if that
+//! is larger ([`SurfaceProbe`]: closest points both ways, the worst of the sampled poses). The
+//! memoryless bound alone can drift from the truth over many steps, and for the rest-pose
+//! method it knows nothing of the animation; a level's error is what the renderer projects to
+//! pixels, so it must not flatter. Each level holds
+//! its render vertices with their animation-space influences *at that level* (influence
+//! simplification changes them), its triangles, and a geomorph map: for every vertex, the
+//! vertex of the next coarser level it ends up as, following the half-edge collapses in
+//! between (Houle & Poulin §5.1). A renderer can then morph any vertex of level k towards level
+//! k+1 with `v = (1−t)·Σ G_i p_i(fine) + t·Σ G_j p_j(coarse)` (Merry et al. §6.4).
+
+pub mod cut;
+pub mod levels;
+pub mod replay;
+
+use cut::cut_growing_levels;
+pub use cut::{LevelProbes, choose_prefixes, cut_levels};
+pub use levels::{
+    LodLevel, LodOptions, POSE_SAMPLES, SkinnedLods, floor_triangles, lod_options, model_height,
+};
+use replay::GrowingSequence;
+pub use replay::{Replay, extract};
+
+use super::simplify::expectation::ExpectationMatrix;
+use super::simplify::{
+    Feed, FirstPricing, Method, Prepared, Sequence, SimplifyInput, Stats, Step, gathered,
+    pose_samples, simplify_prepared,
+};
+use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
+use crate::model::Model;
+use std::sync::OnceLock;
+use std::sync::mpsc::{self};
+
+/// The full-detail mesh of `model` in animation space (GPU order) and its progressive mesh by
+/// `method`, with the wall time the simplification took (estimating `P` included).
+pub fn progressive_mesh(
+    model: &Model,
+    method: Method,
+    progress: &(dyn Fn(f32) + Sync),
+) -> (AnimationSpaceMesh, Sequence, f64) {
+    let base = full_detail(model);
+    let start = std::time::Instant::now();
+    let sequence =
+        gathered(|feed| SharedBake::default().simplify(model, &base, method, progress, feed));
+    let seconds = start.elapsed().as_secs_f64();
+    (base, sequence, seconds)
+}
+
+/// `model`'s mesh in animation space, in GPU order: what every level is cut from.
+pub fn full_detail(model: &Model) -> AnimationSpaceMesh {
+    AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu()
+}
+
+/// What the bakes of one model by several methods share, made by the first bake that needs
+/// each (see [`bake_lods_sharing`]): the probes its levels are measured with, what the
+/// simplifier prepares of its full detail ([`Prepared`]), the expectation matrix `P` and the
+/// first pricing of every position in animation space ([`FirstPricing`]), which AS and AS+IS
+/// share.
+/// On a 2-million-triangle model the probes are about a gigabyte and several seconds, the
+/// preparation five seconds and half a gigabyte, and the first pricing a quarter of a
+/// method's simplification: three methods baking at once each made them again.
+#[derive(Default)]
+pub struct SharedBake<'a> {
+    probes: OnceLock<LevelProbes<'a>>,
+    prepared: OnceLock<Prepared>,
+    expectation: OnceLock<ExpectationMatrix>,
+    as_start: OnceLock<FirstPricing>,
+}
+
+impl<'a> SharedBake<'a> {
+    /// The probes the levels of `model` (full detail `base`) are measured with.
+    fn probes(&self, model: &Model, base: &'a AnimationSpaceMesh) -> &LevelProbes<'a> {
+        self.probes.get_or_init(|| LevelProbes::new(model, base))
+    }
+
+    /// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to
+    /// `feed` as it is built, from what the bakes share; returns its statistics (see
+    /// [`super::simplify::simplify_feeding`]).
+    fn simplify(
+        &self,
+        model: &Model,
+        base: &AnimationSpaceMesh,
+        method: Method,
+        progress: &(dyn Fn(f32) + Sync),
+        feed: &mut (dyn FnMut(Feed) + Send),
+    ) -> Stats {
+        let prepared = self.prepared.get_or_init(|| prepare(model, base));
+        match method {
+            // No other method ranks by the rest pose: its first pricing is its own.
+            Method::RestPose => {
+                let none = ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>());
+                let start = OnceLock::new();
+                simplify_prepared(prepared, &none, &start, method, progress, feed)
+            }
+            Method::AnimationSpace | Method::InfluenceSimplification => {
+                let pm = self
+                    .expectation
+                    .get_or_init(|| ExpectationMatrix::estimate(model));
+                simplify_prepared(prepared, pm, &self.as_start, method, progress, feed)
+            }
+        }
+    }
+}
+
+/// What the simplifier makes of `base` (the full detail of `model`) whatever the method
+/// ([`Prepared`]).
+fn prepare(model: &Model, base: &AnimationSpaceMesh) -> Prepared {
+    let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
+    let poses = pose_samples(model, POSE_SAMPLES);
+    let textured: Vec<bool> = model
+        .materials
+        .iter()
+        .map(|m| m.texture.is_some())
+        .collect();
+    Prepared::new(base, &rest_bones, &poses, &textured)
+}
+
+/// Builds the progressive mesh of `model` by `method` and cuts its levels. The levels are cut
+/// on a second thread as the steps come (see [`GrowingSequence`]): the same levels as cutting
+/// the finished sequence, sooner where there are cores to spare.
+pub fn bake_lods(
+    model: &Model,
+    method: Method,
+    opts: &LodOptions,
+    progress: &(dyn Fn(f32) + Sync),
+) -> SkinnedLods {
+    let start = std::time::Instant::now();
+    let base = full_detail(model);
+    let shared = SharedBake::default();
+    let mut lods = bake_lods_sharing(model, &base, &shared, method, opts, progress);
+    lods.bake_seconds = start.elapsed().as_secs_f64();
+    lods
+}
+
+/// [`bake_lods`] of a model whose bakes by several methods share its full-detail mesh `base`
+/// ([`full_detail`]) and `shared` ([`SharedBake`]): what one bake makes there the others
+/// take, and a cutter waits for the probes while its simplifier goes on.
+pub fn bake_lods_sharing<'a>(
+    model: &Model,
+    base: &'a AnimationSpaceMesh,
+    shared: &SharedBake<'a>,
+    method: Method,
+    opts: &LodOptions,
+    progress: &(dyn Fn(f32) + Sync),
+) -> SkinnedLods {
+    let start = std::time::Instant::now();
+    let (sequence, levels) = std::thread::scope(|scope| {
+        // Made inside the scope, so that a panicking simplifier drops them and the cutter,
+        // seeing the channel close, ends before the scope joins it.
+        let (start_tx, start_rx) = mpsc::channel::<Sequence>();
+        let (steps_tx, steps_rx) = mpsc::channel::<Vec<Step>>();
+        let cutter = scope.spawn(move || {
+            let probes = shared.probes(model, base);
+            // No start: the simplifier stopped before its first step (it panicked).
+            let first = start_rx.recv().ok()?;
+            let mut seq = GrowingSequence::fed(first, steps_rx);
+            let levels = cut_growing_levels(base, &mut seq, opts, probes);
+            // The cutter holds the only copy of the steps: the rest of them, if the floor
+            // came before the end.
+            Some((levels, seq.into_whole()))
+        });
+        // A closed channel means the cutter panicked: joining it below says so.
+        let stats = shared.simplify(model, base, method, progress, &mut |feed| match feed {
+            Feed::Start(first) => {
+                let _ = start_tx.send(first);
+            }
+            Feed::Steps(steps) => {
+                let _ = steps_tx.send(steps);
+            }
+        });
+        drop(steps_tx);
+        // A bake among others in a parallel loop runs on a pool worker: blocked here, it could
+        // leave the cutter's measurements, which need the pool, with no worker to run them
+        // (every worker waiting for its own cutter). So it keeps working while it waits.
+        if rayon::current_thread_index().is_some() {
+            while !cutter.is_finished() {
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                }
+            }
+        }
+        let (levels, mut sequence) = match cutter.join() {
+            Ok(cut) => cut.expect("the simplifier hands over its start"),
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        sequence.stats = stats;
+        (sequence, levels)
+    });
+    let bake_seconds = start.elapsed().as_secs_f64();
+    log::debug!(
+        "{} by {method}: {} steps, {} levels ({} triangles at the coarsest), {bake_seconds:.2} s",
+        model.name,
+        sequence.steps.len(),
+        levels.len(),
+        levels.last().map_or(0, LodLevel::triangles)
+    );
+    SkinnedLods {
+        model: model.name.clone(),
+        method,
+        options: opts.clone(),
+        levels,
+        sequence,
+        bake_seconds,
+    }
+}
