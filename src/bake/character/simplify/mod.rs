@@ -25,10 +25,12 @@
 
 pub mod collapse;
 pub mod expectation;
+mod flatten;
 pub mod influence;
 mod input;
 pub mod mesh;
 mod metric;
+mod posed;
 mod prepare;
 mod queue;
 mod sequence;

@@ -1,11 +1,11 @@
 //! What every method's simplifier of one model starts from, made once: welded positions, the
 //! mesh's topology and kinds, texture charts, posed positions and parts.
 
-use super::collapse::Posed;
 use super::influence::Influence64;
 use super::mesh::{Kind, Mesh};
 use super::metric::influences64;
 use super::metric::rest_position;
+use super::posed::Posed;
 use super::sequence::Stats;
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use glam::{Affine3A, DVec2, DVec3};

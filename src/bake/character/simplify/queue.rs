@@ -2,12 +2,13 @@
 //! removals) ranked by cost, re-priced lazily when a neighbour changes, applied cheapest first
 //! while the sequence is fed to its reader (Merry et al. §4.3, §5).
 
-use super::collapse::{Context, Posed, Scratch};
+use super::collapse::{Context, Scratch};
 use super::expectation::ExpectationMatrix;
 use super::influence::{FactorCache, Influence64};
 use super::input::Method;
 use super::mesh::{Kind, Mesh};
 use super::metric::{Metric, rest_position};
+use super::posed::Posed;
 use super::sequence::{Sequence, Stats, Step, StepKind};
 use crate::bake::character::simplify::prepare::Located;
 use crate::bake::gpu_data::animation_space::AsInfluence;
