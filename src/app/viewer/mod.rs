@@ -5,6 +5,8 @@
 //! the last one to FILE and exits: how the window itself is tested under Xvfb.
 
 mod controls;
+mod figures;
+mod history;
 mod panel;
 
 use super::window::{Acquired, WindowGpu};
@@ -20,7 +22,8 @@ use crate::runtime::world::World;
 use crate::scene::{LodMethod, Transition};
 use anyhow::{Context, Result, anyhow};
 use controls::{Controls, KeyAction};
-use panel::{FrameHistory, Info, Settings};
+use history::FrameHistory;
+use panel::{Info, Settings};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;

@@ -3,149 +3,14 @@
 
 use crate::bake::foliage::billboard::chain::MIN_EPSILON_GROWTH;
 
+use crate::app::viewer::figures::{chain_table, memory, pass_times, statistics};
+use crate::app::viewer::history::FrameHistory;
 use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::render::timer::PassTimes;
 use crate::render::{DebugView, FrameStats};
 use crate::runtime::world::LevelSummary;
 use crate::scene::foliage::{FoliagePolicy, FoliageView};
 use crate::scene::{Drive, LodMethod, LodPolicy, Transition};
-use std::collections::VecDeque;
-
-/// How much history the frame-time graph shows.
-const HISTORY_SECONDS: f64 = 5.0;
-/// Frames the history keeps however old they are.
-const MIN_SAMPLES: usize = 8;
-/// A frame at least this long may be a pause rather than rendering (see
-/// [`FrameHistory::animation_step`]).
-const PAUSE_SECONDS: f32 = 0.5;
-
-/// Frame times over the last few seconds.
-#[derive(Default)]
-pub struct FrameHistory {
-    samples: VecDeque<(f64, f32)>,
-}
-
-impl FrameHistory {
-    /// Records a frame that took `ms` milliseconds and ended at `now` seconds, however long
-    /// that was: on a software rasteriser a frame can take seconds, and the readout must say
-    /// so. The last few frames stay even when they are older than the graph's span, so that
-    /// a slow frame rate still draws a line.
-    pub fn push(&mut self, now: f64, ms: f32) {
-        self.samples.push_back((now, ms));
-        while self.samples.len() > MIN_SAMPLES
-            && self
-                .samples
-                .front()
-                .is_some_and(|(t, _)| now - t > HISTORY_SECONDS)
-        {
-            self.samples.pop_front();
-        }
-    }
-
-    /// The median frame time of the history, in milliseconds (0 with none).
-    pub fn median_ms(&self) -> f32 {
-        let mut ms: Vec<f32> = self.samples.iter().map(|s| s.1).collect();
-        if ms.is_empty() {
-            return 0.0;
-        }
-        ms.sort_by(f32::total_cmp);
-        ms[ms.len() / 2]
-    }
-
-    /// How far the animation advances for a frame that took `seconds`: the wall time, except
-    /// after a pause (a dragged window, a blocking dialog, a level installed), which shows as a
-    /// frame far longer than the usual. A frame counts as a pause beyond four times the median
-    /// of the history, and never below half a second, so a steadily slow renderer still plays
-    /// in real time.
-    pub fn animation_step(&self, seconds: f32) -> f32 {
-        let usual = 4.0 * self.median_ms() / 1000.0;
-        seconds.min(usual.max(PAUSE_SECONDS))
-    }
-
-    /// Frames per second over the last second.
-    pub fn fps(&self) -> f32 {
-        let Some(&(last, _)) = self.samples.back() else {
-            return 0.0;
-        };
-        let recent: Vec<f32> = self
-            .samples
-            .iter()
-            .filter(|(t, _)| last - t <= 1.0)
-            .map(|s| s.1)
-            .collect();
-        let total: f32 = recent.iter().sum();
-        if total > 0.0 {
-            recent.len() as f32 * 1000.0 / total
-        } else {
-            0.0
-        }
-    }
-
-    pub fn mean_ms(&self) -> f32 {
-        if self.samples.is_empty() {
-            return 0.0;
-        }
-        self.samples.iter().map(|s| s.1).sum::<f32>() / self.samples.len() as f32
-    }
-
-    /// Draws the frame times as a line over the last [`HISTORY_SECONDS`].
-    fn graph(&self, ui: &mut egui::Ui) {
-        let (rect, _) =
-            ui.allocate_exact_size(egui::vec2(ui.available_width(), 64.0), egui::Sense::hover());
-        let painter = ui.painter_at(rect);
-        painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
-        let Some(&(now, _)) = self.samples.back() else {
-            return;
-        };
-        let top = self.samples.iter().map(|s| s.1).fold(16.7f32, f32::max) * 1.1;
-        let to_screen = |t: f64, ms: f32| {
-            let x = rect.right() - ((now - t) / HISTORY_SECONDS) as f32 * rect.width();
-            let y = rect.bottom() - (ms / top) * rect.height();
-            egui::pos2(x, y)
-        };
-        // Reference lines at 60, 30 and 10 frames per second, where they stand clear of each
-        // other and of the bottom edge.
-        let mut last_y = rect.bottom();
-        for (ms, label) in [
-            (1000.0 / 60.0, "60 fps"),
-            (1000.0 / 30.0, "30 fps"),
-            (100.0, "10 fps"),
-        ] {
-            let y = to_screen(now, ms).y;
-            if ms < top && last_y - y >= 12.0 {
-                last_y = y;
-                painter.hline(
-                    rect.x_range(),
-                    y,
-                    egui::Stroke::new(1.0, egui::Color32::from_gray(70)),
-                );
-                painter.text(
-                    egui::pos2(rect.left() + 2.0, y),
-                    egui::Align2::LEFT_BOTTOM,
-                    label,
-                    egui::FontId::proportional(10.0),
-                    egui::Color32::from_gray(120),
-                );
-            }
-        }
-        let points: Vec<egui::Pos2> = self
-            .samples
-            .iter()
-            .map(|&(t, ms)| to_screen(t, ms))
-            .collect();
-        painter.add(egui::Shape::line(
-            points,
-            egui::Stroke::new(1.5, egui::Color32::from_rgb(120, 200, 120)),
-        ));
-        painter.text(
-            rect.right_top() + egui::vec2(-2.0, 2.0),
-            egui::Align2::RIGHT_TOP,
-            format!("{top:.0} ms"),
-            egui::FontId::proportional(10.0),
-            egui::Color32::from_gray(150),
-        );
-    }
-}
 
 /// The instance slider's top: a 10,000-character crowd and then some (`--count` goes
 /// further, up to what the device's instance buffer holds).
@@ -379,112 +244,6 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     req
 }
 
-fn level_color(k: usize) -> egui::Color32 {
-    use crate::render::shaders::LEVEL_COLORS;
-    let [r, g, b] = LEVEL_COLORS[k.min(LEVEL_COLORS.len() - 1)];
-    egui::Color32::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
-}
-
-fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameStats) {
-    ui.strong("Statistics");
-    ui.label(format!(
-        "{:.1} fps · {:.1} ms mean over 5 s",
-        history.fps(),
-        history.mean_ms()
-    ));
-    history.graph(ui);
-    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
-        for (label, value) in [
-            ("instances", st.instances),
-            ("culled", st.culled),
-            ("triangles", st.triangles),
-            ("influences", st.influences),
-            ("in transition", st.in_transition),
-            ("draw calls", st.draw_calls as u64),
-        ] {
-            ui.label(label);
-            ui.label(thousands(value));
-            ui.end_row();
-        }
-    });
-    ui.label("instances per level");
-    level_histogram(ui, &st.levels);
-}
-
-/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel.
-fn pass_times(ui: &mut egui::Ui, passes: Option<&PassTimes>, pixels: u64) {
-    let Some(p) = passes else {
-        ui.label(egui::RichText::new("GPU time by pass: no timestamp queries here").small());
-        return;
-    };
-    ui.label(format!("GPU time by pass ({:.1} ms a frame)", p.frame_ms));
-    egui::Grid::new("passes").num_columns(2).show(ui, |ui| {
-        for (pass, ms) in p.drawn() {
-            ui.label(pass.name());
-            ui.label(format!("{ms:.2} ms"));
-            ui.end_row();
-        }
-        if let Some(x) = p.overdraw(pixels) {
-            ui.label("fragments per pixel");
-            ui.label(format!("{x:.2}"));
-            ui.end_row();
-        }
-    });
-}
-
-/// Where memory goes, in MB by kind.
-fn memory(ui: &mut egui::Ui, rows: &[(&'static str, u64)]) {
-    egui::CollapsingHeader::new("Memory")
-        .id_salt("memory")
-        .show(ui, |ui| {
-            egui::Grid::new("memory grid")
-                .num_columns(2)
-                .show(ui, |ui| {
-                    for &(name, bytes) in rows.iter().filter(|(_, b)| *b > 0) {
-                        ui.label(name);
-                        ui.label(format!("{:.1} MB", bytes as f64 / 1e6));
-                        ui.end_row();
-                    }
-                });
-        });
-}
-
-/// Instances per level as bars in the levels' debug colours.
-fn level_histogram(ui: &mut egui::Ui, levels: &[u32]) {
-    let used = levels.iter().rposition(|&n| n > 0).map_or(1, |i| i + 1);
-    let (rect, _) =
-        ui.allocate_exact_size(egui::vec2(ui.available_width(), 56.0), egui::Sense::hover());
-    let painter = ui.painter_at(rect);
-    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
-    let top = levels.iter().copied().max().unwrap_or(0).max(1) as f32;
-    let slot = rect.width() / used.max(4) as f32;
-    for (k, &n) in levels.iter().enumerate().take(used) {
-        let x = rect.left() + k as f32 * slot;
-        let h = (n as f32 / top) * (rect.height() - 24.0);
-        let bar = egui::Rect::from_min_max(
-            egui::pos2(x + 2.0, rect.bottom() - 12.0 - h),
-            egui::pos2(x + slot - 2.0, rect.bottom() - 12.0),
-        );
-        painter.rect_filled(bar, 1.0, level_color(k));
-        painter.text(
-            egui::pos2(x + slot * 0.5, rect.bottom() - 1.0),
-            egui::Align2::CENTER_BOTTOM,
-            format!("{k}"),
-            egui::FontId::proportional(10.0),
-            egui::Color32::from_gray(160),
-        );
-        if n > 0 {
-            painter.text(
-                egui::pos2(x + slot * 0.5, bar.top() - 1.0),
-                egui::Align2::CENTER_BOTTOM,
-                n.to_string(),
-                egui::FontId::proportional(9.0),
-                egui::Color32::from_gray(200),
-            );
-        }
-    }
-}
-
 /// A method picker; methods still to bake say so.
 fn method_combo(ui: &mut egui::Ui, id: &str, value: &mut LodMethod, info: &Info) {
     egui::ComboBox::from_label(id)
@@ -701,33 +460,6 @@ fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     }
 }
 
-/// A tree's levels: ε, kind, billboards, triangles and animation error, each level's row
-/// marked in its tint colour.
-fn chain_table(ui: &mut egui::Ui, name: &str, levels: &[LevelSummary]) {
-    egui::Grid::new(("levels", name))
-        .num_columns(5)
-        .striped(true)
-        .show(ui, |ui| {
-            for h in ["", "ε (m)", "kind", "billb.", "anim"] {
-                ui.label(egui::RichText::new(h).small().strong());
-            }
-            ui.end_row();
-            for (k, l) in levels.iter().enumerate() {
-                ui.colored_label(level_color(k), format!("L{k}"));
-                ui.label(format!("{:.3}", l.epsilon));
-                ui.label(l.kind);
-                ui.label(thousands(l.billboards as u64))
-                    .on_hover_text(format!(
-                        "{} triangles with the wood",
-                        thousands(l.triangles as u64)
-                    ));
-                ui.label(format!("{:.3}", l.anim_rms))
-                    .on_hover_text("RMS animation error, in tree heights");
-                ui.end_row();
-            }
-        });
-}
-
 /// The divider and the method names over the 3D view in compare mode.
 pub fn compare_overlay(ui: &egui::Ui, view: egui::Rect, left: LodMethod, right: LodMethod) {
     let painter = ui.ctx().layer_painter(egui::LayerId::new(
@@ -767,21 +499,11 @@ pub fn compare_overlay(ui: &egui::Ui, view: egui::Rect, left: LodMethod, right: 
     }
 }
 
-fn thousands(n: u64) -> String {
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::app::viewer::figures::thousands;
+    use crate::app::viewer::history::{MIN_SAMPLES, PAUSE_SECONDS};
 
     #[test]
     fn fps_counts_the_last_second() {

@@ -1,0 +1,152 @@
+//! The panel's read-outs: frame statistics and the levels drawn, GPU time by pass, memory
+//! by kind, and a tree chain's levels as a table.
+
+use crate::app::viewer::history::FrameHistory;
+use crate::render::FrameStats;
+use crate::render::timer::PassTimes;
+use crate::runtime::world::LevelSummary;
+
+pub(crate) fn level_color(k: usize) -> egui::Color32 {
+    use crate::render::shaders::LEVEL_COLORS;
+    let [r, g, b] = LEVEL_COLORS[k.min(LEVEL_COLORS.len() - 1)];
+    egui::Color32::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
+}
+
+pub(crate) fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameStats) {
+    ui.strong("Statistics");
+    ui.label(format!(
+        "{:.1} fps · {:.1} ms mean over 5 s",
+        history.fps(),
+        history.mean_ms()
+    ));
+    history.graph(ui);
+    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+        for (label, value) in [
+            ("instances", st.instances),
+            ("culled", st.culled),
+            ("triangles", st.triangles),
+            ("influences", st.influences),
+            ("in transition", st.in_transition),
+            ("draw calls", st.draw_calls as u64),
+        ] {
+            ui.label(label);
+            ui.label(thousands(value));
+            ui.end_row();
+        }
+    });
+    ui.label("instances per level");
+    level_histogram(ui, &st.levels);
+}
+
+/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel.
+pub(crate) fn pass_times(ui: &mut egui::Ui, passes: Option<&PassTimes>, pixels: u64) {
+    let Some(p) = passes else {
+        ui.label(egui::RichText::new("GPU time by pass: no timestamp queries here").small());
+        return;
+    };
+    ui.label(format!("GPU time by pass ({:.1} ms a frame)", p.frame_ms));
+    egui::Grid::new("passes").num_columns(2).show(ui, |ui| {
+        for (pass, ms) in p.drawn() {
+            ui.label(pass.name());
+            ui.label(format!("{ms:.2} ms"));
+            ui.end_row();
+        }
+        if let Some(x) = p.overdraw(pixels) {
+            ui.label("fragments per pixel");
+            ui.label(format!("{x:.2}"));
+            ui.end_row();
+        }
+    });
+}
+
+/// Where memory goes, in MB by kind.
+pub(crate) fn memory(ui: &mut egui::Ui, rows: &[(&'static str, u64)]) {
+    egui::CollapsingHeader::new("Memory")
+        .id_salt("memory")
+        .show(ui, |ui| {
+            egui::Grid::new("memory grid")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    for &(name, bytes) in rows.iter().filter(|(_, b)| *b > 0) {
+                        ui.label(name);
+                        ui.label(format!("{:.1} MB", bytes as f64 / 1e6));
+                        ui.end_row();
+                    }
+                });
+        });
+}
+
+/// Instances per level as bars in the levels' debug colours.
+pub(crate) fn level_histogram(ui: &mut egui::Ui, levels: &[u32]) {
+    let used = levels.iter().rposition(|&n| n > 0).map_or(1, |i| i + 1);
+    let (rect, _) =
+        ui.allocate_exact_size(egui::vec2(ui.available_width(), 56.0), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+    let top = levels.iter().copied().max().unwrap_or(0).max(1) as f32;
+    let slot = rect.width() / used.max(4) as f32;
+    for (k, &n) in levels.iter().enumerate().take(used) {
+        let x = rect.left() + k as f32 * slot;
+        let h = (n as f32 / top) * (rect.height() - 24.0);
+        let bar = egui::Rect::from_min_max(
+            egui::pos2(x + 2.0, rect.bottom() - 12.0 - h),
+            egui::pos2(x + slot - 2.0, rect.bottom() - 12.0),
+        );
+        painter.rect_filled(bar, 1.0, level_color(k));
+        painter.text(
+            egui::pos2(x + slot * 0.5, rect.bottom() - 1.0),
+            egui::Align2::CENTER_BOTTOM,
+            format!("{k}"),
+            egui::FontId::proportional(10.0),
+            egui::Color32::from_gray(160),
+        );
+        if n > 0 {
+            painter.text(
+                egui::pos2(x + slot * 0.5, bar.top() - 1.0),
+                egui::Align2::CENTER_BOTTOM,
+                n.to_string(),
+                egui::FontId::proportional(9.0),
+                egui::Color32::from_gray(200),
+            );
+        }
+    }
+}
+
+/// A tree's levels: ε, kind, billboards, triangles and animation error, each level's row
+/// marked in its tint colour.
+pub(crate) fn chain_table(ui: &mut egui::Ui, name: &str, levels: &[LevelSummary]) {
+    egui::Grid::new(("levels", name))
+        .num_columns(5)
+        .striped(true)
+        .show(ui, |ui| {
+            for h in ["", "ε (m)", "kind", "billb.", "anim"] {
+                ui.label(egui::RichText::new(h).small().strong());
+            }
+            ui.end_row();
+            for (k, l) in levels.iter().enumerate() {
+                ui.colored_label(level_color(k), format!("L{k}"));
+                ui.label(format!("{:.3}", l.epsilon));
+                ui.label(l.kind);
+                ui.label(thousands(l.billboards as u64))
+                    .on_hover_text(format!(
+                        "{} triangles with the wood",
+                        thousands(l.triangles as u64)
+                    ));
+                ui.label(format!("{:.3}", l.anim_rms))
+                    .on_hover_text("RMS animation error, in tree heights");
+                ui.end_row();
+            }
+        });
+}
+
+pub(crate) fn thousands(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
