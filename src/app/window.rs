@@ -105,6 +105,162 @@ impl WindowGpu {
     }
 }
 
+/// A frame of a window with an egui panel, from the surface acquired to the frame presented:
+/// the part of drawing a frame the viewer and the study window share ([`WindowGpu::begin_frame`],
+/// [`WindowGpu::finish_frame`]). What the window draws goes into `encoder`, onto `view`;
+/// egui's own pass draws `primitives` at `screen`.
+pub struct PanelFrame {
+    surface: wgpu::SurfaceTexture,
+    pub view: wgpu::TextureView,
+    pub encoder: wgpu::CommandEncoder,
+    pub primitives: Vec<egui::ClippedPrimitive>,
+    pub screen: egui_wgpu::ScreenDescriptor,
+    /// egui's vertex and index uploads, submitted before the frame.
+    egui_buffers: Vec<wgpu::CommandBuffer>,
+    /// egui's textures the frame no longer needs, freed once it is submitted.
+    frees: Vec<egui::TextureId>,
+}
+
+/// What [`WindowGpu::begin_frame`] found.
+pub enum Began {
+    Frame(Box<PanelFrame>),
+    /// No frame this time (the surface skipped it, or was made again): draw next time.
+    Skipped,
+    /// The surface no longer fits the window: resize (the window and whatever else has its
+    /// size), and draw next time.
+    Reconfigure,
+}
+
+impl WindowGpu {
+    /// Begins a frame of egui's `output` (of `ctx`, drawn by `renderer`): tessellates it and
+    /// uploads its textures, acquires the surface (making it again where it was lost), and
+    /// records egui's buffer uploads. Where no frame comes, egui's freed textures are freed at
+    /// once.
+    pub fn begin_frame(
+        &mut self,
+        ctx: &egui::Context,
+        renderer: &mut egui_wgpu::Renderer,
+        mut output: egui::FullOutput,
+    ) -> Result<Began> {
+        let ppp = output.pixels_per_point;
+        let primitives = ctx.tessellate(std::mem::take(&mut output.shapes), ppp);
+        // egui's texture uploads go in whether or not this frame reaches the screen; its frees
+        // once the frame no longer needs the textures.
+        for (id, deltas) in output.textures_delta.set.drain() {
+            for delta in &deltas {
+                renderer.update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+            }
+        }
+        let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
+        let free_now = |renderer: &mut egui_wgpu::Renderer| {
+            for id in &frees {
+                renderer.free_texture(id);
+            }
+        };
+        let surface = match self.acquire() {
+            Ok(Acquired::Frame(f)) => f,
+            Ok(Acquired::Skip) => {
+                free_now(renderer);
+                return Ok(Began::Skipped);
+            }
+            Ok(Acquired::Reconfigure) => {
+                free_now(renderer);
+                return Ok(Began::Reconfigure);
+            }
+            Ok(Acquired::Recreate) => {
+                free_now(renderer);
+                self.recreate_surface()?;
+                return Ok(Began::Skipped);
+            }
+            Err(e) => {
+                free_now(renderer);
+                return Err(e);
+            }
+        };
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [self.config.width, self.config.height],
+            pixels_per_point: ppp,
+        };
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let egui_buffers = renderer.update_buffers(
+            &self.gpu.device,
+            &self.gpu.queue,
+            &mut encoder,
+            &primitives,
+            &screen,
+        );
+        let view = surface.texture.create_view(&Default::default());
+        Ok(Began::Frame(Box::new(PanelFrame {
+            surface,
+            view,
+            encoder,
+            primitives,
+            screen,
+            egui_buffers,
+            frees,
+        })))
+    }
+
+    /// Submits `frame`, presents it, and frees egui's textures it no longer needs. A GPU error
+    /// of the frame fails it, unpresented.
+    pub fn finish_frame(
+        &self,
+        renderer: &mut egui_wgpu::Renderer,
+        frame: Box<PanelFrame>,
+    ) -> Result<()> {
+        let PanelFrame {
+            surface,
+            encoder,
+            mut egui_buffers,
+            frees,
+            ..
+        } = *frame;
+        egui_buffers.push(encoder.finish());
+        self.gpu.queue.submit(egui_buffers);
+        let submitted = self.gpu.take_error();
+        if submitted.is_ok() {
+            self.window.pre_present_notify();
+            self.gpu.queue.present(surface);
+        }
+        for id in &frees {
+            renderer.free_texture(id);
+        }
+        submitted
+    }
+}
+
+/// egui's pass: `primitives` drawn at `screen` into `view`, over what is there (`clear`: None)
+/// or over a clear colour.
+#[allow(clippy::too_many_arguments)]
+pub fn draw_panel(
+    renderer: &egui_wgpu::Renderer,
+    encoder: &mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    primitives: &[egui::ClippedPrimitive],
+    screen: &egui_wgpu::ScreenDescriptor,
+    label: &str,
+    clear: Option<wgpu::Color>,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) {
+    let mut pass = encoder
+        .begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            timestamp_writes,
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: clear.map_or(wgpu::LoadOp::Load, wgpu::LoadOp::Clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        })
+        .forget_lifetime();
+    renderer.render(&mut pass, primitives, screen);
+}
+
 /// What to do about the surface's answer: draw, skip this frame, reconfigure it (outdated:
 /// the window changed size or format), make it again (lost), or give up (validation: a bug).
 fn acquired(status: wgpu::CurrentSurfaceTexture) -> Result<Acquired> {

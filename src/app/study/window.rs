@@ -7,7 +7,7 @@
 use super::session::Session;
 use crate::app::video::ClipReader;
 use crate::app::viewer::display_available;
-use crate::app::window::{Acquired, WindowGpu};
+use crate::app::window::{Began, WindowGpu, draw_panel};
 use anyhow::{Context, Result};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -337,72 +337,33 @@ impl StudyWindow {
                     }
                 });
         });
-        self.egui
-            .handle_platform_output(&self.win.window, output.platform_output);
-        let ppp = output.pixels_per_point;
-        let primitives = self.egui.egui_ctx().tessellate(output.shapes, ppp);
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                self.renderer
-                    .update_texture(&self.win.gpu.device, &self.win.gpu.queue, *id, delta);
-            }
-        }
-        let surface_frame = match self.win.acquire()? {
-            Acquired::Frame(f) => f,
-            Acquired::Skip => return Ok(()),
-            Acquired::Reconfigure => {
+        let mut output = output;
+        self.egui.handle_platform_output(
+            &self.win.window,
+            std::mem::take(&mut output.platform_output),
+        );
+        let began = self
+            .win
+            .begin_frame(self.egui.egui_ctx(), &mut self.renderer, output)?;
+        let mut frame = match began {
+            Began::Frame(f) => f,
+            Began::Skipped => return Ok(()),
+            Began::Reconfigure => {
                 let (w, h) = (self.win.config.width, self.win.config.height);
                 self.win.resize(w, h);
                 return Ok(());
             }
-            Acquired::Recreate => {
-                self.win.recreate_surface()?;
-                return Ok(());
-            }
         };
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [self.win.config.width, self.win.config.height],
-            pixels_per_point: ppp,
-        };
-        let mut encoder = self
-            .win
-            .gpu
-            .device
-            .create_command_encoder(&Default::default());
-        let mut buffers = self.renderer.update_buffers(
-            &self.win.gpu.device,
-            &self.win.gpu.queue,
-            &mut encoder,
-            &primitives,
-            &screen,
+        draw_panel(
+            &self.renderer,
+            &mut frame.encoder,
+            &frame.view,
+            &frame.primitives,
+            &frame.screen,
+            "study",
+            Some(wgpu::Color::BLACK),
+            None,
         );
-        let view = surface_frame.texture.create_view(&Default::default());
-        {
-            let mut pass = encoder
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("study"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    ..Default::default()
-                })
-                .forget_lifetime();
-            self.renderer.render(&mut pass, &primitives, &screen);
-        }
-        buffers.push(encoder.finish());
-        self.win.gpu.queue.submit(buffers);
-        self.win.gpu.take_error()?;
-        self.win.window.pre_present_notify();
-        self.win.gpu.queue.present(surface_frame);
-        for id in &output.textures_delta.free {
-            self.renderer.free_texture(id);
-        }
-        Ok(())
+        self.win.finish_frame(&mut self.renderer, frame)
     }
 }

@@ -5,11 +5,12 @@
 //! the last one to FILE and exits: how the window itself is tested under Xvfb.
 
 mod controls;
+mod event_loop;
 mod figures;
 mod history;
 mod panel;
 
-use super::window::{Acquired, WindowGpu};
+use super::window::{Began, WindowGpu, draw_panel};
 use crate::atomic::write_png;
 use crate::render::DebugView;
 use crate::render::FrameStats;
@@ -20,27 +21,22 @@ use crate::runtime::levels::{BackgroundBake, Poll};
 use crate::runtime::spec::{Loaded, SceneSpec};
 use crate::runtime::world::World;
 use crate::scene::{LodMethod, Transition};
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use controls::{Controls, KeyAction};
+pub use event_loop::{display_available, run};
 use history::FrameHistory;
 use panel::{Info, Settings};
 use std::path::PathBuf;
-use std::process::ExitCode;
 use std::time::Instant;
-use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
-use winit::event_loop::{ActiveEventLoop, EventLoop};
-use winit::window::{Window, WindowId};
+use winit::event_loop::ActiveEventLoop;
+use winit::window::Window;
 
 /// The choice after `current` in `all`, wrapping round.
 fn next<T: Copy + PartialEq>(all: &[T], current: T) -> T {
     let i = all.iter().position(|&x| x == current).map_or(0, |i| i + 1);
     all[i % all.len()]
 }
-
-/// Printed, with exit code 2, where no window can be opened.
-pub const NO_DISPLAY: &str = "lodlab: no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset); \
-     to render without one use `lodlab shot --out FILE.png`";
 
 #[derive(Clone, Debug)]
 pub struct ViewOptions {
@@ -53,122 +49,6 @@ pub struct ViewOptions {
     pub frames: usize,
     /// The level-of-detail choices the viewer starts with.
     pub lod: ShotLod,
-}
-
-/// Is there a display server to talk to? On Linux and the BSDs that means X11 or Wayland.
-pub(crate) fn display_available() -> bool {
-    if cfg!(all(unix, not(target_os = "macos"))) {
-        std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
-            || std::env::var_os("WAYLAND_DISPLAY").is_some_and(|d| !d.is_empty())
-    } else {
-        true
-    }
-}
-
-pub fn run(options: ViewOptions) -> Result<ExitCode> {
-    if !display_available() {
-        eprintln!("{NO_DISPLAY}");
-        return Ok(ExitCode::from(2));
-    }
-    if let Some(path) = &options.screenshot {
-        crate::atomic::check_target(path)?;
-    }
-    let launched = Instant::now();
-    let loaded = Loaded::new(options.spec.clone())?;
-    let models_seconds = launched.elapsed().as_secs_f32();
-    // winit loads the windowing system's libraries at run time, and panics where one it
-    // needs is missing: say which package holds it, in one line.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let created = std::panic::catch_unwind(EventLoop::new);
-    std::panic::set_hook(hook);
-    let event_loop = match created {
-        Ok(Ok(el)) => el,
-        Ok(Err(e)) => {
-            if let Some(line) = super::window::missing_library(&e.to_string()) {
-                anyhow::bail!(line);
-            }
-            eprintln!("{NO_DISPLAY} ({e})");
-            return Ok(ExitCode::from(2));
-        }
-        Err(panic) => {
-            let message = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
-            match super::window::missing_library(&message) {
-                Some(line) => anyhow::bail!(line),
-                None => anyhow::bail!("cannot open a window: {message}"),
-            }
-        }
-    };
-    let mut app = App {
-        options,
-        launched: Launch {
-            at: launched,
-            models_seconds,
-            window_seconds: 0.0,
-        },
-        loaded: Some(loaded),
-        viewer: None,
-        error: None,
-    };
-    event_loop.run_app(&mut app).context("window event loop")?;
-    match app.error {
-        Some(e) => Err(e),
-        None => Ok(ExitCode::SUCCESS),
-    }
-}
-
-struct App {
-    options: ViewOptions,
-    launched: Launch,
-    loaded: Option<Loaded>,
-    viewer: Option<Viewer>,
-    error: Option<anyhow::Error>,
-}
-
-impl ApplicationHandler for App {
-    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.viewer.is_some() {
-            return;
-        }
-        let Some(loaded) = self.loaded.take() else {
-            return;
-        };
-        match Viewer::new(event_loop, &self.options, loaded, self.launched) {
-            Ok(mut v) => {
-                v.launched.window_seconds = self.launched.at.elapsed().as_secs_f32();
-                self.viewer = Some(v)
-            }
-            Err(e) => {
-                self.error = Some(e);
-                event_loop.exit();
-            }
-        }
-    }
-
-    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
-        let Some(viewer) = &mut self.viewer else {
-            return;
-        };
-        match viewer.handle(&event, &self.options) {
-            Ok(true) => {}
-            Ok(false) => event_loop.exit(),
-            Err(e) => {
-                self.error = Some(e);
-                event_loop.exit();
-            }
-        }
-    }
-
-    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
-        // Always animating: ask for the next frame straight away.
-        if let Some(v) = &self.viewer {
-            v.win.window.request_redraw();
-        }
-    }
 }
 
 /// When the viewer was launched, and how long its models took to load: the start-up figures
@@ -552,12 +432,8 @@ impl Viewer {
             self.recover_device()?;
         }
         let dt = self.tick();
-        let (mut output, central) = self.run_panel()?;
+        let (output, central) = self.run_panel()?;
         let ppp = output.pixels_per_point;
-        let primitives = self
-            .egui
-            .egui_ctx()
-            .tessellate(std::mem::take(&mut output.shapes), ppp);
 
         // The 3D view: what the panel leaves.
         let (w, h) = (self.win.config.width, self.win.config.height);
@@ -570,74 +446,30 @@ impl Viewer {
             .world
             .prepare(&self.win.gpu, [self.view[2], self.view[3]], self.time, dt);
 
-        // egui's texture uploads go in whether or not this frame reaches the screen; its frees
-        // once the frame no longer needs the textures.
-        for (id, deltas) in output.textures_delta.set.drain() {
-            for delta in &deltas {
-                self.egui_renderer.update_texture(
-                    &self.win.gpu.device,
-                    &self.win.gpu.queue,
-                    id,
-                    delta,
-                );
-            }
-        }
-        let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
-        let acquired = match self.win.acquire() {
-            Ok(a) => a,
-            Err(e) => {
-                // The surface of a device lost since this frame began fails validation.
-                if self.win.gpu.is_lost() {
-                    self.free_egui_textures(&frees);
-                    return Ok(true);
-                }
-                return Err(e);
-            }
-        };
-        let frame = match acquired {
-            Acquired::Frame(f) => f,
-            Acquired::Skip => {
-                self.free_egui_textures(&frees);
-                return Ok(true);
-            }
-            Acquired::Reconfigure => {
-                self.free_egui_textures(&frees);
+        let began = self
+            .win
+            .begin_frame(self.egui.egui_ctx(), &mut self.egui_renderer, output);
+        let mut frame = match began {
+            Ok(Began::Frame(f)) => f,
+            Ok(Began::Skipped) => return Ok(true),
+            Ok(Began::Reconfigure) => {
                 self.resize(w, h);
                 return Ok(true);
             }
-            Acquired::Recreate => {
-                self.free_egui_textures(&frees);
-                self.win.recreate_surface()?;
-                return Ok(true);
-            }
+            // The surface of a device lost since this frame began fails validation.
+            Err(_) if self.win.gpu.is_lost() => return Ok(true),
+            Err(e) => return Err(e),
         };
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [w, h],
-            pixels_per_point: ppp,
-        };
-        let mut encoder = self
-            .win
-            .gpu
-            .device
-            .create_command_encoder(&Default::default());
-        let mut buffers = self.egui_renderer.update_buffers(
-            &self.win.gpu.device,
-            &self.win.gpu.queue,
-            &mut encoder,
-            &primitives,
-            &screen,
-        );
-        let view = frame.texture.create_view(&Default::default());
         self.encode(
-            &mut encoder,
+            &mut frame.encoder,
             &self.targets,
-            &view,
-            &primitives,
-            &screen,
+            &frame.view,
+            &frame.primitives,
+            &frame.screen,
             self.timer.as_ref(),
         );
         if let Some(t) = &mut self.timer {
-            t.resolve(&mut encoder);
+            t.resolve(&mut frame.encoder);
         }
 
         // The screenshot: the same frame once more into a texture that can be read back.
@@ -651,18 +483,16 @@ impl Viewer {
                 self.win.config.format,
             );
             self.encode(
-                &mut encoder,
+                &mut frame.encoder,
                 &shot.targets,
                 &shot.view,
-                &primitives,
-                &screen,
+                &frame.primitives,
+                &frame.screen,
                 None,
             );
             shot
         });
-        buffers.push(encoder.finish());
-        self.win.gpu.queue.submit(buffers);
-        if let Err(e) = self.win.gpu.take_error() {
+        if let Err(e) = self.win.finish_frame(&mut self.egui_renderer, frame) {
             // The next frame recovers a lost device.
             if self.win.gpu.is_lost() {
                 return Ok(true);
@@ -678,9 +508,6 @@ impl Viewer {
                 });
             }
         }
-        self.win.window.pre_present_notify();
-        self.win.gpu.queue.present(frame);
-        self.free_egui_textures(&frees);
         self.frames += 1;
         self.report_start_up();
 
@@ -858,13 +685,6 @@ impl Viewer {
             self.bake_error = None;
         }
     }
-
-    fn free_egui_textures(&mut self, ids: &[egui::TextureId]) {
-        for id in ids {
-            self.egui_renderer.free_texture(id);
-        }
-    }
-
     /// Records the scene into the 3D view and the panel over it.
     fn encode(
         &self,
@@ -878,22 +698,15 @@ impl Viewer {
         self.world
             .renderer
             .encode(encoder, targets, view, Some(self.view), timer);
-        let mut pass = encoder
-            .begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("panel"),
-                timestamp_writes: timer.map(|t| t.writes(Pass::Ui)),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                ..Default::default()
-            })
-            .forget_lifetime();
-        self.egui_renderer.render(&mut pass, primitives, screen);
+        draw_panel(
+            &self.egui_renderer,
+            encoder,
+            view,
+            primitives,
+            screen,
+            "panel",
+            None,
+            timer.map(|t| t.writes(Pass::Ui)),
+        );
     }
 }
