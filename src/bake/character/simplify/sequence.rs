@@ -1,7 +1,7 @@
 //! The simplifier's output: every step in order with its cost and the running maximum (the
 //! memoryless bound of Merry et al. §4), from which levels and geomorphs are cut.
 
-use super::Method;
+use super::input::Method;
 use crate::bake::gpu_data::animation_space::AsInfluence;
 use serde::{Deserialize, Serialize};
 

@@ -1,17 +1,19 @@
 //! The command line's arguments: every subcommand and its options, with clap. `main.rs`
 //! parses them and hands each command to its front end.
 
-use crate::bake::foliage::billboard::chain::{ChainOptions, MIN_EPSILON_GROWTH};
-use crate::bake::foliage::spectral::description::DescriptionType;
+pub mod scene_args;
+pub mod values;
+
 use crate::render::DebugView;
-use crate::runtime::headless::ShotLod;
-use crate::runtime::spec::SceneSpec;
-use crate::scene::SceneKind;
 use crate::scene::camera_path::PathKind;
-use crate::scene::foliage::{FoliagePolicy, FoliageView};
-use crate::scene::{Camera, Drive, LodMethod, LodPolicy, Transition};
+use crate::scene::{Camera, LodMethod};
 use clap::{Args, Parser, Subcommand};
+pub use scene_args::{BillboardLighting, FoliageArgs, Impostors, LodArgs, PolicyArgs, SceneArgs};
 use std::path::PathBuf;
+use values::{
+    parse_camera, parse_clip_length, parse_export_tolerance, parse_frames, parse_limit,
+    parse_number, parse_samples, parse_seconds, parse_size, parse_video_size,
+};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -109,11 +111,6 @@ impl Cli {
         limits.outside_files = self.allow_outside_files;
         limits
     }
-}
-
-fn parse_limit(s: &str) -> Result<String, String> {
-    crate::import::validate::Limits::default().set(s)?;
-    Ok(s.to_string())
 }
 
 #[derive(Subcommand, Debug)]
@@ -395,10 +392,6 @@ pub struct ExportArgs {
     pub json: bool,
 }
 
-fn parse_export_tolerance(s: &str) -> Result<f32, String> {
-    parse_in(s, "tolerance", 0.25..=16.0)
-}
-
 #[derive(Args, Debug)]
 pub struct GenAssetsArgs {
     /// Folder to write into (default: the project's assets/ folder).
@@ -407,317 +400,6 @@ pub struct GenAssetsArgs {
     /// Only these assets.
     #[arg(long = "only", value_name = "NAME")]
     pub only: Vec<String>,
-}
-
-/// Which scene and which characters.
-#[derive(Args, Debug, Clone)]
-pub struct SceneArgs {
-    /// Scene to show: mixed (the crowd walking in a clearing of the forest), crowd
-    /// (characters), forest (trees) or study (copies of one model) [default: mixed; study for
-    /// record].
-    #[arg(long, value_enum)]
-    pub scene: Option<SceneKind>,
-    /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling) or a glTF path.
-    /// Repeat for several.
-    #[arg(long = "model", value_name = "NAME|PATH")]
-    pub models: Vec<String>,
-    /// Number of characters (or trees in the forest) [default: 300 characters, 500 trees, 100
-    /// copies in the study scene].
-    #[arg(long)]
-    pub count: Option<usize>,
-    /// Trees round the mixed scene's clearing.
-    #[arg(long, default_value_t = crate::scene::kind::DEFAULT_MIXED_TREES)]
-    pub trees: usize,
-    /// Play this clip on every model that has it (default: a mix).
-    #[arg(long)]
-    pub clip: Option<String>,
-    /// Seed of the crowd layout.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Walkers stop now and then to play a clip on the spot (a wave), cross-fading into it and
-    /// back over this many seconds; 0: they never stop.
-    #[arg(long, default_value_t = 0.0, value_name = "SECONDS", value_parser = parse_seconds)]
-    pub cross_fade: f32,
-    /// Far characters become animated impostors, their last level of detail under every
-    /// simplified method: VIEWSxFRAMESxCELL is views on a side of the view grid, frames per
-    /// clip and texels on a side of a view (memory grows as views² × frames × cell²), or
-    /// `off`.
-    #[arg(long, default_value = "12x12x24", value_name = "VIEWSxFRAMESxCELL|off", value_parser = parse_impostors)]
-    pub impostors: Impostors,
-    /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
-    #[arg(long, value_name = "DIR")]
-    pub cache: Option<PathBuf>,
-}
-
-impl SceneArgs {
-    pub fn spec(&self) -> SceneSpec {
-        self.spec_or(SceneKind::Mixed)
-    }
-
-    /// The scene asked for, `default` where none is.
-    pub fn spec_or(&self, default: SceneKind) -> SceneSpec {
-        let scene = self.scene.unwrap_or(default);
-        SceneSpec {
-            count: self.count.unwrap_or_else(|| scene.default_count()),
-            scene,
-            models: self.models.clone(),
-            trees: self.trees,
-            clip: self.clip.clone(),
-            seed: self.seed,
-            cross_fade: self.cross_fade,
-            impostors: self.impostors.0,
-            cache_dir: self.cache.clone(),
-        }
-    }
-}
-
-/// Levels of detail: which, how they change, what the view shows.
-#[derive(Args, Debug, Clone)]
-pub struct LodArgs {
-    /// Level-of-detail method: none, rest-pose, as, as+is [default: as+is in the viewer, none
-    /// for shot, the full-detail baseline].
-    #[arg(long, value_enum)]
-    pub method: Option<LodMethod>,
-    #[command(flatten)]
-    pub policy: PolicyArgs,
-    /// Debug view: shaded, lod, transition, wireframe, influences.
-    #[arg(long, default_value = "shaded", value_enum)]
-    pub debug_view: DebugView,
-    /// Light the coarse levels with their vertex normals only, not through the normal maps
-    /// baked from full detail.
-    #[arg(long)]
-    pub no_normal_maps: bool,
-    /// Split the view: method A on the left half, B on the right, e.g. as+is,rest-pose.
-    #[arg(long, value_name = "A,B", value_parser = parse_compare)]
-    pub compare: Option<(LodMethod, LodMethod)>,
-    #[command(flatten)]
-    pub foliage: FoliageArgs,
-}
-
-/// How instances choose and change levels.
-#[derive(Args, Debug, Clone)]
-pub struct PolicyArgs {
-    /// Transition between levels: pop, alpha (blend), morph (geomorph), dither (screen-door
-    /// cross-fade).
-    #[arg(long, default_value = "morph", value_enum)]
-    pub transition: Transition,
-    /// What drives alpha, morph and dither: time (over --duration) or zone (morph zones over
-    /// distance).
-    #[arg(long, value_enum, default_value = "time")]
-    pub drive: Drive,
-    /// Seconds a time-driven transition takes.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_seconds)]
-    pub duration: f32,
-    /// Width of a morph zone, as a fraction of its threshold distance.
-    #[arg(long, default_value_t = 0.25, value_parser = parse_non_negative)]
-    pub zone_width: f32,
-    /// Largest projected error allowed, in pixels (0.25 to 16).
-    #[arg(long, default_value_t = 1.5, value_parser = parse_tolerance)]
-    pub tolerance: f32,
-    /// Hysteresis: the fraction of the tolerance a coarser level must undercut (0 to 0.9).
-    #[arg(long, default_value_t = 0.2, value_parser = parse_hysteresis)]
-    pub hysteresis: f32,
-    /// Show level N of every character (its coarsest if it has fewer), whatever the distance.
-    #[arg(long, value_name = "N")]
-    pub force_level: Option<u8>,
-}
-
-impl PolicyArgs {
-    pub fn policy(&self) -> LodPolicy {
-        LodPolicy {
-            tolerance_px: self.tolerance,
-            hysteresis: self.hysteresis,
-            transition: self.transition,
-            drive: self.drive,
-            duration: self.duration,
-            zone_width: self.zone_width,
-            force_level: self.force_level,
-        }
-    }
-}
-
-/// Trees: what they become under a simplified method and how they look.
-#[derive(Args, Debug, Clone)]
-pub struct FoliageArgs {
-    /// Trees' level policy: automatic (skeleton clouds near, spectral clouds far, view-selected
-    /// clumps farthest), skeleton, spectral, or full (every leaf at every distance).
-    #[arg(long, default_value = "automatic", value_enum)]
-    pub foliage: FoliagePolicy,
-    /// ε of a tree's first cloud level, as a fraction of its height.
-    #[arg(long, default_value_t = ChainOptions::default().first_epsilon, value_parser = parse_first_epsilon)]
-    pub first_epsilon: f32,
-    /// Factor from one cloud level's ε to the next (1.25 to 8).
-    #[arg(long, default_value_t = ChainOptions::default().epsilon_growth, value_parser = parse_epsilon_growth)]
-    pub epsilon_growth: f32,
-    /// Spectral description type of spectral clouds: naive, dominating-axis, axis-phase.
-    #[arg(long, default_value = "axis-phase", value_enum)]
-    pub description: DescriptionType,
-    /// Frequency lines kept per axis by spectral clouds (K, 1 to 16).
-    #[arg(long, default_value_t = crate::bake::foliage::spectral::DEFAULT_BINS as u16, value_parser = clap::value_parser!(u16).range(1..=16))]
-    pub bins: u16,
-    /// Plain SCA: spectral billboards hang from the root with all their leaves' motion in their
-    /// spectra, instead of following the leaves' shared bone (Bennett-Therkildsen, Carlsen &
-    /// Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007) §6.4).
-    #[arg(long)]
-    pub plain_sca: bool,
-    /// Wind strength: scales every tree's sway (0: still air; 1: as baked).
-    #[arg(long, default_value_t = 1.0, value_parser = parse_wind)]
-    pub wind: f32,
-    /// Draw the outlines of the billboards.
-    #[arg(long)]
-    pub outlines: bool,
-    /// Colour trees by level of detail (characters keep their colours).
-    #[arg(long)]
-    pub foliage_tint: bool,
-    /// How billboards are lit: atlas (per texel through their atlases, by each leaf's normal)
-    /// or flat (by their planes, as the thesis did); the crown's occlusion is in their colour
-    /// either way [default: flat on a CPU adapter such as lavapipe, else atlas].
-    #[arg(long, value_enum)]
-    pub billboard_lighting: Option<BillboardLighting>,
-}
-
-/// How billboards are lit (see `FoliageArgs::billboard_lighting`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum BillboardLighting {
-    Atlas,
-    Flat,
-}
-
-impl FoliageArgs {
-    pub fn view(&self) -> FoliageView {
-        FoliageView {
-            policy: self.foliage,
-            chain: ChainOptions {
-                first_epsilon: self.first_epsilon,
-                epsilon_growth: self.epsilon_growth,
-                description: self.description,
-                bins: self.bins as usize,
-                shared_bone: !self.plain_sca,
-                ..Default::default()
-            },
-            wind: self.wind,
-            outlines: self.outlines,
-            tint: self.foliage_tint,
-            atlas_lighting: self
-                .billboard_lighting
-                .map(|l| l == BillboardLighting::Atlas),
-        }
-    }
-}
-
-fn parse_in(s: &str, what: &str, range: std::ops::RangeInclusive<f32>) -> Result<f32, String> {
-    parse_number(s).and_then(|x| {
-        if range.contains(&x) {
-            Ok(x)
-        } else {
-            Err(format!(
-                "{what} '{s}' must be between {} and {}",
-                range.start(),
-                range.end()
-            ))
-        }
-    })
-}
-
-fn parse_first_epsilon(s: &str) -> Result<f32, String> {
-    parse_in(s, "first epsilon", 0.0005..=0.2)
-}
-
-fn parse_epsilon_growth(s: &str) -> Result<f32, String> {
-    parse_in(s, "epsilon growth", MIN_EPSILON_GROWTH..=8.0)
-}
-
-fn parse_wind(s: &str) -> Result<f32, String> {
-    parse_in(s, "wind strength", 0.0..=5.0)
-}
-
-impl LodArgs {
-    /// The choices, with `default` as the method where none is given.
-    pub fn shot_lod(&self, default: LodMethod) -> ShotLod {
-        let (method, compare) = match self.compare {
-            Some((a, b)) => (a, Some(b)),
-            None => (self.method.unwrap_or(default), None),
-        };
-        ShotLod {
-            method,
-            compare,
-            policy: self.policy.policy(),
-            debug: self.debug_view,
-            normal_maps: !self.no_normal_maps,
-            foliage: self.foliage.view(),
-            ..Default::default()
-        }
-    }
-}
-
-fn parse_compare(s: &str) -> Result<(LodMethod, LodMethod), String> {
-    let (a, b) = s
-        .split_once(',')
-        .ok_or_else(|| format!("'{s}' is not A,B (two methods)"))?;
-    Ok((
-        crate::choice::parse(a, "a method")?,
-        crate::choice::parse(b, "a method")?,
-    ))
-}
-
-fn parse_number(s: &str) -> Result<f32, String> {
-    s.trim()
-        .parse::<f32>()
-        .ok()
-        .filter(|x| x.is_finite())
-        .ok_or_else(|| format!("'{s}' is not a number"))
-}
-
-/// A frame count: at least one, at most 100,000 (an hour at 30 frames a second).
-fn parse_frames(s: &str) -> Result<usize, String> {
-    s.trim()
-        .parse::<usize>()
-        .ok()
-        .filter(|n| (1..=100_000).contains(n))
-        .ok_or_else(|| format!("'{s}' is not a frame count from 1 to 100000"))
-}
-
-fn parse_non_negative(s: &str) -> Result<f32, String> {
-    parse_number(s).and_then(|x| {
-        if x >= 0.0 {
-            Ok(x)
-        } else {
-            Err(format!("'{s}' must not be negative"))
-        }
-    })
-}
-
-/// A span of time a command runs or waits for: finite, not negative, at most a day (a larger
-/// one is a slip of the keyboard that would keep the command running for ever).
-fn parse_seconds(s: &str) -> Result<f32, String> {
-    parse_in(s, "seconds", 0.0..=86_400.0)
-}
-
-/// A recorded clip's length: at most an hour (108,000 frames at 30 a second).
-fn parse_clip_length(s: &str) -> Result<f32, String> {
-    parse_in(s, "clip length in seconds", 0.0..=3600.0)
-}
-
-fn parse_tolerance(s: &str) -> Result<f32, String> {
-    parse_number(s).and_then(|x| {
-        if (0.25..=16.0).contains(&x) {
-            Ok(x)
-        } else {
-            Err(format!(
-                "tolerance '{s}' must be between 0.25 and 16 pixels"
-            ))
-        }
-    })
-}
-
-fn parse_hysteresis(s: &str) -> Result<f32, String> {
-    parse_number(s).and_then(|x| {
-        if (0.0..=0.9).contains(&x) {
-            Ok(x)
-        } else {
-            Err(format!("hysteresis '{s}' must be between 0 and 0.9"))
-        }
-    })
 }
 
 #[derive(Args, Debug)]
@@ -803,75 +485,4 @@ pub struct SoakArgs {
         default_value = "method,transition,foliage,count,size"
     )]
     pub vary: Vec<crate::app::soak::Setting>,
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width in '{s}'"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height in '{s}'"))?;
-    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
-        return Err(format!("size '{s}' must be between 1x1 and 8192x8192"));
-    }
-    Ok((w, h))
-}
-
-/// A [`parse_size`] that H.264 (OpenH264) can encode, refused before anything is rendered.
-fn parse_video_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = parse_size(s)?;
-    if !w.is_multiple_of(2) || !h.is_multiple_of(2) || w < 16 || h < 16 {
-        return Err(format!(
-            "video size '{s}': H.264 needs even sides of at least 16 pixels"
-        ));
-    }
-    let (long, short) = (w.max(h), w.min(h));
-    if long > 3840 || short > 2160 {
-        return Err(format!(
-            "video size '{s}': the H.264 encoder takes at most 3840x2160 (or 2160x3840)"
-        ));
-    }
-    Ok((w, h))
-}
-
-fn parse_samples(s: &str) -> Result<u32, String> {
-    match s {
-        "1" => Ok(1),
-        "4" => Ok(4),
-        _ => Err(format!("'{s}': multisampling must be 1 or 4")),
-    }
-}
-
-fn parse_camera(s: &str) -> Result<Camera, String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("'{s}' is not YAW,PITCH,DISTANCE[,X,Y,Z]"))?;
-    if !(v.len() == 3 || v.len() == 6) || v.iter().any(|x| !x.is_finite()) || v[2] <= 0.0 {
-        return Err(format!("'{s}' is not YAW,PITCH,DISTANCE[,X,Y,Z]"));
-    }
-    let target = if v.len() == 6 {
-        glam::Vec3::new(v[3], v[4], v[5])
-    } else {
-        glam::Vec3::new(0.0, 1.0, 0.0)
-    };
-    Ok(Camera::new(target, v[0], v[1], v[2]))
-}
-
-/// `--impostors`: how characters' animated impostors are baked, or none.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Impostors(pub Option<crate::bake::impostor::animated::ImpostorOptions>);
-
-fn parse_impostors(s: &str) -> Result<Impostors, String> {
-    if s.eq_ignore_ascii_case("off") || s.eq_ignore_ascii_case("none") {
-        return Ok(Impostors(None));
-    }
-    s.parse().map(|o| Impostors(Some(o)))
 }
