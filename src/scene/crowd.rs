@@ -248,181 +248,58 @@ impl Agent {
 }
 
 impl Crowd {
+    /// The crowd of `config.count` characters of `models`: who plays what, the standing
+    /// ones on a plaza in the middle, the travelling ones on circular lanes round it, one
+    /// (model, clip) group after another, slowest innermost. Deterministic in `config.seed`.
     pub fn layout(models: &[CrowdModel], config: &CrowdConfig) -> Crowd {
         if models.is_empty() || config.count == 0 {
             return Crowd::default();
         }
-        let mut rng = fastrand::Rng::with_seed(config.seed);
         if config.count == 1 {
-            // A single character is being inspected: it plays on the spot at the origin.
-            let clip = config
-                .forced_clip(0, models[0].clip_speeds.len())
-                .unwrap_or(0);
-            return Crowd {
-                agents: vec![Agent {
-                    wind: 1.0,
-                    scale: 1.0,
-                    model: 0,
-                    clip,
-                    phase: 0.0,
-                    speed: 1.0,
-                    ground_speed: 0.0,
-                    tint: Vec4::ONE,
-                    path: Path::Still {
-                        position: Vec2::ZERO,
-                        heading: 0.0,
-                    },
-                    pause: None,
-                }],
-                radius: 1.0,
-            };
+            return Self::inspected(models, config);
         }
-        // Who plays what: models in turn, clips weighted towards travelling ones.
-        let mut cast: Vec<(usize, usize)> = Vec::with_capacity(config.count);
-        for i in 0..config.count {
-            let m = i % models.len();
-            let speeds = &models[m].clip_speeds;
-            let clip = match config.forced_clip(m, speeds.len()) {
-                Some(c) => c,
-                None => pick_clip(speeds, &mut rng),
-            };
-            cast.push((m, clip));
-        }
-        let footprint = |m: usize| {
-            let s = models[m].bounds.size();
-            (s.x.max(0.3), s.z.max(0.3))
-        };
-        let plaza_cell = (0..models.len())
-            .map(|m| footprint(m).0.max(footprint(m).1))
-            .fold(0.5f32, f32::max)
-            * 1.8;
+        let mut rng = fastrand::Rng::with_seed(config.seed);
+        let cast = cast(models, config, &mut rng);
         let standing: Vec<usize> = (0..cast.len())
             .filter(|&i| models[cast[i].0].clip_speeds[cast[i].1] <= 0.0)
             .collect();
+        let cell = plaza_cell(models);
         let plaza_radius = if standing.is_empty() {
-            6.0
+            EMPTY_PLAZA_RADIUS
         } else {
-            (standing.len() as f32 / std::f32::consts::PI).sqrt() * plaza_cell + plaza_cell
+            (standing.len() as f32 / std::f32::consts::PI).sqrt() * cell + cell
         };
-
         let mut agents = Vec::with_capacity(cast.len());
-        let tint = |rng: &mut fastrand::Rng| {
-            let b = 0.85 + 0.25 * rng.f32();
-            Vec4::new(
-                b * (0.95 + 0.1 * rng.f32()),
-                b * (0.95 + 0.1 * rng.f32()),
-                b * (0.95 + 0.1 * rng.f32()),
-                1.0,
-            )
-        };
-
-        // The plaza: standing characters on a jittered spiral, facing outwards-ish.
-        for (k, &i) in standing.iter().enumerate() {
-            let (m, clip) = cast[i];
-            let golden = 2.399_963_f32;
-            let r = plaza_cell * (k as f32 + 0.5).sqrt() * 0.56;
-            let a = k as f32 * golden;
-            let jitter = Vec2::new(rng.f32() - 0.5, rng.f32() - 0.5) * plaza_cell * 0.2;
-            let position = Vec2::new(a.cos(), a.sin()) * r + jitter;
-            agents.push(Agent {
-                wind: 1.0,
-                scale: 1.0,
-                model: m,
-                clip,
-                phase: rng.f32() * 10.0,
-                speed: 0.9 + 0.2 * rng.f32(),
-                ground_speed: 0.0,
-                tint: tint(&mut rng),
-                path: Path::Still {
-                    position,
-                    heading: rng.f32() * std::f32::consts::TAU,
-                },
-                pause: None,
-            });
-        }
-
-        // Lanes: one (model, clip) group after another, slowest innermost.
-        let mut groups: Vec<(usize, usize, Vec<usize>)> = Vec::new();
-        for (i, &(m, clip)) in cast.iter().enumerate() {
-            if models[m].clip_speeds[clip] <= 0.0 {
-                continue;
-            }
-            match groups.iter_mut().find(|g| g.0 == m && g.1 == clip) {
-                Some(g) => g.2.push(i),
-                None => groups.push((m, clip, vec![i])),
-            }
-        }
-        groups.sort_by(|a, b| {
-            let sa = models[a.0].clip_speeds[a.1];
-            let sb = models[b.0].clip_speeds[b.1];
-            sa.total_cmp(&sb).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1))
-        });
-        let mut radius = plaza_radius + 2.0;
-        let mut lane_index = 0;
-        let mut outermost = plaza_radius;
-        for (m, clip, members) in groups {
-            let (width, length) = footprint(m);
-            let lane_gap = width.max(0.6) * 2.5 + 0.6;
-            // Lanes are filled to about a third, at random spacings no shorter than `min_gap`.
-            let min_gap = length * 1.6 + 0.4;
-            let ground_speed = models[m].clip_speeds[clip];
-            // Everyone on a lane plays at the same speed, so nobody catches anybody up.
-            let speed = 0.95 + 0.1 * rng.f32();
-            // And stops at the same time, to play the model's first clip on the spot.
-            let on_the_spot = models[m].clip_speeds.iter().position(|&s| s <= 0.0);
-            let pause = match (config.cross_fade > 0.0, on_the_spot) {
-                (true, Some(clip)) => {
-                    let walk = 6.0 + 6.0 * rng.f32();
-                    let fade = config.cross_fade;
-                    let hold = models[m].clip_durations.get(clip).copied().unwrap_or(2.0);
-                    let period = walk + 2.0 * fade + hold;
-                    Some(Pause {
-                        clip,
-                        start: -rng.f32() * period,
-                        walk,
-                        fade,
-                        hold,
-                    })
-                }
-                _ => None,
-            };
-            let mut left = members.as_slice();
-            radius += lane_gap * 0.5;
-            while !left.is_empty() {
-                let circumference = std::f32::consts::TAU * radius;
-                let capacity = ((circumference / min_gap / 3.0).floor() as usize).max(1);
-                let take = capacity.min(left.len());
-                let direction = if lane_index % 2 == 0 { 1.0 } else { -1.0 };
-                for (angle, _) in lane_angles(take, circumference, min_gap, &mut rng)
-                    .into_iter()
-                    .zip(&left[..take])
-                {
-                    agents.push(Agent {
-                        wind: 1.0,
-                        scale: 1.0,
-                        model: m,
-                        clip,
-                        phase: rng.f32() * 10.0,
-                        speed,
-                        ground_speed,
-                        tint: tint(&mut rng),
-                        path: Path::Circle {
-                            radius,
-                            angle,
-                            direction,
-                        },
-                        pause,
-                    });
-                }
-                left = &left[take..];
-                outermost = radius;
-                radius += lane_gap;
-                lane_index += 1;
-            }
-        }
+        plaza(&cast, &standing, cell, &mut rng, &mut agents);
+        let outermost = lanes(models, config, &cast, plaza_radius, &mut rng, &mut agents);
         Crowd {
             agents,
             radius: outermost + 1.0,
+        }
+    }
+
+    /// A single character, being inspected: it plays on the spot at the origin.
+    fn inspected(models: &[CrowdModel], config: &CrowdConfig) -> Crowd {
+        let clip = config
+            .forced_clip(0, models[0].clip_speeds.len())
+            .unwrap_or(0);
+        Crowd {
+            agents: vec![Agent {
+                wind: 1.0,
+                scale: 1.0,
+                model: 0,
+                clip,
+                phase: 0.0,
+                speed: 1.0,
+                ground_speed: 0.0,
+                tint: Vec4::ONE,
+                path: Path::Still {
+                    position: Vec2::ZERO,
+                    heading: 0.0,
+                },
+                pause: None,
+            }],
+            radius: 1.0,
         }
     }
 
@@ -430,6 +307,208 @@ impl Crowd {
     pub fn instances_at(&self, time: f32, out: &mut Vec<Instance>) {
         out.clear();
         out.extend(self.agents.iter().map(|a| a.instance_at(time)));
+    }
+}
+
+/// A standing character's cell on the plaza, in multiples of the largest model's footprint.
+const PLAZA_SPACING: f32 = 1.8;
+/// The plaza's radius, metres, where nobody stands on it.
+const EMPTY_PLAZA_RADIUS: f32 = 6.0;
+/// The golden angle, radians: consecutive characters of the plaza's spiral turn by it, so that
+/// none lines up with another.
+const GOLDEN_ANGLE: f32 = 2.399_963;
+/// How tightly the spiral packs the plaza's cells.
+const SPIRAL_PACKING: f32 = 0.56;
+/// A plaza character's random offset from its place on the spiral, in cells.
+const PLAZA_JITTER: f32 = 0.2;
+/// The gap between the plaza and the first lane, metres.
+const FIRST_LANE_GAP: f32 = 2.0;
+/// A lane's width: its model's width (at least [`MIN_WIDTH`]) times this, plus [`LANE_MARGIN`].
+const LANE_WIDTH: f32 = 2.5;
+const MIN_WIDTH: f32 = 0.6;
+const LANE_MARGIN: f32 = 0.6;
+/// The shortest gap between two characters of a lane: their model's length times this, plus
+/// [`SPACING_MARGIN`].
+const SPACING: f32 = 1.6;
+const SPACING_MARGIN: f32 = 0.4;
+/// A lane holds one character per this many shortest gaps (it is filled to about a third).
+const LANE_FILL: f32 = 3.0;
+/// A lane's characters walk between 6 and 12 seconds before they stop together.
+const PAUSE_WALK: f32 = 6.0;
+
+/// Who plays what: models in turn, clips weighted towards travelling ones (or the clip the
+/// configuration forces).
+fn cast(
+    models: &[CrowdModel],
+    config: &CrowdConfig,
+    rng: &mut fastrand::Rng,
+) -> Vec<(usize, usize)> {
+    let mut cast = Vec::with_capacity(config.count);
+    for i in 0..config.count {
+        let m = i % models.len();
+        let speeds = &models[m].clip_speeds;
+        let clip = match config.forced_clip(m, speeds.len()) {
+            Some(c) => c,
+            None => pick_clip(speeds, rng),
+        };
+        cast.push((m, clip));
+    }
+    cast
+}
+
+/// A model's footprint on the ground, width and length, metres (at least 0.3 each).
+fn footprint(model: &CrowdModel) -> (f32, f32) {
+    let s = model.bounds.size();
+    (s.x.max(0.3), s.z.max(0.3))
+}
+
+/// A standing character's cell on the plaza, metres.
+fn plaza_cell(models: &[CrowdModel]) -> f32 {
+    models
+        .iter()
+        .map(|m| footprint(m).0.max(footprint(m).1))
+        .fold(0.5f32, f32::max)
+        * PLAZA_SPACING
+}
+
+/// A character's colour, a little lighter or darker and warmer or cooler than its model's.
+fn tint(rng: &mut fastrand::Rng) -> Vec4 {
+    let b = 0.85 + 0.25 * rng.f32();
+    Vec4::new(
+        b * (0.95 + 0.1 * rng.f32()),
+        b * (0.95 + 0.1 * rng.f32()),
+        b * (0.95 + 0.1 * rng.f32()),
+        1.0,
+    )
+}
+
+/// The plaza: the `standing` characters of `cast` on a jittered spiral of `cell`-sized
+/// places, facing every way.
+fn plaza(
+    cast: &[(usize, usize)],
+    standing: &[usize],
+    cell: f32,
+    rng: &mut fastrand::Rng,
+    agents: &mut Vec<Agent>,
+) {
+    for (k, &i) in standing.iter().enumerate() {
+        let (m, clip) = cast[i];
+        let r = cell * (k as f32 + 0.5).sqrt() * SPIRAL_PACKING;
+        let a = k as f32 * GOLDEN_ANGLE;
+        let jitter = Vec2::new(rng.f32() - 0.5, rng.f32() - 0.5) * cell * PLAZA_JITTER;
+        let position = Vec2::new(a.cos(), a.sin()) * r + jitter;
+        agents.push(Agent {
+            wind: 1.0,
+            scale: 1.0,
+            model: m,
+            clip,
+            phase: rng.f32() * 10.0,
+            speed: 0.9 + 0.2 * rng.f32(),
+            ground_speed: 0.0,
+            tint: tint(rng),
+            path: Path::Still {
+                position,
+                heading: rng.f32() * std::f32::consts::TAU,
+            },
+            pause: None,
+        });
+    }
+}
+
+/// The lanes: the travelling characters of `cast` in (model, clip) groups, slowest
+/// innermost, each group on as many circular lanes beyond `plaza_radius` as it fills,
+/// alternate lanes walking opposite ways. Returns the outermost lane's radius.
+fn lanes(
+    models: &[CrowdModel],
+    config: &CrowdConfig,
+    cast: &[(usize, usize)],
+    plaza_radius: f32,
+    rng: &mut fastrand::Rng,
+    agents: &mut Vec<Agent>,
+) -> f32 {
+    let mut groups: Vec<(usize, usize, Vec<usize>)> = Vec::new();
+    for (i, &(m, clip)) in cast.iter().enumerate() {
+        if models[m].clip_speeds[clip] <= 0.0 {
+            continue;
+        }
+        match groups.iter_mut().find(|g| g.0 == m && g.1 == clip) {
+            Some(g) => g.2.push(i),
+            None => groups.push((m, clip, vec![i])),
+        }
+    }
+    groups.sort_by(|a, b| {
+        let sa = models[a.0].clip_speeds[a.1];
+        let sb = models[b.0].clip_speeds[b.1];
+        sa.total_cmp(&sb).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1))
+    });
+    let mut radius = plaza_radius + FIRST_LANE_GAP;
+    let mut lane_index = 0;
+    let mut outermost = plaza_radius;
+    for (m, clip, members) in groups {
+        let (width, length) = footprint(&models[m]);
+        let lane_gap = width.max(MIN_WIDTH) * LANE_WIDTH + LANE_MARGIN;
+        // Lanes are filled to about a third, at random spacings no shorter than `min_gap`.
+        let min_gap = length * SPACING + SPACING_MARGIN;
+        let ground_speed = models[m].clip_speeds[clip];
+        // Everyone on a lane plays at the same speed, so nobody catches anybody up.
+        let speed = 0.95 + 0.1 * rng.f32();
+        let pause = lane_pause(&models[m], config, rng);
+        let mut left = members.as_slice();
+        radius += lane_gap * 0.5;
+        while !left.is_empty() {
+            let circumference = std::f32::consts::TAU * radius;
+            let capacity = ((circumference / min_gap / LANE_FILL).floor() as usize).max(1);
+            let take = capacity.min(left.len());
+            let direction = if lane_index % 2 == 0 { 1.0 } else { -1.0 };
+            for (angle, _) in lane_angles(take, circumference, min_gap, rng)
+                .into_iter()
+                .zip(&left[..take])
+            {
+                agents.push(Agent {
+                    wind: 1.0,
+                    scale: 1.0,
+                    model: m,
+                    clip,
+                    phase: rng.f32() * 10.0,
+                    speed,
+                    ground_speed,
+                    tint: tint(rng),
+                    path: Path::Circle {
+                        radius,
+                        angle,
+                        direction,
+                    },
+                    pause,
+                });
+            }
+            left = &left[take..];
+            outermost = radius;
+            radius += lane_gap;
+            lane_index += 1;
+        }
+    }
+    outermost
+}
+
+/// Where cross-fades are on, a lane of `model` stops together now and then to play the
+/// model's first clip on the spot: its walk, fades and hold, started at a random point.
+fn lane_pause(model: &CrowdModel, config: &CrowdConfig, rng: &mut fastrand::Rng) -> Option<Pause> {
+    let on_the_spot = model.clip_speeds.iter().position(|&s| s <= 0.0);
+    match (config.cross_fade > 0.0, on_the_spot) {
+        (true, Some(clip)) => {
+            let walk = PAUSE_WALK + PAUSE_WALK * rng.f32();
+            let fade = config.cross_fade;
+            let hold = model.clip_durations.get(clip).copied().unwrap_or(2.0);
+            let period = walk + 2.0 * fade + hold;
+            Some(Pause {
+                clip,
+                start: -rng.f32() * period,
+                walk,
+                fade,
+                hold,
+            })
+        }
+        _ => None,
     }
 }
 

@@ -14,15 +14,15 @@ use super::cloud::CloudParams;
 use super::occlusion::CrownDensity;
 use super::siblings::merge_siblings;
 use super::wood::WoodChain;
-use super::{Foliage, Grouping, cloud_model, grouped_cloud, is_cut_out};
+use super::{Foliage, Grouping, SkeletonCloud, cloud_model, grouped_cloud, is_cut_out};
 use crate::anim::skinning_over_loop;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::foliage::spectral::cloud::{SpectralParams, lines_per_axis, spectral_cloud};
 use crate::bake::foliage::spectral::metrics::{animation_error, traced_leaves};
-use crate::bake::gpu_data::materials::{MaterialLayers, dilate};
+use crate::bake::gpu_data::materials::{MaterialLayers, dilate, lit_atlas_material};
 use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
-use crate::bake::seams::{MeasureColour, RasterizeAtlas};
-use crate::model::Model;
+use crate::bake::seams::{AtlasLayout, MeasureColour, RasterizeAtlas};
+use crate::model::{Model, Rgba8Image};
 use anyhow::{Result, anyhow};
 
 /// Texels of dilated colour round every leaf in the atlas.
@@ -52,7 +52,7 @@ pub fn cloud_level(
 struct BuiltCloud<'a> {
     /// The leaves it was built from: the tree's, or those rebound to merged siblings.
     foliage: std::borrow::Cow<'a, Foliage>,
-    cloud: super::SkeletonCloud,
+    cloud: SkeletonCloud,
     /// A spectral cloud's lines per billboard, and lines per axis.
     lines: Option<(Vec<[Vec<crate::bake::gpu_data::spectra::Line>; 3]>, usize)>,
     /// The clouds or clumps it was built as.
@@ -122,7 +122,8 @@ fn build_cloud<'a>(
 }
 
 /// The level that draws `built` (the tree's leaves `original`, perhaps rebound first): the
-/// atlas, the model with `wood`, the motion, the animation error against `original`.
+/// atlas ([`draw_atlas`]), the model with `wood`, its crown occlusion, the motion, the
+/// animation error against `original`.
 fn level_of_cloud(
     raster: &dyn RasterizeAtlas,
     tree: &Model,
@@ -140,10 +141,64 @@ fn level_of_cloud(
         views,
         depth,
     } = built;
-    let foliage = foliage.as_ref();
+    let (atlas_layout, atlas, lighting) = draw_atlas(
+        raster,
+        tree,
+        foliage.as_ref(),
+        &cloud,
+        density,
+        depth,
+        crown,
+    )?;
+    let texture_bytes = atlas.pixels.len() + lighting.pixels.len();
+    let animation = animation_error(
+        tree,
+        original,
+        &cloud,
+        lines.as_ref().map(|(l, _)| l.as_slice()),
+        &skinning_over_loop(tree, crate::bake::foliage::spectral::DEFAULT_SAMPLES),
+        &traced_leaves(original),
+    );
+    let mut model = cloud_model(wood, &cloud, &atlas_layout, atlas);
+    model.materials.push(lighting_material(lighting));
+    let occlusion = wood_occlusion(&model, crown);
+    let motion = match lines {
+        Some((lines, bins)) => Some(spectral_motion(&model, &lines, bins)?),
+        None => None,
+    };
+    Ok(CloudLevel {
+        impostor: None,
+        billboards: cloud.billboards.len(),
+        groups,
+        animation,
+        area: cloud.total_area(),
+        texture_bytes,
+        model,
+        motion,
+        occlusion,
+        view_windows: if cloud.billboards.iter().any(|b| b.view_window != 0.0) {
+            cloud.billboards.iter().map(|b| b.view_window).collect()
+        } else {
+            Vec::new()
+        },
+        views,
+    })
+}
+
+/// A cloud's atlas (thesis §3.3): its layout at `density`, the leaves of `foliage` drawn into
+/// it through `raster` (each darkened by the crown's occlusion at its centre), colour and
+/// lighting dilated past the billboards' edges.
+fn draw_atlas(
+    raster: &dyn RasterizeAtlas,
+    tree: &Model,
+    foliage: &Foliage,
+    cloud: &SkeletonCloud,
+    density: AtlasDensity,
+    depth: f32,
+    crown: Option<&CrownDensity>,
+) -> Result<(AtlasLayout, Rgba8Image, Rgba8Image)> {
     let atlas_layout = layout(&cloud.billboards, density).map_err(|e| anyhow!(e))?;
     let mesh = &tree.mesh;
-    let occlusion_at = |p: glam::Vec3| crown.map_or(0.0, |c| c.occlusion(p));
     // One occlusion a leaf, at its centre: leaves are small beside the crown's voxels. Found
     // once a leaf, not once a billboard drawing it: a clump level draws every leaf on four
     // planes, and the conifer's spent a second a level marching the same rays again.
@@ -152,7 +207,7 @@ fn level_of_cloud(
         foliage
             .leaves
             .par_iter()
-            .map(|l| occlusion_at(l.centre()))
+            .map(|l| crown.map_or(0.0, |c| c.occlusion(l.centre())))
             .collect()
     };
     let triangles = atlas_triangles(&cloud.billboards, &atlas_layout, depth, |leaf| {
@@ -188,61 +243,40 @@ fn level_of_cloud(
         lighting.height,
         DILATE_RINGS,
     );
-    let texture_bytes = atlas.pixels.len() + lighting.pixels.len();
-    let animation = animation_error(
-        tree,
-        original,
-        &cloud,
-        lines.as_ref().map(|(l, _)| l.as_slice()),
-        &skinning_over_loop(tree, crate::bake::foliage::spectral::DEFAULT_SAMPLES),
-        &traced_leaves(original),
-    );
-    let mut model = cloud_model(wood, &cloud, &atlas_layout, atlas);
-    model.materials.push(lighting_material(lighting));
-    let billboard_material = (model.materials.len() - 2) as u16;
-    let occlusion = model
+    Ok((atlas_layout, atlas, lighting))
+}
+
+/// The crown's occlusion at each vertex of a cloud level's `model`: at the wood's vertices;
+/// 0 on the billboards, whose atlas carries it per texel.
+fn wood_occlusion(model: &Model, crown: Option<&CrownDensity>) -> Vec<f32> {
+    let billboards = lit_atlas_material(&model.materials).map(|m| m as u16);
+    model
         .mesh
         .positions
         .iter()
         .zip(&model.mesh.materials)
-        .map(|(&p, &m)| {
-            if m == billboard_material {
-                0.0
-            } else {
-                occlusion_at(p)
-            }
+        .map(|(&p, &m)| match crown {
+            Some(c) if Some(m) != billboards => c.occlusion(p),
+            _ => 0.0,
         })
-        .collect();
-    // The billboards' corners are the model's last vertices, four per billboard in order.
-    let motion = match lines {
-        Some((lines, bins)) => {
-            let spectra = SpectraTexture::new(&lines, bins).map_err(|e| anyhow!(e))?;
-            let wood_vertices = model.mesh.vertex_count() - 4 * lines.len();
-            let mut vertex_rows = vec![NO_ROW; wood_vertices];
-            vertex_rows.extend((0..lines.len() as u32).flat_map(|b| [b; 4]));
-            Some(SpectralMotion {
-                spectra,
-                vertex_rows,
-            })
-        }
-        None => None,
-    };
-    Ok(CloudLevel {
-        impostor: None,
-        billboards: cloud.billboards.len(),
-        groups,
-        animation,
-        area: cloud.total_area(),
-        texture_bytes,
-        model,
-        motion,
-        occlusion,
-        view_windows: if cloud.billboards.iter().any(|b| b.view_window != 0.0) {
-            cloud.billboards.iter().map(|b| b.view_window).collect()
-        } else {
-            Vec::new()
-        },
-        views,
+        .collect()
+}
+
+/// A spectral cloud's motion: its billboards' `lines` (`bins` a billboard and axis) as the
+/// spectra texture, and each vertex of `model` pointed at its billboard's row. The
+/// billboards' corners are the model's last vertices, four per billboard in order.
+fn spectral_motion(
+    model: &Model,
+    lines: &[[Vec<crate::bake::gpu_data::spectra::Line>; 3]],
+    bins: usize,
+) -> Result<SpectralMotion> {
+    let spectra = SpectraTexture::new(lines, bins).map_err(|e| anyhow!(e))?;
+    let wood_vertices = model.mesh.vertex_count() - 4 * lines.len();
+    let mut vertex_rows = vec![NO_ROW; wood_vertices];
+    vertex_rows.extend((0..lines.len() as u32).flat_map(|b| [b; 4]));
+    Ok(SpectralMotion {
+        spectra,
+        vertex_rows,
     })
 }
 
