@@ -1,4 +1,4 @@
-//! Choices as types: an enum with an `ALL` list and a `name()` (written once by [`choice!`])
+//! Choices as types: an enum with an `ALL` list and a `name()` (written once by `choice!`)
 //! becomes a clap `ValueEnum` whose values are those names, so the command line, the study
 //! plans and the panels all parse and print a choice the same way, with no string matching of
 //! their own.

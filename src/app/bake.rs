@@ -21,7 +21,7 @@ use std::sync::OnceLock;
 pub struct BakeOptions {
     pub models: Vec<String>,
     pub methods: Vec<Method>,
-    /// `e_1` in pixels for a model filling 1000 pixels of height (see [`LodOptions`]).
+    /// `e_1` in pixels for a model filling 1000 pixels of height (see [`LodOptions`](crate::bake::character::lod::LodOptions)).
     pub tolerance_px: f32,
     /// Cut levels by these triangle budgets instead.
     pub budgets: Option<Vec<u32>>,

@@ -2,7 +2,7 @@
 //! buffers.
 //!
 //! What is read: the first skin that a mesh uses, every primitive of every mesh bound to it (merged
-//! into one [`SkinnedMesh`]), all JOINTS_n / WEIGHTS_n sets (so any number of influences per
+//! into one [`SkinnedMesh`](crate::model::SkinnedMesh)), all JOINTS_n / WEIGHTS_n sets (so any number of influences per
 //! vertex), the node hierarchy above the joints, the inverse bind matrices, every animation clip
 //! (translation, rotation and scale; STEP, LINEAR and CUBICSPLINE) and the base colour of each
 //! material. Everything the renderer and the bakes rely on is validated here, so that a bad file

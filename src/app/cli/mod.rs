@@ -440,7 +440,7 @@ pub struct ShotArgs {
     /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
     #[arg(long, value_parser = parse_samples)]
     pub msaa: Option<u32>,
-    /// Camera as YAW,PITCH,DISTANCE[,X,Y,Z] (degrees, metres; X,Y,Z the point looked at).
+    /// Camera as YAW,PITCH,DISTANCE\[,X,Y,Z\] (degrees, metres; X,Y,Z the point looked at).
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<Camera>,
     /// Frames to time after one warm-up frame; frame_ms is their median.

@@ -76,7 +76,7 @@ impl CharacterBake {
     /// [`Self::with_motion`] for a level of a tree, every vertex darkened by the crown by
     /// `occlusion` (one per vertex of `model`, see [`crate::bake::foliage::billboard::occlusion`]; empty: none), and
     /// its billboards drawn within their `view_windows` (one per vertex, see
-    /// [`billboard::clumps`]; empty: from every view).
+    /// [`billboard::clumps`](crate::bake::foliage::billboard::clumps); empty: from every view).
     pub fn tree_level(
         model: &Model,
         motion: Option<&SpectralMotion>,

@@ -18,7 +18,7 @@ use anyhow::{Result, bail};
 impl World {
     /// Per model, whether it already has what showing `method` needs, so that a bake may
     /// leave it out (for [`bake_all`]): a character its levels by the method, a tree its chain
-    /// cut as [`LodView::chain`] says (or nothing, where the policy keeps trees full).
+    /// cut as [`LodView::chain`](super::LodView::chain) says (or nothing, where the policy keeps trees full).
     pub fn has_levels(&self, method: Method) -> Vec<bool> {
         let slot = LodMethod::Simplified(method).index();
         (0..self.bakes.len())

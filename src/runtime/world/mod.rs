@@ -179,7 +179,7 @@ impl World {
         LodCache::new(self.spec.cache_dir.clone())
     }
 
-    /// Where memory goes, in bytes by kind: on the GPU (see [`GpuMemory`]), the frame's
+    /// Where memory goes, in bytes by kind: on the GPU (see [`GpuMemory`](crate::render::memory::GpuMemory)), the frame's
     /// render targets (`targets`, the caller's), and the CPU's copies: the models as loaded
     /// (kept to bake their levels) and their bakes (kept for re-uploads and the crowd); then
     /// the process's resident size where the platform says it.

@@ -4,7 +4,7 @@
 //! stays within `e_k`, with `e_k` doubling from a base tolerance (or the first prefix within a
 //! triangle budget), down to a floor of about a hundred triangles. "Error" is the true one:
 //! the memoryless bound of the steps so far, or the measured distance from full detail if that
-//! is larger ([`SurfaceProbe`]: closest points both ways, the worst of the sampled poses). The
+//! is larger ([`SurfaceProbe`](crate::bake::character::lod_error::SurfaceProbe): closest points both ways, the worst of the sampled poses). The
 //! memoryless bound alone can drift from the truth over many steps, and for the rest-pose
 //! method it knows nothing of the animation; a level's error is what the renderer projects to
 //! pixels, so it must not flatter. Each level holds

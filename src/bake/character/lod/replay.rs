@@ -263,7 +263,7 @@ pub(crate) fn nearest_in_chart(base: &AnimationSpaceMesh, level: &LodLevel, r: u
 }
 
 /// A sequence as the simplifier hands it over, steps in batches down a channel (see
-/// [`bake_lods`]), or whole. What [`cut_growing_levels`] asks of it waits for the steps that
+/// [`bake_lods`](super::bake_lods)), or whole. What [`cut_growing_levels`](super::cut::cut_growing_levels) asks of it waits for the steps that
 /// decide the answer, so levels are cut while the simplifier runs on, and the cut's
 /// measurements and the simplification share the machine's cores.
 pub struct GrowingSequence<'s> {

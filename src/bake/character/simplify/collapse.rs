@@ -324,7 +324,7 @@ impl Context<'_> {
     }
 
     /// No triangle of v1's fan may turn over, nor become a sliver (thinner than
-    /// [`SLIVER`] and less than half as round as it was), in the rest pose or in any sampled
+    /// [`SLIVER`](super::posed::SLIVER) and less than half as round as it was), in the rest pose or in any sampled
     /// pose: either shows as a spike of light or a crack where the metric, an average over
     /// poses, could overlook it. Kept apart from [`Self::corners`] because it is the dearest
     /// check: the simplifier runs it on the cheapest candidates only, until one passes.

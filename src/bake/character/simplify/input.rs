@@ -36,7 +36,7 @@ pub struct SimplifyInput<'a> {
     /// so its texture coordinates say what colour a point shows. A texture sliding over the
     /// surface costs what it moves, and two wedges of one position that differ in material,
     /// or in texture coordinate on a textured one, show different colours: a chart torn
-    /// between them costs the triangles it recolours (see [`collapse`]). A material missing
+    /// between them costs the triangles it recolours (see [`collapse`](super::collapse)). A material missing
     /// here counts as untextured.
     pub textured: &'a [bool],
 }

@@ -60,7 +60,7 @@ impl Metric<'_> {
     }
 }
 
-/// Every vertex's influences in double precision, sorted by bone (the order [`Mesh::new`]
+/// Every vertex's influences in double precision, sorted by bone (the order [`Mesh::new`](super::mesh::Mesh::new)
 /// groups wedges by and the factor cache keys on).
 pub fn influences64(am: &AnimationSpaceMesh) -> Vec<Vec<Influence64>> {
     (0..am.vertex_count())

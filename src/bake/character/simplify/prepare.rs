@@ -19,7 +19,7 @@ pub(crate) type Located = GeomWithData<[f64; 3], u32>;
 /// mesh's topology and kinds, its welded positions, texture charts, posed positions and
 /// connected parts. On a 2-million-triangle model that is about five seconds and half a
 /// gigabyte, which each of the three methods made again; a bake of several methods makes it
-/// once and each method's simplifier starts from it ([`simplify_prepared`]).
+/// once and each method's simplifier starts from it ([`simplify_prepared`](super::simplify_prepared)).
 pub struct Prepared {
     pub(crate) rest_bones: Vec<Affine3A>,
     pub(crate) poses: Vec<Vec<Affine3A>>,
@@ -43,7 +43,7 @@ pub struct Prepared {
 
 impl Prepared {
     /// Prepares `am` (a character's full-detail mesh) with its rest-pose bone matrices, sampled
-    /// poses and which materials are textured (as [`SimplifyInput`] has them).
+    /// poses and which materials are textured (as [`SimplifyInput`](super::input::SimplifyInput) has them).
     pub fn new(
         am: &AnimationSpaceMesh,
         rest_bones: &[Affine3A],

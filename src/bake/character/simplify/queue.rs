@@ -122,7 +122,7 @@ pub(crate) struct Simplifier<'a> {
     pub(crate) unchecked: u64,
 }
 
-/// What [`simplify_feeding`] hands over as it runs: the sequence in pieces, each once, so
+/// What [`simplify_feeding`](super::simplify_feeding) hands over as it runs: the sequence in pieces, each once, so
 /// that it is held in one place only (on a 2-million-triangle model a million steps, about
 /// 100 MB).
 pub enum Feed {
@@ -135,7 +135,7 @@ pub enum Feed {
 /// Fewer vertices than this to price are priced on the calling thread.
 pub(crate) const PARALLEL_PRICING: usize = 64;
 
-/// Steps handed over at a time by [`simplify_feeding`].
+/// Steps handed over at a time by [`simplify_feeding`](super::simplify_feeding).
 pub(crate) const FEED_BATCH: usize = 64;
 
 /// A vertex's cheapest legal collapse (its cost and target), and how many candidates were
@@ -146,7 +146,7 @@ pub(crate) type Priced = (Option<(f64, u32)>, u64);
 /// where a simplification starts, a quarter of its pricing on a large model. AS and AS+IS rank
 /// by the same metric (influence removals are queued beside the collapses, and none has
 /// happened yet), so a bake of both prices the full-detail mesh once. It holds for the
-/// [`Prepared`] character, metric and expectation matrix it was made with, and for no other.
+/// [`Prepared`](super::prepare::Prepared) character, metric and expectation matrix it was made with, and for no other.
 pub struct FirstPricing {
     pub(crate) found: Vec<Priced>,
 }

@@ -43,7 +43,7 @@ pub struct Step {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Sequence {
     pub method: Method,
-    /// For every render vertex, the position it belongs to (see [`mesh::weld_positions`]).
+    /// For every render vertex, the position it belongs to (see [`mesh::weld_positions`](super::mesh::weld_positions)).
     pub positions: Vec<u32>,
     /// The triangles the sequence starts from: the input without triangles that repeat a
     /// position or duplicate another.
