@@ -377,8 +377,10 @@ fn main() -> ExitCode {
 /// is made, and where `XDG_RUNTIME_DIR` is unset or no folder (containers, ssh sessions)
 /// libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment." four
 /// times: lines on stderr that read as lodlab's own errors, on every command. There is no
-/// compositor to find there, and lodlab picks its adapter itself, so the layer is switched
-/// off (its `NODEVICE_SELECT`) unless the user set it up or chose a device through it.
+/// compositor to find there, so the layer is switched off (its `NODEVICE_SELECT`) unless the
+/// user set it up or chose a device through it. What the layer does besides is put the boot
+/// display's GPU first; on a headless machine with several, `WGPU_ADAPTER_NAME` or
+/// `WGPU_POWER_PREF` choose (see `render::gpu`).
 fn quiet_device_select() {
     let runtime_dir = std::env::var_os("XDG_RUNTIME_DIR");
     let no_compositor = runtime_dir.is_none_or(|d| !std::path::Path::new(&d).is_dir());

@@ -40,7 +40,7 @@ crate::choice! {
 }
 
 impl Pass {
-    pub const COUNT: usize = 6;
+    pub const COUNT: usize = Pass::ALL.len();
 
     fn bit(self) -> u32 {
         1 << self as u32

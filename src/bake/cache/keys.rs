@@ -13,7 +13,7 @@ use std::path::Path;
 pub const FORMAT_VERSION: u32 = 9;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
-pub const CHAIN_VERSION: u32 = 23;
+pub const CHAIN_VERSION: u32 = 24;
 /// A character's animated impostor (`bake::impostor::animated`).
 pub const IMPOSTOR_VERSION: u32 = 5;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the

@@ -70,8 +70,9 @@ impl Placement {
 /// Places an impostor in a chain whose levels have the error bounds `errors` (finest first,
 /// scene units; level 0 is full detail), for a model `height` high selected at
 /// `tolerance_px` (see the module comment). `finest` is the finest level the impostor may
-/// stand for. Returns the placement and the level it takes the place of (`None` where it
-/// comes in further off than the coarsest level, or not at all).
+/// stand for (where the coarsest level is finer, it can still come in further off). Returns
+/// the placement and the level it takes the place of (`None` where it comes in further off
+/// than the coarsest level, or not at all).
 pub fn place(
     errors: &[f32],
     height: f32,
@@ -85,7 +86,7 @@ pub fn place(
         measured: Vec::new(),
     };
     let coarsest = errors.len().saturating_sub(1);
-    if coarsest < finest.max(1) {
+    if coarsest == 0 {
         return Ok((placement, None));
     }
     let switch_px = |e: f32| tolerance_px * height / e.max(1e-6);
@@ -171,6 +172,13 @@ mod tests {
         let (p, replaces) = place(&ERRORS, 2.0, 1.0, 2, &mut m).unwrap();
         assert_eq!((replaces, p.epsilon), (Some(2), Some(0.02)));
         assert_eq!(m.asked, vec![(3, 50.0), (2, 100.0)]);
+
+        // A chain whose only level is finer than asked: the impostor may still come in
+        // further off than it, standing for none.
+        let mut m = measure(|_| 0.0, |_| 0.1);
+        let (p, replaces) = place(&ERRORS[..2], 2.0, 1.0, 2, &mut m).unwrap();
+        assert_eq!((replaces, p.epsilon), (None, Some(0.02)));
+        assert_eq!(m.asked, vec![(1, 100.0)]);
     }
 
     #[test]

@@ -6,6 +6,7 @@ use crate::bake::foliage::billboard::chain::levels::{
     ChainOptions, CloudKind, CloudLevel, TreeLevel,
 };
 use crate::bake::foliage::spectral::metrics::AnimationError;
+use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::impostor::octahedral::{self, ViewGrid};
 use crate::bake::impostor::placement;
 use crate::bake::seams::{MeasureColour, MeasureImpostor, RasterizeAtlas};
@@ -20,7 +21,8 @@ use anyhow::{Result, anyhow};
 /// selection treats it like any level.
 ///
 /// Returns the impostor level and the index it goes in at (the levels from there on give way
-/// to it), or `None` where it beats no cloud level (it is then not part of the chain).
+/// to it; the chain's length where it comes in further off), or `None` where it beats no cloud
+/// level even two, four or eight times further off (it is then not part of the chain).
 pub fn impostor_level(
     raster: &dyn RasterizeAtlas,
     measure: &dyn MeasureColour,
@@ -62,6 +64,9 @@ pub fn impostor_level(
         measure,
         tree,
         impostor: &level,
+        impostor_bake: level
+            .bake()
+            .map_err(|e| anyhow!("{}: {e}", level.model.name))?,
         chain,
     };
     let errors: Vec<f32> = chain.iter().map(|l| l.epsilon).collect();
@@ -103,25 +108,27 @@ pub(crate) struct TreeFit<'a> {
     measure: &'a dyn MeasureColour,
     tree: &'a Model,
     impostor: &'a CloudLevel,
+    /// The impostor baked for the GPU once (its views' mipmaps), for every size it is
+    /// measured at.
+    impostor_bake: CharacterBake,
     chain: &'a [TreeLevel],
-}
-
-impl TreeFit<'_> {
-    fn error(&self, level: &CloudLevel, px: f32) -> Result<f32> {
-        let bake = level
-            .bake()
-            .map_err(|e| anyhow!("{}: {e}", level.model.name))?;
-        Ok(self
-            .measure
-            .colour_errors(self.tree, &level.model, bake, &[px])?[0])
-    }
 }
 
 impl MeasureImpostor for TreeFit<'_> {
     fn errors(&mut self, level: usize, px: f32) -> Result<(f32, f32)> {
-        Ok((
-            self.error(self.impostor, px)?,
-            self.error(&self.chain[level].cloud, px)?,
-        ))
+        let impostor = self.measure.colour_errors(
+            self.tree,
+            &self.impostor.model,
+            self.impostor_bake.clone(),
+            &[px],
+        )?[0];
+        let cloud = &self.chain[level].cloud;
+        let bake = cloud
+            .bake()
+            .map_err(|e| anyhow!("{}: {e}", cloud.model.name))?;
+        let own = self
+            .measure
+            .colour_errors(self.tree, &cloud.model, bake, &[px])?[0];
+        Ok((impostor, own))
     }
 }
