@@ -152,29 +152,20 @@ impl WindowGpu {
             }
         }
         let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
-        let free_now = |renderer: &mut egui_wgpu::Renderer| {
-            for id in &frees {
-                renderer.free_texture(id);
-            }
-        };
         let surface = match self.acquire() {
             Ok(Acquired::Frame(f)) => f,
-            Ok(Acquired::Skip) => {
-                free_now(renderer);
-                return Ok(Began::Skipped);
-            }
-            Ok(Acquired::Reconfigure) => {
-                free_now(renderer);
-                return Ok(Began::Reconfigure);
-            }
-            Ok(Acquired::Recreate) => {
-                free_now(renderer);
-                self.recreate_surface()?;
-                return Ok(Began::Skipped);
-            }
-            Err(e) => {
-                free_now(renderer);
-                return Err(e);
+            other => {
+                for id in &frees {
+                    renderer.free_texture(id);
+                }
+                return match other? {
+                    Acquired::Reconfigure => Ok(Began::Reconfigure),
+                    Acquired::Recreate => {
+                        self.recreate_surface()?;
+                        Ok(Began::Skipped)
+                    }
+                    Acquired::Skip | Acquired::Frame(_) => Ok(Began::Skipped),
+                };
             }
         };
         let screen = egui_wgpu::ScreenDescriptor {

@@ -254,11 +254,7 @@ fn impostor_level(
         let height = full.bounds.size().y.max(1e-3);
         let placement = if errors.len() < 2 {
             // Full detail alone: nothing for the impostor to stand for (and no worlds to draw).
-            Placement {
-                epsilon: None,
-                tolerance_px: tolerance,
-                measured: Vec::new(),
-            }
+            Placement::none(tolerance)
         } else {
             let mut fit = measure.impostor(gpu, &s.model, &full, &lods.levels, &impostor)?;
             placement::place(&errors, height, tolerance, 1, &mut *fit)?.0

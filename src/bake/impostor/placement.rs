@@ -48,6 +48,15 @@ pub struct Placement {
 }
 
 impl Placement {
+    /// No impostor, placed for `tolerance_px`: where there is nothing for it to stand for.
+    pub fn none(tolerance_px: f32) -> Placement {
+        Placement {
+            epsilon: None,
+            tolerance_px,
+            measured: Vec::new(),
+        }
+    }
+
     /// The error bound selection gives the impostor at pixel tolerance `tolerance_px`: never
     /// below what makes it come in where it was measured. Selection takes a level where its
     /// error projects to the tolerance, so at a tolerance above the placement's the bound
@@ -80,11 +89,7 @@ pub fn place(
     finest: usize,
     measure: &mut dyn MeasureImpostor,
 ) -> Result<(Placement, Option<usize>)> {
-    let mut placement = Placement {
-        epsilon: None,
-        tolerance_px,
-        measured: Vec::new(),
-    };
+    let mut placement = Placement::none(tolerance_px);
     let coarsest = errors.len().saturating_sub(1);
     if coarsest == 0 {
         return Ok((placement, None));
