@@ -20,7 +20,9 @@ struct VsOut {
     @location(3) @interpolate(flat) material: u32,
     @location(4) tint: vec4<f32>,
     // x: level coordinate (level + t · hops); y: transition t, or −1 outside transitions;
-    // z: opacity; w: a clump billboard's view coverage (see `view_coverage`), else 1.
+    // z: the instance's cover (`Cover` in src/render/uniforms.rs: an opacity in the faded
+    // pass, a signed screen-door coverage in the dithered ones, 1 when whole); w: a clump
+    // billboard's view coverage (see `view_coverage`), else 1.
     @location(5) @interpolate(flat) lod: vec4<f32>,
     @location(6) influences: f32,
     // The normal-map layers plus one (0: vertex normals) of the vertex drawn (x) and, in a

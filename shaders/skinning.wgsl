@@ -218,7 +218,9 @@ struct Instance {
     @location(5) tint: vec4<f32>,
     // x: transition t (geomorph: 0 the drawn level, 1 its target hops levels coarser), −1 when
     // not in a transition; y: hops;
-    // z: opacity (below 1 only while an alpha transition fades the level); w: the level.
+    // z: cover (`Cover` in src/render/uniforms.rs): an opacity below 1 only while an alpha
+    // transition fades the level, a signed screen-door coverage for a dissolve's or dithered
+    // cross-fade's half, else 1; w: the level.
     @location(6) lod: vec4<f32>,
     // A cross-fade to a second clip: that clip as a frame range (see `clip_frames`), and its
     // time offset (x), playback speed (y) and weight (z, 0: no cross-fade).

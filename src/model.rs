@@ -258,6 +258,24 @@ pub struct Material {
     pub alpha_cutoff: f32,
     /// glTF's `doubleSided`.
     pub double_sided: bool,
+    /// What lodlab's renderer takes it for. Only lodlab's own bakes give a material another
+    /// role than [`MaterialRole::Surface`]: an imported file's material names mean nothing to
+    /// it.
+    pub role: MaterialRole,
+}
+
+/// What a material is to the renderer besides a surface: the roles a billboard cloud's bake
+/// gives its atlas and the atlas's lighting (see `bake::gpu_data::materials`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MaterialRole {
+    /// A surface drawn with its colour and alpha.
+    #[default]
+    Surface,
+    /// A billboard cloud's atlas: its triangles are the billboards, two to a quad.
+    BillboardAtlas,
+    /// The material after a cloud's atlas, holding its lighting: per texel, the normal the
+    /// leaf drawn there is lit by. No triangle uses it.
+    BillboardLighting,
 }
 
 impl Material {
@@ -270,7 +288,13 @@ impl Material {
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
+            role: MaterialRole::Surface,
         }
+    }
+
+    /// The same material in `role`.
+    pub fn with_role(self, role: MaterialRole) -> Material {
+        Material { role, ..self }
     }
 
     /// Whether its alpha cuts its shape out anywhere: a mask (or a blend, which lodlab draws

@@ -153,18 +153,7 @@ pub(crate) fn read_meshes(
     for (node, binding) in nodes {
         let Some(m) = node.mesh() else { continue };
         for prim in m.primitives() {
-            let mut attributes: VertexAccessors = prim
-                .attributes()
-                .map(|(s, a)| (s.to_string(), a.index()))
-                .collect();
-            attributes.sort();
-            let this = DrawnPrimitive {
-                attributes: attributes.clone(),
-                indices: prim.indices().map(|a| a.index()),
-                mode: prim.mode().as_gl_enum(),
-                material: prim.material().index(),
-                place: binding.key(),
-            };
+            let (attributes, this) = drawn_primitive(&prim, binding);
             if !drawn.insert(this) {
                 repeated += 1;
                 continue;
@@ -174,63 +163,15 @@ pub(crate) fn read_meshes(
                 morphed += 1;
             }
             let material = prim.material();
-            let slot = match material_slots.get(&material.index()) {
-                Some(&s) => s,
-                None => {
-                    let s = u16::try_from(materials.len())
-                        .map_err(|_| "more than 65535 materials".to_string())?;
-                    materials.push(convert_material(&material, images)?);
-                    material_slots.insert(material.index(), s);
-                    s
-                }
-            };
-            let base_colour = material.pbr_metallic_roughness().base_color_texture();
-            let transform = base_colour.as_ref().and_then(|t| t.texture_transform());
-            let uv_set = transform
-                .as_ref()
-                .and_then(|t| t.tex_coord())
-                .or(base_colour.as_ref().map(|t| t.tex_coord()))
-                .unwrap_or(0);
+            let slot = material_slot(&material, images, &mut material_slots, &mut materials)?;
+            let (uv_set, transform) = base_colour_uvs(&material);
             let joints = match binding {
                 Binding::Skin(map) => Some(map.len()),
                 Binding::Rigid(..) => None,
             };
             let mut raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
-            if let Some(t) = &transform {
-                let finite = t.offset().iter().chain(&t.scale()).all(|v| v.is_finite())
-                    && t.rotation().is_finite();
-                if !finite {
-                    return Err(format!(
-                        "{label}: its material's KHR_texture_transform is not finite"
-                    ));
-                }
-            }
-            if let Some(t) = transform {
-                apply_texture_transform(&mut raw.uvs, t.offset(), t.rotation(), t.scale());
-            }
-            match binding {
-                Binding::Skin(map) => {
-                    for inf in raw.influences.iter_mut().flatten() {
-                        inf.bone = map[inf.bone as usize];
-                    }
-                }
-                Binding::Rigid(world, bone) => {
-                    for inf in raw.influences.iter_mut().flatten() {
-                        inf.bone = *bone;
-                    }
-                    let normal_matrix = glam::Mat3::from_mat4(*world).inverse().transpose();
-                    for p in &mut raw.positions {
-                        *p = world.transform_point3(*p);
-                    }
-                    for n in raw.normals.iter_mut().flatten() {
-                        *n = (normal_matrix * *n).normalize_or(Vec3::Y);
-                    }
-                    if world.determinant() < 0.0 {
-                        // A mirroring transform turns the triangles inside out.
-                        raw.triangles.iter_mut().for_each(|t| t.swap(1, 2));
-                    }
-                }
-            }
+            apply_material_transform(&mut raw, transform, &label)?;
+            bind(&mut raw, binding);
             // Primitives over the same vertex accessors, drawn in one place in one material,
             // share their vertices: an exporter's layout (one vertex buffer, index buffers
             // per part).
@@ -248,8 +189,119 @@ pub(crate) fn read_meshes(
     if repeated > 0 {
         log::info!("{repeated} primitive(s) drawn again where they were already drawn read once");
     }
+    finish_mesh(&mut mesh, &needs_normals)?;
+
+    Ok((mesh, materials))
+}
+
+/// A primitive's vertex accessors (sorted), and what it draws where under `binding`: the key
+/// by which a primitive drawn again in the same place is read once.
+fn drawn_primitive(prim: &gltf::Primitive, binding: &Binding) -> (VertexAccessors, DrawnPrimitive) {
+    let mut attributes: VertexAccessors = prim
+        .attributes()
+        .map(|(s, a)| (s.to_string(), a.index()))
+        .collect();
+    attributes.sort();
+    let this = DrawnPrimitive {
+        attributes: attributes.clone(),
+        indices: prim.indices().map(|a| a.index()),
+        mode: prim.mode().as_gl_enum(),
+        material: prim.material().index(),
+        place: binding.key(),
+    };
+    (attributes, this)
+}
+
+/// The model's material slot of a glTF material, converted and added to `materials` the first
+/// time a primitive uses it: a vertex stores its material as a `u16`.
+fn material_slot(
+    material: &gltf::Material,
+    images: &[Option<Rgba8Image>],
+    material_slots: &mut BTreeMap<Option<usize>, u16>,
+    materials: &mut Vec<Material>,
+) -> Result<u16, String> {
+    Ok(match material_slots.get(&material.index()) {
+        Some(&s) => s,
+        None => {
+            let s = u16::try_from(materials.len())
+                .map_err(|_| "more than 65535 materials".to_string())?;
+            materials.push(convert_material(material, images)?);
+            material_slots.insert(material.index(), s);
+            s
+        }
+    })
+}
+
+/// The texture coordinate set a material's base colour texture reads (its
+/// `KHR_texture_transform` may name another), and that transform.
+fn base_colour_uvs<'a>(
+    material: &gltf::Material<'a>,
+) -> (u32, Option<gltf::texture::TextureTransform<'a>>) {
+    let base_colour = material.pbr_metallic_roughness().base_color_texture();
+    let transform = base_colour.as_ref().and_then(|t| t.texture_transform());
+    let uv_set = transform
+        .as_ref()
+        .and_then(|t| t.tex_coord())
+        .or(base_colour.as_ref().map(|t| t.tex_coord()))
+        .unwrap_or(0);
+    (uv_set, transform)
+}
+
+/// A material's `KHR_texture_transform`, checked finite, baked into a primitive's texture
+/// coordinates.
+fn apply_material_transform(
+    raw: &mut RawPrimitive,
+    transform: Option<gltf::texture::TextureTransform>,
+    label: &str,
+) -> Result<(), String> {
+    if let Some(t) = &transform {
+        let finite =
+            t.offset().iter().chain(&t.scale()).all(|v| v.is_finite()) && t.rotation().is_finite();
+        if !finite {
+            return Err(format!(
+                "{label}: its material's KHR_texture_transform is not finite"
+            ));
+        }
+    }
+    if let Some(t) = transform {
+        apply_texture_transform(&mut raw.uvs, t.offset(), t.rotation(), t.scale());
+    }
+    Ok(())
+}
+
+/// A primitive's vertices bound as `binding` says: a skin's joints mapped to the model's
+/// bones, or a rigid part given its bone and moved by its transform.
+fn bind(raw: &mut RawPrimitive, binding: &Binding) {
+    match binding {
+        Binding::Skin(map) => {
+            for inf in raw.influences.iter_mut().flatten() {
+                inf.bone = map[inf.bone as usize];
+            }
+        }
+        Binding::Rigid(world, bone) => {
+            for inf in raw.influences.iter_mut().flatten() {
+                inf.bone = *bone;
+            }
+            let normal_matrix = glam::Mat3::from_mat4(*world).inverse().transpose();
+            for p in &mut raw.positions {
+                *p = world.transform_point3(*p);
+            }
+            for n in raw.normals.iter_mut().flatten() {
+                *n = (normal_matrix * *n).normalize_or(Vec3::Y);
+            }
+            if world.determinant() < 0.0 {
+                // A mirroring transform turns the triangles inside out.
+                raw.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+            }
+        }
+    }
+}
+
+/// The merged mesh made ready: normals computed where a primitive had none, what no triangle
+/// draws dropped, and a mesh that would draw nothing refused.
+fn finish_mesh(mesh: &mut SkinnedMesh, needs_normals: &[bool]) -> Result<(), String> {
     if needs_normals.iter().any(|&n| n) {
-        compute_normals(&mut mesh, &needs_normals);
+        compute_normals(mesh, needs_normals);
     }
     // Degenerate and repeated triangles, and the vertices only they used (or none did), go
     // before anything counts vertices or builds animation space from them.
@@ -272,8 +324,7 @@ pub(crate) fn read_meshes(
                 .into(),
         );
     }
-
-    Ok((mesh, materials))
+    Ok(())
 }
 
 pub(crate) fn read_primitive<'a, 's, F>(
@@ -287,6 +338,40 @@ where
     F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
 {
     let reader = prim.reader(buffer.clone());
+    let (positions, normals, uvs) = read_vertices(prim, buffer, uv_set, label)?;
+    let n = positions.len();
+
+    // Skin influences from every JOINTS_n / WEIGHTS_n pair; a rigid mesh (no skin) follows
+    // bone 0 alone.
+    let Some(joint_count) = joint_count else {
+        let influences = vec![
+            vec![Influence {
+                bone: 0,
+                weight: 1.0
+            }];
+            n
+        ];
+        return finish_primitive(prim, &reader, positions, normals, uvs, influences, label);
+    };
+    let mut influences = read_influences(&reader, n, joint_count, label)?;
+    normalise_influences(&mut influences, label)?;
+    finish_primitive(prim, &reader, positions, normals, uvs, influences, label)
+}
+
+/// A primitive's positions, normals (if any) and texture coordinates, before influences.
+type Vertices = (Vec<Vec3>, Option<Vec<Vec3>>, Vec<Vec2>);
+
+/// A primitive's positions, normals (if any) and texture coordinates of set `uv_set` (zero
+/// where it has none), checked finite and of one count.
+fn read_vertices<'a, 's, F>(
+    prim: &'a gltf::Primitive<'a>,
+    buffer: F,
+    uv_set: u32,
+    label: &str,
+) -> Result<Vertices, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
     let attribute = |s: gltf::Semantic| prim.get(&s);
     let positions: Vec<Vec3> = attribute(gltf::Semantic::Positions)
         .and_then(|a| read_floats!(a, buffer.clone(), 3))
@@ -329,19 +414,21 @@ where
             "{label}: vertex {i} has a non-finite texture coordinate"
         ));
     }
+    Ok((positions, normals, uvs))
+}
 
-    // Skin influences from every JOINTS_n / WEIGHTS_n pair; a rigid mesh (no skin) follows
-    // bone 0 alone.
-    let Some(joint_count) = joint_count else {
-        let influences = vec![
-            vec![Influence {
-                bone: 0,
-                weight: 1.0
-            }];
-            n
-        ];
-        return finish_primitive(prim, &reader, positions, normals, uvs, influences, label);
-    };
+/// The skin influences of a primitive's `n` vertices from every JOINTS_n / WEIGHTS_n pair,
+/// checked (weights finite and non-negative, joints in the skin's `joint_count`), the
+/// weights of one joint summed; zero weights left out. Not yet normalised.
+fn read_influences<'a, 's, F>(
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    n: usize,
+    joint_count: usize,
+    label: &str,
+) -> Result<Vec<Vec<Influence>>, String>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
     let mut influences: Vec<Vec<Influence>> = vec![Vec::new(); n];
     let mut set = 0;
     loop {
@@ -397,6 +484,12 @@ where
             "{label}: has no JOINTS_0/WEIGHTS_0 skin attributes"
         ));
     }
+    Ok(influences)
+}
+
+/// Every vertex's weights scaled to sum to 1, and its influences in bone order; a vertex of
+/// no weight at all is refused.
+fn normalise_influences(influences: &mut [Vec<Influence>], label: &str) -> Result<(), String> {
     for (v, inf) in influences.iter_mut().enumerate() {
         let total: f32 = inf.iter().map(|i| i.weight).sum();
         if total <= 0.0 {
@@ -416,7 +509,7 @@ where
         }
         inf.sort_by_key(|i| i.bone);
     }
-    finish_primitive(prim, &reader, positions, normals, uvs, influences, label)
+    Ok(())
 }
 
 /// A primitive's triangles (from its indices and mode) with its vertices read so far.
@@ -590,5 +683,7 @@ pub(crate) fn convert_material(
         },
         alpha_cutoff,
         double_sided: material.double_sided(),
+        // A file's material is a surface, whatever it is called.
+        role: crate::model::MaterialRole::Surface,
     })
 }

@@ -3,7 +3,7 @@
 
 use super::gpu::Gpu;
 use super::memory::GpuMemory;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::{CharacterBake, DrawClass};
 use crate::bake::gpu_data::lod_pack::{LodPack, PackedLevel};
 use crate::bake::gpu_data::texels::TexelGrid;
 use wgpu::util::DeviceExt;
@@ -25,14 +25,8 @@ pub struct GpuCharacter {
     pub name: String,
     /// Bounding sphere over the animation, model space: centre and radius.
     pub sphere: (glam::Vec3, f32),
-    /// Foliage: drawn two-sided with its alpha as a cut-out.
-    pub two_sided: bool,
-    /// A billboard cloud lit per texel through its atlas (see `CharacterBake::atlas_lit`).
-    pub atlas_lit: bool,
-    /// An octahedral impostor: drawn by the impostor shader, one quad facing the eye.
-    pub impostor: bool,
-    /// A character's animated impostor: drawn by its own shader, one quad facing the eye.
-    pub animated_impostor: bool,
+    /// How it is drawn (see [`DrawKind`](crate::bake::gpu_data::drawable::DrawKind)).
+    pub class: DrawClass,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
     /// The pose the plain calibration shader draws every set in: the first frame of the
@@ -235,7 +229,7 @@ impl GpuCharacter {
         };
         // A texel a view, read by index in the vertex shader: indexing an array in the
         // uniform by a per-instance index took llvmpipe five times as long.
-        let rects = match &bake.animated_impostor {
+        let rects = match bake.kind.character_impostor() {
             Some(a) if !a.rects.is_empty() => float_texture(
                 gpu,
                 &format!("{} impostor views", bake.name),
@@ -249,7 +243,7 @@ impl GpuCharacter {
         let material_bytes: usize = bake.materials.mips.iter().map(Vec::len).sum();
         // The blob shadow covers the footprint of the animated bounds.
         let b = bake.bounds;
-        let frame = bake.impostor.as_ref();
+        let frame = bake.kind.tree_impostor();
         let mut shadow = CharacterUniform {
             ellipse: [
                 b.center().x,
@@ -268,7 +262,7 @@ impl GpuCharacter {
                 [1.0 / texels.max(1.0), 0.0, 0.0, 0.0]
             }),
         };
-        if let Some(a) = &bake.animated_impostor {
+        if let Some(a) = bake.kind.character_impostor() {
             shadow.sphere = [a.centre[0], a.centre[1], a.centre[2], a.radius];
             shadow.grid = [a.views as f32, a.columns as f32, a.rows as f32, 0.0];
             shadow.cell = [1.0 / a.cell.max(1) as f32, 0.0, 0.0, 0.0];
@@ -293,10 +287,7 @@ impl GpuCharacter {
         let mut character = GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
-            two_sided: bake.alpha_tested,
-            atlas_lit: bake.atlas_lit,
-            impostor: bake.impostor.is_some(),
-            animated_impostor: bake.animated_impostor.is_some(),
+            class: bake.kind.class(),
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),

@@ -5,6 +5,8 @@
 use super::shaders;
 use super::targets::DEPTH_FORMAT;
 use super::uniforms::{GpuInstance, static_vertex_layout};
+use crate::bake::gpu_data::drawable::DrawClass;
+use std::collections::HashMap;
 
 /// Depth state: test and write, test only, or equal only (the colour pass of a faded level).
 #[derive(Clone, Copy)]
@@ -117,54 +119,193 @@ fn pipeline(
     })
 }
 
-/// A character pipeline twice: shaded by its materials, and painted by a debug view. The debug
-/// views are a fragment shader of their own, so that the shaded one carries no branch on the
-/// view: on a software rasteriser every branch costs every pixel, about a quarter of a
-/// character's fragment time.
-pub(super) struct Shading {
-    pub shaded: wgpu::RenderPipeline,
-    pub debug: wgpu::RenderPipeline,
+/// What picks a character pipeline: the family of shaders (a drawable's [`DrawClass`]), whether
+/// the vertices geomorph, the stage of the frame it draws in, and how it is painted. A draw
+/// finds its pipeline by its key (see `renderer::draw`); [`PipelineKey::all`] lists the keys
+/// pipelines are built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PipelineKey {
+    pub class: DrawClass,
+    /// A geomorph: each vertex moves towards its place in a coarser level.
+    pub morph: bool,
+    pub stage: Stage,
+    pub look: Look,
 }
 
-impl Shading {
-    pub fn get(&self, debug: bool) -> &wgpu::RenderPipeline {
-        if debug { &self.debug } else { &self.shaded }
+/// The stage of the frame a character pipeline draws in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// Depth tested and written, the whole level.
+    Opaque,
+    /// One half of a dithered cross-fade: only its half's pixels.
+    Dither,
+    /// A faded level's first pass: depth only.
+    FadeDepth,
+    /// A faded level's second pass: colour blended where the depth is equal.
+    FadeColor,
+    /// Lines, coloured by level (where the adapter draws lines).
+    Wireframe,
+}
+
+/// How a character pipeline paints.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Look {
+    /// Lit by its materials and vertex normals.
+    Shaded,
+    /// A debug view. The debug views are a fragment shader of their own, so that the shaded
+    /// one carries no branch on the view: on a software rasteriser every branch costs every
+    /// pixel, about a quarter of a character's fragment time.
+    Debug,
+    /// Lit through normal maps: its own vertex shaders read each vertex's layer, its fragment
+    /// shaders the map (the debug views keep vertex normals).
+    Mapped,
+}
+
+impl PipelineKey {
+    /// A mesh's pipeline.
+    pub fn mesh(morph: bool, stage: Stage, look: Look) -> PipelineKey {
+        PipelineKey {
+            class: DrawClass::Mesh,
+            morph,
+            stage,
+            look,
+        }
     }
-}
 
-/// The shaded character pipelines again for levels lit through normal maps (the debug views
-/// keep vertex normals): their own vertex shaders read each vertex's layer, their fragment
-/// shaders the map.
-pub(super) struct Mapped {
-    pub skinned: wgpu::RenderPipeline,
-    pub morph: wgpu::RenderPipeline,
-    pub dither: wgpu::RenderPipeline,
-    pub fade_color: wgpu::RenderPipeline,
+    /// The one pipeline foliage and impostors of `class` draw with (foliage also geomorphs).
+    pub fn own(class: DrawClass, morph: bool) -> PipelineKey {
+        PipelineKey {
+            class,
+            morph,
+            stage: Stage::Opaque,
+            look: Look::Shaded,
+        }
+    }
+
+    /// Every key a pipeline is built for; wireframes where the adapter draws lines.
+    pub fn all(wireframe: bool) -> Vec<PipelineKey> {
+        use Stage::*;
+        let mut keys = Vec::new();
+        for look in [Look::Shaded, Look::Debug, Look::Mapped] {
+            for (morph, stage) in [
+                (false, Opaque),
+                (true, Opaque),
+                (false, Dither),
+                (false, FadeColor),
+            ] {
+                keys.push(Self::mesh(morph, stage, look));
+            }
+        }
+        keys.push(Self::mesh(false, FadeDepth, Look::Shaded));
+        if wireframe {
+            keys.push(Self::mesh(false, Wireframe, Look::Debug));
+            keys.push(Self::mesh(true, Wireframe, Look::Debug));
+        }
+        keys.push(Self::own(DrawClass::Foliage, false));
+        keys.push(Self::own(DrawClass::Foliage, true));
+        keys.push(Self::own(DrawClass::AtlasLitFoliage, false));
+        keys.push(Self::own(DrawClass::TreeImpostor, false));
+        keys.push(Self::own(DrawClass::CharacterImpostor, false));
+        keys
+    }
+
+    /// The vertex and fragment entry points (`shaders/character.wgsl`, `impostor.wgsl`). With
+    /// multisampling, cut-outs have fragment shaders of their own that sharpen the alpha for
+    /// alpha to coverage.
+    fn entry_points(self, multisampled: bool) -> (&'static str, &'static str) {
+        let cut = |single, multi| if multisampled { multi } else { single };
+        match self.class {
+            DrawClass::Foliage => (
+                if self.morph {
+                    "vs_foliage_morph"
+                } else {
+                    "vs_foliage"
+                },
+                cut("fs_foliage", "fs_foliage_coverage"),
+            ),
+            DrawClass::AtlasLitFoliage => (
+                "vs_foliage_lit",
+                cut("fs_foliage_lit", "fs_foliage_lit_coverage"),
+            ),
+            DrawClass::TreeImpostor => ("vs_impostor", cut("fs_impostor", "fs_impostor_coverage")),
+            DrawClass::CharacterImpostor => (
+                "vs_animated_impostor",
+                cut("fs_animated_impostor", "fs_animated_impostor_coverage"),
+            ),
+            DrawClass::Mesh => {
+                let mapped = self.look == Look::Mapped;
+                let vs = match (self.morph, mapped) {
+                    (false, false) => "vs_main",
+                    (true, false) => "vs_morph",
+                    (false, true) => "vs_main_mapped",
+                    (true, true) => "vs_morph_mapped",
+                };
+                let fs = match (self.stage, self.look) {
+                    (Stage::Wireframe, _) => "fs_debug",
+                    (Stage::Dither, Look::Shaded) => "fs_dither",
+                    (Stage::Dither, Look::Debug) => "fs_debug_dither",
+                    (Stage::Dither, Look::Mapped) => "fs_dither_mapped",
+                    (_, Look::Mapped) if self.morph => "fs_morph_mapped",
+                    (_, Look::Mapped) => "fs_mapped",
+                    (_, Look::Debug) => "fs_debug",
+                    (_, Look::Shaded) => "fs_main",
+                };
+                (vs, fs)
+            }
+        }
+    }
+
+    /// The pipeline's description, on the characters' vertex buffer `instances`.
+    fn spec<'a>(
+        self,
+        label: &'a str,
+        module: &'a wgpu::ShaderModule,
+        instances: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+        multisampled: bool,
+    ) -> PipelineSpec<'a> {
+        let (vs, fs) = self.entry_points(multisampled);
+        let base = PipelineSpec {
+            buffers: instances,
+            ..PipelineSpec::new(label, module, vs, fs)
+        };
+        if self.class != DrawClass::Mesh {
+            // Cut out: no culling, the texture's alpha as a cut-out; with multisampling, alpha
+            // to coverage smooths the cut edges.
+            return PipelineSpec {
+                alpha_to_coverage: true,
+                ..base
+            };
+        }
+        let mesh = PipelineSpec {
+            cull: Some(wgpu::Face::Back),
+            ..base
+        };
+        match self.stage {
+            Stage::Opaque | Stage::Dither => mesh,
+            Stage::FadeDepth => PipelineSpec {
+                depth_only: true,
+                ..mesh
+            },
+            Stage::FadeColor => PipelineSpec {
+                depth: Depth::Equal,
+                blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                ..mesh
+            },
+            Stage::Wireframe => PipelineSpec {
+                polygon_mode: wgpu::PolygonMode::Line,
+                ..mesh
+            },
+        }
+    }
 }
 
 /// Every pipeline the scene renderer draws with.
 pub(super) struct Pipelines {
-    pub skinned: Shading,
-    pub morph: Shading,
-    /// `skinned` keeping only its half's pixels of a dithered cross-fade.
-    pub dither: Shading,
-    /// The two passes of a faded level: depth only, then colour where the depth is equal.
-    pub fade_depth: wgpu::RenderPipeline,
-    pub fade_color: Shading,
-    pub mapped: Mapped,
-    /// Line-mode versions of `skinned` and `morph`, where the adapter can draw lines.
-    pub wireframe: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline)>,
-    /// Foliage (alpha-tested, two-sided) versions of `skinned` and `morph`.
-    pub foliage: (wgpu::RenderPipeline, wgpu::RenderPipeline),
-    /// Foliage lit per pixel: billboard clouds lit through their atlases.
-    pub foliage_lit: wgpu::RenderPipeline,
-    /// Octahedral impostors: one quad a tree facing the eye, cut out like foliage.
-    pub impostor: wgpu::RenderPipeline,
-    /// Characters' animated impostors: one quad a character facing the eye, cut out at half
-    /// coverage (alpha to coverage with multisampling).
-    pub animated_impostor: wgpu::RenderPipeline,
+    /// The characters' and trees' pipelines, by key (built for [`PipelineKey::all`]).
+    characters: HashMap<PipelineKey, wgpu::RenderPipeline>,
     /// Billboard outlines: lines over the billboards, tested against depth.
     pub outline: wgpu::RenderPipeline,
+    /// The plain calibration shader: every level drawn from one fixed pose.
     pub plain: wgpu::RenderPipeline,
     pub sky: wgpu::RenderPipeline,
     pub ground: wgpu::RenderPipeline,
@@ -196,172 +337,38 @@ impl Pipelines {
         let plain_module = shaders::PLAIN_SHADER.create(device);
         let environment_module = shaders::ENVIRONMENT_SHADER.create(device);
         let shadow_module = shaders::SHADOW_SHADER.create(device);
-        let (f, s) = (color_format, sample_count);
+        let build = |layout, spec| pipeline(device, layout, color_format, sample_count, spec);
         let instances = [Some(GpuInstance::layout())];
         let plain_buffers = [Some(static_vertex_layout()), Some(GpuInstance::layout())];
-        let character = |label, vs| PipelineSpec {
-            buffers: &instances,
-            cull: Some(wgpu::Face::Back),
-            ..PipelineSpec::new(label, &character_module, vs, "fs_main")
-        };
-        let build = |layout, spec| pipeline(device, layout, f, s, spec);
-        // The shaded pipeline of `spec`, and the same with the debug views' fragment shader.
-        let shading = |spec: PipelineSpec<'_>| Shading {
-            debug: pipeline(
-                device,
-                &with_characters,
-                f,
-                s,
-                PipelineSpec {
-                    fs: "fs_debug",
-                    ..spec
-                },
-            ),
-            shaded: pipeline(device, &with_characters, f, s, spec),
-        };
-        let skinned = shading(character("skinned characters", "vs_main"));
-        let dither = Shading {
-            debug: pipeline(
-                device,
-                &with_characters,
-                f,
-                s,
-                PipelineSpec {
-                    fs: "fs_debug_dither",
-                    ..character("dithered characters, debug view", "vs_main")
-                },
-            ),
-            shaded: pipeline(
-                device,
-                &with_characters,
-                f,
-                s,
-                PipelineSpec {
-                    fs: "fs_dither",
-                    ..character("dithered characters", "vs_main")
-                },
-            ),
-        };
-        let morph = shading(character("geomorphed characters", "vs_morph"));
-        let fade_depth = build(
-            &with_characters,
-            PipelineSpec {
-                depth_only: true,
-                ..character("faded level depth", "vs_main")
-            },
-        );
-        let fade_color_spec = |label, vs| PipelineSpec {
-            depth: Depth::Equal,
-            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-            ..character(label, vs)
-        };
-        let fade_color = shading(fade_color_spec("faded level colour", "vs_main"));
-        let mapped_spec = |spec: PipelineSpec<'_>, fs| {
-            pipeline(device, &with_characters, f, s, PipelineSpec { fs, ..spec })
-        };
-        let mapped = Mapped {
-            skinned: mapped_spec(
-                character("normal-mapped characters", "vs_main_mapped"),
-                "fs_mapped",
-            ),
-            morph: mapped_spec(
-                character("normal-mapped geomorphs", "vs_morph_mapped"),
-                "fs_morph_mapped",
-            ),
-            dither: mapped_spec(
-                character("normal-mapped dithered characters", "vs_main_mapped"),
-                "fs_dither_mapped",
-            ),
-            fade_color: mapped_spec(
-                fade_color_spec("normal-mapped faded level colour", "vs_main_mapped"),
-                "fs_mapped",
-            ),
-        };
-        // Foliage: no culling, the texture's alpha as a cut-out; with multisampling, alpha to
-        // coverage smooths the cut edges.
-        let foliage_fs = if s > 1 {
-            "fs_foliage_coverage"
-        } else {
-            "fs_foliage"
-        };
-        let foliage_spec = |label, vs| PipelineSpec {
-            cull: None,
-            alpha_to_coverage: true,
-            ..PipelineSpec {
-                fs: foliage_fs,
-                ..character(label, vs)
-            }
-        };
-        let foliage = (
-            build(&with_characters, foliage_spec("foliage", "vs_foliage")),
-            build(
-                &with_characters,
-                foliage_spec("geomorphed foliage", "vs_foliage_morph"),
-            ),
-        );
-        let foliage_lit = build(
-            &with_characters,
-            PipelineSpec {
-                fs: if s > 1 {
-                    "fs_foliage_lit_coverage"
-                } else {
-                    "fs_foliage_lit"
-                },
-                ..foliage_spec("atlas-lit foliage", "vs_foliage_lit")
-            },
-        );
-        let impostor = build(
-            &with_characters,
-            PipelineSpec {
-                fs: if s > 1 {
-                    "fs_impostor_coverage"
-                } else {
-                    "fs_impostor"
-                },
-                ..foliage_spec("octahedral impostors", "vs_impostor")
-            },
-        );
-        let animated_impostor = build(
-            &with_characters,
-            PipelineSpec {
-                cull: None,
-                alpha_to_coverage: true,
-                fs: if s > 1 {
-                    "fs_animated_impostor_coverage"
-                } else {
-                    "fs_animated_impostor"
-                },
-                ..character("animated impostors", "vs_animated_impostor")
-            },
-        );
+        let lines = device
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE);
+        let characters = PipelineKey::all(lines)
+            .into_iter()
+            .map(|key| {
+                let label = format!("{key:?}");
+                let spec = key.spec(&label, &character_module, &instances, sample_count > 1);
+                let made = pipeline(device, &with_characters, color_format, sample_count, spec);
+                (key, made)
+            })
+            .collect();
         let outline = build(
             &with_characters,
             PipelineSpec {
-                fs: "fs_outline",
+                buffers: &instances,
                 depth: Depth::TestOnly,
                 // Half see-through: where thousands of fine billboards crowd, the leaves
                 // still show.
                 blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-                cull: None,
                 topology: wgpu::PrimitiveTopology::LineList,
-                ..character("billboard outlines", "vs_outline")
+                ..PipelineSpec::new(
+                    "billboard outlines",
+                    &character_module,
+                    "vs_outline",
+                    "fs_outline",
+                )
             },
         );
-        let wireframe = device
-            .features()
-            .contains(wgpu::Features::POLYGON_MODE_LINE)
-            .then(|| {
-                // Wireframes are coloured by level: the debug views' shader.
-                let line = |label, vs| PipelineSpec {
-                    polygon_mode: wgpu::PolygonMode::Line,
-                    fs: "fs_debug",
-                    ..character(label, vs)
-                };
-                (
-                    build(&with_characters, line("wireframe characters", "vs_main")),
-                    build(&with_characters, line("wireframe geomorphs", "vs_morph")),
-                )
-            });
         let plain = build(
             &with_characters,
             PipelineSpec {
@@ -398,22 +405,24 @@ impl Pipelines {
             },
         );
         Pipelines {
-            skinned,
-            morph,
-            dither,
-            fade_depth,
-            fade_color,
-            mapped,
-            wireframe,
-            foliage,
-            foliage_lit,
-            impostor,
-            animated_impostor,
+            characters,
             outline,
             plain,
             sky,
             ground,
             shadow,
         }
+    }
+
+    /// The pipeline of `key`: one of [`PipelineKey::all`] (the renderer's choice of keys is
+    /// checked against that list by a test).
+    pub fn get(&self, key: PipelineKey) -> &wgpu::RenderPipeline {
+        &self.characters[&key]
+    }
+
+    /// Whether the adapter draws lines, so that there are wireframe pipelines.
+    pub fn has_wireframe(&self) -> bool {
+        self.characters
+            .contains_key(&PipelineKey::mesh(false, Stage::Wireframe, Look::Debug))
     }
 }

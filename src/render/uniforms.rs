@@ -104,7 +104,8 @@ pub struct GpuInstance {
     /// Time offset in seconds, playback speed, wind strength (1: the clip as it is), spare.
     pub timing: [f32; 4],
     pub tint: [f32; 4],
-    /// Level of detail: transition t (−1 outside transitions), geomorph hops, opacity, level.
+    /// Level of detail: transition t (−1 outside transitions), geomorph hops, [`Cover`]
+    /// (encoded), level. Written by [`GpuInstance::set_lod`].
     pub lod: [f32; 4],
     /// A cross-fade's second clip as a frame range (as `clip`).
     pub clip2: [f32; 4],
@@ -151,6 +152,12 @@ impl GpuInstance {
         self
     }
 
+    /// Draws level `level` (its debug colour), `hops` levels of geomorph beyond it, at `t`
+    /// into its transition (None: in none), covering `cover` of its pixels.
+    pub fn set_lod(&mut self, level: usize, hops: usize, t: Option<f32>, cover: Cover) {
+        self.lod = [t.unwrap_or(-1.0), hops as f32, cover.encode(), level as f32];
+    }
+
     /// Locations 7–9 belong to the plain calibration shader's own vertex buffer.
     pub const ATTRIBUTES: [wgpu::VertexAttribute; 9] = wgpu::vertex_attr_array![
         0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Float32x4, 4 => Float32x4,
@@ -162,6 +169,38 @@ impl GpuInstance {
             array_stride: std::mem::size_of::<GpuInstance>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &Self::ATTRIBUTES,
+        }
+    }
+}
+
+/// How much of an instance's level is drawn: the third number of [`GpuInstance::lod`], which
+/// the shaders read as an opacity or as a screen-door coverage by the pipeline that draws
+/// it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cover {
+    /// Every pixel, opaque.
+    Whole,
+    /// Every pixel at this opacity: the faded level of an alpha blend, which only the
+    /// transitions pass's blended pipelines draw.
+    Opacity(f32),
+    /// The pixels whose screen-door threshold lies below this share: the incoming half of a
+    /// dissolve or of a dithered cross-fade.
+    Incoming(f32),
+    /// The pixels an `Incoming` half of the same share leaves: the outgoing half.
+    Outgoing(f32),
+}
+
+impl Cover {
+    /// As the shaders read it (`screened_out_at` in `shaders/character.wgsl`): a coverage
+    /// c ≥ 0 keeps the pixels whose threshold lies below c, and c < 0 those at or above
+    /// −c − 1; so `Whole` (1) keeps every pixel and the two halves of a share are
+    /// complementary. The blended pipelines read an opacity in [0, 1] as it is.
+    pub fn encode(self) -> f32 {
+        match self {
+            Cover::Whole => 1.0,
+            Cover::Opacity(a) => a.clamp(0.0, 1.0),
+            Cover::Incoming(p) => p.clamp(0.0, 1.0),
+            Cover::Outgoing(p) => -1.0 - p.clamp(0.0, 1.0),
         }
     }
 }
@@ -188,6 +227,23 @@ mod tests {
         // Two matrices and nine vec4s (the last, `views`, of u32s), as `Frame` in common.wgsl.
         assert_eq!(std::mem::size_of::<FrameUniforms>(), 2 * 64 + 9 * 16);
         assert_eq!(std::mem::size_of::<GpuInstance>(), 144);
+    }
+
+    /// The shaders' screen-door rule on encoded covers: the two halves of every share cover
+    /// each pixel exactly once, and `Whole` every pixel.
+    #[test]
+    fn halves_of_a_cover_are_complementary() {
+        let out = |x: f32, c: f32| if c < 0.0 { x < -c - 1.0 } else { x >= c };
+        for share in [0.0, 0.3, 0.5, 1.0] {
+            for x in [0.0, 0.1, 0.29, 0.3, 0.7, 0.999] {
+                let kept = [Cover::Incoming(share), Cover::Outgoing(share)]
+                    .iter()
+                    .filter(|c| !out(x, c.encode()))
+                    .count();
+                assert_eq!(kept, 1, "share {share}, threshold {x}");
+                assert!(!out(x, Cover::Whole.encode()));
+            }
+        }
     }
 
     #[test]

@@ -150,7 +150,7 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
 /// crowns over it.
 fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
     let (trees, characters): (Vec<usize>, Vec<usize>) =
-        (0..bakes.len()).partition(|&m| bakes[m].alpha_tested);
+        (0..bakes.len()).partition(|&m| bakes[m].kind.is_tree());
     let part = |scene: SceneKind, models: &[usize], count: usize| {
         let mut sub = layout_crowd(
             &SceneSpec {

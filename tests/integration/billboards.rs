@@ -874,10 +874,11 @@ fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
     )
     .unwrap();
     let atlas = lit_atlas_material(&level.model.materials).expect("a lit atlas");
-    assert!(
+    assert_eq!(
         CharacterBake::tree_level(&level.model, None, &level.occlusion, &[])
             .unwrap()
-            .atlas_lit
+            .kind,
+        lodlab::bake::gpu_data::drawable::DrawKind::Foliage { atlas_lit: true }
     );
     let colour = level.model.materials[atlas].texture.as_ref().unwrap();
     let lighting = &level.model.materials[atlas + 1];

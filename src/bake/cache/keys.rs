@@ -10,7 +10,7 @@ use serde::Serialize;
 use std::path::Path;
 
 /// The cache file's encoding and the progressive-mesh levels' bake.
-pub const FORMAT_VERSION: u32 = 9;
+pub const FORMAT_VERSION: u32 = 10;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
 pub const CHAIN_VERSION: u32 = 24;

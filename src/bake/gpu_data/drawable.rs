@@ -2,7 +2,7 @@
 
 use super::anim_texture::{self, AnimationTexture};
 use super::animation_space::AnimationSpaceMesh;
-use super::materials::{BILLBOARD_MATERIAL, MaterialLayers, lit_atlas_material};
+use super::materials::{MaterialLayers, billboard_atlas, lit_atlas_material};
 use super::vertex_texture::VertexTexture;
 use crate::bake::foliage::billboard::occlusion::CrownDensity;
 use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
@@ -21,23 +21,95 @@ pub struct CharacterBake {
     /// Bounds over the sampled frames of every clip, in scene units, model-local.
     pub bounds: Bounds,
     pub animation_space: AnimationSpaceMesh,
-    /// Some material has cut-out alpha (foliage): drawn two-sided and alpha-tested.
-    pub alpha_tested: bool,
+    /// How the renderer draws it: a mesh, foliage or an impostor's quad.
+    pub kind: DrawKind,
     /// A spectral cloud's spectra texture (the vertices that read it have their rows in
     /// `animation_space.spectral_rows`).
     pub spectra: Option<SpectraTexture>,
     /// A billboard cloud's billboard outlines as a line list over `indices`' vertices (empty
     /// for everything else): what the viewer's "billboard outlines" draw.
     pub outlines: Vec<u32>,
-    /// An octahedral impostor's frame: the renderer draws it as one camera-facing quad (see
-    /// [`octahedral`]).
-    pub impostor: Option<octahedral::ImpostorFrame>,
-    /// A character's animated impostor (its last level): the renderer draws it as one quad
-    /// facing the eye, showing the view and frames it stands in (see [`animated`]).
-    pub animated_impostor: Option<animated::AnimatedFrame>,
-    /// A billboard cloud whose billboards are lit through their atlas (a normal per texel,
-    /// [`crate::bake::foliage::billboard::atlas`]): drawn with the per-pixel foliage shader.
-    pub atlas_lit: bool,
+}
+
+/// How the renderer draws a [`CharacterBake`]: which pass it belongs to and which family of
+/// shaders draws it. Every drawable is a skinned mesh in animation space; what differs is
+/// its material (opaque or cut out) and whether its mesh is a card that faces the eye.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DrawKind {
+    /// An opaque mesh, back faces culled: a character's level. The only kind lit through
+    /// normal maps, and the only one whose transitions are screen-door dithered (the others
+    /// dissolve in their own shaders).
+    Mesh,
+    /// Cut-out alpha (foliage: a tree's mesh or billboard cloud), drawn two-sided and
+    /// alpha-tested in the foliage pass and swayed by the scene's wind. `atlas_lit`: a
+    /// billboard cloud whose billboards are lit through their atlas (a normal per texel,
+    /// [`crate::bake::foliage::billboard::atlas`]), drawn with the per-pixel foliage shader
+    /// where atlas lighting is on.
+    Foliage { atlas_lit: bool },
+    /// A tree's octahedral impostor, drawn as one quad facing the eye, cut out like foliage
+    /// (see [`octahedral`]).
+    TreeImpostor(octahedral::ImpostorFrame),
+    /// A character's animated impostor (its last level), drawn as one quad facing the eye in
+    /// the characters' pass, showing the view and frames it stands in (see [`animated`]).
+    CharacterImpostor(animated::AnimatedFrame),
+}
+
+/// [`DrawKind`] without its data: what the renderer keeps of it and picks pipelines by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DrawClass {
+    Mesh,
+    Foliage,
+    AtlasLitFoliage,
+    TreeImpostor,
+    CharacterImpostor,
+}
+
+impl DrawKind {
+    pub fn class(&self) -> DrawClass {
+        match self {
+            DrawKind::Mesh => DrawClass::Mesh,
+            DrawKind::Foliage { atlas_lit: false } => DrawClass::Foliage,
+            DrawKind::Foliage { atlas_lit: true } => DrawClass::AtlasLitFoliage,
+            DrawKind::TreeImpostor(_) => DrawClass::TreeImpostor,
+            DrawKind::CharacterImpostor(_) => DrawClass::CharacterImpostor,
+        }
+    }
+
+    /// See [`DrawClass::is_tree`].
+    pub fn is_tree(&self) -> bool {
+        self.class().is_tree()
+    }
+
+    pub fn tree_impostor(&self) -> Option<&octahedral::ImpostorFrame> {
+        match self {
+            DrawKind::TreeImpostor(f) => Some(f),
+            _ => None,
+        }
+    }
+
+    pub fn character_impostor(&self) -> Option<&animated::AnimatedFrame> {
+        match self {
+            DrawKind::CharacterImpostor(f) => Some(f),
+            _ => None,
+        }
+    }
+}
+
+impl DrawClass {
+    /// A tree (its mesh, a billboard cloud or its impostor): drawn in the foliage pass,
+    /// swayed by the scene's wind, placed by a scene's tree layout.
+    pub fn is_tree(self) -> bool {
+        matches!(
+            self,
+            DrawClass::Foliage | DrawClass::AtlasLitFoliage | DrawClass::TreeImpostor
+        )
+    }
+
+    /// An impostor: one quad facing the eye, made by its own shaders from four corners
+    /// (so never drawn as a mesh, faded or in wireframe).
+    pub fn faces_eye(self) -> bool {
+        matches!(self, DrawClass::TreeImpostor | DrawClass::CharacterImpostor)
+    }
 }
 
 impl CharacterBake {
@@ -67,7 +139,7 @@ impl CharacterBake {
     /// A tree (a model with leaves, not billboards) is darkened inside its crown (see
     /// [`crate::bake::foliage::billboard::occlusion`]).
     pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
-        let billboards = model.materials.iter().any(|m| m.name == BILLBOARD_MATERIAL);
+        let billboards = billboard_atlas(&model.materials).is_some();
         let crown = (!billboards).then(|| CrownDensity::of(model)).flatten();
         let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
         Self::build(model, motion, true, &occlusion, &[])
@@ -160,19 +232,18 @@ impl CharacterBake {
             indices: am.indices.clone(),
             materials,
             bounds,
-            alpha_tested: model.materials.iter().any(Material::cuts_out),
-            outlines: model
-                .materials
-                .iter()
-                .position(|m| m.name == BILLBOARD_MATERIAL)
-                .map_or_else(Vec::new, |b| {
-                    billboard_outlines(&am.indices, &am.materials, b as u16)
-                }),
+            kind: if model.materials.iter().any(Material::cuts_out) {
+                DrawKind::Foliage {
+                    atlas_lit: atlas.is_some(),
+                }
+            } else {
+                DrawKind::Mesh
+            },
+            outlines: billboard_atlas(&model.materials).map_or_else(Vec::new, |b| {
+                billboard_outlines(&am.indices, &am.materials, b as u16)
+            }),
             animation_space: am,
             spectra: motion.map(|m| m.spectra.clone()),
-            impostor: None,
-            animated_impostor: None,
-            atlas_lit: atlas.is_some(),
         })
     }
 

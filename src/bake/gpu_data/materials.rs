@@ -5,7 +5,7 @@
 //! `texture × base colour factor` (a plain colour where there is no texture). The layer index goes
 //! into each vertex's header in the vertex texture.
 
-use crate::model::{AlphaMode, Material, linear_to_srgb, srgb_to_linear};
+use crate::model::{AlphaMode, Material, MaterialRole, linear_to_srgb, srgb_to_linear};
 use serde::{Deserialize, Serialize};
 
 /// Layers are never larger than this on a side.
@@ -292,27 +292,34 @@ pub(crate) fn preserve_coverage(level: &mut [u8], target: f32) {
     }
 }
 
-// Material roles: a billboard cloud's atlas and its lighting are told apart from the
-// model's own materials by name, in the model the cloud's bake writes
-// (`bake::foliage::billboard::cloud_model`).
+// A billboard cloud's atlas and its lighting are told apart from the model's own materials
+// by their roles ([`MaterialRole`]), which only the cloud's bake
+// (`bake::foliage::billboard::cloud_model`) gives; the names below are what a debugger or an
+// exported file shows.
 
-/// The name of a cloud model's atlas material: its triangles are the billboards, two to a quad.
+/// The name of a cloud model's atlas material ([`MaterialRole::BillboardAtlas`]).
 pub const BILLBOARD_MATERIAL: &str = "billboards";
 
-/// The name of the material after a cloud's atlas that holds its lighting: per texel, the
-/// normal the leaf drawn there is lit by when seen from the billboard's front, in its
-/// billboard's [`billboard_frame`](crate::bake::foliage::billboard::atlas::billboard_frame) (r, g, b along t, b and n, as x/2 + 1/2). The crown's
-/// occlusion, which scales all of a leaf's light, is multiplied into the atlas's colour.
-/// Stored sRGB-encoded, so that the renderer's sRGB material texture hands the shader these
-/// values in linear form.
+/// The name of the material after a cloud's atlas that holds its lighting
+/// ([`MaterialRole::BillboardLighting`]): per texel, the normal the leaf drawn there is lit by
+/// when seen from the billboard's front, in its billboard's
+/// [`billboard_frame`](crate::bake::foliage::billboard::atlas::billboard_frame) (r, g, b along
+/// t, b and n, as x/2 + 1/2). The crown's occlusion, which scales all of a leaf's light, is
+/// multiplied into the atlas's colour. Stored sRGB-encoded, so that the renderer's sRGB
+/// material texture hands the shader these values in linear form.
 pub const BILLBOARD_LIGHTING: &str = "billboard lighting";
 
-/// The index of `materials`' billboard atlas where the material after it holds its lighting.
-pub fn lit_atlas_material(materials: &[crate::model::Material]) -> Option<usize> {
-    let atlas = materials
+/// The index of `materials`' billboard atlas, if it has one.
+pub fn billboard_atlas(materials: &[Material]) -> Option<usize> {
+    materials
         .iter()
-        .position(|m| m.name == BILLBOARD_MATERIAL)?;
-    (materials.get(atlas + 1)?.name == BILLBOARD_LIGHTING).then_some(atlas)
+        .position(|m| m.role == MaterialRole::BillboardAtlas)
+}
+
+/// The index of `materials`' billboard atlas where the material after it holds its lighting.
+pub fn lit_atlas_material(materials: &[Material]) -> Option<usize> {
+    let atlas = billboard_atlas(materials)?;
+    (materials.get(atlas + 1)?.role == MaterialRole::BillboardLighting).then_some(atlas)
 }
 
 #[cfg(test)]

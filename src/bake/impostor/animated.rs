@@ -287,8 +287,8 @@ impl AnimatedImpostor {
         bake.bounds = bounds;
         // Its pages' alpha is coverage, not a cut-out material: it is a character, drawn in
         // the characters' pass by its own shader.
-        bake.alpha_tested = false;
-        bake.animated_impostor = Some(self.frame.clone());
+        bake.kind =
+            crate::bake::gpu_data::drawable::DrawKind::CharacterImpostor(self.frame.clone());
         Ok(bake)
     }
 }

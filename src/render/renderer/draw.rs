@@ -6,7 +6,9 @@ use super::keys::{
     DrawKey, PASS_DISSOLVE_OUT, PASS_DITHER_IN, PASS_DITHER_OUT, PASS_FADE, PASS_MORPH, PASS_OPAQUE,
 };
 use super::{CharacterShader, DebugView, SceneRenderer};
+use crate::bake::gpu_data::drawable::DrawClass;
 use crate::render::gpu::Gpu;
+use crate::render::pipelines::{Look, PipelineKey, Stage};
 use crate::render::timer::{FrameTimer, Pass};
 use anyhow::Result;
 use std::ops::Range;
@@ -20,8 +22,8 @@ impl SceneRenderer {
     /// test; then the faded levels of alpha transitions over all of it.
     pub fn passes(&self) -> smallvec::SmallVec<[Pass; Pass::COUNT]> {
         let plain = self.shader == CharacterShader::Plain;
-        let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
-        let foliage = |k: &DrawKey| self.characters[k.model()].two_sided;
+        let wireframe = self.wireframe();
+        let foliage = |k: &DrawKey| self.characters[k.model()].class.is_tree();
         let any = |f: &dyn Fn(&DrawKey) -> bool| self.draws.iter().any(|(k, _)| f(k));
         let mut passes = smallvec::SmallVec::new();
         let shown = |k: &DrawKey| wireframe || k.pass() != PASS_FADE;
@@ -44,8 +46,23 @@ impl SceneRenderer {
     /// Whether the billboards' outlines are drawn: asked for, and neither the plain
     /// calibration draw nor a wireframe.
     fn shows_outlines(&self) -> bool {
-        let wireframe = self.debug == DebugView::Wireframe && self.pipelines.wireframe.is_some();
-        self.outlines && self.shader != CharacterShader::Plain && !wireframe
+        self.outlines && self.shader != CharacterShader::Plain && !self.wireframe()
+    }
+
+    /// Whether the frame is drawn as lines: asked for, where the adapter draws lines.
+    fn wireframe(&self) -> bool {
+        self.debug == DebugView::Wireframe && self.pipelines.has_wireframe()
+    }
+
+    /// How the mesh draw `key` is painted: by its debug view, through normal maps, or shaded.
+    fn look(&self, key: &DrawKey) -> Look {
+        if self.debug != DebugView::Shaded {
+            Look::Debug
+        } else if self.mapped(key) {
+            Look::Mapped
+        } else {
+            Look::Shaded
+        }
     }
 
     /// Records pass `which` of the frame. `view` is the rectangle the scene covers (x, y,
@@ -91,23 +108,22 @@ impl SceneRenderer {
                 }
             }
             Pass::Transitions => {
-                let debug = self.debug != DebugView::Shaded;
                 let fades = || self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE);
-                pass.set_pipeline(&self.pipelines.fade_depth);
+                pass.set_pipeline(self.pipelines.get(PipelineKey::mesh(
+                    false,
+                    Stage::FadeDepth,
+                    Look::Shaded,
+                )));
                 for (key, range) in fades() {
                     scissor.side(pass, key.side());
                     self.draw_group(pass, key, range);
                 }
                 let mut current = None;
                 for (key, range) in fades() {
-                    let mapped = self.mapped(key, debug);
-                    if current != Some(mapped) {
-                        current = Some(mapped);
-                        pass.set_pipeline(if mapped {
-                            &self.pipelines.mapped.fade_color
-                        } else {
-                            self.pipelines.fade_color.get(debug)
-                        });
+                    let pipeline = PipelineKey::mesh(false, Stage::FadeColor, self.look(key));
+                    if current != Some(pipeline) {
+                        current = Some(pipeline);
+                        pass.set_pipeline(self.pipelines.get(pipeline));
                     }
                     scissor.side(pass, key.side());
                     self.draw_group(pass, key, range);
@@ -140,14 +156,14 @@ impl SceneRenderer {
         }
     }
 
-    /// Whether the draw `key` is lit through normal maps: shaded (not a debug view), maps on,
-    /// a character's level (or, in a geomorph, either end) that has one.
-    fn mapped(&self, key: &DrawKey, debug: bool) -> bool {
-        if debug || !self.normal_maps {
+    /// Whether the draw `key` can be lit through normal maps: maps on, a mesh's level (or, in
+    /// a geomorph, either end) that has one.
+    fn mapped(&self, key: &DrawKey) -> bool {
+        if !self.normal_maps {
             return false;
         }
         let c = &self.characters[key.model()];
-        if c.two_sided || c.impostor || c.animated_impostor {
+        if c.class != DrawClass::Mesh {
             return false;
         }
         let Some(set) = c.set(key.slot()) else {
@@ -198,53 +214,55 @@ impl SceneRenderer {
             pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
             return;
         }
-        let wire = self
-            .pipelines
-            .wireframe
-            .as_ref()
-            .filter(|_| self.debug == DebugView::Wireframe);
-        let debug = self.debug != DebugView::Shaded;
+        let wire = self.wireframe();
         let mut current = None;
         for &(key, ref range) in &self.draws {
-            if self.characters[key.model()].two_sided != foliage {
+            let c = &self.characters[key.model()];
+            if c.class.is_tree() != foliage {
                 continue;
             }
-            let c = &self.characters[key.model()];
-            let (impostor, animated) = (c.impostor, c.animated_impostor);
-            let mapped = self.mapped(&key, debug);
-            let (pipeline, id) = match (key.pass(), wire, foliage) {
-                // An impostor's mesh is only where its rows sway (or, animated, four
-                // corners): it is always drawn as the quad its shader makes.
-                (PASS_FADE, None, _) if impostor || animated => continue,
-                _ if impostor => (&self.pipelines.impostor, 6),
-                _ if animated => (&self.pipelines.animated_impostor, 8),
-                (PASS_MORPH, Some((_, m)), _) => (m, 0),
-                (_, Some((l, _)), _) => (l, 1),
-                (PASS_FADE, None, _) => continue,
-                (PASS_MORPH, None, true) => (&self.pipelines.foliage.1, 2),
-                (_, None, true) if c.atlas_lit && self.atlas_lighting => {
-                    (&self.pipelines.foliage_lit, 12)
-                }
-                (_, None, true) => (&self.pipelines.foliage.0, 3),
-                (PASS_MORPH, None, false) if mapped => (&self.pipelines.mapped.morph, 9),
-                (PASS_MORPH, None, false) => (self.pipelines.morph.get(debug), 4),
-                (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) if mapped => {
-                    (&self.pipelines.mapped.dither, 10)
-                }
-                (PASS_DITHER_IN | PASS_DITHER_OUT, None, false) => {
-                    (self.pipelines.dither.get(debug), 7)
-                }
-                _ if mapped => (&self.pipelines.mapped.skinned, 11),
-                _ => (self.pipelines.skinned.get(debug), 5),
+            let class = match c.class {
+                DrawClass::AtlasLitFoliage if !self.atlas_lighting => DrawClass::Foliage,
+                class => class,
             };
-            if current != Some(id) {
-                current = Some(id);
-                pass.set_pipeline(pipeline);
+            let Some(pipeline) = opaque_pipeline(class, key.pass(), wire, || self.look(&key))
+            else {
+                continue;
+            };
+            if current != Some(pipeline) {
+                current = Some(pipeline);
+                pass.set_pipeline(self.pipelines.get(pipeline));
             }
             scissor.side(pass, key.side());
             self.draw_group(pass, &key, range);
         }
     }
+}
+
+/// The pipeline of an opaque-pass draw of a `class` drawable in `pass` (one of the
+/// `PASS_*` keys), `wire` when the frame is drawn as lines; `look` tells how a mesh is
+/// painted. None: not drawn in the opaque passes (a faded level, which the transitions pass
+/// draws; an impostor's faded half).
+fn opaque_pipeline(
+    class: DrawClass,
+    pass: u64,
+    wire: bool,
+    look: impl FnOnce() -> Look,
+) -> Option<PipelineKey> {
+    let morph = pass == PASS_MORPH;
+    Some(match class {
+        _ if pass == PASS_FADE && !wire => return None,
+        // An impostor's mesh is only where its rows sway (or, animated, four corners): it is
+        // always drawn as the quad its shader makes, in wireframe too.
+        DrawClass::TreeImpostor | DrawClass::CharacterImpostor => PipelineKey::own(class, false),
+        _ if wire => PipelineKey::mesh(morph, Stage::Wireframe, Look::Debug),
+        DrawClass::AtlasLitFoliage if morph => PipelineKey::own(DrawClass::Foliage, true),
+        DrawClass::Foliage | DrawClass::AtlasLitFoliage => PipelineKey::own(class, morph),
+        DrawClass::Mesh => match pass {
+            PASS_DITHER_IN | PASS_DITHER_OUT => PipelineKey::mesh(false, Stage::Dither, look()),
+            _ => PipelineKey::mesh(morph, Stage::Opaque, look()),
+        },
+    })
 }
 
 /// The scissor rectangle of the side being drawn, set only when the side changes.
@@ -337,5 +355,65 @@ impl SceneRenderer {
         }
         gpu.take_error()?;
         Ok(index)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::renderer::keys::{PASS_DISSOLVE_OUT, PASS_OPAQUE};
+
+    /// Every pipeline a draw can ask for is one that is built, and the choices follow the
+    /// draw kinds: impostors always by their own shaders, only meshes lit through maps or
+    /// dithered, faded levels left to the transitions pass.
+    #[test]
+    fn every_chosen_pipeline_is_built() {
+        let classes = [
+            DrawClass::Mesh,
+            DrawClass::Foliage,
+            DrawClass::AtlasLitFoliage,
+            DrawClass::TreeImpostor,
+            DrawClass::CharacterImpostor,
+        ];
+        let passes = [
+            PASS_OPAQUE,
+            PASS_MORPH,
+            PASS_FADE,
+            PASS_DISSOLVE_OUT,
+            PASS_DITHER_IN,
+            PASS_DITHER_OUT,
+        ];
+        let built = PipelineKey::all(true);
+        let mut chosen = std::collections::HashSet::new();
+        for class in classes {
+            for pass in passes {
+                for wire in [false, true] {
+                    for look in [Look::Shaded, Look::Debug, Look::Mapped] {
+                        let Some(key) = opaque_pipeline(class, pass, wire, || look) else {
+                            assert!(pass == PASS_FADE && !wire, "{class:?} {pass} {wire}");
+                            continue;
+                        };
+                        assert!(built.contains(&key), "{key:?} is not built");
+                        chosen.insert(key);
+                        if class.faces_eye() {
+                            assert_eq!(key, PipelineKey::own(class, false));
+                        } else if wire {
+                            assert_eq!(key.stage, Stage::Wireframe);
+                        } else if class != DrawClass::Mesh {
+                            assert_eq!((key.stage, key.look), (Stage::Opaque, Look::Shaded));
+                        }
+                    }
+                }
+            }
+        }
+        // The transitions pass's two stages are the only keys the opaque passes never pick.
+        let fades: Vec<_> = built.iter().filter(|k| !chosen.contains(k)).collect();
+        assert!(
+            fades
+                .iter()
+                .all(|k| matches!(k.stage, Stage::FadeDepth | Stage::FadeColor)),
+            "{fades:?}"
+        );
+        assert_eq!(fades.len(), 4);
     }
 }

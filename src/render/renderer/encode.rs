@@ -7,9 +7,10 @@ use super::keys::{
     DrawAt, DrawKey, FrameStats, PASS_DISSOLVE_OUT, PASS_DITHER_IN, PASS_DITHER_OUT, PASS_FADE,
     PASS_MORPH, PASS_OPAQUE,
 };
+use crate::bake::gpu_data::drawable::DrawClass;
 use crate::render::character::GpuCharacter;
 use crate::render::gpu::Gpu;
-use crate::render::uniforms::GpuInstance;
+use crate::render::uniforms::{Cover, GpuInstance};
 use crate::scene::lod::MAX_LEVELS;
 use crate::scene::{Instance, LodDraw};
 
@@ -28,7 +29,7 @@ fn gpu_instance(c: &GpuCharacter, inst: &Instance, wind: f32) -> GpuInstance {
     if let Some(f) = inst.fade {
         g = g.with_fade(row(f.clip), f.time_offset, f.speed, f.weight);
     }
-    g.timing[2] = if c.two_sided {
+    g.timing[2] = if c.class.is_tree() {
         inst.wind * wind
     } else {
         inst.wind
@@ -86,28 +87,29 @@ impl SceneRenderer {
                 // The debug tint shows the level asked for (a tree's cloud level is a
                 // character of its own, drawn at its only level).
                 let k = (asked as usize).min(last);
-                g.lod = [-1.0, 0.0, 1.0, asked as f32];
+                g.set_lod(asked as usize, 0, None, Cover::Whole);
                 count(k, 0);
                 keyed.keep(key(PASS_OPAQUE, k, 0), near, g);
             }
             LodDraw::Morph { fine, coarse, t } => {
                 let fine = (fine as usize).min(last);
                 let hops = (coarse as usize).min(last).saturating_sub(fine);
-                g.lod = [t.clamp(0.0, 1.0), hops as f32, 1.0, fine as f32];
+                g.set_lod(fine, hops, Some(t.clamp(0.0, 1.0)), Cover::Whole);
                 count(fine, set.levels[fine + hops].influences);
                 keyed.keep(key(PASS_MORPH, fine, hops), near, g);
             }
             LodDraw::Dither { from, to, p } => {
-                // Both levels opaque, on complementary pixels (the coverage sign picks the
-                // half, as for a tree's dissolve); the incoming one casts the shadow.
+                // Both levels opaque, on complementary pixels (as a tree's dissolve); the
+                // incoming one casts the shadow.
                 let (from, to) = ((from as usize).min(last), (to as usize).min(last));
                 let p = p.clamp(0.0, 1.0);
                 count(from, 0);
                 count(to, 0);
-                for (level, pass, coverage) in
-                    [(to, PASS_DITHER_IN, p), (from, PASS_DITHER_OUT, -1.0 - p)]
-                {
-                    g.lod = [p, 0.0, coverage, level as f32];
+                for (level, pass, cover) in [
+                    (to, PASS_DITHER_IN, Cover::Incoming(p)),
+                    (from, PASS_DITHER_OUT, Cover::Outgoing(p)),
+                ] {
+                    g.set_lod(level, 0, Some(p), cover);
                     keyed.keep(key(pass, level, 0), near, g);
                 }
             }
@@ -123,28 +125,25 @@ impl SceneRenderer {
                 };
                 count(opaque, 0);
                 count(faded, 0);
-                g.lod = [p, 0.0, 1.0, opaque as f32];
+                g.set_lod(opaque, 0, Some(p), Cover::Whole);
                 keyed.keep(key(PASS_OPAQUE, opaque, 0), near, g);
-                g.lod = [p, 0.0, opacity, faded as f32];
+                g.set_lod(faded, 0, Some(p), Cover::Opacity(opacity));
                 keyed.keep(key(PASS_FADE, faded, 0), near, g);
             }
             LodDraw::Dissolve { level, p, incoming } => {
-                // The foliage shaders keep a pixel where its threshold lies below lod.z ≥ 0,
-                // or at or above −lod.z − 1 when lod.z < 0 (see shaders/character.wgsl): the
-                // two halves cover complementary pixels.
                 let k = (level as usize).min(last);
                 let p = p.clamp(0.0, 1.0);
                 // A mesh character's half (a character going to or from its animated
                 // impostor, see `World::upload`) is dithered as in a dithered cross-fade;
                 // impostors and trees dissolve in their own shaders.
-                let dithered = !(c.two_sided || c.impostor || c.animated_impostor);
-                let (pass, coverage) = match (incoming, dithered) {
-                    (true, false) => (PASS_OPAQUE, p),
-                    (false, false) => (PASS_DISSOLVE_OUT, -1.0 - p),
-                    (true, true) => (PASS_DITHER_IN, p),
-                    (false, true) => (PASS_DITHER_OUT, -1.0 - p),
+                let dithered = c.class == DrawClass::Mesh;
+                let (pass, cover) = match (incoming, dithered) {
+                    (true, false) => (PASS_OPAQUE, Cover::Incoming(p)),
+                    (false, false) => (PASS_DISSOLVE_OUT, Cover::Outgoing(p)),
+                    (true, true) => (PASS_DITHER_IN, Cover::Incoming(p)),
+                    (false, true) => (PASS_DITHER_OUT, Cover::Outgoing(p)),
                 };
-                g.lod = [p, 0.0, coverage, level as f32];
+                g.set_lod(level as usize, 0, Some(p), cover);
                 count(k, 0);
                 keyed.keep(key(pass, k, 0), near, g);
             }

@@ -329,7 +329,7 @@ impl SceneRenderer {
 
     /// Does the adapter draw wireframes?
     pub fn has_wireframe(&self) -> bool {
-        self.pipelines.wireframe.is_some()
+        self.pipelines.has_wireframe()
     }
 
     /// Uploads the frame's uniforms and instances (one buffer write each) and plans the draws:

@@ -140,7 +140,7 @@ impl World {
             compare: None,
             foliage: FoliagePolicy::default(),
             chain: ChainOptions::default(),
-            trees: bakes.iter().map(|b| b.alpha_tested).collect(),
+            trees: bakes.iter().map(|b| b.kind.is_tree()).collect(),
             trackers: Default::default(),
             draws: Default::default(),
             models: bakes

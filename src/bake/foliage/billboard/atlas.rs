@@ -235,6 +235,7 @@ pub fn lighting_material(mut lighting: crate::model::Rgba8Image) -> crate::model
         p[3] = 255;
     }
     crate::model::Material::opaque(BILLBOARD_LIGHTING, [1.0; 4], Some(lighting))
+        .with_role(crate::model::MaterialRole::BillboardLighting)
 }
 
 /// Divides alpha out of linear bytes that were blended over transparent black.
@@ -364,13 +365,23 @@ mod tests {
         }
         // Opaque: the colour layer's alpha cuts the billboard out, not this one's.
         assert_eq!([t.pixels[3], t.pixels[7]], [255, 255]);
-        let materials = vec![
+        let atlas = crate::model::Material::cut_out(BILLBOARD_MATERIAL, [1.0; 4], None);
+        let mut materials = vec![
             crate::model::Material::opaque("bark", [1.0; 4], None),
-            crate::model::Material::cut_out(BILLBOARD_MATERIAL, [1.0; 4], None),
-            m,
+            atlas
+                .clone()
+                .with_role(crate::model::MaterialRole::BillboardAtlas),
+            m.clone(),
         ];
         assert_eq!(lit_atlas_material(&materials), Some(1));
         assert_eq!(lit_atlas_material(&materials[..2]), None);
+        // A file's materials that merely carry the names are surfaces.
+        materials[1] = atlas;
+        materials[2] = crate::model::Material {
+            role: Default::default(),
+            ..m
+        };
+        assert_eq!(lit_atlas_material(&materials), None);
     }
 
     #[test]

@@ -403,11 +403,14 @@ pub fn cloud_model(
         }
     }
     let atlas_material = materials.len() as u16;
-    materials.push(Material::cut_out(
-        crate::bake::gpu_data::materials::BILLBOARD_MATERIAL,
-        [1.0; 4],
-        Some(atlas),
-    ));
+    materials.push(
+        Material::cut_out(
+            crate::bake::gpu_data::materials::BILLBOARD_MATERIAL,
+            [1.0; 4],
+            Some(atlas),
+        )
+        .with_role(crate::model::MaterialRole::BillboardAtlas),
+    );
     let mut mesh = SkinnedMesh::empty();
     mesh.copy_triangles_from(src, |t| {
         keep.get(src.materials[t[0] as usize] as usize)

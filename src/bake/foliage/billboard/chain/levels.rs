@@ -284,7 +284,7 @@ impl CloudLevel {
                     min: lo - sway,
                     max: hi + sway,
                 };
-                bake.impostor = Some(frame);
+                bake.kind = crate::bake::gpu_data::drawable::DrawKind::TreeImpostor(frame);
                 Ok(bake)
             }
             None if self.billboards == 0 => {
