@@ -1,17 +1,10 @@
-//! Front ends: the command-line tools and the viewer.
+//! Front ends: the command line ([`cli`] parses it, [`commands`] runs each command), the
+//! viewer, user studies, and the window and video helpers they share.
 
-pub mod bake;
-pub mod bench;
 pub mod cli;
-pub mod export;
-pub mod gen_assets;
+pub mod commands;
 pub mod plotting;
-pub mod record;
-pub mod report;
-pub mod shot;
-pub mod soak;
 pub mod study;
-pub mod tree_report;
 pub mod video;
 pub mod viewer;
 pub mod window;

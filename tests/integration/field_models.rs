@@ -275,7 +275,7 @@ fn levels_read_back(model: &Model, seed: u64, dir: &Path) -> Vec<(Method, Vec<Sk
         .map(|method| {
             let lods = bake_lods(model, method, &opts, &|_| {});
             assert!(!lods.levels.is_empty(), "seed {seed} {method}");
-            let meshes = lodlab::app::export::level_meshes(model, &lods);
+            let meshes = lodlab::app::commands::export::level_meshes(model, &lods);
             for mesh in &meshes {
                 let one = lodlab::generate::glb::to_glb(&Model {
                     mesh: mesh.clone(),
@@ -696,7 +696,7 @@ fn levels_by_budget_read_back(bytes: &[u8]) {
     };
     for method in Method::ALL {
         let lods = bake_lods(&model, method, &options, &|_| {});
-        let meshes = lodlab::app::export::level_meshes(&model, &lods);
+        let meshes = lodlab::app::commands::export::level_meshes(&model, &lods);
         assert!(!meshes.is_empty());
         for (k, mesh) in meshes.into_iter().enumerate() {
             let triangles = mesh.triangle_count();

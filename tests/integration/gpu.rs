@@ -2,7 +2,7 @@
 //! `WGPU_BACKEND=vulkan` makes a missing driver fail loudly instead of falling back).
 
 use glam::{Affine3A, Quat, Vec3};
-use lodlab::app::shot::{ShotOptions, run as shot};
+use lodlab::app::commands::shot::{ShotOptions, run as shot};
 use lodlab::render::Gpu;
 use lodlab::render::capture::capture_skinned;
 use lodlab::render::targets::OFFSCREEN_FORMAT;
@@ -81,7 +81,7 @@ fn render(
     time: f32,
     size: (u32, u32),
     camera: Option<Camera>,
-) -> (image::RgbaImage, lodlab::app::shot::ShotReport) {
+) -> (image::RgbaImage, lodlab::app::commands::shot::ShotReport) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("shot.png");
     let report = shot(&ShotOptions {
@@ -292,8 +292,9 @@ fn shot_reports_where_the_frame_goes() {
     let (_, one) = render(spec(&["walker"], 1, None), 0.5, (64, 48), close);
     // Where memory goes: the walker's textures and buffers by kind, and the process's
     // resident size (Linux) above what is counted.
-    let mb =
-        |r: &lodlab::app::shot::ShotReport, k: &str| r.memory_mb.get(k).copied().unwrap_or(0.0);
+    let mb = |r: &lodlab::app::commands::shot::ShotReport, k: &str| {
+        r.memory_mb.get(k).copied().unwrap_or(0.0)
+    };
     for kind in [
         "animation textures",
         "vertex textures",
@@ -319,7 +320,8 @@ fn shot_reports_where_the_frame_goes() {
         eprintln!("no timestamp queries on this adapter: nothing to check");
         return;
     }
-    let names = |r: &lodlab::app::shot::ShotReport| r.passes.keys().cloned().collect::<Vec<_>>();
+    let names =
+        |r: &lodlab::app::commands::shot::ShotReport| r.passes.keys().cloned().collect::<Vec<_>>();
     assert_eq!(names(&empty), ["sky and ground"]);
     assert_eq!(names(&one), ["characters", "shadows", "sky and ground"]);
     for r in [&empty, &one] {

@@ -1,7 +1,7 @@
 //! Levels of detail on the GPU (lavapipe in CI): transition endpoints on pixels, batching, and
 //! headless shots of every method, transition, debug view and comparison.
 
-use lodlab::app::shot::{ShotOptions, ShotReport, run as shot};
+use lodlab::app::commands::shot::{ShotOptions, ShotReport, run as shot};
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{DebugView, FrameView, Region, Side};
 use lodlab::runtime::headless::ShotLod;

@@ -264,7 +264,7 @@ fn trees_stand_on_the_ground_and_are_metric() {
 /// to coverage smooths it.
 #[test]
 fn a_forest_shot_shows_trees_with_cut_out_leaves() {
-    use lodlab::app::shot::{ShotOptions, run};
+    use lodlab::app::commands::shot::{ShotOptions, run};
     use lodlab::runtime::spec::SceneSpec;
     let dir = tempfile::tempdir().unwrap();
     for samples in [1, 4] {
@@ -319,7 +319,7 @@ fn a_forest_shot_shows_trees_with_cut_out_leaves() {
 /// picture that stays close to the full trees.
 #[test]
 fn forest_trees_use_their_cloud_levels() {
-    use lodlab::app::shot::{ShotOptions, run};
+    use lodlab::app::commands::shot::{ShotOptions, run};
     use lodlab::runtime::headless::ShotLod;
     use lodlab::runtime::spec::SceneSpec;
     use lodlab::scene::{LodMethod, LodPolicy, Transition};

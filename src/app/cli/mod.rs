@@ -484,5 +484,5 @@ pub struct SoakArgs {
         value_delimiter = ',',
         default_value = "method,transition,foliage,count,size"
     )]
-    pub vary: Vec<crate::app::soak::Setting>,
+    pub vary: Vec<values::Setting>,
 }

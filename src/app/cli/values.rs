@@ -172,3 +172,24 @@ pub(crate) fn parse_camera(s: &str) -> Result<Camera, String> {
     };
     Ok(Camera::new(target, v[0], v[1], v[2]))
 }
+
+/// A setting `lodlab soak`'s cycle changes (`--vary`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Setting {
+    Method,
+    Transition,
+    Foliage,
+    Count,
+    Size,
+}
+
+/// A list of choices in the order given, each once.
+pub fn dedup<T: PartialEq>(list: Vec<T>) -> Vec<T> {
+    let mut out = Vec::with_capacity(list.len());
+    for x in list {
+        if !out.contains(&x) {
+            out.push(x);
+        }
+    }
+    out
+}

@@ -18,14 +18,16 @@ pub mod proxy;
 pub mod session;
 pub mod window;
 
-use super::record::{self, RecordOptions};
+use crate::app::commands::record::{self, RecordOptions};
 use crate::atomic::write as write_atomic;
 use crate::runtime::headless::ShotLod;
 use crate::runtime::spec::SceneSpec;
 use crate::scene::{LodMethod, LodPolicy};
 use anyhow::{Context, Result, bail};
-use plan::{ANSWERS, CLIPS, Condition, MAKING, MANIFEST, Manifest, Plan, SESSIONS, read_manifest};
-use std::path::PathBuf;
+use plan::{
+    ANSWERS, CLIPS, Clip, Condition, MAKING, MANIFEST, Manifest, Plan, SESSIONS, read_manifest,
+};
+use std::path::{Path, PathBuf};
 
 /// Options of `study make` beyond the plan.
 #[derive(Clone, Debug)]
@@ -43,15 +45,39 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     let plan = Plan::read(&o.plan)?;
     let manifest_path = o.out.join(MANIFEST);
     let making_path = o.out.join(MAKING);
+    let earlier = earlier_clips(o, &plan, &manifest_path, &making_path)?;
+    crate::atomic::make_folder(&o.out.join(CLIPS))?;
+    let mut clips = plan.clips();
+    record_clips(o, &plan, &mut clips, earlier, &manifest_path, &making_path)?;
+    let manifest = Manifest {
+        conditions: plan.conditions(),
+        participants: plan.participant_ids(),
+        plan,
+        clips,
+    };
+    write_study(o, &manifest, &manifest_path, &making_path)?;
+    Ok(manifest)
+}
+
+/// Planning: what the output folder already holds of this plan. The clips of a study in the
+/// making that was interrupted, or of a finished study (whose clips are then all reused);
+/// nothing for a new or empty folder. Fails rather than overwrite a folder holding another
+/// plan's study or anything else.
+fn earlier_clips(
+    o: &MakeOptions,
+    plan: &Plan,
+    manifest_path: &Path,
+    making_path: &Path,
+) -> Result<Vec<Clip>> {
     // A folder already holding another study (or answers) is not overwritten.
     let mut earlier = Vec::new();
     if !manifest_path.exists() && making_path.exists() {
-        let text = std::fs::read_to_string(&making_path)
+        let text = std::fs::read_to_string(making_path)
             .with_context(|| format!("{}: cannot read", making_path.display()))?;
         let old: Manifest = serde_json::from_str(&text).map_err(|e| {
             anyhow::anyhow!("{}: not a study in the making: {e}", making_path.display())
         })?;
-        if old.plan != plan {
+        if old.plan != *plan {
             bail!(
                 "{}: holds an interrupted study of another plan; make the new one in another \
                  folder",
@@ -67,7 +93,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     } else if manifest_path.exists() {
         let old: Manifest = read_manifest(&o.out)?;
         earlier = old.clips.clone();
-        if old.plan != plan {
+        if old.plan != *plan {
             bail!(
                 "{}: holds a study of another plan; make the new one in another folder",
                 o.out.display()
@@ -84,8 +110,20 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
             o.out.display()
         );
     }
-    crate::atomic::make_folder(&o.out.join(CLIPS))?;
-    let mut clips = plan.clips();
+    Ok(earlier)
+}
+
+/// Recording: renders each of `clips` not already there (from `earlier`), noting its record
+/// in it. Until the study is finished, the clips recorded so far are written to the
+/// in-the-making manifest after each, so that an interrupted run resumes where it stopped.
+fn record_clips(
+    o: &MakeOptions,
+    plan: &Plan,
+    clips: &mut [Clip],
+    earlier: Vec<Clip>,
+    manifest_path: &Path,
+    making_path: &Path,
+) -> Result<()> {
     let total = clips.len();
     // Clips recorded so far, written after each: what a resumed run starts from.
     let mut making = Manifest {
@@ -96,7 +134,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     };
     if !manifest_path.exists() {
         write_atomic(
-            &making_path,
+            making_path,
             serde_json::to_string_pretty(&making)?.as_bytes(),
         )?;
     }
@@ -117,7 +155,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
         }
         eprintln!("clip {}/{total}: {}", k + 1, clip.file);
         let report = record::run(&clip_options(
-            &plan,
+            plan,
             &clip.model,
             clip.method,
             clip.tolerance_px,
@@ -131,35 +169,40 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
             making.clips.retain(|c| c.file != clip.file);
             making.clips.push(clip.clone());
             write_atomic(
-                &making_path,
+                making_path,
                 serde_json::to_string_pretty(&making)?.as_bytes(),
             )?;
         }
     }
-    let manifest = Manifest {
-        conditions: plan.conditions(),
-        participants: plan.participant_ids(),
-        plan,
-        clips,
-    };
+    Ok(())
+}
+
+/// Writing files: every participant's session list, then the manifest, and last the
+/// in-the-making manifest goes, so that a study with a manifest is a finished one.
+fn write_study(
+    o: &MakeOptions,
+    manifest: &Manifest,
+    manifest_path: &Path,
+    making_path: &Path,
+) -> Result<()> {
     let sessions = o.out.join(SESSIONS);
     crate::atomic::make_folder(&sessions)?;
     for id in &manifest.participants {
-        let trials = session::plan_session(&manifest, id);
+        let trials = session::plan_session(manifest, id);
         write_atomic(
             &sessions.join(format!("{id}.json")),
             serde_json::to_string_pretty(&trials)?.as_bytes(),
         )?;
     }
     write_atomic(
-        &manifest_path,
-        serde_json::to_string_pretty(&manifest)?.as_bytes(),
+        manifest_path,
+        serde_json::to_string_pretty(manifest)?.as_bytes(),
     )?;
     if making_path.exists() {
-        std::fs::remove_file(&making_path)
+        std::fs::remove_file(making_path)
             .with_context(|| format!("{}: cannot remove", making_path.display()))?;
     }
-    Ok(manifest)
+    Ok(())
 }
 
 /// How a plan's clip of `model` drawn by `method` at `tolerance` is recorded into `out`: the

@@ -1,7 +1,7 @@
 //! The study's plan (`plan.toml`) and its manifest (`study.json`): what `study make` reads and
 //! writes, and what the sessions, the analysis and the proxy read back.
 
-use crate::app::record::RecordReport;
+use crate::app::commands::record::RecordReport;
 use crate::scene::camera_path::PathKind;
 use crate::scene::{LodMethod, Transition};
 use anyhow::{Context, Result};

@@ -20,8 +20,8 @@
 
 use super::clip_options;
 use super::plan::{CLIPS, Manifest, read_manifest};
+use crate::app::commands::record;
 use crate::app::plotting::{plot_error, register_font, write_plot};
-use crate::app::record;
 use crate::app::video::ClipReader;
 use crate::atomic::write as write_atomic;
 use crate::measure::ssim::{Luma, ssim};

@@ -591,7 +591,7 @@ impl Viewer {
             bake_error: self.bake_error.as_deref(),
             wireframe: self.world.renderer.has_wireframe(),
             ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
-            trees: self.world.bakes.iter().any(|b| b.alpha_tested),
+            trees: self.world.bakes.iter().any(|b| b.kind.is_tree()),
             chains: self.world.shown_chains(),
             impostors: self.world.impostor_summary(),
             normal_maps: self.world.normal_map_summary(),

@@ -5,7 +5,10 @@
 //! it. Before the first frame, selection runs over the second before it at 60 Hz, so the clip
 //! opens with the levels and transitions a viewer would be in the middle of.
 
-use super::video::Mp4Video;
+use crate::app::cli::RecordArgs;
+use std::process::ExitCode;
+
+use crate::app::video::Mp4Video;
 use crate::atomic::{check_target, write_png};
 use crate::render::DebugView;
 use crate::runtime::headless::{Headless, ShotLod};
@@ -180,4 +183,29 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
         total_influences: influences,
         render_seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// `lodlab record`: a study clip as MP4.
+pub fn command(a: RecordArgs) -> anyhow::Result<ExitCode> {
+    let report = run(&RecordOptions {
+        spec: a.scene.spec_or(SceneKind::Study),
+        lod: ShotLod {
+            method: a.method,
+            policy: a.policy.policy(),
+            debug: a.debug_view,
+            foliage: a.foliage.view(),
+            ..Default::default()
+        },
+        width: a.size.0,
+        height: a.size.1,
+        samples: a.msaa,
+        fps: a.fps,
+        seconds: a.seconds,
+        path: a.path,
+        out: a.out,
+        frames_dir: a.frames_dir,
+        progress: true,
+    })?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(ExitCode::SUCCESS)
 }

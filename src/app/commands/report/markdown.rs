@@ -1,8 +1,8 @@
 //! The report's Markdown: bake times, levels and their errors, shading with and without
 //! normal maps.
 
-use crate::app::report::compare::VISIBLE_COLOUR;
-use crate::app::report::data::{Report, SHADING_PX, SILHOUETTE_POSES};
+use crate::app::commands::report::compare::VISIBLE_COLOUR;
+use crate::app::commands::report::data::{Report, SHADING_PX, SILHOUETTE_POSES};
 use crate::bake::character::lod::LodOptions;
 use crate::bake::character::simplify::{Method, Sequence};
 use crate::model::Model;

@@ -10,48 +10,23 @@
 //! every method's levels) the GPU figures must repeat exactly and the resident set must stay
 //! within `--max-growth-mb`.
 
+use crate::app::cli::SoakArgs;
+pub use crate::app::cli::values::Setting;
+use std::process::ExitCode;
+
 use crate::render::Gpu;
 use crate::render::memory::{resident_bytes, return_freed_memory};
 use crate::render::targets::Offscreen;
 use crate::runtime::headless::{Headless, ShotLod};
-use crate::runtime::spec::SceneSpec;
 use crate::scene::foliage::FoliagePolicy;
 use crate::scene::{LodMethod, Transition};
 
 use anyhow::{Result, bail};
 use std::io::Write;
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// Phases in one cycle of settings.
 pub const CYCLE: usize = 20;
-
-/// A setting the soak's cycle changes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Setting {
-    Method,
-    Transition,
-    Foliage,
-    Count,
-    Size,
-}
-
-#[derive(Clone, Debug)]
-pub struct SoakOptions {
-    /// The settings the cycle changes; the others stay at their first phase's values.
-    pub vary: Vec<Setting>,
-    pub spec: SceneSpec,
-    pub frames: usize,
-    pub phase_frames: usize,
-    pub every: usize,
-    pub width: u32,
-    pub height: u32,
-    pub samples: Option<u32>,
-    /// Resident growth allowed after the first cycle, MB.
-    pub max_growth_mb: f64,
-    /// Also write the readings here as CSV.
-    pub csv: Option<PathBuf>,
-}
 
 /// The settings of one phase.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,7 +99,8 @@ pub struct SoakReport {
     pub seconds: f64,
 }
 
-pub fn run(o: &SoakOptions) -> Result<SoakReport> {
+/// Runs `lodlab soak` as its arguments `o` ask.
+pub fn run(o: &SoakArgs) -> Result<SoakReport> {
     if o.phase_frames == 0 || o.every == 0 {
         bail!("--phase-frames and --every must be at least 1");
     }
@@ -136,13 +112,9 @@ pub fn run(o: &SoakOptions) -> Result<SoakReport> {
         None => None,
     };
     let started = Instant::now();
-    let mut h = Headless::new(
-        &o.spec,
-        o.width,
-        o.height,
-        o.samples,
-        &crate::measure::GpuMeasurer,
-    )?;
+    let spec = o.scene.spec();
+    let (width, height) = o.size;
+    let mut h = Headless::new(&spec, width, height, o.msaa, &crate::measure::GpuMeasurer)?;
     let mut lod = ShotLod {
         settle_seconds: 0.0,
         ..ShotLod::default()
@@ -155,12 +127,7 @@ pub fn run(o: &SoakOptions) -> Result<SoakReport> {
         "frame  method     transition  foliage    count  size        resident MB  GPU MB  GPU allocations"
     );
     for frame in 0..o.frames {
-        let p = phase(
-            frame / o.phase_frames,
-            o.spec.count,
-            [o.width, o.height],
-            &o.vary,
-        );
+        let p = phase(frame / o.phase_frames, spec.count, [width, height], &o.vary);
         if current != Some(p) {
             lod.method = p.method;
             lod.policy.transition = p.transition;
@@ -186,7 +153,7 @@ pub fn run(o: &SoakOptions) -> Result<SoakReport> {
                 h.gpu.wait()?;
             }
             // Minimised: the scene's time runs on, nothing is drawn.
-            None => h.world.select(o.height, time, dt),
+            None => h.world.select(height, time, dt),
         }
         if (frame + 1) % o.every == 0 {
             let r = read_memory(&h.gpu, frame + 1);
@@ -247,6 +214,33 @@ pub fn run(o: &SoakOptions) -> Result<SoakReport> {
         gpu_steady,
         seconds: started.elapsed().as_secs_f64(),
     })
+}
+
+/// `lodlab soak`: frames through every setting, memory read as they go; exit 1 on growth.
+pub fn command(a: SoakArgs) -> anyhow::Result<ExitCode> {
+    let r = run(&a)?;
+    let max_growth_mb = a.max_growth_mb as f64;
+    let growth = r.growth_mb.map_or(
+        "not measured (fewer than two readings after the first cycle)".into(),
+        |g| format!("{g:+.1} MB"),
+    );
+    let gpu = match r.gpu_steady {
+        Some(true) => "the same at every reading after the first cycle",
+        Some(false) => "NOT the same at every reading after the first cycle",
+        None => "not compared (readings not aligned with the cycle, or no figures)",
+    };
+    println!(
+        "lodlab soak: {} frames in {:.0} s; resident growth after the first cycle {growth}; GPU memory {gpu}",
+        a.frames, r.seconds
+    );
+    if r.growth_mb.is_some_and(|g| g > max_growth_mb) || r.gpu_steady == Some(false) {
+        eprintln!(
+            "error: memory grew (limit {} MB resident, GPU figures must repeat)",
+            max_growth_mb
+        );
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]

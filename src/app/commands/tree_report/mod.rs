@@ -16,8 +16,8 @@
 pub mod charts;
 pub mod data;
 
-use crate::app::tree_report::charts::{contact_sheet, motion_plot, plot};
-use crate::app::tree_report::data::{
+use crate::app::commands::tree_report::charts::{contact_sheet, motion_plot, plot};
+use crate::app::commands::tree_report::data::{
     AtCount, DescriptionReport, LIGHTING_PX, LevelReport, METRIC_SIZE, StaticCloudReport, THESIS,
     ThesisRow, TreeReport, at_billboards, lighting_table, thesis_table,
 };

@@ -82,7 +82,7 @@ pub struct Comparison {
     /// Fraction of the meshopt curve with meshopt ≤ rest-pose.
     pub meshopt_le_rest_pose: Option<f64>,
     /// What two equal methods score against each other: the fraction of the curve of
-    /// rest-pose baked on the same mesh in another order ([`reordered`](crate::app::report::reordered)) that lies at or
+    /// rest-pose baked on the same mesh in another order ([`reordered`](crate::app::commands::report::reordered)) that lies at or
     /// under rest-pose's. Where steps of nearly equal cost abound, which comes first is
     /// decided by order and rounding, and the fraction strays far from 100% (or 50%) for
     /// that alone: read `as_le_rest_pose` against it.
@@ -90,7 +90,7 @@ pub struct Comparison {
     /// The noise band: the median of |rest-pose reordered / rest-pose − 1| over its curve.
     pub noise: Option<f64>,
     /// Fraction of the AS curve no further above rest-pose than the reordered rest-pose strays
-    /// from it there: AS ≤ rest-pose × (1 + band), the band the local one of [`local_band`](crate::app::report::compare::local_band)
+    /// from it there: AS ≤ rest-pose × (1 + band), the band the local one of [`local_band`](crate::app::commands::report::compare::local_band)
     /// (the largest deviation of the nearest reordered points, at least `noise`).
     pub as_le_rest_pose_within_noise: Option<f64>,
     /// `as_le_rest_pose` over the part of the curve the viewer's levels span: down to the
@@ -100,8 +100,8 @@ pub struct Comparison {
     /// of it, by how much.
     pub as_over_rest_pose: Option<f64>,
     /// The largest ratio, over AS+IS's levels, of a level's colour error (by vertex normals,
-    /// through the renderer) to AS's at the same total influences ([`lighting_at`](crate::app::report::compare::lighting_at)), where
-    /// either shows at least [`VISIBLE_COLOUR`](crate::app::report::compare::VISIBLE_COLOUR); `None` where nothing was drawn or no level
+    /// through the renderer) to AS's at the same total influences ([`lighting_at`](crate::app::commands::report::compare::lighting_at)), where
+    /// either shows at least [`VISIBLE_COLOUR`](crate::app::commands::report::compare::VISIBLE_COLOUR); `None` where nothing was drawn or no level
     /// reaches that. Levels of one index are cut at one error, and AS+IS's then hold fewer
     /// influences and triangles: equal cost compares the lighting, equal indices the budget.
     pub as_is_lighting_over_as: Option<f64>,
@@ -128,7 +128,7 @@ pub struct Report {
     /// place over the frames measured, scene units, and as a share of its height.
     pub motion: f64,
     pub motion_share: f64,
-    /// Rest-pose's curve on the same mesh in another order ([`reordered`](crate::app::report::reordered)): the noise
+    /// Rest-pose's curve on the same mesh in another order ([`reordered`](crate::app::commands::report::reordered)): the noise
     /// reference of [`Comparison`], drawn in `error.png` beside the methods.
     pub reordered_rest_pose: Vec<CurvePoint>,
 }

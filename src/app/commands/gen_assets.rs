@@ -1,5 +1,8 @@
 //! `lodlab gen-assets`: regenerate the demo creatures under `assets/`.
 
+use crate::app::cli::GenAssetsArgs;
+use std::process::ExitCode;
+
 use crate::assets::BUILTINS;
 use crate::generate::file;
 use anyhow::{Result, anyhow};
@@ -59,4 +62,13 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
         });
     }
     Ok(written)
+}
+
+/// `lodlab gen-assets`: the built-in models as .glb files.
+pub fn command(a: GenAssetsArgs) -> anyhow::Result<ExitCode> {
+    let dir = a.out.unwrap_or_else(crate::assets::assets_dir);
+    for w in run(&dir, &a.only)? {
+        println!("{}", serde_json::to_string(&w)?);
+    }
+    Ok(ExitCode::SUCCESS)
 }

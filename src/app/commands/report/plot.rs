@@ -1,8 +1,8 @@
 //! The report's chart: each method's error against triangles, on log axes.
 
+use crate::app::commands::report::compare::{interpolate, points};
+use crate::app::commands::report::data::{NEGLIGIBLE, Report};
 use crate::app::plotting::{log_label, plot_error, register_font, write_plot};
-use crate::app::report::compare::{interpolate, points};
-use crate::app::report::data::{NEGLIGIBLE, Report};
 use anyhow::Result;
 use plotters::prelude::*;
 use std::path::Path;

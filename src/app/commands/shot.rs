@@ -1,5 +1,9 @@
 //! `lodlab shot`: render a scene headless and deterministically to a PNG.
 
+use crate::app::cli::ShotArgs;
+use crate::scene::LodMethod;
+use std::process::ExitCode;
+
 use crate::render::targets::Offscreen;
 use crate::render::timer::{FrameTimer, PassTimes, overdraw_median, pass_medians};
 use crate::render::{CharacterShader, FrameStats, Gpu};
@@ -197,4 +201,22 @@ fn draw_divider(image: &mut image::RgbaImage) {
             image.put_pixel(x, y, image::Rgba([235, 235, 235, 255]));
         }
     }
+}
+
+/// `lodlab shot`: one PNG and a JSON line of figures.
+pub fn command(a: ShotArgs) -> anyhow::Result<ExitCode> {
+    let report = run(&ShotOptions {
+        spec: a.scene.spec(),
+        out: a.out,
+        width: a.size.0,
+        height: a.size.1,
+        time: a.time,
+        samples: a.msaa,
+        camera: a.camera,
+        timed_frames: a.frames,
+        calibrate: a.calibrate,
+        lod: a.lod.shot_lod(LodMethod::None),
+    })?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(ExitCode::SUCCESS)
 }

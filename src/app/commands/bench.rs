@@ -18,6 +18,10 @@
 //! - The time of a frame is the GPU time of its render pass from timestamp queries where the
 //!   adapter has them, otherwise the wall time from submit to completion.
 
+use crate::app::cli::BenchArgs;
+use crate::atomic::write as write_atomic;
+use std::process::ExitCode;
+
 use super::shot::histogram;
 use crate::atomic::check_target;
 use crate::render::targets::Offscreen;
@@ -44,31 +48,6 @@ const SETTLE_STEPS: usize = 60;
 pub const MIN_FRAMES: usize = 6;
 /// At most this many frames of one method in a row.
 const MAX_BLOCK: usize = 5;
-
-#[derive(Clone, Debug)]
-pub struct BenchOptions {
-    pub spec: SceneSpec,
-    /// Measured in this order, interleaved.
-    pub methods: Vec<LodMethod>,
-    pub policy: LodPolicy,
-    pub foliage: FoliageView,
-    /// Light coarse levels through their normal maps.
-    pub normal_maps: bool,
-    pub width: u32,
-    pub height: u32,
-    /// Samples per pixel; `None` for the adapter's default (see [`crate::render::Gpu::samples`]).
-    pub samples: Option<u32>,
-    /// Seconds of measuring, all methods and their calibration together.
-    pub seconds: f32,
-    /// Seconds of unmeasured frames first (pipelines, caches, clocks settle).
-    pub warmup: f32,
-    /// Frames per method, instead of as many as fit `seconds`.
-    pub frames: Option<usize>,
-    /// The camera path and its length in seconds.
-    pub path: PathKind,
-    pub path_seconds: f32,
-    pub progress: bool,
-}
 
 /// The version of [`BenchReport`]'s JSON: bumped whenever a field changes meaning or goes.
 /// 2: `schema_version`, `warmup_seconds`, `measured_seconds` and each method's `frame_ms`.
@@ -222,26 +201,100 @@ fn path_time(path: &CameraPath, i: usize, n: usize) -> f32 {
     path.duration() * (i as f32 + 0.5) / n as f32
 }
 
-pub fn run(o: &BenchOptions) -> Result<BenchReport> {
-    if o.methods.is_empty() {
+pub fn run(o: &BenchArgs) -> Result<BenchReport> {
+    // Measured in the order given, each once, interleaved.
+    let order = crate::app::cli::values::dedup(o.methods.clone());
+    let (policy, foliage, normal_maps) = (o.policy.policy(), o.foliage.view(), !o.no_normal_maps);
+    let (width, height) = o.size;
+    let spec = o.scene.spec();
+    check_inputs(o, &order)?;
+    let (mut bench, msaa) = set_up(o, &spec, &order, policy, foliage, normal_maps)?;
+    let path = bench.path;
+
+    // Warm-up: round after round of every method, at points spread along the path, until the
+    // time is up; the last round's times estimate what a round costs.
+    let warm = Instant::now();
+    let round_ms = warm_up(&mut bench, &order, warm, o.warmup)?;
+    let n = o.frames.map(|f| f as usize).unwrap_or_else(|| {
+        ((o.seconds as f64 * 1e3 / round_ms.max(1e-3)).floor() as usize).clamp(MIN_FRAMES, 3600)
+    });
+    let block = (n / 4).clamp(1, MAX_BLOCK);
+
+    let bar = ProgressBar::new((n * order.len()) as u64);
+    bar.set_style(super::bake::bar_style());
+    bar.set_prefix("bench");
+    let warmup_seconds = warm.elapsed().as_secs_f64();
+    let measuring = Instant::now();
+    let samples = measure(&mut bench, &order, n, block, &bar)?;
+    bar.finish_and_clear();
+    let measured_seconds = measuring.elapsed().as_secs_f64();
+
+    let methods = method_figures(&samples, &order, n, width, height);
+    let calibration = calibration(&order, &methods);
+    let gpu = &bench.gpu;
+    Ok(BenchReport {
+        schema_version: BENCH_SCHEMA_VERSION,
+        warmup_seconds,
+        measured_seconds,
+        adapter: gpu.info.name.clone(),
+        driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info)
+            .trim()
+            .to_string(),
+        backend: gpu.backend_name(),
+        size: [width, height],
+        msaa,
+        scene: spec.scene.to_string(),
+        instances: bench.world.crowd.agents.len(),
+        timing: if bench.timer.is_some() {
+            "gpu timestamps"
+        } else {
+            "wall clock"
+        }
+        .into(),
+        frames_per_method: n,
+        path: o.path,
+        path_seconds: path.duration(),
+        transition: policy.transition.name().into(),
+        drive: policy.drive.name().into(),
+        tolerance_px: policy.tolerance_px,
+        normal_maps,
+        calibration,
+        methods,
+        order: order.iter().map(|m| m.name().to_string()).collect(),
+    })
+}
+
+/// Input checks, before anything is loaded: there is a method to measure, and the measuring
+/// and warm-up times make sense.
+fn check_inputs(o: &BenchArgs, order: &[LodMethod]) -> Result<()> {
+    if order.is_empty() {
         bail!("no method to measure");
     }
     if !(o.seconds.is_finite() && o.seconds > 0.0 && o.warmup.is_finite() && o.warmup >= 0.0) {
         bail!("--seconds must be positive and --warmup not negative");
     }
-    let mut scene = Headless::new(
-        &o.spec,
-        o.width,
-        o.height,
-        o.samples,
-        &crate::measure::GpuMeasurer,
-    )?;
-    for &method in &o.methods {
+    Ok(())
+}
+
+/// Set-up: loads the scene and shows it once by every method (so that every method's levels
+/// are baked and on the GPU before any timing), then takes the scene apart into a [`Bench`]
+/// along the camera path from the scene's home view. Returns it with the samples per pixel.
+fn set_up(
+    o: &BenchArgs,
+    spec: &SceneSpec,
+    order: &[LodMethod],
+    policy: LodPolicy,
+    foliage: FoliageView,
+    normal_maps: bool,
+) -> Result<(Bench, u32)> {
+    let (width, height) = o.size;
+    let mut scene = Headless::new(spec, width, height, o.msaa, &crate::measure::GpuMeasurer)?;
+    for &method in order {
         scene.show(&ShotLod {
             method,
-            policy: o.policy,
-            foliage: o.foliage,
-            normal_maps: o.normal_maps,
+            policy,
+            foliage,
+            normal_maps,
             ..Default::default()
         })?;
     }
@@ -255,51 +308,55 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
     let home = world.camera;
     let path = CameraPath::new(o.path, &home, o.path_seconds);
     let timer = FrameTimer::new(&gpu);
-    let mut bench = Bench {
+    let bench = Bench {
         gpu,
         world,
         target,
         timer,
         path,
         fov_y: home.fov_y,
-        size: [o.width, o.height],
+        size: [width, height],
     };
+    Ok((bench, msaa))
+}
 
-    // Warm-up: round after round of every method, at points spread along the path, until the
-    // time is up; the last round's times estimate what a round costs.
-    let warm = Instant::now();
+/// Warm-up: rounds of every method, skinned then calibration, at 7 points along the path in
+/// turn, until `warmup` seconds have passed since `warm` (at least one round). Returns the
+/// last round's milliseconds, which size the measuring when no frame count is given.
+fn warm_up(bench: &mut Bench, order: &[LodMethod], warm: Instant, warmup: f32) -> Result<f64> {
+    let path = bench.path;
     let mut round_ms;
     let mut k = 0;
     loop {
         round_ms = 0.0;
-        for &m in &o.methods {
+        for &m in order {
             bench.show(m, path_time(&path, k % 7, 7));
             round_ms +=
                 bench.time(CharacterShader::Skinned)?.0 + bench.time(CharacterShader::Plain)?.0;
         }
         k += 1;
-        if warm.elapsed().as_secs_f32() >= o.warmup {
+        if warm.elapsed().as_secs_f32() >= warmup {
             break;
         }
     }
-    let n = o.frames.unwrap_or_else(|| {
-        ((o.seconds as f64 * 1e3 / round_ms.max(1e-3)).floor() as usize).clamp(MIN_FRAMES, 3600)
-    });
-    let block = (n / 4).clamp(1, MAX_BLOCK);
+    Ok(round_ms)
+}
 
-    let bar = if o.progress {
-        let bar = ProgressBar::new((n * o.methods.len()) as u64);
-        bar.set_style(super::bake::bar_style());
-        bar.set_prefix("bench");
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
-    let warmup_seconds = warm.elapsed().as_secs_f64();
-    let measuring = Instant::now();
-    let mut samples: Vec<Samples> = o.methods.iter().map(|_| Samples::default()).collect();
+/// The measuring loop: `n` frames per method along the path, methods interleaved in blocks
+/// of `block` frames (see the module's notes), each frame timed skinned and then by the
+/// calibration shader, with its statistics summed. Returns the samples in `order`, ticking
+/// `bar` once a frame.
+fn measure(
+    bench: &mut Bench,
+    order: &[LodMethod],
+    n: usize,
+    block: usize,
+    bar: &ProgressBar,
+) -> Result<Vec<Samples>> {
+    let path = bench.path;
+    let mut samples: Vec<Samples> = order.iter().map(|_| Samples::default()).collect();
     for start in (0..n).step_by(block) {
-        for (s, &m) in samples.iter_mut().zip(&o.methods) {
+        for (s, &m) in samples.iter_mut().zip(order) {
             bar.set_message(m.name());
             for i in start..(start + block).min(n) {
                 let stats = bench.show(m, path_time(&path, i, n));
@@ -320,54 +377,36 @@ pub fn run(o: &BenchOptions) -> Result<BenchReport> {
             }
         }
     }
-    bar.finish_and_clear();
-    let measured_seconds = measuring.elapsed().as_secs_f64();
+    Ok(samples)
+}
 
+/// Each method's figures from its samples, keyed by name for the report.
+fn method_figures(
+    samples: &[Samples],
+    order: &[LodMethod],
+    n: usize,
+    width: u32,
+    height: u32,
+) -> BTreeMap<String, MethodFigures> {
     let mut methods = BTreeMap::new();
-    for (s, m) in samples.iter().zip(&o.methods) {
-        methods.insert(m.name().to_string(), figures(s, n, o.width, o.height));
+    for (s, m) in samples.iter().zip(order) {
+        methods.insert(m.name().to_string(), figures(s, n, width, height));
     }
-    let (cal_method, cal) = o
-        .methods
+    methods
+}
+
+/// The calibration: the trivial shader's throughput on the frames of the method that draws
+/// the most triangles (of equals, the last in `order`, as `max_by_key` picks).
+fn calibration(order: &[LodMethod], methods: &BTreeMap<String, MethodFigures>) -> Calibration {
+    let (cal_method, cal) = order
         .iter()
         .map(|m| (m.name(), &methods[m.name()]))
         .max_by_key(|(_, f)| f.triangles)
         .expect("at least one method");
-    let calibration = Calibration {
+    Calibration {
         triangles_per_second: cal.triangles as f64 / (cal.calibration_ms * 1e-3).max(1e-9),
         method: cal_method.to_string(),
-    };
-    let gpu = &bench.gpu;
-    Ok(BenchReport {
-        schema_version: BENCH_SCHEMA_VERSION,
-        warmup_seconds,
-        measured_seconds,
-        adapter: gpu.info.name.clone(),
-        driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info)
-            .trim()
-            .to_string(),
-        backend: gpu.backend_name(),
-        size: [o.width, o.height],
-        msaa,
-        scene: o.spec.scene.to_string(),
-        instances: bench.world.crowd.agents.len(),
-        timing: if bench.timer.is_some() {
-            "gpu timestamps"
-        } else {
-            "wall clock"
-        }
-        .into(),
-        frames_per_method: n,
-        path: o.path,
-        path_seconds: path.duration(),
-        transition: o.policy.transition.name().into(),
-        drive: o.policy.drive.name().into(),
-        tolerance_px: o.policy.tolerance_px,
-        normal_maps: o.normal_maps,
-        calibration,
-        methods,
-        order: o.methods.iter().map(|m| m.name().to_string()).collect(),
-    })
+    }
 }
 
 fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
@@ -529,6 +568,21 @@ pub fn check_outputs(paths: &[&Option<PathBuf>]) -> Result<()> {
         check_target(p)?;
     }
     Ok(())
+}
+
+/// `lodlab bench`: frame times of the methods, as a Markdown table (and JSON).
+pub fn command(a: BenchArgs) -> anyhow::Result<ExitCode> {
+    check_outputs(&[&a.json, &a.markdown])?;
+    let report = run(&a)?;
+    let table = markdown(&report);
+    print!("{table}");
+    if let Some(p) = &a.json {
+        write_atomic(p, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    }
+    if let Some(p) = &a.markdown {
+        write_atomic(p, table.as_bytes())?;
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]

@@ -2,6 +2,9 @@
 //! methods at once, in parallel, and print them as a table. A tree gets its chain of
 //! billboard-cloud levels instead (the same for every method), as the viewer uses it.
 
+use crate::app::cli::BakeArgs;
+use std::process::ExitCode;
+
 use crate::bake::cache::{LodCache, Origin, keys::source_hash};
 use crate::bake::character::lod::{
     SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options,
@@ -14,19 +17,7 @@ use crate::import::{load_model, source_path};
 use crate::render::atlas::AtlasRasterizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use std::path::PathBuf;
 use std::sync::OnceLock;
-
-#[derive(Clone, Debug)]
-pub struct BakeOptions {
-    pub models: Vec<String>,
-    pub methods: Vec<Method>,
-    /// `e_1` in pixels for a model filling 1000 pixels of height (see [`LodOptions`](crate::bake::character::lod::LodOptions)).
-    pub tolerance_px: f32,
-    /// Cut levels by these triangle budgets instead.
-    pub budgets: Option<Vec<u32>>,
-    pub cache_dir: Option<PathBuf>,
-}
 
 /// One model's bake by one method.
 #[derive(Debug)]
@@ -55,79 +46,69 @@ pub struct BakeResults {
     pub trees: Vec<TreeBaked>,
 }
 
-/// Loads every model (failing on the first bad one before any work), then bakes every
-/// (model, method) pair of the characters and the chain of every tree, in parallel, with one
-/// progress bar each.
-pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
+/// One bake: a character by one method, or a tree's chain (`method` None), with its
+/// progress bar and its line in [`ProgressLines`].
+struct Job {
+    model: usize,
+    method: Option<Method>,
+    bar: ProgressBar,
+    line: usize,
+}
+
+/// What every job reads: the models with their sources' hashes, the cache, the GPU tree
+/// chains render their atlases on, and what the methods' bakes of one character share.
+struct Bakery<'a> {
+    models: Vec<(crate::model::Model, [u8; 32])>,
+    gpu: Option<crate::render::Gpu>,
+    cache: LodCache,
+    tolerance_px: f32,
+    budgets: Option<Vec<u32>>,
+    /// Each character's full-detail mesh and what its methods' bakes share, made by the
+    /// first of them that misses the cache (see `bake_lods_sharing`).
+    bases: &'a [OnceLock<AnimationSpaceMesh>],
+    shared: Vec<SharedBake<'a>>,
+    bars: &'a MultiProgress,
+    lines: &'a ProgressLines,
+}
+
+/// Loads every model `a` names (failing on the first bad one before any work), then bakes
+/// every (model, method) pair of the characters and the chain of every tree, in parallel,
+/// with one progress bar each.
+pub fn run(a: &BakeArgs) -> anyhow::Result<BakeResults> {
+    if !(a.first_error.is_finite() && a.first_error > 0.0) {
+        anyhow::bail!("--first-error must be a positive number of pixels");
+    }
     let mut models = Vec::new();
-    for name in &opts.models {
+    for name in a.models.iter().chain(&a.model_flags) {
         let model = load_model(name)?;
         let path = source_path(name);
         let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
         models.push((model, hash));
     }
     // Tree chains render their atlases on the GPU.
-    let has_trees = models.iter().any(|(m, _)| is_tree(m));
-    let gpu = if has_trees {
+    let gpu = if models.iter().any(|(m, _)| is_tree(m)) {
         Some(crate::render::Gpu::headless()?)
     } else {
         None
     };
-    let cache = LodCache::new(opts.cache_dir.clone());
-    let bars = MultiProgress::new();
-    let style = bar_style();
-    // A job is a character by one method, or a tree (method `None`).
-    let jobs: Vec<(usize, Option<Method>, ProgressBar)> = models
-        .iter()
-        .enumerate()
-        .flat_map(|(i, (m, _))| {
-            let methods: Vec<Option<Method>> = if is_tree(m) {
-                vec![None]
-            } else {
-                opts.methods.iter().copied().map(Some).collect()
-            };
-            let (bars, style) = (&bars, &style);
-            methods.into_iter().map(move |method| {
-                let bar = bars.add(ProgressBar::new(1000));
-                bar.set_style(style.clone());
-                let what = method.map_or("clouds".to_string(), |m| m.to_string());
-                bar.set_prefix(format!("{} {what}", m.name));
-                (i, method, bar)
-            })
-        })
-        .collect();
-    let warn = |origin: &Origin| {
-        if let Origin::Baked { warning: Some(w) } = origin {
-            bars.suspend(|| eprintln!("warning: {w}"));
-        }
-    };
-    // Each character's full-detail mesh and what its methods' bakes share, made by the first of
-    // them that misses the cache (see `bake_lods_sharing`).
+    let (bars, lines) = (MultiProgress::new(), ProgressLines::new());
     let bases: Vec<OnceLock<AnimationSpaceMesh>> = models.iter().map(|_| OnceLock::new()).collect();
-    let shared: Vec<SharedBake> = models.iter().map(|_| SharedBake::default()).collect();
-    let lines = ProgressLines::new();
-    let jobs: Vec<_> = jobs
-        .into_iter()
-        .map(|(i, method, bar)| {
-            let what = method.map_or("clouds".to_string(), |m| m.to_string());
-            let line = lines.add(format!("{} {what}", models[i].0.name));
-            (i, method, bar, line)
-        })
-        .collect();
-    // Run dearest first (longest processing time first), so that the cheapest is the one that
-    // starts when a core comes free and the last to end is not a long one started late. AS+IS
-    // (influence removals besides the collapses) is the dearest; AS is as dear on its own, but
-    // it starts from the first pricing AS+IS makes (see `SharedBake`), a quarter of its work, so
-    // it runs after rest-pose. The results keep the jobs' order.
-    let mut jobs: Vec<(usize, _)> = jobs.into_iter().enumerate().collect();
-    jobs.sort_by_key(|(_, (i, method, ..))| {
-        let rank = match method {
-            Some(Method::InfluenceSimplification) | None => 0,
-            Some(Method::RestPose) => 1,
-            Some(Method::AnimationSpace) => 2,
-        };
-        (*i, rank)
-    });
+    let bakery = Bakery {
+        bases: &bases,
+        shared: models.iter().map(|_| SharedBake::default()).collect(),
+        models,
+        gpu,
+        cache: LodCache::new(a.cache.clone()),
+        tolerance_px: a.first_error,
+        // `--triangles`, or the budgets `--levels triangles:…` gave every command.
+        budgets: a
+            .triangles
+            .clone()
+            .or_else(crate::runtime::levels::level_budgets),
+        bars: &bars,
+        lines: &lines,
+    };
+    let jobs = bakery.jobs(&crate::app::cli::values::dedup(a.methods.clone()));
     let done = std::sync::atomic::AtomicBool::new(false);
     let results: Vec<anyhow::Result<Result<Baked, TreeBaked>>> = std::thread::scope(|scope| {
         scope.spawn(|| lines.print_until(&done));
@@ -140,84 +121,9 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
             }
         }
         let _stop = Stop(&done);
-        let bake_one = |(i, method, bar, line): (usize, Option<Method>, ProgressBar, usize)|
-         -> anyhow::Result<Result<Baked, TreeBaked>> {
-                let (model, hash) = &models[i];
-                let progress = |f: f32| {
-                    bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
-                    lines.set(line, f);
-                };
-                // Whichever way the job ends.
-                struct Finish<'l>(&'l ProgressLines, usize);
-                impl Drop for Finish<'_> {
-                    fn drop(&mut self) {
-                        self.0.finish(self.1);
-                    }
-                }
-                let _finish = Finish(&lines, line);
-                let Some(method) = method else {
-                    let start = std::time::Instant::now();
-                    let gpu = gpu.as_ref().expect("a GPU when there are trees");
-                    let opts = crate::bake::foliage::billboard::chain::ChainOptions::default();
-                    let (levels, origin) = crate::bake::foliage::billboard::chain::load_or_build_chain(
-                        &AtlasRasterizer::new(gpu),
-                        &crate::measure::colour_error::GpuColourError::new(gpu),
-                        &cache,
-                        model,
-                        hash,
-                        &opts,
-                        &progress,
-                    )
-                    .map_err(|e| anyhow::anyhow!("{}: {e:#}", model.name))?;
-                    warn(&origin);
-                    let from_cache = origin == Origin::Cache;
-                    let seconds = start.elapsed().as_secs_f64();
-                    bar.finish_with_message(if from_cache {
-                        "cached".to_string()
-                    } else {
-                        format!("{seconds:.2} s")
-                    });
-                    return Ok(Err(TreeBaked {
-                        model: model.name.clone(),
-                        source_triangles: model.mesh.triangle_count(),
-                        bones: model.skeleton.bone_count(),
-                        height: crate::bake::foliage::billboard::tree_height(model),
-                        levels,
-                        from_cache,
-                        seconds,
-                    }));
-                };
-                let options = lod_options(model, opts.tolerance_px, opts.budgets.as_deref());
-                let (path, key) = cache.levels_file(&model.name, hash, method, &options);
-                let Ok((lods, origin)) = cache.load_or_build(&path, &key, || {
-                    let base = bases[i].get_or_init(|| full_detail(model));
-                    Ok::<_, std::convert::Infallible>(bake_lods_sharing(
-                        model,
-                        base,
-                        &shared[i],
-                        method,
-                        &options,
-                        &progress,
-                    ))
-                });
-                warn(&origin);
-                let from_cache = origin == Origin::Cache;
-                bar.finish_with_message(if from_cache {
-                    "cached".to_string()
-                } else {
-                    format!("{:.2} s", lods.bake_seconds)
-                });
-                Ok(Ok(Baked {
-                    model: model.name.clone(),
-                    source_triangles: model.mesh.triangle_count(),
-                    bones: model.skeleton.bone_count(),
-                    lods,
-                    from_cache,
-                }))
-        };
         let mut results: Vec<(usize, anyhow::Result<Result<Baked, TreeBaked>>)> = jobs
             .into_par_iter()
-            .map(|(k, job)| (k, bake_one(job)))
+            .map(|(k, job)| (k, bakery.bake(job)))
             .collect();
         results.sort_by_key(|(k, _)| *k);
         results.into_iter().map(|(_, r)| r).collect()
@@ -233,6 +139,159 @@ pub fn run(opts: &BakeOptions) -> anyhow::Result<BakeResults> {
         }
     }
     Ok(out)
+}
+
+impl Bakery<'_> {
+    /// The jobs: each character by each of `methods`, each tree once; numbered in that
+    /// order (the results keep it) and listed in the order they run.
+    fn jobs(&self, methods: &[Method]) -> Vec<(usize, Job)> {
+        let style = bar_style();
+        let mut jobs = Vec::new();
+        for (i, (m, _)) in self.models.iter().enumerate() {
+            let methods: Vec<Option<Method>> = if is_tree(m) {
+                vec![None]
+            } else {
+                methods.iter().copied().map(Some).collect()
+            };
+            for method in methods {
+                let bar = self.bars.add(ProgressBar::new(1000));
+                bar.set_style(style.clone());
+                let what = method.map_or("clouds".to_string(), |m| m.to_string());
+                bar.set_prefix(format!("{} {what}", m.name));
+                let line = self.lines.add(format!("{} {what}", m.name));
+                jobs.push((
+                    jobs.len(),
+                    Job {
+                        model: i,
+                        method,
+                        bar,
+                        line,
+                    },
+                ));
+            }
+        }
+        // Run dearest first (longest processing time first), so that the cheapest is the one
+        // that starts when a core comes free and the last to end is not a long one started
+        // late. AS+IS (influence removals besides the collapses) is the dearest; AS is as
+        // dear on its own, but it starts from the first pricing AS+IS makes (see
+        // `SharedBake`), a quarter of its work, so it runs after rest-pose.
+        jobs.sort_by_key(|(_, job)| {
+            let rank = match job.method {
+                Some(Method::InfluenceSimplification) | None => 0,
+                Some(Method::RestPose) => 1,
+                Some(Method::AnimationSpace) => 2,
+            };
+            (job.model, rank)
+        });
+        jobs
+    }
+
+    /// Runs one job: a character's levels (`Ok`) or a tree's chain (`Err`).
+    fn bake(&self, job: Job) -> anyhow::Result<Result<Baked, TreeBaked>> {
+        let progress = |f: f32| {
+            job.bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+            self.lines.set(job.line, f);
+        };
+        // Whichever way the job ends.
+        struct Finish<'l>(&'l ProgressLines, usize);
+        impl Drop for Finish<'_> {
+            fn drop(&mut self) {
+                self.0.finish(self.1);
+            }
+        }
+        let _finish = Finish(self.lines, job.line);
+        match job.method {
+            None => self.bake_tree(job.model, &job.bar, &progress).map(Err),
+            Some(method) => Ok(Ok(
+                self.bake_character(job.model, method, &job.bar, &progress)
+            )),
+        }
+    }
+
+    /// A tree's chain of billboard-cloud levels, baked or from the cache.
+    fn bake_tree(
+        &self,
+        i: usize,
+        bar: &ProgressBar,
+        progress: &(dyn Fn(f32) + Sync),
+    ) -> anyhow::Result<TreeBaked> {
+        let (model, hash) = &self.models[i];
+        let start = std::time::Instant::now();
+        let gpu = self.gpu.as_ref().expect("a GPU when there are trees");
+        let opts = crate::bake::foliage::billboard::chain::ChainOptions::default();
+        let (levels, origin) = crate::bake::foliage::billboard::chain::load_or_build_chain(
+            &AtlasRasterizer::new(gpu),
+            &crate::measure::colour_error::GpuColourError::new(gpu),
+            &self.cache,
+            model,
+            hash,
+            &opts,
+            progress,
+        )
+        .map_err(|e| anyhow::anyhow!("{}: {e:#}", model.name))?;
+        self.warn(&origin);
+        let from_cache = origin == Origin::Cache;
+        let seconds = start.elapsed().as_secs_f64();
+        bar.finish_with_message(if from_cache {
+            "cached".to_string()
+        } else {
+            format!("{seconds:.2} s")
+        });
+        Ok(TreeBaked {
+            model: model.name.clone(),
+            source_triangles: model.mesh.triangle_count(),
+            bones: model.skeleton.bone_count(),
+            height: crate::bake::foliage::billboard::tree_height(model),
+            levels,
+            from_cache,
+            seconds,
+        })
+    }
+
+    /// A character's levels by `method`, baked or from the cache.
+    fn bake_character(
+        &self,
+        i: usize,
+        method: Method,
+        bar: &ProgressBar,
+        progress: &(dyn Fn(f32) + Sync),
+    ) -> Baked {
+        let (model, hash) = &self.models[i];
+        let options = lod_options(model, self.tolerance_px, self.budgets.as_deref());
+        let (path, key) = self.cache.levels_file(&model.name, hash, method, &options);
+        let Ok((lods, origin)) = self.cache.load_or_build(&path, &key, || {
+            let base = self.bases[i].get_or_init(|| full_detail(model));
+            Ok::<_, std::convert::Infallible>(bake_lods_sharing(
+                model,
+                base,
+                &self.shared[i],
+                method,
+                &options,
+                progress,
+            ))
+        });
+        self.warn(&origin);
+        let from_cache = origin == Origin::Cache;
+        bar.finish_with_message(if from_cache {
+            "cached".to_string()
+        } else {
+            format!("{:.2} s", lods.bake_seconds)
+        });
+        Baked {
+            model: model.name.clone(),
+            source_triangles: model.mesh.triangle_count(),
+            bones: model.skeleton.bone_count(),
+            lods,
+            from_cache,
+        }
+    }
+
+    /// A bake's warning, printed above the bars.
+    fn warn(&self, origin: &Origin) {
+        if let Origin::Baked { warning: Some(w) } = origin {
+            self.bars.suspend(|| eprintln!("warning: {w}"));
+        }
+    }
 }
 
 /// One line per (model, method) whose triangle budgets go below what the simplification
@@ -536,4 +595,18 @@ fn character_table(results: &[Baked]) -> String {
         }
     }
     out
+}
+
+/// `lodlab bake`: levels of detail baked or fetched from the cache, as a table.
+pub fn command(a: BakeArgs) -> anyhow::Result<ExitCode> {
+    let results = run(&a)?;
+    for warning in budget_warnings(&results) {
+        eprintln!("warning: {warning}");
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&summary(&results))?);
+    } else {
+        print!("{}", table(&results));
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,7 +1,7 @@
 //! Methods compared along their curves: errors at equal triangle counts, the noise band a
 //! model's own reordering gives, lighting at equal influences.
 
-use crate::app::report::data::{Comparison, MethodReport, NEGLIGIBLE};
+use crate::app::commands::report::data::{Comparison, MethodReport, NEGLIGIBLE};
 use std::collections::BTreeMap;
 
 /// `y` of a curve at `x`, interpolated linearly in log–log; `None` outside its range.

@@ -9,18 +9,21 @@
 //! The curves measure through the texture where the model's texture coordinates are a
 //! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
 
+use crate::app::cli::ReportArgs;
+use std::process::ExitCode;
+
 pub mod compare;
 pub mod data;
 pub mod markdown;
 pub mod plot;
 
-use crate::app::report::compare::compare;
-use crate::app::report::data::{
+use crate::app::commands::report::compare::compare;
+use crate::app::commands::report::data::{
     CURVE_POINTS, CurvePoint, LevelReport, MethodReport, Report, ReportOptions, SAMPLES,
     SHADING_PX, SILHOUETTE_POSES, SILHOUETTE_TOLERANCES, motion,
 };
-use crate::app::report::markdown::timings_markdown;
-use crate::app::report::plot::plot;
+use crate::app::commands::report::markdown::timings_markdown;
+use crate::app::commands::report::plot::plot;
 use crate::bake::character::lod::{Replay, SkinnedLods, bake_lods, progressive_mesh};
 use crate::bake::character::lod_error::{MeshError, Probe};
 use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
@@ -339,6 +342,68 @@ fn reordered_rest_pose(model: &Model) -> MethodReport {
         levels: Vec::new(),
         shading: Vec::new(),
     }
+}
+
+/// `lodlab report`: a tree's billboard-cloud report or a character's error curves.
+pub fn command(a: ReportArgs) -> anyhow::Result<ExitCode> {
+    let Some(name) = a.model.or(a.model_flag) else {
+        anyhow::bail!("report needs a model: lodlab report --model NAME|PATH --out DIR");
+    };
+    // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
+    // report; a character the simplification report.
+    let model = crate::import::load_model(&name)?;
+    if crate::bake::foliage::billboard::foliage(&model).is_ok() {
+        let r = crate::app::commands::tree_report::run(&model, &a.out)?;
+        let last = r.levels.last().map_or(0, |l| l.billboards);
+        println!(
+            "{}: {} leaves, {} levels down to {last} billboards in {:.2} s; wrote {}",
+            r.model,
+            r.leaves,
+            r.levels.len(),
+            r.chain_seconds,
+            a.out.display()
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = run(&data::ReportOptions {
+        model: name,
+        out: a.out.clone(),
+        baseline_meshopt: a.baseline.is_some(),
+        progress: true,
+    })?;
+    let c = &report.comparison;
+    let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
+    let floors: Vec<String> = report
+        .methods
+        .iter()
+        .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
+        .collect();
+    println!(
+        "{}: AS <= rest-pose on {} of the curve ({} down to the coarsest level; {} within the \
+         noise, {} at the median, where the same mesh reordered scores {}; AS/rest-pose {} at \
+         the median), AS+IS <= AS on {} (its lighting at most {} AS's at equal influences); \
+         coarsest levels {} of {} triangles; errors by {}; wrote {}",
+        report.model,
+        pct(c.as_le_rest_pose),
+        pct(c.as_le_rest_pose_at_levels),
+        pct(c.as_le_rest_pose_within_noise),
+        c.noise
+            .map_or("-".into(), |n| format!("±{:.1}%", n * 100.0)),
+        pct(c.reordered_le_rest_pose),
+        c.as_over_rest_pose
+            .map_or("-".into(), |r| format!("{r:.2}")),
+        pct(c.as_is_le_as),
+        c.as_is_lighting_over_as
+            .map_or("-".into(), |r| format!("{r:.2}x")),
+        floors.join(", "),
+        report.triangles,
+        report.correspondence.describe(),
+        a.out.display()
+    );
+    if let Some(still) = report.stillness() {
+        println!("{}: {still}", report.model);
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]

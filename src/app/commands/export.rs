@@ -10,9 +10,11 @@
 //!
 //! [`AnimationSpaceMesh::to_skinned`]: crate::bake::gpu_data::animation_space::AnimationSpaceMesh::to_skinned
 
+use crate::app::cli::ExportArgs;
+use std::process::ExitCode;
+
 use crate::bake::cache::{LodCache, Origin, keys::source_hash};
 use crate::bake::character::lod::{SkinnedLods, model_height};
-use crate::bake::character::simplify::Method;
 use crate::error::InputError;
 use crate::generate::glb::{to_glb, to_lod_glb};
 use crate::import::{load_model, source_path};
@@ -20,16 +22,6 @@ use crate::model::{Model, SkinnedMesh};
 use anyhow::Result;
 use serde::Serialize;
 use std::path::PathBuf;
-
-#[derive(Clone, Debug)]
-pub struct ExportOptions {
-    pub model: String,
-    pub method: Method,
-    pub out: PathBuf,
-    /// The pixel tolerance the screen-coverage hints are worked out for.
-    pub tolerance_px: f32,
-    pub cache_dir: Option<PathBuf>,
-}
 
 /// The screen the coverage hints assume, pixels.
 pub const SCREEN: [f32; 2] = [1920.0, 1080.0];
@@ -132,18 +124,22 @@ pub fn level_meshes(model: &Model, lods: &SkinnedLods) -> Vec<SkinnedMesh> {
     meshes
 }
 
-pub fn run(opts: &ExportOptions) -> Result<Exported> {
-    let model = load_model(&opts.model)?;
+/// Writes the levels `lodlab export` is asked for by `opts`.
+pub fn run(opts: &ExportArgs) -> Result<Exported> {
+    let Some(name) = opts.model.as_deref().or(opts.model_flag.as_deref()) else {
+        anyhow::bail!("export needs a model: lodlab export --model NAME|PATH --out DIR");
+    };
+    let model = load_model(name)?;
     if crate::bake::foliage::billboard::is_tree(&model) {
         anyhow::bail!(
             "{}: a tree; export writes a character's levels (a tree's are billboard clouds)",
-            opts.model
+            name
         );
     }
-    let path = source_path(&opts.model);
+    let path = source_path(name);
     let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
     crate::atomic::make_folder(&opts.out)?;
-    let cache = LodCache::new(opts.cache_dir.clone());
+    let cache = LodCache::new(opts.cache.clone());
     let options = crate::runtime::levels::runtime_options(&model);
     let (lods, origin) = cache.load_or_bake(&model, &hash, opts.method, &options, &|_| {});
     if let Origin::Baked { warning: Some(w) } = &origin {
@@ -152,7 +148,7 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
     // The bounding box seen from the side, in the scene's units (the importer's).
     let rest = crate::bake::character::simplify::SimplifyInput::rest_bones(&model.skeleton);
     let bounds = crate::model::Bounds::of(lods.levels[0].mesh.rest_positions(&rest))
-        .ok_or_else(|| anyhow::anyhow!("{}: an empty mesh", opts.model))?;
+        .ok_or_else(|| anyhow::anyhow!("{}: an empty mesh", name))?;
     let height = model_height(&model);
     let aspect = bounds.size().x.max(bounds.size().z) / height.max(1e-6);
     let meshes = level_meshes(&model, &lods);
@@ -162,7 +158,7 @@ pub fn run(opts: &ExportOptions) -> Result<Exported> {
     let switch_px: Vec<f32> = (0..kept.len())
         .map(|k| {
             kept.get(k + 1)
-                .map_or(0.0, |n| opts.tolerance_px * height / n.error.max(1e-9))
+                .map_or(0.0, |n| opts.tolerance * height / n.error.max(1e-9))
         })
         .collect();
     let hints = coverage_hints(&switch_px, aspect);
@@ -263,6 +259,17 @@ pub fn table(e: &Exported) -> String {
         e.lod_bytes / 1024
     );
     out
+}
+
+/// `lodlab export`: a character's levels as glTF files.
+pub fn command(a: ExportArgs) -> anyhow::Result<ExitCode> {
+    let exported = run(&a)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&exported)?);
+    } else {
+        print!("{}", crate::app::commands::export::table(&exported));
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]
