@@ -9,7 +9,7 @@
 use super::cage::Weights;
 use super::facets::{FacetBuilder, normalised};
 use super::rig::{Chain, Pose, Rig, bake_clip, bump, euler, rigid};
-use crate::model::{Material, Model};
+use crate::model::{Clip, Material, Model};
 use glam::{Quat, Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -248,7 +248,28 @@ pub(crate) struct Knight {
     pub chest: usize,
 }
 
-pub(crate) fn knight(detail: f32) -> Knight {
+/// The knight's joints: the rig, and the bones the parts and the walk refer to by name.
+struct Bones {
+    rig: Rig,
+    root: usize,
+    hips: usize,
+    spine: usize,
+    chest: usize,
+    neck: usize,
+    head: usize,
+    /// Upper arm, forearm and hand, left then right.
+    arms: [[usize; 3]; 2],
+    /// Thigh, shin and foot, left then right.
+    legs: [[usize; 3]; 2],
+}
+
+/// The chest plate's and the helmet's ellipsoids (centre, radii), shared by the plates and the
+/// rivets set into them.
+const CHEST_SHELL: (Vec3, Vec3) = (Vec3::new(0.0, 1.32, 0.01), Vec3::new(0.19, 0.15, 0.12));
+const HEAD_SHELL: (Vec3, Vec3) = (Vec3::new(0.0, 1.64, 0.01), Vec3::new(0.1, 0.12, 0.11));
+
+/// The 18 joints: the trunk from root to head, then each side's arm and leg (left first).
+fn knight_rig() -> Bones {
     let mut r = Rig::default();
     let root = r.bone("root", None, Vec3::ZERO);
     let hips = r.bone("hips", Some(root), Vec3::new(0.0, 0.95, 0.0));
@@ -292,15 +313,26 @@ pub(crate) fn knight(detail: f32) -> Knight {
         );
         legs[i] = [a, b, c];
     }
+    Bones {
+        rig: r,
+        root,
+        hips,
+        spine,
+        chest,
+        neck,
+        head,
+        arms,
+        legs,
+    }
+}
 
-    let mut p = Parts {
-        b: FacetBuilder::default(),
-        next_group: 0,
-        detail,
-    };
+/// The trunk's parts: pelvis, waist, chest and neck plates skinned along the spine (so they
+/// bend with it), the helmet with its crest and visor, and the belt with its buckle.
+fn trunk_parts(p: &mut Parts, k: &Bones) {
+    let (r, hips, head) = (&k.rig, k.hips, k.head);
     let trunk = Chain::new(
-        &r,
-        &[hips, spine, chest, neck, head],
+        r,
+        &[k.hips, k.spine, k.chest, k.neck, k.head],
         Vec3::new(0.0, 1.78, 0.0),
     );
     let on_trunk = |s0: f32, s1: f32, y0: f32, y1: f32| {
@@ -311,8 +343,8 @@ pub(crate) fn knight(detail: f32) -> Knight {
         }
     };
     let (pelvis_c, pelvis_r) = (Vec3::new(0.0, 0.97, 0.0), Vec3::new(0.16, 0.1, 0.11));
-    let (chest_c, chest_r) = (Vec3::new(0.0, 1.32, 0.01), Vec3::new(0.19, 0.15, 0.12));
-    let (head_c, head_r) = (Vec3::new(0.0, 1.64, 0.01), Vec3::new(0.1, 0.12, 0.11));
+    let (chest_c, chest_r) = CHEST_SHELL;
+    let (head_c, head_r) = HEAD_SHELL;
     p.ellipsoid(
         pelvis_c,
         pelvis_r,
@@ -364,64 +396,77 @@ pub(crate) fn knight(detail: f32) -> Knight {
         1,
         hips,
     );
-    for (i, x) in [1.0f32, -1.0].into_iter().enumerate() {
-        let [ua, fa, hand] = arms[i];
-        let [th, sh, ft] = legs[i];
-        let shoulder = Vec3::new(0.22 * x, 1.42, 0.0);
-        let elbow = Vec3::new(0.27 * x, 1.14, 0.0);
-        let wrist = Vec3::new(0.3 * x, 0.88, 0.0);
-        let arm = Chain::new(&r, &[ua, fa, hand], Vec3::new(0.31 * x, 0.74, 0.0));
-        p.shell(shoulder, elbow, 0.05, &arm, (0.0, 1.0));
-        p.shell(elbow, wrist, 0.045, &arm, (1.0, 2.0));
-        let pad_c = Vec3::new(0.23 * x, 1.44, 0.0);
-        let pad_r = Vec3::new(0.1, 0.07, 0.1);
-        let pad_up = Vec3::new(0.35 * x, 1.0, 0.0);
-        p.dome(pad_c, pad_r, pad_up, ua);
-        p.torus(elbow, elbow - shoulder, 0.056, 0.014, fa);
-        p.torus(
-            wrist + (wrist - elbow) * 0.05,
-            wrist - elbow,
-            0.05,
-            0.012,
-            hand,
-        );
-        p.cuboid(
-            Vec3::new(0.305 * x, 0.81, 0.0),
-            Vec3::new(0.025, 0.07, 0.045),
-            Quat::IDENTITY,
-            2,
-            hand,
-        );
-        let hip = Vec3::new(0.1 * x, 0.9, 0.0);
-        let knee = Vec3::new(0.1 * x, 0.5, 0.0);
-        let ankle = Vec3::new(0.1 * x, 0.1, 0.0);
-        let leg = Chain::new(&r, &[th, sh, ft], Vec3::new(0.1 * x, 0.03, 0.16));
-        p.shell(hip, knee, 0.075, &leg, (0.0, 1.0));
-        p.shell(knee, ankle, 0.06, &leg, (1.0, 2.0));
-        let knee_pad = (Vec3::new(0.1 * x, 0.5, 0.065), Vec3::new(0.06, 0.035, 0.06));
-        p.dome(knee_pad.0, knee_pad.1, Vec3::Z, sh);
-        p.torus(knee - Vec3::Y * 0.06, Vec3::Y, 0.068, 0.013, sh);
-        p.torus(ankle + Vec3::Y * 0.03, Vec3::Y, 0.056, 0.012, sh);
-        p.cuboid(
-            Vec3::new(0.1 * x, 0.045, 0.05),
-            Vec3::new(0.05, 0.045, 0.11),
-            Quat::IDENTITY,
-            2,
-            ft,
-        );
-        // Rivets: three on the pad, two on the knee pad, one on each side of the helmet.
-        let turn = Quat::from_rotation_arc(Vec3::Y, pad_up.normalize());
-        for k in 0..3 {
-            let a = TAU * k as f32 / 3.0 + 0.4;
-            let d = turn * Vec3::new(a.cos(), 0.5, a.sin());
-            p.rivet(on_ellipsoid(pad_c, turn * pad_r, d), ua);
-        }
-        for k in [-1.0f32, 1.0] {
-            let d = Vec3::new(0.6 * k, 0.0, 1.0);
-            p.rivet(on_ellipsoid(knee_pad.0, knee_pad.1, d), sh);
-        }
-        p.rivet(on_ellipsoid(head_c, head_r, Vec3::new(x, 0.0, 0.1)), head);
+}
+
+/// One side's parts (`i` 0 left, 1 right; `x` the side's sign): the arm's shells, shoulder
+/// pad, rings and gauntlet, the leg's shells, knee pad, rings and boot, then the side's rivets
+/// on the pads and the helmet.
+fn side_parts(p: &mut Parts, bones: &Bones, i: usize, x: f32) {
+    let (r, head) = (&bones.rig, bones.head);
+    let (head_c, head_r) = HEAD_SHELL;
+    let [ua, fa, hand] = bones.arms[i];
+    let [th, sh, ft] = bones.legs[i];
+    let shoulder = Vec3::new(0.22 * x, 1.42, 0.0);
+    let elbow = Vec3::new(0.27 * x, 1.14, 0.0);
+    let wrist = Vec3::new(0.3 * x, 0.88, 0.0);
+    let arm = Chain::new(r, &[ua, fa, hand], Vec3::new(0.31 * x, 0.74, 0.0));
+    p.shell(shoulder, elbow, 0.05, &arm, (0.0, 1.0));
+    p.shell(elbow, wrist, 0.045, &arm, (1.0, 2.0));
+    let pad_c = Vec3::new(0.23 * x, 1.44, 0.0);
+    let pad_r = Vec3::new(0.1, 0.07, 0.1);
+    let pad_up = Vec3::new(0.35 * x, 1.0, 0.0);
+    p.dome(pad_c, pad_r, pad_up, ua);
+    p.torus(elbow, elbow - shoulder, 0.056, 0.014, fa);
+    p.torus(
+        wrist + (wrist - elbow) * 0.05,
+        wrist - elbow,
+        0.05,
+        0.012,
+        hand,
+    );
+    p.cuboid(
+        Vec3::new(0.305 * x, 0.81, 0.0),
+        Vec3::new(0.025, 0.07, 0.045),
+        Quat::IDENTITY,
+        2,
+        hand,
+    );
+    let hip = Vec3::new(0.1 * x, 0.9, 0.0);
+    let knee = Vec3::new(0.1 * x, 0.5, 0.0);
+    let ankle = Vec3::new(0.1 * x, 0.1, 0.0);
+    let leg = Chain::new(r, &[th, sh, ft], Vec3::new(0.1 * x, 0.03, 0.16));
+    p.shell(hip, knee, 0.075, &leg, (0.0, 1.0));
+    p.shell(knee, ankle, 0.06, &leg, (1.0, 2.0));
+    let knee_pad = (Vec3::new(0.1 * x, 0.5, 0.065), Vec3::new(0.06, 0.035, 0.06));
+    p.dome(knee_pad.0, knee_pad.1, Vec3::Z, sh);
+    p.torus(knee - Vec3::Y * 0.06, Vec3::Y, 0.068, 0.013, sh);
+    p.torus(ankle + Vec3::Y * 0.03, Vec3::Y, 0.056, 0.012, sh);
+    p.cuboid(
+        Vec3::new(0.1 * x, 0.045, 0.05),
+        Vec3::new(0.05, 0.045, 0.11),
+        Quat::IDENTITY,
+        2,
+        ft,
+    );
+    // Rivets: three on the pad, two on the knee pad, one on each side of the helmet.
+    let turn = Quat::from_rotation_arc(Vec3::Y, pad_up.normalize());
+    for k in 0..3 {
+        let a = TAU * k as f32 / 3.0 + 0.4;
+        let d = turn * Vec3::new(a.cos(), 0.5, a.sin());
+        p.rivet(on_ellipsoid(pad_c, turn * pad_r, d), ua);
     }
+    for k in [-1.0f32, 1.0] {
+        let d = Vec3::new(0.6 * k, 0.0, 1.0);
+        p.rivet(on_ellipsoid(knee_pad.0, knee_pad.1, d), sh);
+    }
+    p.rivet(on_ellipsoid(head_c, head_r, Vec3::new(x, 0.0, 0.1)), head);
+}
+
+/// The rivets on the front: a zigzag of six across the chest plate, each followed by one of the
+/// six round the back of the belt.
+fn trunk_rivets(p: &mut Parts, bones: &Bones) {
+    let (chest, hips) = (bones.chest, bones.hips);
+    let (chest_c, chest_r) = CHEST_SHELL;
     // Rivets: six across the chest, six round the belt.
     for k in 0..6 {
         let a = (k as f32 - 2.5) * 0.28;
@@ -432,8 +477,13 @@ pub(crate) fn knight(detail: f32) -> Knight {
         let ring = Vec3::new(0.0, 1.03, 0.0) + Vec3::new(a.sin(), 0.0, a.cos()) * 0.178;
         p.rivet(ring, hips);
     }
+}
 
-    let walk = bake_clip("walk", 1.2, 1.2, &r, root, |ph| {
+/// The `walk` clip: legs and arms swinging half a cycle apart, spine and chest twisting, the
+/// root bobbing twice a cycle.
+fn walk(k: &Bones) -> Clip {
+    let (r, root, spine, chest, arms, legs) = (&k.rig, k.root, k.spine, k.chest, k.arms, k.legs);
+    bake_clip("walk", 1.2, 1.2, r, root, |ph| {
         let mut pose = Pose::rest(r.len());
         for i in 0..2 {
             let q = (ph + 0.5 * i as f32).rem_euclid(1.0);
@@ -451,12 +501,28 @@ pub(crate) fn knight(detail: f32) -> Knight {
         pose.rotate(chest, euler(0.0, 6.0 * (TAU * ph).cos(), 0.0));
         pose.root_offset = Vec3::Y * (0.025 * (2.0 * TAU * ph).cos() - 0.02);
         pose
-    });
+    })
+}
+
+pub(crate) fn knight(detail: f32) -> Knight {
+    let bones = knight_rig();
+    let mut p = Parts {
+        b: FacetBuilder::default(),
+        next_group: 0,
+        detail,
+    };
+    trunk_parts(&mut p, &bones);
+    for (i, x) in [1.0f32, -1.0].into_iter().enumerate() {
+        side_parts(&mut p, &bones, i, x);
+    }
+    trunk_rivets(&mut p, &bones);
+
+    let walk = walk(&bones);
     Knight {
         parts: p.b,
-        hand_r: arms[1][2],
-        chest,
-        rig: r,
+        hand_r: bones.arms[1][2],
+        chest: bones.chest,
+        rig: bones.rig,
         walk,
     }
 }

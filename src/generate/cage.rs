@@ -415,7 +415,202 @@ impl Cage {
     /// subdivision of the face-varying UVs.
     pub fn subdivide(&self) -> Cage {
         let faces: Vec<&Face> = self.live_faces().collect();
+        let topology = Topology::of(&faces);
+        let (face_points, face_weights) = self.face_points(&faces);
+
+        let mut out = Cage {
+            chart_parts: self.chart_parts.clone(),
+            ..Default::default()
+        };
+        // Vertex points.
+        self.push_vertex_points(&mut out, &faces, &topology, &face_points, &face_weights);
+        // Edge points.
+        let edge_base = out.positions.len() as u32;
+        self.push_edge_points(&mut out, &topology, &face_points, &face_weights);
+        // Face points.
+        let face_base = out.positions.len() as u32;
+        out.positions.extend_from_slice(&face_points);
+        out.weights.extend(face_weights);
+        // Four quads per face.
+        push_child_faces(&mut out, &faces, &topology.face_edges, edge_base, face_base);
+        out
+    }
+
+    /// Subdivision's face points: each live face's centroid and the average of its corners'
+    /// weights, which the edge and vertex stencils and the child faces' centres all use.
+    fn face_points(&self, faces: &[&Face]) -> (Vec<Vec3>, Vec<Weights>) {
+        let face_points: Vec<Vec3> = faces
+            .iter()
+            .map(|f| {
+                f.v.iter()
+                    .map(|&i| self.positions[i as usize])
+                    .sum::<Vec3>()
+                    / 4.0
+            })
+            .collect();
+        let face_weights: Vec<Weights> = faces
+            .iter()
+            .map(|f| {
+                let terms: Vec<(&Weights, f32)> =
+                    f.v.iter()
+                        .map(|&i| (&self.weights[i as usize], 0.25))
+                        .collect();
+                mix_weights(&terms)
+            })
+            .collect();
+        (face_points, face_weights)
+    }
+
+    /// Subdivision's vertex points, one per old vertex in order, pushed onto `out`: each
+    /// vertex moved by the Catmull–Clark stencil over the faces and edges round it.
+    fn push_vertex_points(
+        &self,
+        out: &mut Cage,
+        faces: &[&Face],
+        topology: &Topology,
+        face_points: &[Vec3],
+        face_weights: &[Weights],
+    ) {
         let nv = self.positions.len();
+        let mut v_faces: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        for (fi, f) in faces.iter().enumerate() {
+            for &v in &f.v {
+                v_faces[v as usize].push(fi);
+            }
+        }
+        let mut v_edges: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        for (e, &(a, b)) in topology.edge_ends.iter().enumerate() {
+            v_edges[a as usize].push(e);
+            v_edges[b as usize].push(e);
+        }
+        for v in 0..nv {
+            let (p, w) = self.vertex_point(
+                v,
+                &v_faces[v],
+                &v_edges[v],
+                topology,
+                face_points,
+                face_weights,
+            );
+            out.positions.push(p);
+            out.weights.push(w);
+        }
+    }
+
+    /// Vertex `v`'s new position and weights, given the faces `fs` and edges `es` round it:
+    /// unchanged if no face uses it, the B-spline border rule on an open border, else the
+    /// Catmull–Clark stencil (the same on positions and on weights).
+    fn vertex_point(
+        &self,
+        v: usize,
+        fs: &[usize],
+        es: &[usize],
+        topology: &Topology,
+        face_points: &[Vec3],
+        face_weights: &[Weights],
+    ) -> (Vec3, Weights) {
+        let (edge_faces, edge_ends) = (&topology.edge_faces, &topology.edge_ends);
+        let p = self.positions[v];
+        let w = &self.weights[v];
+        let boundary: Vec<usize> = es
+            .iter()
+            .copied()
+            .filter(|&e| edge_faces[e].len() != 2)
+            .collect();
+        if fs.is_empty() {
+            (p, w.clone())
+        } else if !boundary.is_empty() {
+            // Open border (never in a closed creature, kept for robustness): cubic B-spline
+            // along the border.
+            let ends: Vec<u32> = boundary
+                .iter()
+                .map(|&e| {
+                    let (a, b) = edge_ends[e];
+                    if a as usize == v { b } else { a }
+                })
+                .take(2)
+                .collect();
+            let mut q = p * 0.75;
+            let mut terms: Vec<(&Weights, f32)> = vec![(w, 0.75)];
+            for &o in &ends {
+                q += self.positions[o as usize] * (0.25 / ends.len() as f32);
+                terms.push((&self.weights[o as usize], 0.25 / ends.len() as f32));
+            }
+            (q, mix_weights(&terms))
+        } else {
+            let n = fs.len() as f32;
+            let f_avg = fs.iter().map(|&f| face_points[f]).sum::<Vec3>() / n;
+            let r_avg = es
+                .iter()
+                .map(|&e| {
+                    let (a, b) = edge_ends[e];
+                    (self.positions[a as usize] + self.positions[b as usize]) * 0.5
+                })
+                .sum::<Vec3>()
+                / es.len() as f32;
+            let position = (f_avg + 2.0 * r_avg + (n - 3.0) * p) / n;
+            // The same stencil on the weights: faces 1/n², edge ends 2/(n·m) each half,
+            // the vertex itself (n − 3)/n.
+            let mut terms: Vec<(&Weights, f32)> = Vec::new();
+            for &f in fs {
+                terms.push((&face_weights[f], 1.0 / (n * n)));
+            }
+            let m = es.len() as f32;
+            for &e in es {
+                let (a, b) = edge_ends[e];
+                terms.push((&self.weights[a as usize], 1.0 / (n * m)));
+                terms.push((&self.weights[b as usize], 1.0 / (n * m)));
+            }
+            terms.push((w, (n - 3.0) / n));
+            (position, mix_weights(&terms))
+        }
+    }
+
+    /// Subdivision's edge points, one per edge in first-use order, pushed onto `out`: the
+    /// average of the ends and the two faces' points, or the midpoint on an open border.
+    fn push_edge_points(
+        &self,
+        out: &mut Cage,
+        topology: &Topology,
+        face_points: &[Vec3],
+        face_weights: &[Weights],
+    ) {
+        let edge_faces = &topology.edge_faces;
+        for (e, &(a, b)) in topology.edge_ends.iter().enumerate() {
+            let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+            let (wa, wb) = (&self.weights[a as usize], &self.weights[b as usize]);
+            if edge_faces[e].len() == 2 {
+                let (f0, f1) = (edge_faces[e][0], edge_faces[e][1]);
+                out.positions
+                    .push((pa + pb + face_points[f0] + face_points[f1]) * 0.25);
+                out.weights.push(mix_weights(&[
+                    (wa, 0.25),
+                    (wb, 0.25),
+                    (&face_weights[f0], 0.25),
+                    (&face_weights[f1], 0.25),
+                ]));
+            } else {
+                out.positions.push((pa + pb) * 0.5);
+                out.weights.push(mix_weights(&[(wa, 0.5), (wb, 0.5)]));
+            }
+        }
+    }
+}
+
+/// The edges of a cage's live faces, numbered in the order the faces first use them: what
+/// subdivision needs to place edge points and to stitch the child faces to them.
+struct Topology {
+    /// `edge_faces[e]`: the faces (by place among the live faces) using edge `e`.
+    edge_faces: Vec<Vec<usize>>,
+    /// `edge_ends[e]`: edge `e`'s vertices, the smaller first.
+    edge_ends: Vec<(u32, u32)>,
+    /// `face_edges[f][k]`: the edge from corner `k` of face `f` to corner `k + 1`.
+    face_edges: Vec<[usize; 4]>,
+}
+
+impl Topology {
+    /// The edges of `faces`, in the order the faces first use them.
+    fn of(faces: &[&Face]) -> Topology {
         // Edges and their adjacent faces.
         let mut edge_index: HashMap<(u32, u32), usize> = HashMap::new();
         let mut edge_faces: Vec<Vec<usize>> = Vec::new();
@@ -436,149 +631,42 @@ impl Cage {
             }
             face_edges.push(fe);
         }
-        let face_points: Vec<Vec3> = faces
-            .iter()
-            .map(|f| {
-                f.v.iter()
-                    .map(|&i| self.positions[i as usize])
-                    .sum::<Vec3>()
-                    / 4.0
-            })
-            .collect();
-        let face_weights: Vec<Weights> = faces
-            .iter()
-            .map(|f| {
-                let terms: Vec<(&Weights, f32)> =
-                    f.v.iter()
-                        .map(|&i| (&self.weights[i as usize], 0.25))
-                        .collect();
-                mix_weights(&terms)
-            })
-            .collect();
+        Topology {
+            edge_faces,
+            edge_ends,
+            face_edges,
+        }
+    }
+}
 
-        let mut out = Cage {
-            chart_parts: self.chart_parts.clone(),
-            ..Default::default()
-        };
-        // Vertex points.
-        let mut v_faces: Vec<Vec<usize>> = vec![Vec::new(); nv];
-        for (fi, f) in faces.iter().enumerate() {
-            for &v in &f.v {
-                v_faces[v as usize].push(fi);
-            }
+/// Subdivision's child faces: four quads per old face (corner, edge point, face point, edge
+/// point), in face order, with UVs split bilinearly so every chart stays a regular grid.
+fn push_child_faces(
+    out: &mut Cage,
+    faces: &[&Face],
+    face_edges: &[[usize; 4]],
+    edge_base: u32,
+    face_base: u32,
+) {
+    for (fi, f) in faces.iter().enumerate() {
+        let center_uv = f.uv.iter().sum::<Vec2>() / 4.0;
+        for k in 0..4 {
+            let prev = (k + 3) % 4;
+            let next = (k + 1) % 4;
+            let v = [
+                f.v[k],
+                edge_base + face_edges[fi][k] as u32,
+                face_base + fi as u32,
+                edge_base + face_edges[fi][prev] as u32,
+            ];
+            let uv = [
+                f.uv[k],
+                (f.uv[k] + f.uv[next]) * 0.5,
+                center_uv,
+                (f.uv[k] + f.uv[prev]) * 0.5,
+            ];
+            out.add_face(v, uv, f.chart);
         }
-        let mut v_edges: Vec<Vec<usize>> = vec![Vec::new(); nv];
-        for (e, &(a, b)) in edge_ends.iter().enumerate() {
-            v_edges[a as usize].push(e);
-            v_edges[b as usize].push(e);
-        }
-        for v in 0..nv {
-            let p = self.positions[v];
-            let w = &self.weights[v];
-            let fs = &v_faces[v];
-            let es = &v_edges[v];
-            let boundary: Vec<usize> = es
-                .iter()
-                .copied()
-                .filter(|&e| edge_faces[e].len() != 2)
-                .collect();
-            if fs.is_empty() {
-                out.positions.push(p);
-                out.weights.push(w.clone());
-            } else if !boundary.is_empty() {
-                // Open border (never in a closed creature, kept for robustness): cubic B-spline
-                // along the border.
-                let ends: Vec<u32> = boundary
-                    .iter()
-                    .map(|&e| {
-                        let (a, b) = edge_ends[e];
-                        if a as usize == v { b } else { a }
-                    })
-                    .take(2)
-                    .collect();
-                let mut q = p * 0.75;
-                let mut terms: Vec<(&Weights, f32)> = vec![(w, 0.75)];
-                for &o in &ends {
-                    q += self.positions[o as usize] * (0.25 / ends.len() as f32);
-                    terms.push((&self.weights[o as usize], 0.25 / ends.len() as f32));
-                }
-                out.positions.push(q);
-                out.weights.push(mix_weights(&terms));
-            } else {
-                let n = fs.len() as f32;
-                let f_avg = fs.iter().map(|&f| face_points[f]).sum::<Vec3>() / n;
-                let r_avg = es
-                    .iter()
-                    .map(|&e| {
-                        let (a, b) = edge_ends[e];
-                        (self.positions[a as usize] + self.positions[b as usize]) * 0.5
-                    })
-                    .sum::<Vec3>()
-                    / es.len() as f32;
-                out.positions
-                    .push((f_avg + 2.0 * r_avg + (n - 3.0) * p) / n);
-                // The same stencil on the weights: faces 1/n², edge ends 2/(n·m) each half,
-                // the vertex itself (n − 3)/n.
-                let mut terms: Vec<(&Weights, f32)> = Vec::new();
-                for &f in fs {
-                    terms.push((&face_weights[f], 1.0 / (n * n)));
-                }
-                let m = es.len() as f32;
-                for &e in es {
-                    let (a, b) = edge_ends[e];
-                    terms.push((&self.weights[a as usize], 1.0 / (n * m)));
-                    terms.push((&self.weights[b as usize], 1.0 / (n * m)));
-                }
-                terms.push((w, (n - 3.0) / n));
-                out.weights.push(mix_weights(&terms));
-            }
-        }
-        // Edge points.
-        let edge_base = out.positions.len() as u32;
-        for (e, &(a, b)) in edge_ends.iter().enumerate() {
-            let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
-            let (wa, wb) = (&self.weights[a as usize], &self.weights[b as usize]);
-            if edge_faces[e].len() == 2 {
-                let (f0, f1) = (edge_faces[e][0], edge_faces[e][1]);
-                out.positions
-                    .push((pa + pb + face_points[f0] + face_points[f1]) * 0.25);
-                out.weights.push(mix_weights(&[
-                    (wa, 0.25),
-                    (wb, 0.25),
-                    (&face_weights[f0], 0.25),
-                    (&face_weights[f1], 0.25),
-                ]));
-            } else {
-                out.positions.push((pa + pb) * 0.5);
-                out.weights.push(mix_weights(&[(wa, 0.5), (wb, 0.5)]));
-            }
-        }
-        // Face points.
-        let face_base = out.positions.len() as u32;
-        out.positions.extend_from_slice(&face_points);
-        out.weights.extend(face_weights);
-        // Four quads per face.
-        for (fi, f) in faces.iter().enumerate() {
-            let center_uv = f.uv.iter().sum::<Vec2>() / 4.0;
-            for k in 0..4 {
-                let prev = (k + 3) % 4;
-                let next = (k + 1) % 4;
-                let v = [
-                    f.v[k],
-                    edge_base + face_edges[fi][k] as u32,
-                    face_base + fi as u32,
-                    edge_base + face_edges[fi][prev] as u32,
-                ];
-                let uv = [
-                    f.uv[k],
-                    (f.uv[k] + f.uv[next]) * 0.5,
-                    center_uv,
-                    (f.uv[k] + f.uv[prev]) * 0.5,
-                ];
-                out.add_face(v, uv, f.chart);
-            }
-        }
-        out
     }
 }
 

@@ -8,7 +8,7 @@ use super::build::{
     OCTAGON, Section, assemble, assemble_subdivided, body_rings, extrude_limb, extrude_rigid, limb,
     nearest_surface_point, section,
 };
-use super::cage::{Cage, Cap};
+use super::cage::{Cage, Cap, Tube};
 use super::finish::{fbm, noise, smooth};
 use super::rig::{Chain, Pose, Rig, bake_clip, bump, euler, rigid, wave};
 use crate::model::Model;
@@ -127,14 +127,28 @@ const ARM_SEGMENT: usize = 6;
 const FACE_SEGMENT: usize = 12;
 
 fn cage(r: &Rig, l: &Limbs) -> Cage {
+    let mut cage = Cage::default();
+    let tube = body(&mut cage, r);
+    shoulders(&mut cage, r, &tube);
+    for (i, s) in [1.0f32, -1.0].into_iter().enumerate() {
+        arm(&mut cage, r, l, &tube, i, s);
+        leg(&mut cage, r, l, &tube, i, s);
+        ear(&mut cage, r, &tube, s);
+    }
+    nose(&mut cage, r, &tube);
+    cage
+}
+
+/// The body tube (torso, neck and head) along the spine, which the limbs, ears and nose are
+/// extruded from.
+fn body(cage: &mut Cage, r: &Rig) -> Tube {
     let spine_bones: Vec<usize> = ["hips", "spine", "chest", "neck", "head"]
         .iter()
         .map(|n| r.index(n))
         .collect();
     let spine = Chain::new(r, &spine_bones, Vec3::new(0.0, 1.9, 0.0));
-    let mut cage = Cage::default();
     // The crotch cap splits into left, middle and right quads: the legs hang from the outer two.
-    let tube = cage.tube(
+    cage.tube(
         &body_rings(&SECTIONS, &OCTAGON, Vec3::X, &spine),
         &[(0, TORSO), (HEAD_START, HEAD)],
         Cap {
@@ -145,8 +159,12 @@ fn cage(r: &Rig, l: &Limbs) -> Cage {
             offset: 0,
             part: HEAD,
         },
-    );
+    )
+}
 
+/// The shoulders' weights: the outer vertices of the rings round the shoulders go partly to
+/// the clavicle of their side, so that raising an arm lifts the shoulder.
+fn shoulders(cage: &mut Cage, r: &Rig, tube: &Tube) {
     // Shoulders: the torso's upper rings share their outer vertices between the chest and the
     // clavicle of that side, so raising an arm lifts the shoulder with it.
     let chest = r.index("chest") as u32;
@@ -163,108 +181,121 @@ fn cage(r: &Rig, l: &Limbs) -> Cage {
         out.sort_by_key(|e| e.0);
         Some(out)
     });
+}
 
-    for (i, s) in [1.0f32, -1.0].into_iter().enumerate() {
-        // Arm, from the side of the chest below the shoulder.
-        let face = cage.face_towards(&tube.sides[ARM_SEGMENT], Vec3::new(s, 0.0, 0.0));
-        let arm = Chain::new(r, &l.arms[i], l.arm_ends[i]);
-        let ext = extrude_limb(
-            &mut cage,
-            face,
-            &arm,
-            &[
-                limb(0.25, 0.062, 0.06),
-                limb(0.55, 0.056, 0.053),
-                limb(0.85, 0.048, 0.046),
-                limb(1.0, 0.045, 0.043),
-                limb(1.3, 0.047, 0.041),
-                limb(1.75, 0.037, 0.031),
-                limb(1.97, 0.033, 0.025),
-                limb(2.3, 0.052, 0.02),
-                limb(2.9, 0.052, 0.019),
-                limb(3.4, 0.047, 0.016),
-                limb(3.95, 0.033, 0.012),
-            ],
-            Vec3::Z,
-            ARM,
-            SKIN,
-        );
-        // Thumb, from the front of the palm.
-        let palm = cage.face_towards(&ext.sides[7], Vec3::Z);
-        let thumb = Chain::new(r, &[l.thumbs[i]], l.thumb_ends[i]);
-        extrude_limb(
-            &mut cage,
-            palm,
-            &thumb,
-            &[
-                limb(0.35, 0.017, 0.015),
-                limb(0.7, 0.014, 0.013),
-                limb(0.97, 0.009, 0.009),
-            ],
-            Vec3::X,
-            THUMB,
-            SKIN,
-        );
+/// Side `i`'s arm (`s` its sign), extruded from the chest along the arm's bones to a hand,
+/// and its thumb extruded from the palm.
+fn arm(cage: &mut Cage, r: &Rig, l: &Limbs, tube: &Tube, i: usize, s: f32) {
+    // Arm, from the side of the chest below the shoulder.
+    let face = cage.face_towards(&tube.sides[ARM_SEGMENT], Vec3::new(s, 0.0, 0.0));
+    let arm = Chain::new(r, &l.arms[i], l.arm_ends[i]);
+    let ext = extrude_limb(
+        cage,
+        face,
+        &arm,
+        &[
+            limb(0.25, 0.062, 0.06),
+            limb(0.55, 0.056, 0.053),
+            limb(0.85, 0.048, 0.046),
+            limb(1.0, 0.045, 0.043),
+            limb(1.3, 0.047, 0.041),
+            limb(1.75, 0.037, 0.031),
+            limb(1.97, 0.033, 0.025),
+            limb(2.3, 0.052, 0.02),
+            limb(2.9, 0.052, 0.019),
+            limb(3.4, 0.047, 0.016),
+            limb(3.95, 0.033, 0.012),
+        ],
+        Vec3::Z,
+        ARM,
+        SKIN,
+    );
+    // Thumb, from the front of the palm.
+    let palm = cage.face_towards(&ext.sides[7], Vec3::Z);
+    let thumb = Chain::new(r, &[l.thumbs[i]], l.thumb_ends[i]);
+    extrude_limb(
+        cage,
+        palm,
+        &thumb,
+        &[
+            limb(0.35, 0.017, 0.015),
+            limb(0.7, 0.014, 0.013),
+            limb(0.97, 0.009, 0.009),
+        ],
+        Vec3::X,
+        THUMB,
+        SKIN,
+    );
+}
 
-        // Leg, from the crotch.
-        let face = *tube
-            .start_cap
-            .iter()
-            .max_by(|a, b| (s * cage.face_center(**a).x).total_cmp(&(s * cage.face_center(**b).x)))
-            .expect("crotch cap");
-        let leg = Chain::new(r, &l.legs[i], l.leg_ends[i]);
-        extrude_limb(
-            &mut cage,
-            face,
-            &leg,
-            &[
-                limb(0.22, 0.095, 0.1),
-                limb(0.5, 0.082, 0.088),
-                limb(0.85, 0.064, 0.068),
-                limb(1.0, 0.06, 0.066),
-                limb(1.2, 0.062, 0.068),
-                limb(1.6, 0.05, 0.053),
-                limb(1.9, 0.043, 0.047),
-                limb(2.1, 0.05, 0.055),
-                limb(2.5, 0.052, 0.042),
-                limb(2.95, 0.05, 0.032),
-                limb(3.5, 0.045, 0.027),
-                limb(3.95, 0.036, 0.022),
-            ],
-            Vec3::X,
-            LEG,
-            SOLE,
-        );
+/// Side `i`'s leg (`s` its sign), extruded from the crotch cap's outer quad on that side along
+/// the leg's bones to a foot with a sole.
+fn leg(cage: &mut Cage, r: &Rig, l: &Limbs, tube: &Tube, i: usize, s: f32) {
+    // Leg, from the crotch.
+    let face = *tube
+        .start_cap
+        .iter()
+        .max_by(|a, b| (s * cage.face_center(**a).x).total_cmp(&(s * cage.face_center(**b).x)))
+        .expect("crotch cap");
+    let leg = Chain::new(r, &l.legs[i], l.leg_ends[i]);
+    extrude_limb(
+        cage,
+        face,
+        &leg,
+        &[
+            limb(0.22, 0.095, 0.1),
+            limb(0.5, 0.082, 0.088),
+            limb(0.85, 0.064, 0.068),
+            limb(1.0, 0.06, 0.066),
+            limb(1.2, 0.062, 0.068),
+            limb(1.6, 0.05, 0.053),
+            limb(1.9, 0.043, 0.047),
+            limb(2.1, 0.05, 0.055),
+            limb(2.5, 0.052, 0.042),
+            limb(2.95, 0.05, 0.032),
+            limb(3.5, 0.045, 0.027),
+            limb(3.95, 0.036, 0.022),
+        ],
+        Vec3::X,
+        LEG,
+        SOLE,
+    );
+}
 
-        // An ear on either side of the head.
-        let head = rigid(r.index("head"));
-        let side_face = cage.face_towards(&tube.sides[FACE_SEGMENT], Vec3::new(s, 0.0, -0.2));
-        let c = cage.face_center(side_face);
-        extrude_rigid(
-            &mut cage,
-            side_face,
-            &[
-                (
-                    c + Vec3::new(s * 0.012, 0.0, -0.004),
-                    Vec2::new(0.024, 0.03),
-                ),
-                (
-                    c + Vec3::new(s * 0.02, 0.002, -0.008),
-                    Vec2::new(0.016, 0.022),
-                ),
-            ],
-            &head,
-            Vec3::Z,
-            HEAD,
-            HEAD,
-        );
-    }
+/// The ear on side `s` of the head: a short rigid extrusion on the head bone.
+fn ear(cage: &mut Cage, r: &Rig, tube: &Tube, s: f32) {
+    // An ear on either side of the head.
+    let head = rigid(r.index("head"));
+    let side_face = cage.face_towards(&tube.sides[FACE_SEGMENT], Vec3::new(s, 0.0, -0.2));
+    let c = cage.face_center(side_face);
+    extrude_rigid(
+        cage,
+        side_face,
+        &[
+            (
+                c + Vec3::new(s * 0.012, 0.0, -0.004),
+                Vec2::new(0.024, 0.03),
+            ),
+            (
+                c + Vec3::new(s * 0.02, 0.002, -0.008),
+                Vec2::new(0.016, 0.022),
+            ),
+        ],
+        &head,
+        Vec3::Z,
+        HEAD,
+        HEAD,
+    );
+}
+
+/// The nose: a short rigid extrusion on the head bone from the face's front.
+fn nose(cage: &mut Cage, r: &Rig, tube: &Tube) {
     // Nose.
     let head = rigid(r.index("head"));
     let front = cage.face_towards(&tube.sides[FACE_SEGMENT], Vec3::Z);
     let c = cage.face_center(front);
     extrude_rigid(
-        &mut cage,
+        cage,
         front,
         &[
             (c + Vec3::new(0.0, -0.012, 0.012), Vec2::new(0.022, 0.024)),
@@ -275,7 +306,6 @@ fn cage(r: &Rig, l: &Limbs) -> Cage {
         HEAD,
         HEAD,
     );
-    cage
 }
 
 fn clips(r: &Rig, l: &Limbs) -> Vec<crate::model::Clip> {

@@ -283,19 +283,87 @@ fn build(
     if skinned.is_empty() {
         return build_rigid(name, doc, buffers, images, warnings);
     }
-    // Every skin a mesh uses, in order of first use, their joints merged into one list of
-    // bones: a joint another skin has already, with the same inverse bind matrix, is shared;
-    // otherwise it is a bone of its own (bones may share a node).
+    let skins = used_skins(&skinned);
+    let SkinBones {
+        mut bone_nodes,
+        mut inverse_bind,
+        maps,
+    } = merge_skins(&skins, buffers)?;
+    let parents = node_parents(doc);
+    let props = rigid_parts(
+        doc,
+        &lower_lods,
+        &parents,
+        (&mut bone_nodes, &mut inverse_bind),
+        warnings,
+    )?;
+    let (nodes, remap) = read_hierarchy(doc, &bone_nodes)?;
+    let mut skeleton = Skeleton {
+        nodes,
+        joints: bone_nodes.iter().map(|&j| remap[j]).collect(),
+        inverse_bind,
+        root_transform: Affine3A::IDENTITY,
+    };
+    let mut bound: Vec<(gltf::Node, Binding)> = skinned
+        .iter()
+        .map(|n| {
+            let s = n.skin().expect("filtered on a skin").index();
+            let k = skins
+                .iter()
+                .position(|x| x.index() == s)
+                .expect("collected above");
+            (n.clone(), Binding::Skin(&maps[k]))
+        })
+        .collect();
+    bound.extend(rigid_bindings(doc, &parents, &bone_nodes, &skeleton, props));
+    let (mut mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
+    into_bind_space(&mut mesh, &mut skeleton);
+    let mut clips = Vec::new();
+    for anim in doc.animations() {
+        if let Some(clip) = read_clip(&anim, buffer, &remap)? {
+            clips.push(clip);
+        }
+    }
+    place_in_scene(&mesh, &mut skeleton, &mut clips)?;
+    Ok(Model {
+        name: name.to_string(),
+        mesh,
+        skeleton,
+        clips,
+        materials,
+    })
+}
+
+/// The bones of every skin a mesh uses, merged (see [`merge_skins`]).
+struct SkinBones {
+    /// Each bone's node, and its inverse bind matrix.
+    bone_nodes: Vec<usize>,
+    inverse_bind: Vec<Mat4>,
+    /// Per skin, the bone of each of its joints.
+    maps: Vec<Vec<u32>>,
+}
+
+/// Every skin the `skinned` nodes use, in order of first use.
+fn used_skins<'a>(skinned: &[gltf::Node<'a>]) -> Vec<gltf::Skin<'a>> {
     let mut skins: Vec<gltf::Skin> = Vec::new();
-    for n in &skinned {
+    for n in skinned {
         let s = n.skin().expect("filtered on a skin");
         if !skins.iter().any(|k| k.index() == s.index()) {
             skins.push(s);
         }
     }
+    skins
+}
+
+/// The joints of `skins` merged into one list of bones.
+///
+/// Every skin a mesh uses, in order of first use, their joints merged into one list of
+/// bones: a joint another skin has already, with the same inverse bind matrix, is shared;
+/// otherwise it is a bone of its own (bones may share a node).
+fn merge_skins(skins: &[gltf::Skin], buffers: &[gltf::buffer::Data]) -> Result<SkinBones, String> {
     let (mut bone_nodes, mut inverse_bind): (Vec<usize>, Vec<Mat4>) = (Vec::new(), Vec::new());
     let mut maps: Vec<Vec<u32>> = Vec::with_capacity(skins.len());
-    for skin in &skins {
+    for skin in skins {
         let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
         if joints.is_empty() {
             return Err(format!("skin {} has no joints", skin.index()));
@@ -316,11 +384,29 @@ fn build(
         }
         maps.push(map);
     }
-    // Unskinned parts ride rigidly on what carries them in the file: the nearest joint above
-    // the node (a helmet on the head bone), else the node itself, which becomes a bone of its
-    // own so that whatever animates it or the nodes above it moves the part (a cape on the
-    // armature's node beside the skeleton's root, a prop standing in the scene).
-    let parents = node_parents(doc);
+    Ok(SkinBones {
+        bone_nodes,
+        inverse_bind,
+        maps,
+    })
+}
+
+/// The unskinned mesh nodes of the scene, each with its world transform and the node that
+/// carries it; a carrier that is no joint is added to `bones` (nodes and inverse bind
+/// matrices, the skins' bones first).
+///
+/// Unskinned parts ride rigidly on what carries them in the file: the nearest joint above
+/// the node (a helmet on the head bone), else the node itself, which becomes a bone of its
+/// own so that whatever animates it or the nodes above it moves the part (a cape on the
+/// armature's node beside the skeleton's root, a prop standing in the scene).
+fn rigid_parts<'a>(
+    doc: &'a gltf::Document,
+    lower_lods: &[usize],
+    parents: &[Option<usize>],
+    bones: (&mut Vec<usize>, &mut Vec<Mat4>),
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(gltf::Node<'a>, Mat4, usize)>, String> {
+    let (bone_nodes, inverse_bind) = bones;
     let skin_bones = bone_nodes.len();
     let mut props: Vec<(gltf::Node, Mat4, usize)> = Vec::new();
     for (node, world) in mesh_nodes_in_scene(doc) {
@@ -357,24 +443,19 @@ fn build(
         };
         props.push((node, world, carrier));
     }
-    let (nodes, remap) = read_hierarchy(doc, &bone_nodes)?;
-    let mut skeleton = Skeleton {
-        nodes,
-        joints: bone_nodes.iter().map(|&j| remap[j]).collect(),
-        inverse_bind,
-        root_transform: Affine3A::IDENTITY,
-    };
-    let mut bound: Vec<(gltf::Node, Binding)> = skinned
-        .iter()
-        .map(|n| {
-            let s = n.skin().expect("filtered on a skin").index();
-            let k = skins
-                .iter()
-                .position(|x| x.index() == s)
-                .expect("collected above");
-            (n.clone(), Binding::Skin(&maps[k]))
-        })
-        .collect();
+    Ok(props)
+}
+
+/// The unskinned parts `props` (node, world transform, carrier) bound rigidly to their
+/// carriers' bones.
+fn rigid_bindings<'a, 'm>(
+    doc: &gltf::Document,
+    parents: &[Option<usize>],
+    bone_nodes: &[usize],
+    skeleton: &Skeleton,
+    props: Vec<(gltf::Node<'a>, Mat4, usize)>,
+) -> Vec<(gltf::Node<'a>, Binding<'m>)> {
+    let mut bound = Vec::with_capacity(props.len());
     for (node, world, carrier) in props {
         // The carrier's first bone (a node may be a bone of two skins).
         let bone = bone_nodes
@@ -383,27 +464,12 @@ fn build(
             .expect("every carrier is a bone");
         // Into the bone's bind space: G_b · IBM_b · v̂ then puts the part where the node
         // carrying it puts it, whatever the bind matrices say.
-        let carrier_world = world_of(doc, &parents, carrier);
+        let carrier_world = world_of(doc, parents, carrier);
         let bind = skeleton.inverse_bind[bone].inverse();
         let to_bind = bind * carrier_world.inverse() * world;
         bound.push((node, Binding::Rigid(to_bind, bone as u32)));
     }
-    let (mut mesh, materials) = read_meshes(&bound, buffers, images, warnings)?;
-    into_bind_space(&mut mesh, &mut skeleton);
-    let mut clips = Vec::new();
-    for anim in doc.animations() {
-        if let Some(clip) = read_clip(&anim, buffer, &remap)? {
-            clips.push(clip);
-        }
-    }
-    place_in_scene(&mesh, &mut skeleton, &mut clips)?;
-    Ok(Model {
-        name: name.to_string(),
-        mesh,
-        skeleton,
-        clips,
-        materials,
-    })
+    bound
 }
 
 /// A file without a skinned mesh: a static prop. Every mesh of the scene, its node's world

@@ -83,12 +83,7 @@ fn capture(
     renderer: &SceneRenderer,
     model: usize,
     transform: Affine3A,
-    Playing {
-        clip,
-        time,
-        wind,
-        fade,
-    }: Playing,
+    playing: Playing,
 ) -> Result<Vec<Vec4>> {
     let Some(character) = renderer.characters().get(model) else {
         bail!("no character {model}");
@@ -98,6 +93,53 @@ fn capture(
     let height = n.div_ceil(WIDTH).max(1);
     let format = wgpu::TextureFormat::Rgba32Float;
     let target = Offscreen::with_format(gpu, WIDTH, height, 1, format);
+    let (_frame_buffer, frame_bind_group) = frame_bind_group(gpu, renderer, playing.time, height);
+    let instance = playing_instance(&character.clip_rows, &transform, playing);
+    let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("capture instance"),
+        contents: bytemuck::bytes_of(&instance),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let (_layout, pipeline) = capture_pipeline(gpu, renderer, format);
+    let mut enc = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("capture"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &target.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &frame_bind_group, &[]);
+        pass.set_bind_group(1, &character.full().bind_group, &[]);
+        pass.set_vertex_buffer(0, instance_buffer.slice(..));
+        pass.draw(0..n, 0..1);
+    }
+    gpu.queue.submit([enc.finish()]);
+    gpu.take_error()?;
+    let bytes = target.read_bytes(gpu)?;
+    let texels: &[Vec4] = bytemuck::cast_slice(&bytes);
+    Ok(texels[..n as usize].to_vec())
+}
+
+/// The frame uniforms of a capture at `time` seconds, and their bind group: identity view
+/// and projection (the skinned position is written as a colour, not placed on screen) over a
+/// target `height` rows of [`WIDTH`] texels. The buffer is returned to be held while the
+/// bind group is used.
+fn frame_bind_group(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    time: f32,
+    height: u32,
+) -> (wgpu::Buffer, wgpu::BindGroup) {
+    let device = &gpu.device;
     let view = FrameView {
         view: Mat4::IDENTITY,
         proj: Mat4::IDENTITY,
@@ -118,9 +160,23 @@ fn capture(
             resource: frame_buffer.as_entire_binding(),
         }],
     });
-    let rows = &character.clip_rows;
+    (frame_buffer, frame_bind_group)
+}
+
+/// The one instance a capture draws: placed by `transform`, playing what `Playing` says (a
+/// clip past the character's last is its last, `rows` its clips' frame ranges).
+fn playing_instance(
+    rows: &[[f32; 4]],
+    transform: &Affine3A,
+    Playing {
+        clip,
+        time,
+        wind,
+        fade,
+    }: Playing,
+) -> GpuInstance {
     let mut instance = GpuInstance::new(
-        &transform,
+        transform,
         rows[(clip as usize).min(rows.len() - 1)],
         0.0,
         1.0,
@@ -136,11 +192,18 @@ fn capture(
             weight,
         );
     }
-    let instance_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("capture instance"),
-        contents: bytemuck::bytes_of(&instance),
-        usage: wgpu::BufferUsages::VERTEX,
-    });
+    instance
+}
+
+/// The capture pipeline: `skin_vertex` through the capture shader, one point per vertex into
+/// a `format` target, over the frame and character bind groups the scene's character
+/// pipeline uses. Its layout is returned to be held with it.
+fn capture_pipeline(
+    gpu: &Gpu,
+    renderer: &SceneRenderer,
+    format: wgpu::TextureFormat,
+) -> (wgpu::PipelineLayout, wgpu::RenderPipeline) {
+    let device = &gpu.device;
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("capture"),
         bind_group_layouts: &[
@@ -174,30 +237,5 @@ fn capture(
         multiview_mask: None,
         cache: None,
     });
-    let mut enc = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("capture"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &frame_bind_group, &[]);
-        pass.set_bind_group(1, &character.full().bind_group, &[]);
-        pass.set_vertex_buffer(0, instance_buffer.slice(..));
-        pass.draw(0..n, 0..1);
-    }
-    gpu.queue.submit([enc.finish()]);
-    gpu.take_error()?;
-    let bytes = target.read_bytes(gpu)?;
-    let texels: &[Vec4] = bytemuck::cast_slice(&bytes);
-    Ok(texels[..n as usize].to_vec())
+    (layout, pipeline)
 }

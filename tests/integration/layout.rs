@@ -310,6 +310,69 @@ fn no_source_file_is_over_800_lines() {
     assert!(long.is_empty(), "{long:#?}");
 }
 
+/// The functions of `text` (a Rust source file formatted by rustfmt) with their lengths in
+/// lines, from the `fn` line to the closing brace at the same indent.
+fn function_lengths(text: &str) -> Vec<(String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let body = line.trim_start();
+        let indent = line.len() - body.len();
+        let after_qualifiers = body
+            .trim_start_matches("pub(crate) ")
+            .trim_start_matches("pub(super) ")
+            .trim_start_matches("pub ")
+            .trim_start_matches("const ")
+            .trim_start_matches("unsafe ");
+        let Some(rest) = after_qualifiers.strip_prefix("fn ") else {
+            continue;
+        };
+        // A declaration without a body (in a trait) ends with `;` before any `{`.
+        let opens = lines[i..]
+            .iter()
+            .map(|l| l.trim_end())
+            .find(|l| l.ends_with('{') || l.ends_with(';'));
+        if opens.is_none_or(|l| l.ends_with(';')) {
+            continue;
+        }
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let close = " ".repeat(indent) + "}";
+        let end = lines[i + 1..]
+            .iter()
+            .position(|l| l.trim_end() == close)
+            .map_or(lines.len(), |k| i + 1 + k);
+        out.push((name, end - i + 1));
+    }
+    out
+}
+
+/// No function grows past 120 lines: a longer one does several things, and each is split
+/// into a named step (the second redesign split thirty).
+#[test]
+fn no_function_is_over_120_lines() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let mut long = Vec::new();
+    let mut functions = 0;
+    for f in &files {
+        for (name, lines) in function_lengths(&std::fs::read_to_string(f).unwrap()) {
+            functions += 1;
+            if lines > 120 {
+                long.push(format!("{}: {name}, {lines} lines", f.display()));
+            }
+        }
+    }
+    assert!(functions > 1000, "{functions} functions found");
+    assert!(long.is_empty(), "{long:#?}");
+    // The measure sees a long function.
+    let made = format!("fn f() {{\n{}}}\n", "    let x = 1;\n".repeat(130));
+    assert_eq!(function_lengths(&made), [("f".to_string(), 132)]);
+}
+
 /// The circle finder sees the circles it is there for: two files that use each other.
 #[test]
 fn file_uses_resolve_crate_super_and_child_paths() {

@@ -117,19 +117,7 @@ pub fn frame(
 }
 
 pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &Info) -> Requests {
-    let mut req = Requests::default();
-    ui.horizontal(|ui| {
-        ui.heading("lodlab");
-        req.open = ui
-            .button("Open…")
-            .on_hover_text("Show a .glb or .gltf model instead of the scene's characters (or drop one on the window)")
-            .clicked();
-    });
-    ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
-    ui.label(egui::RichText::new("F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit").small());
-    if let Some(notice) = info.notice {
-        ui.label(egui::RichText::new(notice).small().strong());
-    }
+    let open = header(ui, info);
     ui.separator();
 
     statistics(ui, history, &info.stats);
@@ -147,6 +135,44 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         ui.separator();
     }
 
+    let relayout = crowd(ui, s, info);
+    ui.separator();
+
+    animation(ui, s, info);
+    ui.separator();
+
+    let reset_camera = camera(ui);
+    Requests {
+        relayout,
+        reset_camera,
+        open,
+    }
+}
+
+/// The panel's head: the name and "Open…", the adapter, the keys, and the latest notice.
+/// Returns whether "Open…" was clicked, for [`Requests::open`].
+fn header(ui: &mut egui::Ui, info: &Info) -> bool {
+    let mut open = false;
+    ui.horizontal(|ui| {
+        ui.heading("lodlab");
+        open = ui
+            .button("Open…")
+            .on_hover_text("Show a .glb or .gltf model instead of the scene's characters (or drop one on the window)")
+            .clicked();
+    });
+    ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
+    ui.label(egui::RichText::new("F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit").small());
+    if let Some(notice) = info.notice {
+        ui.label(egui::RichText::new(notice).small().strong());
+    }
+    open
+}
+
+/// The crowd: how many instances, which model and clip, and whether walkers stop to wave.
+/// Returns whether any of them changed, so that the crowd is laid out again
+/// ([`Requests::relayout`]).
+fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
+    let mut relayout = false;
     ui.strong("Crowd");
     if ui
         .add(
@@ -156,7 +182,7 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         )
         .changed()
     {
-        req.relayout = true;
+        relayout = true;
     }
     let model_label = |m: Option<usize>| match m {
         None => info.models.join(" + "),
@@ -171,7 +197,7 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
                     .changed()
                 {
                     s.clip = None;
-                    req.relayout = true;
+                    relayout = true;
                 }
             }
         });
@@ -189,14 +215,14 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         .selected_text(s.clip.clone().unwrap_or_else(|| "mixed".into()))
         .show_ui(ui, |ui| {
             if ui.selectable_value(&mut s.clip, None, "mixed").changed() {
-                req.relayout = true;
+                relayout = true;
             }
             for n in &names {
                 if ui
                     .selectable_value(&mut s.clip, Some(n.clone()), n)
                     .changed()
                 {
-                    req.relayout = true;
+                    relayout = true;
                 }
             }
         });
@@ -208,17 +234,20 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         .changed()
     {
         s.cross_fade = if stopping { DEFAULT_CROSS_FADE } else { 0.0 };
-        req.relayout = true;
+        relayout = true;
     }
     if stopping
         && ui
             .add(egui::Slider::new(&mut s.cross_fade, 0.1..=3.0).text("cross-fade s"))
             .changed()
     {
-        req.relayout = true;
+        relayout = true;
     }
-    ui.separator();
+    relayout
+}
 
+/// Animation: play or pause, the clock, the speed, and blob shadows.
+fn animation(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.strong("Animation");
     ui.horizontal(|ui| {
         let label = if s.playing { "Pause" } else { "Play" };
@@ -229,11 +258,15 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     });
     ui.add(egui::Slider::new(&mut s.speed, 0.0..=3.0).text("speed"));
     ui.checkbox(&mut s.shadows, "blob shadows");
-    ui.separator();
+}
 
+/// The camera: a reset button and the mouse and keyboard controls. Returns whether the reset
+/// was clicked, for [`Requests::reset_camera`].
+fn camera(ui: &mut egui::Ui) -> bool {
+    let mut reset = false;
     ui.strong("Camera");
     if ui.button("reset view (R)").clicked() {
-        req.reset_camera = true;
+        reset = true;
     }
     ui.label(
         egui::RichText::new(
@@ -241,7 +274,7 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         )
         .small(),
     );
-    req
+    reset
 }
 
 /// A method picker; methods still to bake say so.

@@ -102,167 +102,199 @@ impl Walker {
     }
 }
 
+/// Adds joint `mixamorig:{name}` to `j` and returns its index.
+fn add_joint(
+    j: &mut Vec<Joint>,
+    name: &str,
+    parent: Option<usize>,
+    head: Vec3,
+    follows: Option<usize>,
+) -> usize {
+    j.push(Joint {
+        name: format!("mixamorig:{name}"),
+        parent,
+        head,
+        follows,
+    });
+    j.len() - 1
+}
+
 /// The 65 joints, parents first.
 fn joints(w: &Walker) -> Vec<Joint> {
     let mut j: Vec<Joint> = Vec::new();
-    let add = |j: &mut Vec<Joint>,
-               name: &str,
-               parent: Option<usize>,
-               head: Vec3,
-               follows: Option<usize>| {
-        j.push(Joint {
-            name: format!("mixamorig:{name}"),
-            parent,
-            head,
-            follows,
-        });
-        j.len() - 1
-    };
-    let hips = add(&mut j, "Hips", None, w.head("hips"), Some(w.bone("hips")));
-    let spine = add(
-        &mut j,
+    let (hips, spine2) = spine_joints(&mut j, w);
+    for (side, s, x) in [("Left", "l", 1.0f32), ("Right", "r", -1.0)] {
+        arm_joints(&mut j, w, (side, s, x), spine2);
+        leg_joints(&mut j, w, (side, s, x), hips);
+    }
+    j
+}
+
+/// The trunk's joints, `Hips` to `HeadTop_End`, returning `Hips` and `Spine2` (what the legs
+/// and the shoulders hang from). The walker's one chest bone becomes two spine joints, as the
+/// service's rig has more spine than the walker.
+fn spine_joints(j: &mut Vec<Joint>, w: &Walker) -> (usize, usize) {
+    let hips = add_joint(j, "Hips", None, w.head("hips"), Some(w.bone("hips")));
+    let spine = add_joint(
+        j,
         "Spine",
         Some(hips),
         w.head("spine"),
         Some(w.bone("spine")),
     );
     let chest = w.bone("chest");
-    let spine1 = add(&mut j, "Spine1", Some(spine), w.head("chest"), Some(chest));
-    let spine2 = add(
-        &mut j,
+    let spine1 = add_joint(j, "Spine1", Some(spine), w.head("chest"), Some(chest));
+    let spine2 = add_joint(
+        j,
         "Spine2",
         Some(spine1),
         w.head("chest").lerp(w.head("neck"), 0.5),
         Some(chest),
     );
-    let neck = add(
-        &mut j,
+    let neck = add_joint(
+        j,
         "Neck",
         Some(spine2),
         w.head("neck"),
         Some(w.bone("neck")),
     );
-    let head = add(
-        &mut j,
-        "Head",
-        Some(neck),
-        w.head("head"),
-        Some(w.bone("head")),
-    );
-    add(
-        &mut j,
+    let head = add_joint(j, "Head", Some(neck), w.head("head"), Some(w.bone("head")));
+    add_joint(
+        j,
         "HeadTop_End",
         Some(head),
         w.head("head") + Vec3::new(0.0, 0.19, 0.0),
         Some(w.bone("head")),
     );
-    for (side, s, x) in [("Left", "l", 1.0f32), ("Right", "r", -1.0)] {
-        let b = |n: &str| format!("{n}_{s}");
-        let shoulder = add(
-            &mut j,
-            &format!("{side}Shoulder"),
-            Some(spine2),
-            w.head(&b("clavicle")),
-            Some(w.bone(&b("clavicle"))),
-        );
-        let arm = add(
-            &mut j,
-            &format!("{side}Arm"),
-            Some(shoulder),
-            w.head(&b("upper_arm")),
-            Some(w.bone(&b("upper_arm"))),
-        );
-        let fore = add(
-            &mut j,
-            &format!("{side}ForeArm"),
-            Some(arm),
-            w.head(&b("forearm")),
-            Some(w.bone(&b("forearm"))),
-        );
-        let wrist = w.head(&b("hand"));
-        let hand = add(
-            &mut j,
-            &format!("{side}Hand"),
-            Some(fore),
-            wrist,
-            Some(w.bone(&b("hand"))),
-        );
-        let knuckles = w.head(&b("fingers"));
-        let d = (knuckles - wrist) / 0.085;
-        let fingers = w.bone(&b("fingers"));
-        for (finger, z) in [
-            ("Index", 0.022f32),
-            ("Middle", 0.007),
-            ("Ring", -0.008),
-            ("Pinky", -0.022),
-        ] {
-            let base = knuckles + Vec3::new(0.0, 0.0, z);
-            let mut parent = hand;
-            for k in 1..=4 {
-                let along = [0.0, 0.035, 0.06, 0.085][k - 1];
-                parent = add(
-                    &mut j,
-                    &format!("{side}Hand{finger}{k}"),
-                    Some(parent),
-                    base + d * along,
-                    Some(fingers),
-                );
-            }
-        }
-        let thumb_root = w.head(&b("thumb"));
-        // The walker's thumb tip (placed from its root in the A-pose), carried to the T-pose.
-        let thumb_end = w.carried(
-            &b("thumb"),
-            w.rest_head(&b("thumb")) + Vec3::new(x * 0.01, -0.04, 0.03),
-        );
-        let thumb = w.bone(&b("thumb"));
+    (hips, spine2)
+}
+
+/// One side's arm (`side` as Mixamo spells it, `s` as the walker does, `x` the side's sign):
+/// shoulder, arm, forearm and hand under `spine2`, then the hand's fingers and thumb.
+fn arm_joints(j: &mut Vec<Joint>, w: &Walker, (side, s, x): (&str, &str, f32), spine2: usize) {
+    let b = |n: &str| format!("{n}_{s}");
+    let shoulder = add_joint(
+        j,
+        &format!("{side}Shoulder"),
+        Some(spine2),
+        w.head(&b("clavicle")),
+        Some(w.bone(&b("clavicle"))),
+    );
+    let arm = add_joint(
+        j,
+        &format!("{side}Arm"),
+        Some(shoulder),
+        w.head(&b("upper_arm")),
+        Some(w.bone(&b("upper_arm"))),
+    );
+    let fore = add_joint(
+        j,
+        &format!("{side}ForeArm"),
+        Some(arm),
+        w.head(&b("forearm")),
+        Some(w.bone(&b("forearm"))),
+    );
+    let wrist = w.head(&b("hand"));
+    let hand = add_joint(
+        j,
+        &format!("{side}Hand"),
+        Some(fore),
+        wrist,
+        Some(w.bone(&b("hand"))),
+    );
+    finger_joints(j, w, (side, s, x), hand, wrist);
+}
+
+/// One hand's digits: four joints to each finger (index to pinky), laid out from the walker's
+/// knuckles, then four to the thumb, all on the walker's one fingers or thumb bone, since the
+/// service's rig has joints the walker lacks.
+fn finger_joints(
+    j: &mut Vec<Joint>,
+    w: &Walker,
+    (side, s, x): (&str, &str, f32),
+    hand: usize,
+    wrist: Vec3,
+) {
+    let b = |n: &str| format!("{n}_{s}");
+    let knuckles = w.head(&b("fingers"));
+    let d = (knuckles - wrist) / 0.085;
+    let fingers = w.bone(&b("fingers"));
+    for (finger, z) in [
+        ("Index", 0.022f32),
+        ("Middle", 0.007),
+        ("Ring", -0.008),
+        ("Pinky", -0.022),
+    ] {
+        let base = knuckles + Vec3::new(0.0, 0.0, z);
         let mut parent = hand;
         for k in 1..=4 {
-            parent = add(
-                &mut j,
-                &format!("{side}HandThumb{k}"),
+            let along = [0.0, 0.035, 0.06, 0.085][k - 1];
+            parent = add_joint(
+                j,
+                &format!("{side}Hand{finger}{k}"),
                 Some(parent),
-                thumb_root.lerp(thumb_end, (k - 1) as f32 / 3.0),
-                Some(thumb),
+                base + d * along,
+                Some(fingers),
             );
         }
-        let up = add(
-            &mut j,
-            &format!("{side}UpLeg"),
-            Some(hips),
-            w.head(&b("thigh")),
-            Some(w.bone(&b("thigh"))),
-        );
-        let leg = add(
-            &mut j,
-            &format!("{side}Leg"),
-            Some(up),
-            w.head(&b("shin")),
-            Some(w.bone(&b("shin"))),
-        );
-        let foot = add(
-            &mut j,
-            &format!("{side}Foot"),
-            Some(leg),
-            w.head(&b("foot")),
-            Some(w.bone(&b("foot"))),
-        );
-        let toe = add(
-            &mut j,
-            &format!("{side}ToeBase"),
-            Some(foot),
-            w.head(&b("toe")),
-            Some(w.bone(&b("toe"))),
-        );
-        add(
-            &mut j,
-            &format!("{side}Toe_End"),
-            Some(toe),
-            Vec3::new(x * 0.10, 0.02, 0.19),
-            Some(w.bone(&b("toe"))),
+    }
+    let thumb_root = w.head(&b("thumb"));
+    // The walker's thumb tip (placed from its root in the A-pose), carried to the T-pose.
+    let thumb_end = w.carried(
+        &b("thumb"),
+        w.rest_head(&b("thumb")) + Vec3::new(x * 0.01, -0.04, 0.03),
+    );
+    let thumb = w.bone(&b("thumb"));
+    let mut parent = hand;
+    for k in 1..=4 {
+        parent = add_joint(
+            j,
+            &format!("{side}HandThumb{k}"),
+            Some(parent),
+            thumb_root.lerp(thumb_end, (k - 1) as f32 / 3.0),
+            Some(thumb),
         );
     }
-    j
+}
+
+/// One side's leg under `hips`: up leg, leg, foot, toe base and the toe's end joint.
+fn leg_joints(j: &mut Vec<Joint>, w: &Walker, (side, s, x): (&str, &str, f32), hips: usize) {
+    let b = |n: &str| format!("{n}_{s}");
+    let up = add_joint(
+        j,
+        &format!("{side}UpLeg"),
+        Some(hips),
+        w.head(&b("thigh")),
+        Some(w.bone(&b("thigh"))),
+    );
+    let leg = add_joint(
+        j,
+        &format!("{side}Leg"),
+        Some(up),
+        w.head(&b("shin")),
+        Some(w.bone(&b("shin"))),
+    );
+    let foot = add_joint(
+        j,
+        &format!("{side}Foot"),
+        Some(leg),
+        w.head(&b("foot")),
+        Some(w.bone(&b("foot"))),
+    );
+    let toe = add_joint(
+        j,
+        &format!("{side}ToeBase"),
+        Some(foot),
+        w.head(&b("toe")),
+        Some(w.bone(&b("toe"))),
+    );
+    add_joint(
+        j,
+        &format!("{side}Toe_End"),
+        Some(toe),
+        Vec3::new(x * 0.10, 0.02, 0.19),
+        Some(w.bone(&b("toe"))),
+    );
 }
 
 /// Every joint's orientation in the armature's space: its Y axis along the bone to its first

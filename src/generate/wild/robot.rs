@@ -12,7 +12,7 @@
 use super::file::{DocMesh, DocPrimitive, DocSkin, Document};
 use crate::generate::facets::FacetBuilder;
 use crate::generate::rig::{Pose, Rig, bake_clip, bump, euler, rigid};
-use crate::model::{Material, SkinnedMesh, Trs};
+use crate::model::{Clip, Material, SkinnedMesh, Trs};
 use glam::{Mat4, Quat, Vec2, Vec3};
 use std::f32::consts::TAU;
 
@@ -108,8 +108,24 @@ fn leave_debris(mesh: &mut SkinnedMesh) {
     }
 }
 
-/// The robot's file.
-pub fn robot() -> Document {
+/// The robot's joints: the rig, and the bones the parts, skins and clip refer to by name.
+struct Bones {
+    rig: Rig,
+    root: usize,
+    pelvis: usize,
+    spine: usize,
+    chest: usize,
+    neck: usize,
+    head: usize,
+    /// Shoulder, elbow and wrist, left then right.
+    arms: [[usize; 3]; 2],
+    /// Hip, knee and ankle, left then right.
+    legs: [[usize; 3]; 2],
+}
+
+/// The 18 joints: the spine up to the head, then each side's arm and leg (left first), in the
+/// order that gives the bones the indices the file's first nodes have.
+fn skeleton() -> Bones {
     let mut r = Rig::default();
     let root = r.bone("root", None, Vec3::ZERO);
     let pelvis = r.bone("pelvis", Some(root), Vec3::new(0.0, 0.95, 0.0));
@@ -153,19 +169,41 @@ pub fn robot() -> Document {
         );
         legs[i] = [h, k, a];
     }
+    Bones {
+        rig: r,
+        root,
+        pelvis,
+        spine,
+        chest,
+        neck,
+        head,
+        arms,
+        legs,
+    }
+}
 
+/// The four skins' joint lists (torso, left arm, right arm, legs), each in an order of its own
+/// rather than the rig's, as kit-bashed files have them.
+fn skins(b: &Bones) -> Vec<Vec<usize>> {
+    let (arms, legs) = (b.arms, b.legs);
     // Skins: the torso's, each arm's (with the chest it hangs from), the legs' (with the
     // pelvis), each listing its joints in an order of its own.
-    let skins: Vec<Vec<usize>> = vec![
-        vec![head, neck, chest, spine, pelvis, root],
-        vec![chest, arms[0][0], arms[0][1], arms[0][2]],
-        vec![arms[1][2], arms[1][1], arms[1][0], chest],
+    vec![
+        vec![b.head, b.neck, b.chest, b.spine, b.pelvis, b.root],
+        vec![b.chest, arms[0][0], arms[0][1], arms[0][2]],
+        vec![arms[1][2], arms[1][1], arms[1][0], b.chest],
         vec![
-            pelvis, legs[1][0], legs[1][1], legs[1][2], legs[0][0], legs[0][1], legs[0][2],
+            b.pelvis, legs[1][0], legs[1][1], legs[1][2], legs[0][0], legs[0][1], legs[0][2],
         ],
-    ];
+    ]
+}
+
+/// The torso mesh's seven parts, in primitive order: pelvis, spine, chest, neck, head, visor
+/// (the sixth, which the morph target moves) and antenna.
+fn torso_parts(b: &Bones) -> Vec<Part> {
+    let (pelvis, spine, chest, neck, head) = (b.pelvis, b.spine, b.chest, b.neck, b.head);
     let id = Quat::IDENTITY;
-    let mut parts = vec![
+    vec![
         Part {
             mesh: cuboid(
                 Vec3::new(0.0, 0.97, 0.0),
@@ -239,7 +277,14 @@ pub fn robot() -> Document {
             material: PAINT,
             skin: 0,
         },
-    ];
+    ]
+}
+
+/// Each side's limbs (left, then right), appended to `parts`: upper arm, forearm and hand on
+/// the side's arm skin, then thigh, shin and foot on the legs' skin.
+fn push_limb_parts(parts: &mut Vec<Part>, b: &Bones) {
+    let (r, arms, legs) = (&b.rig, b.arms, b.legs);
+    let id = Quat::IDENTITY;
     for (i, x) in [1.0f32, -1.0].into_iter().enumerate() {
         let [s, e, w] = arms[i];
         let skin = 1 + i;
@@ -292,20 +337,20 @@ pub fn robot() -> Document {
             skin: 3,
         });
     }
+}
+
+/// All 19 parts (torso, then the limbs), with exporters' debris left in two of them.
+fn parts(b: &Bones) -> Vec<Part> {
+    let mut parts = torso_parts(b);
+    push_limb_parts(&mut parts, b);
     // Debris in the chest's and the head's primitives.
     leave_debris(&mut parts[2].mesh);
     leave_debris(&mut parts[4].mesh);
+    parts
+}
 
-    let mut doc = Document {
-        generator: "lodlab gen-assets (robot)".into(),
-        materials: vec![
-            Material::opaque("metal", [0.55, 0.57, 0.6, 1.0], None),
-            Material::opaque("joint", [0.08, 0.08, 0.09, 1.0], None),
-            Material::opaque("paint", [0.85, 0.38, 0.06, 1.0], None),
-            Material::opaque("glass", [0.1, 0.35, 0.6, 1.0], None),
-        ],
-        ..Default::default()
-    };
+/// One node per bone, as the file's first nodes, each translated from its parent.
+fn push_bone_nodes(doc: &mut Document, r: &Rig) {
     // The rig's bones are the file's first nodes, in order, so the clip's channels name them.
     for b in 0..r.len() {
         let parent = r.parents[b];
@@ -319,6 +364,11 @@ pub fn robot() -> Document {
             },
         );
     }
+}
+
+/// For each skin, a mesh of the parts on it (their bones renumbered as places in the skin's
+/// list), the skin itself, and a node carrying both.
+fn push_skinned_meshes(doc: &mut Document, r: &Rig, skins: &[Vec<usize>], parts: &[Part]) {
     for (k, joints) in skins.iter().enumerate() {
         let primitives = parts
             .iter()
@@ -356,14 +406,23 @@ pub fn robot() -> Document {
         doc.nodes[node].mesh = Some(k);
         doc.nodes[node].skin = Some(k);
     }
+}
+
+/// The torso mesh's morph target: the visor lifts, every other primitive stays put.
+fn add_visor_target(doc: &mut Document) {
     // The visor (the torso mesh's sixth primitive) slides up on its morph target; the mesh's
     // other primitives have the target too, as glTF asks, and it leaves them where they are.
     for (i, p) in doc.meshes[0].primitives.iter_mut().enumerate() {
         let lift = if i == 5 { 0.03 } else { 0.0 };
         p.targets = vec![vec![Vec3::new(0.0, lift, 0.0); p.mesh.vertex_count()]];
     }
+}
 
-    doc.clips = vec![bake_clip("walk", 1.2, 1.2, &r, root, |ph| {
+/// The `walk` clip: legs and arms swinging half a cycle apart, the head turning, the root
+/// bobbing twice a cycle.
+fn walk(b: &Bones) -> Clip {
+    let (r, root, head, arms, legs) = (&b.rig, b.root, b.head, b.arms, b.legs);
+    bake_clip("walk", 1.2, 1.2, r, root, |ph| {
         let mut pose = Pose::rest(r.len());
         for i in 0..2 {
             let q = (ph + 0.5 * i as f32).rem_euclid(1.0);
@@ -385,7 +444,30 @@ pub fn robot() -> Document {
         pose.rotate(head, euler(0.0, 12.0 * (TAU * ph).sin(), 0.0));
         pose.root_offset = Vec3::Y * (0.02 * (2.0 * TAU * ph).cos() - 0.015);
         pose
-    })];
+    })
+}
+
+/// The robot's file.
+pub fn robot() -> Document {
+    let bones = skeleton();
+    let skins = skins(&bones);
+    let parts = parts(&bones);
+
+    let mut doc = Document {
+        generator: "lodlab gen-assets (robot)".into(),
+        materials: vec![
+            Material::opaque("metal", [0.55, 0.57, 0.6, 1.0], None),
+            Material::opaque("joint", [0.08, 0.08, 0.09, 1.0], None),
+            Material::opaque("paint", [0.85, 0.38, 0.06, 1.0], None),
+            Material::opaque("glass", [0.1, 0.35, 0.6, 1.0], None),
+        ],
+        ..Default::default()
+    };
+    push_bone_nodes(&mut doc, &bones.rig);
+    push_skinned_meshes(&mut doc, &bones.rig, &skins, &parts);
+    add_visor_target(&mut doc);
+
+    doc.clips = vec![walk(&bones)];
     doc
 }
 

@@ -38,10 +38,21 @@ pub fn structure_document(bytes: &[u8]) -> Document {
         generator: "lodlab random structure".into(),
         ..Default::default()
     };
+    let armature = add_armature(&mut r, &mut doc);
+    let joint_nodes = add_joints(&mut r, &mut doc, armature);
+    let skins = add_skins(&mut r, &mut doc, &joint_nodes);
+    let materials = add_materials(&mut r, &mut doc);
+    add_meshes(&mut r, &mut doc, armature, &joint_nodes, skins, materials);
+    add_clips(&mut r, &mut doc);
+    doc
+}
 
+/// The armature node, now and then (else `None`): the root above the joints that exporters
+/// turn and scale, so that importers must carry its transform into the skeleton.
+fn add_armature(r: &mut Choices, doc: &mut Document) -> Option<usize> {
     // An armature node above the joints, now and then, turned and scaled as exporters leave
     // one (Blender's centimetre armatures scale by 0.01, some by 100).
-    let armature = r.one_in(2).then(|| {
+    r.one_in(2).then(|| {
         let scale = [1.0, 0.01, 100.0, 0.1][r.within(0, 3)];
         let rest = Trs {
             translation: r.vec3(),
@@ -53,8 +64,13 @@ pub fn structure_document(bytes: &[u8]) -> Document {
             scale: Vec3::splat(scale),
         };
         doc.node("armature", None, rest)
-    });
+    })
+}
 
+/// The joints' nodes (1 to 8, returned in joint order): a tree under the armature (or the
+/// scene), with plain nodes between some joints and their parents, to test joint hierarchies
+/// that are not simple chains.
+fn add_joints(r: &mut Choices, doc: &mut Document, armature: Option<usize>) -> Vec<usize> {
     // Joints in a tree, a plain node between a joint and its parent now and then.
     let joints = r.within(1, 8);
     let mut joint_nodes: Vec<usize> = Vec::with_capacity(joints);
@@ -89,6 +105,13 @@ pub fn structure_document(bytes: &[u8]) -> Document {
         };
         joint_nodes.push(doc.node(&format!("joint{j}"), parent, rest));
     }
+    joint_nodes
+}
+
+/// One or two skins over subsets of the joints, returning how many; the bind pose is the rest
+/// pose or one a little off it, so inverse bind matrices cannot be assumed from the nodes.
+fn add_skins(r: &mut Choices, doc: &mut Document, joint_nodes: &[usize]) -> usize {
+    let joints = joint_nodes.len();
     let rest_world: Vec<Mat4> = joint_nodes.iter().map(|&n| doc.world(n)).collect();
 
     // Skins over subsets of the joints (in the joints' order), each bound in the rest pose or
@@ -118,7 +141,12 @@ pub fn structure_document(bytes: &[u8]) -> Document {
             inverse_bind,
         });
     }
+    skins
+}
 
+/// Zero to three materials, returning how many: plain or textured colours, masked, blended or
+/// double-sided, the kinds of material an importer must carry through.
+fn add_materials(r: &mut Choices, doc: &mut Document) -> usize {
     // Materials first, so that primitives can name any of them.
     let materials = r.within(0, 3);
     for m in 0..materials {
@@ -151,7 +179,20 @@ pub fn structure_document(bytes: &[u8]) -> Document {
         material.double_sided = r.one_in(3);
         doc.materials.push(material);
     }
+    materials
+}
 
+/// One to three meshes of one or two primitives, each with the node(s) that draw it: skinned
+/// meshes on a node of their own, rigid parts on a joint, the armature or a second node too.
+fn add_meshes(
+    r: &mut Choices,
+    doc: &mut Document,
+    armature: Option<usize>,
+    joint_nodes: &[usize],
+    skins: usize,
+    materials: usize,
+) {
+    let joints = joint_nodes.len();
     // Meshes: skinned on a skin, or rigid on a joint or a plain node of their own; one drawn
     // by a second node in another place now and then.
     let meshes = r.within(1, 3);
@@ -164,7 +205,7 @@ pub fn structure_document(bytes: &[u8]) -> Document {
             // A textured material's primitive has texture coordinates (glTF asks for them).
             let textured = material.is_some_and(|m| doc.materials[m].texture.is_some());
             primitives.push(DocPrimitive {
-                mesh: random_primitive(&mut r, members, textured),
+                mesh: random_primitive(r, members, textured),
                 material,
                 targets: Vec::new(),
             });
@@ -204,7 +245,11 @@ pub fn structure_document(bytes: &[u8]) -> Document {
             }
         }
     }
+}
 
+/// Zero to two clips of one to four channels on nodes that carry no mesh (joints, plain nodes,
+/// the armature), each clip as long as its longest channel.
+fn add_clips(r: &mut Choices, doc: &mut Document) {
     // Clips: channels on joints, plain nodes or the armature.
     let animated: Vec<usize> = (0..doc.nodes.len())
         .filter(|&n| doc.nodes[n].mesh.is_none())
@@ -226,7 +271,7 @@ pub fn structure_document(bytes: &[u8]) -> Document {
                 continue;
             }
             channels.push(random_channel(
-                &mut r,
+                r,
                 node,
                 target,
                 &doc.nodes[node as usize].rest,
@@ -243,7 +288,6 @@ pub fn structure_document(bytes: &[u8]) -> Document {
             ground_speed: 0.0,
         });
     }
-    doc
 }
 
 /// A primitive of 3 to 24 vertices in a box of 2 m, 1 to 32 triangles among them (any may be

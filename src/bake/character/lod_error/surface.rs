@@ -293,31 +293,12 @@ impl<'a> SurfaceProbe<'a> {
         let frames = self.frames.len();
         let mesh = self.pose(triangles, influences);
         let simplified = Surface::new(triangles, |v| mesh.rest[mesh.slot[v as usize] as usize]);
-        // A triangle both surfaces have, on vertices that did not move, is 0 away in every
-        // frame: samples go where the surfaces differ, so a few hundred find the largest
-        // distance even when the simplification changed a sliver of the surface.
-        let unmoved = |t: &[u32; 3]| {
-            t.iter()
-                .all(|&v| !mesh.moved[mesh.slot[v as usize] as usize])
-        };
-        let kept: rustc_hash::FxHashSet<[u32; 3]> = triangles
-            .iter()
-            .filter(|t| unmoved(t) && self.shared.triangle_set.contains(&sorted(**t)))
-            .map(|t| sorted(*t))
-            .collect();
-        let changed: Vec<bool> = triangles
-            .iter()
-            .map(|t| !kept.contains(&sorted(*t)))
-            .collect();
-        let forward: Vec<&SurfaceSample> = self
-            .forward_pool
-            .iter()
-            .filter(|(t, _, _)| !kept.contains(&sorted(*t)))
-            .collect();
-        // The share of the original surface that changed, and of the simplified one: what the
-        // samples stand for in the RMS.
-        let forward_share = forward.len() as f64 / self.forward_pool.len().max(1) as f64;
-        let backward_share = simplified.area_share(&changed);
+        let Changed {
+            changed,
+            forward,
+            forward_share,
+            backward_share,
+        } = self.changed(triangles, &mesh, &simplified);
         let forward = &forward[..forward.len().min(self.forward)];
         let simplified_fans = Fans::new(triangles, &self.shared.position, self.positions());
         let to_simplified = Reach {
@@ -330,12 +311,7 @@ impl<'a> SurfaceProbe<'a> {
         };
         let moved_samples = self.moved_vertices(&mesh, &simplified_fans, triangles);
         let nearest = |surface: &Surface, p: DVec3| surface.nearest(p, self.candidates);
-        let half = self.backward / 2;
-        let backward: Vec<([u32; 3], [f64; 3])> = simplified
-            .samples(half, 0x5a3b1e, Some(&changed))
-            .into_iter()
-            .chain(simplified.edge_samples(self.backward - half, 0xed9e, Some(&changed)))
-            .collect();
+        let backward = self.backward_samples(&simplified, &changed);
         let forward_sample = |(t, w, p): &&SurfaceSample| {
             let mut sum = 0.0;
             let mut candidates = nearest(&simplified, *p);
@@ -386,13 +362,8 @@ impl<'a> SurfaceProbe<'a> {
         // found).
         let mut max2 = forward_max.max(backward_max).max(moved_max);
         let removed = self.removed_vertices(&mesh, follow, (&simplified_fans, triangles), max2);
-        // Removed vertices, furthest bound first, in batches, until no bound left can beat
-        // the largest distance found: that maximum is then exact over every vertex. Where
-        // every vertex counts, a bound is tightened (by the nearest triangle at rest, often
-        // much nearer than the vertex it became) only for vertices whose first bound can
-        // still beat the maximum: on a 2-million-triangle model, a level's million removed
-        // vertices mostly cannot, and tightening them all was most of its measurement.
-        let (mut tightened, mut exact) = (0, 0);
+        // A removed vertex's bound, tightened where every vertex counts (see
+        // [`removed_maximum`]).
         let tighten = |&(far, v, sample): &(f64, u32, SurfaceSample)| {
             if !self.every_vertex || follow.is_none() || far <= enough {
                 return (far, sample);
@@ -405,39 +376,69 @@ impl<'a> SurfaceProbe<'a> {
                 sample,
             )
         };
-        for chunk in removed.chunks(TIGHTEN_CHUNK) {
-            let live = chunk.partition_point(|r| r.0 > max2);
-            if live == 0 {
-                break;
-            }
-            tightened += live;
-            let mut bounded: Vec<(f64, SurfaceSample)> =
-                chunk[..live].par_iter().map(tighten).collect();
-            bounded.sort_by(|a, b| b.0.total_cmp(&a.0));
-            for batch in bounded.chunks(64) {
-                if batch[0].0 <= max2 {
-                    break;
-                }
-                exact += batch.len();
-                let m = batch
-                    .par_iter()
-                    .map(|(_, s)| forward_sample(&s).1)
-                    .reduce(|| 0.0, f64::max);
-                max2 = max2.max(m);
-            }
+        max2 = removed_maximum(&removed, max2, tighten, |s| forward_sample(&s).1);
+        mesh_error(
+            (forward_share, forward_sum, forward_count),
+            (backward_share, backward_sum, backward_count),
+            max2,
+        )
+    }
+
+    /// Which of a simplified mesh's triangles changed, and the original samples on changed
+    /// triangles, with the share of either surface that changed.
+    ///
+    /// A triangle both surfaces have, on vertices that did not move, is 0 away in every
+    /// frame: samples go where the surfaces differ, so a few hundred find the largest
+    /// distance even when the simplification changed a sliver of the surface.
+    fn changed(
+        &self,
+        triangles: &[[u32; 3]],
+        mesh: &PosedMesh,
+        simplified: &Surface,
+    ) -> Changed<'_> {
+        let unmoved = |t: &[u32; 3]| {
+            t.iter()
+                .all(|&v| !mesh.moved[mesh.slot[v as usize] as usize])
+        };
+        let kept: rustc_hash::FxHashSet<[u32; 3]> = triangles
+            .iter()
+            .filter(|t| unmoved(t) && self.shared.triangle_set.contains(&sorted(**t)))
+            .map(|t| sorted(*t))
+            .collect();
+        let changed: Vec<bool> = triangles
+            .iter()
+            .map(|t| !kept.contains(&sorted(*t)))
+            .collect();
+        let forward: Vec<&SurfaceSample> = self
+            .forward_pool
+            .iter()
+            .filter(|(t, _, _)| !kept.contains(&sorted(*t)))
+            .collect();
+        // The share of the original surface that changed, and of the simplified one: what the
+        // samples stand for in the RMS.
+        let forward_share = forward.len() as f64 / self.forward_pool.len().max(1) as f64;
+        let backward_share = simplified.area_share(&changed);
+        Changed {
+            changed,
+            forward,
+            forward_share,
+            backward_share,
         }
-        log::trace!(
-            "{} removed vertices: {tightened} bounds tightened, {exact} measured exactly",
-            removed.len()
-        );
-        let mean = |sum: f64, count: usize| if count > 0 { sum / count as f64 } else { 0.0 };
-        let ms = 0.5
-            * (forward_share * mean(forward_sum, forward_count)
-                + backward_share * mean(backward_sum, backward_count));
-        MeshError {
-            rms: ms.sqrt(),
-            max: max2.sqrt(),
-        }
+    }
+
+    /// The backward samples of a simplified mesh's changed triangles: half by area, half
+    /// along edges, where the largest distances of a collapse tend to lie.
+    fn backward_samples(
+        &self,
+        simplified: &Surface,
+        changed: &[bool],
+    ) -> Vec<([u32; 3], [f64; 3])> {
+        let half = self.backward / 2;
+        simplified
+            .samples(half, 0x5a3b1e, Some(changed))
+            .into_iter()
+            .chain(simplified.edge_samples(self.backward - half, 0xed9e, Some(changed)))
+            .collect()
     }
 
     /// How many welded positions the original has.
@@ -670,6 +671,78 @@ impl<'a> SurfaceProbe<'a> {
                 Some(self.at_vertex(triangles, t, v))
             })
             .collect()
+    }
+}
+
+/// The changed part of a simplified mesh (see [`SurfaceProbe::changed`]).
+struct Changed<'p> {
+    /// Per simplified triangle, whether the original lacks it or its vertices moved.
+    changed: Vec<bool>,
+    /// The pooled original samples on changed triangles.
+    forward: Vec<&'p SurfaceSample>,
+    /// The share of the original surface that changed, and of the simplified one.
+    forward_share: f64,
+    backward_share: f64,
+}
+
+/// The largest distance (squared) over the removed vertices and `max2`, what the samples
+/// found.
+///
+/// Removed vertices, furthest bound first, in batches, until no bound left can beat
+/// the largest distance found: that maximum is then exact over every vertex. Where
+/// every vertex counts, a bound is tightened (by the nearest triangle at rest, often
+/// much nearer than the vertex it became) only for vertices whose first bound can
+/// still beat the maximum: on a 2-million-triangle model, a level's million removed
+/// vertices mostly cannot, and tightening them all was most of its measurement.
+fn removed_maximum(
+    removed: &[(f64, u32, SurfaceSample)],
+    mut max2: f64,
+    tighten: impl Fn(&(f64, u32, SurfaceSample)) -> (f64, SurfaceSample) + Sync,
+    distance: impl Fn(&SurfaceSample) -> f64 + Sync,
+) -> f64 {
+    use rayon::prelude::*;
+    let (mut tightened, mut exact) = (0, 0);
+    for chunk in removed.chunks(TIGHTEN_CHUNK) {
+        let live = chunk.partition_point(|r| r.0 > max2);
+        if live == 0 {
+            break;
+        }
+        tightened += live;
+        let mut bounded: Vec<(f64, SurfaceSample)> =
+            chunk[..live].par_iter().map(&tighten).collect();
+        bounded.sort_by(|a, b| b.0.total_cmp(&a.0));
+        for batch in bounded.chunks(64) {
+            if batch[0].0 <= max2 {
+                break;
+            }
+            exact += batch.len();
+            let m = batch
+                .par_iter()
+                .map(|(_, s)| distance(s))
+                .reduce(|| 0.0, f64::max);
+            max2 = max2.max(m);
+        }
+    }
+    log::trace!(
+        "{} removed vertices: {tightened} bounds tightened, {exact} measured exactly",
+        removed.len()
+    );
+    max2
+}
+
+/// The error from the sample totals, each with the share of its surface the samples stand
+/// for (squared distance sum, sample count), and the largest distance found (squared): the
+/// RMS is the mean of the two sides' shares of their mean squared distance.
+fn mesh_error(forward: (f64, f64, usize), backward: (f64, f64, usize), max2: f64) -> MeshError {
+    let (forward_share, forward_sum, forward_count) = forward;
+    let (backward_share, backward_sum, backward_count) = backward;
+    let mean = |sum: f64, count: usize| if count > 0 { sum / count as f64 } else { 0.0 };
+    let ms = 0.5
+        * (forward_share * mean(forward_sum, forward_count)
+            + backward_share * mean(backward_sum, backward_count));
+    MeshError {
+        rms: ms.sqrt(),
+        max: max2.sqrt(),
     }
 }
 

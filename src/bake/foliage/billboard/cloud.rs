@@ -150,89 +150,16 @@ fn view_factor(normal: Vec3, view_angle: f32) -> f32 {
 
 /// Builds the billboard cloud of `leaves`.
 pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard> {
-    // ε = 0 still allows for rounding: a few ulps of the scene's size.
-    let scale = leaves
-        .iter()
-        .flat_map(|l| l.corners.iter())
-        .fold(1.0f32, |m, c| m.max(c.abs().max_element()));
-    let eps = params.epsilon.max(0.0) + 4.0 * f32::EPSILON * scale;
+    let validity = Validity::new(leaves, params.epsilon);
+    let valid = |plane: &Plane, i: u32| validity.valid(plane, i);
     let mut rng = fastrand::Rng::with_seed(params.seed);
     let mut pool: Vec<u32> = (0..leaves.len() as u32)
         .filter(|&i| leaves[i as usize].area > 0.0 && leaves[i as usize].corners.len() >= 3)
         .collect();
-    // Quick rejection: a leaf whose centre is farther than its radius + ε from a plane cannot
-    // be valid for it.
-    let centres: Vec<Vec3> = leaves.iter().map(Leaf::centre).collect();
-    let radii: Vec<f32> = leaves
-        .iter()
-        .zip(&centres)
-        .map(|(l, c)| l.corners.iter().map(|p| p.distance(*c)).fold(0.0, f32::max))
-        .collect();
-    let valid = |plane: &Plane, i: u32| {
-        let i = i as usize;
-        plane.distance(centres[i]).abs() <= radii[i] + eps && plane.valid_for(&leaves[i], eps)
-    };
     let mut out: Vec<(Plane, Vec<u32>)> = Vec::new();
     while !pool.is_empty() {
-        // Candidates are drawn first (sequentially, from the seeded generator), then scored
-        // in parallel: the result does not depend on the number of threads.
-        let candidates: Vec<Plane> = (0..params.samples.max(1))
-            .map(|_| {
-                let seed = &leaves[pool[rng.usize(0..pool.len())] as usize];
-                candidate_plane(seed, eps, &mut rng)
-            })
-            .collect();
-        let scored: Vec<(f32, usize)> = candidates
-            .par_iter()
-            .enumerate()
-            .map(|(k, plane)| {
-                let mut density: f32 = pool
-                    .iter()
-                    .filter(|&&i| valid(plane, i))
-                    .map(|&i| {
-                        let l = &leaves[i as usize];
-                        l.area * l.normal.dot(plane.normal).abs()
-                    })
-                    .sum();
-                if let Some(phi_v) = params.view_angle {
-                    density *= view_factor(plane.normal, phi_v);
-                }
-                (density, k)
-            })
-            .collect();
-        // The best candidate; ties go to the earliest (deterministic).
-        let best = scored
-            .iter()
-            .fold((f32::NEG_INFINITY, 0usize), |b, &(d, k)| {
-                if d > b.0 { (d, k) } else { b }
-            })
-            .1;
-        let mut plane = candidates[best];
-        let mut best_density = scored[best].0;
-        for _ in 0..4 {
-            let members: Vec<u32> = pool.iter().copied().filter(|&i| valid(&plane, i)).collect();
-            let Some(refit) = fit_plane(members.iter().map(|&i| &leaves[i as usize])) else {
-                break;
-            };
-            if !members.iter().all(|&i| valid(&refit, i)) {
-                break;
-            }
-            let mut density: f32 = pool
-                .iter()
-                .filter(|&&i| valid(&refit, i))
-                .map(|&i| {
-                    let l = &leaves[i as usize];
-                    l.area * l.normal.dot(refit.normal).abs()
-                })
-                .sum();
-            if let Some(phi_v) = params.view_angle {
-                density *= view_factor(refit.normal, phi_v);
-            }
-            if density <= best_density * 1.000_01 {
-                break;
-            }
-            (plane, best_density) = (refit, density);
-        }
+        let (plane, best_density) = best_candidate(&validity, &pool, params, &mut rng);
+        let plane = refit(&validity, &pool, plane, best_density, params.view_angle);
         let (taken, rest): (Vec<u32>, Vec<u32>) = pool.iter().partition(|&&i| valid(&plane, i));
         let taken = if taken.is_empty() {
             // Only possible through rounding at ε = 0: take the seed-most leaf alone on its own
@@ -247,61 +174,209 @@ pub fn stochastic_cloud(leaves: &[Leaf], params: &CloudParams) -> Vec<Billboard>
         pool = rest;
         out.push((plane, taken));
     }
-    // Crossed pairs draw all their leaves on both planes, and size both to them.
-    let mut shared: Vec<Option<Vec<u32>>> = vec![None; out.len()];
-    if params.crossing {
-        for k in 0..out.len() {
-            let (plane, taken) = &out[k];
-            let Some((cross, stay, go)) = crossing(plane, taken, leaves, &valid) else {
-                continue;
-            };
-            let all = taken.clone();
-            out[k].1 = stay;
-            shared[k] = Some(all.clone());
-            out.push((cross, go));
-            shared.push(Some(all));
-        }
-    }
+    let shared = if params.crossing {
+        cross_clumps(&mut out, leaves, &valid)
+    } else {
+        vec![None; out.len()]
+    };
     out.into_iter()
         .zip(shared)
-        .map(|((plane, taken), shared)| {
-            // A crossed pair is sized to, and draws, all the leaves of its clump.
-            let sized = shared.as_deref().unwrap_or(&taken);
-            let corners = rectangle(&plane, sized.iter().map(|&i| &leaves[i as usize]));
-            // Other leaves valid for the plane are drawn where they fall inside its rectangle
-            // whole: its texture holds nothing outside it.
-            let inside = |i: u32| {
-                let (o, eu, ev) = (corners[0], corners[1] - corners[0], corners[3] - corners[0]);
-                let slack = 1e-4;
-                leaves[i as usize].corners.iter().all(|&c| {
-                    let s = (c - o).dot(eu) / eu.length_squared().max(f32::MIN_POSITIVE);
-                    let t = (c - o).dot(ev) / ev.length_squared().max(f32::MIN_POSITIVE);
-                    (-slack..=1.0 + slack).contains(&s) && (-slack..=1.0 + slack).contains(&t)
-                })
-            };
-            let drawn = match shared {
-                Some(all) => all,
-                None if params.increased_density => {
-                    let mut drawn: Vec<u32> = (0..leaves.len() as u32)
-                        .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i) && inside(i))
-                        .collect();
-                    // Its own leaves always, rounding at the rectangle's edge notwithstanding.
-                    drawn.extend_from_slice(&taken);
-                    drawn.sort_unstable();
-                    drawn.dedup();
-                    drawn
-                }
-                None => taken.clone(),
-            };
-            Billboard {
-                plane,
-                corners,
-                leaves: taken,
-                drawn,
-                view_window: 0.0,
-            }
-        })
+        .map(|((plane, taken), shared)| billboard(&validity, params, plane, taken, shared))
         .collect()
+}
+
+/// Which leaves are valid for a plane (every corner within ε of it), with what a quick
+/// rejection of most of them needs.
+struct Validity<'l> {
+    leaves: &'l [Leaf],
+    /// Each leaf's centre, and the largest distance of a corner from it.
+    centres: Vec<Vec3>,
+    radii: Vec<f32>,
+    /// ε, as the parameter asks, plus rounding.
+    eps: f32,
+}
+
+impl<'l> Validity<'l> {
+    /// Validity within `epsilon` for `leaves`.
+    fn new(leaves: &'l [Leaf], epsilon: f32) -> Validity<'l> {
+        // ε = 0 still allows for rounding: a few ulps of the scene's size.
+        let scale = leaves
+            .iter()
+            .flat_map(|l| l.corners.iter())
+            .fold(1.0f32, |m, c| m.max(c.abs().max_element()));
+        let eps = epsilon.max(0.0) + 4.0 * f32::EPSILON * scale;
+        // Quick rejection: a leaf whose centre is farther than its radius + ε from a plane
+        // cannot be valid for it.
+        let centres: Vec<Vec3> = leaves.iter().map(Leaf::centre).collect();
+        let radii: Vec<f32> = leaves
+            .iter()
+            .zip(&centres)
+            .map(|(l, c)| l.corners.iter().map(|p| p.distance(*c)).fold(0.0, f32::max))
+            .collect();
+        Validity {
+            leaves,
+            centres,
+            radii,
+            eps,
+        }
+    }
+
+    /// Whether `plane` is valid for leaf `i`.
+    fn valid(&self, plane: &Plane, i: u32) -> bool {
+        let i = i as usize;
+        plane.distance(self.centres[i]).abs() <= self.radii[i] + self.eps
+            && plane.valid_for(&self.leaves[i], self.eps)
+    }
+
+    /// A plane's density over the leaves of `pool`: the summed contribution (projected area)
+    /// of those it is valid for, weighted by the view penalty where there is one.
+    fn density(&self, pool: &[u32], plane: &Plane, view_angle: Option<f32>) -> f32 {
+        let mut density: f32 = pool
+            .iter()
+            .filter(|&&i| self.valid(plane, i))
+            .map(|&i| {
+                let l = &self.leaves[i as usize];
+                l.area * l.normal.dot(plane.normal).abs()
+            })
+            .sum();
+        if let Some(phi_v) = view_angle {
+            density *= view_factor(plane.normal, phi_v);
+        }
+        density
+    }
+}
+
+/// One round's `S` random candidate planes, each through a seed leaf of `pool`: the densest,
+/// with its density.
+fn best_candidate(
+    validity: &Validity,
+    pool: &[u32],
+    params: &CloudParams,
+    rng: &mut fastrand::Rng,
+) -> (Plane, f32) {
+    let leaves = validity.leaves;
+    // Candidates are drawn first (sequentially, from the seeded generator), then scored
+    // in parallel: the result does not depend on the number of threads.
+    let candidates: Vec<Plane> = (0..params.samples.max(1))
+        .map(|_| {
+            let seed = &leaves[pool[rng.usize(0..pool.len())] as usize];
+            candidate_plane(seed, validity.eps, rng)
+        })
+        .collect();
+    let scored: Vec<(f32, usize)> = candidates
+        .par_iter()
+        .enumerate()
+        .map(|(k, plane)| (validity.density(pool, plane, params.view_angle), k))
+        .collect();
+    // The best candidate; ties go to the earliest (deterministic).
+    let best = scored
+        .iter()
+        .fold((f32::NEG_INFINITY, 0usize), |b, &(d, k)| {
+            if d > b.0 { (d, k) } else { b }
+        })
+        .1;
+    (candidates[best], scored[best].0)
+}
+
+/// The winning plane refitted to the leaves it takes, for as long as that raises its
+/// density (a few times at most; see the module comment): a random plane through a small
+/// seed leaf is tilted, and the refit levels it.
+fn refit(
+    validity: &Validity,
+    pool: &[u32],
+    mut plane: Plane,
+    mut best_density: f32,
+    view_angle: Option<f32>,
+) -> Plane {
+    let valid = |plane: &Plane, i: u32| validity.valid(plane, i);
+    for _ in 0..4 {
+        let members: Vec<u32> = pool.iter().copied().filter(|&i| valid(&plane, i)).collect();
+        let Some(refit) = fit_plane(members.iter().map(|&i| &validity.leaves[i as usize])) else {
+            break;
+        };
+        if !members.iter().all(|&i| valid(&refit, i)) {
+            break;
+        }
+        let density = validity.density(pool, &refit, view_angle);
+        if density <= best_density * 1.000_01 {
+            break;
+        }
+        (plane, best_density) = (refit, density);
+    }
+    plane
+}
+
+/// Crosses every billboard of `out` whose clump pays for it (see [`crossing`]), the crossing
+/// planes appended: for each billboard, all the leaves of its clump where it is one of a
+/// crossed pair.
+///
+/// Crossed pairs draw all their leaves on both planes, and size both to them.
+fn cross_clumps(
+    out: &mut Vec<(Plane, Vec<u32>)>,
+    leaves: &[Leaf],
+    valid: &dyn Fn(&Plane, u32) -> bool,
+) -> Vec<Option<Vec<u32>>> {
+    let mut shared: Vec<Option<Vec<u32>>> = vec![None; out.len()];
+    for k in 0..out.len() {
+        let (plane, taken) = &out[k];
+        let Some((cross, stay, go)) = crossing(plane, taken, leaves, valid) else {
+            continue;
+        };
+        let all = taken.clone();
+        out[k].1 = stay;
+        shared[k] = Some(all.clone());
+        out.push((cross, go));
+        shared.push(Some(all));
+    }
+    shared
+}
+
+/// The billboard on `plane` of the leaves `taken`: its rectangle, and the leaves its texture
+/// shows (`shared`, all of a crossed pair's clump, where it is one).
+fn billboard(
+    validity: &Validity,
+    params: &CloudParams,
+    plane: Plane,
+    taken: Vec<u32>,
+    shared: Option<Vec<u32>>,
+) -> Billboard {
+    let leaves = validity.leaves;
+    let valid = |plane: &Plane, i: u32| validity.valid(plane, i);
+    // A crossed pair is sized to, and draws, all the leaves of its clump.
+    let sized = shared.as_deref().unwrap_or(&taken);
+    let corners = rectangle(&plane, sized.iter().map(|&i| &leaves[i as usize]));
+    // Other leaves valid for the plane are drawn where they fall inside its rectangle
+    // whole: its texture holds nothing outside it.
+    let inside = |i: u32| {
+        let (o, eu, ev) = (corners[0], corners[1] - corners[0], corners[3] - corners[0]);
+        let slack = 1e-4;
+        leaves[i as usize].corners.iter().all(|&c| {
+            let s = (c - o).dot(eu) / eu.length_squared().max(f32::MIN_POSITIVE);
+            let t = (c - o).dot(ev) / ev.length_squared().max(f32::MIN_POSITIVE);
+            (-slack..=1.0 + slack).contains(&s) && (-slack..=1.0 + slack).contains(&t)
+        })
+    };
+    let drawn = match shared {
+        Some(all) => all,
+        None if params.increased_density => {
+            let mut drawn: Vec<u32> = (0..leaves.len() as u32)
+                .filter(|&i| leaves[i as usize].area > 0.0 && valid(&plane, i) && inside(i))
+                .collect();
+            // Its own leaves always, rounding at the rectangle's edge notwithstanding.
+            drawn.extend_from_slice(&taken);
+            drawn.sort_unstable();
+            drawn.dedup();
+            drawn
+        }
+        None => taken.clone(),
+    };
+    Billboard {
+        plane,
+        corners,
+        leaves: taken,
+        drawn,
+        view_window: 0.0,
+    }
 }
 
 /// The billboard crossing one on `plane` that took the leaves `taken`, where one pays, and
