@@ -8,11 +8,14 @@
 //! - [`shading_error`]: a coarse level's shading against full detail's, normal maps on or off;
 //! - [`foliage_lighting`]: billboards lit through their atlas against the leaves they stand for;
 //! - [`ssim`]: the structural similarity of two pictures (the study's proxy);
+//! - [`coverage`]: the pixels each pass of a frame covers (`bench`'s fragments per covered
+//!   pixel);
 //!
 //! and [`GpuMeasurer`], which hands the first two to a bake of levels
 //! ([`crate::runtime::levels::Measurer`]).
 
 pub mod colour_error;
+pub mod coverage;
 pub mod foliage_lighting;
 pub mod impostor_fit;
 pub mod shading_error;

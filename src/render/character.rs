@@ -3,7 +3,7 @@
 
 use super::gpu::Gpu;
 use super::memory::GpuMemory;
-use crate::bake::gpu_data::drawable::{CharacterBake, DrawClass};
+use crate::bake::gpu_data::drawable::{CharacterBake, DrawClass, LevelKind};
 use crate::bake::gpu_data::lod_pack::{LodPack, PackedLevel};
 use crate::bake::gpu_data::texels::TexelGrid;
 use wgpu::util::DeviceExt;
@@ -27,6 +27,8 @@ pub struct GpuCharacter {
     pub sphere: (glam::Vec3, f32),
     /// How it is drawn (see [`DrawKind`](crate::bake::gpu_data::drawable::DrawKind)).
     pub class: DrawClass,
+    /// What an instance drawn with it shows, for the frame's figures.
+    pub level_kind: LevelKind,
     /// Every clip as the instance data carries it.
     pub clip_rows: Vec<[f32; 4]>,
     /// The pose the plain calibration shader draws every set in: the first frame of the
@@ -288,6 +290,7 @@ impl GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
             class: bake.kind.class(),
+            level_kind: bake.level_kind(),
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))
                 .collect(),

@@ -72,6 +72,16 @@ impl RenderTargets {
         } else {
             wgpu::LoadOp::Load
         };
+        self.color_with(target, load, last)
+    }
+
+    /// [`Self::color`] loaded by `load` (a pass that clears to another colour).
+    pub fn color_with<'a>(
+        &'a self,
+        target: &'a wgpu::TextureView,
+        load: wgpu::LoadOp<wgpu::Color>,
+        last: bool,
+    ) -> wgpu::RenderPassColorAttachment<'a> {
         match &self.msaa {
             Some(msaa) => wgpu::RenderPassColorAttachment {
                 view: msaa,

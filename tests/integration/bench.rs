@@ -140,9 +140,42 @@ fn bench_writes_json_and_a_table_of_every_method() {
             );
         }
         assert!(stdout.contains("GPU time by pass"), "{stdout}");
+        // Where fragments are counted, each pass's against the pixels it covers: every
+        // covered pixel is shaded at least once, and never more pixels than the view.
+        if methods["none"]["overdraw"].is_number() {
+            for name in ["none", "as+is"] {
+                let c = &methods[name]["fragments_by_pass"]["characters"];
+                let f = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{name}: {k} {c}"));
+                assert!(f("covered") > 0.0 && f("covered") <= 1.0, "{name}: {c}");
+                assert!(f("per_covered_pixel") >= 1.0, "{name}: {c}");
+                assert!(f("per_covered_pixel") >= f("per_pixel"), "{name}: {c}");
+            }
+            assert!(stdout.contains("Fragments by pass"), "{stdout}");
+        }
     } else {
         assert!(methods["none"]["passes"].as_object().unwrap().is_empty());
     }
+    // Every instance drawn is a character's mesh here, counted once by its kind.
+    for name in ["none", "as+is"] {
+        let kinds = methods[name]["instances_by_kind"].as_object().unwrap();
+        assert_eq!(
+            kinds.keys().collect::<Vec<_>>(),
+            ["mesh"],
+            "{name}: {kinds:?}"
+        );
+        let drawn: u64 = methods[name]["lod_histogram"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .sum();
+        let meshes = kinds["mesh"].as_f64().unwrap();
+        assert!(
+            (meshes - drawn as f64).abs() <= 1.0 + drawn as f64 * 0.05,
+            "{name}: {meshes} meshes, {drawn} drawn"
+        );
+    }
+    assert!(stdout.contains("Instances by level kind"), "{stdout}");
     // Levels of detail never draw more than full detail along the same frames.
     let none = methods["none"]["triangles"].as_u64().unwrap();
     assert!(methods["as+is"]["triangles"].as_u64().unwrap() <= none);
@@ -165,4 +198,67 @@ fn bench_refuses_an_unwritable_output_before_measuring() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(err.contains("bench.json"), "{err}");
+}
+
+/// A forest's trees are counted by what their levels show (clouds, clumps, impostors), and
+/// the foliage pass's fragments against the pixels the trees cover: a small share of the view
+/// shaded several times over.
+#[test]
+fn bench_counts_trees_by_level_kind_and_foliage_by_covered_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let cache = crate::common::shared_cache();
+    let out = lodlab(&[
+        "bench",
+        "--scene",
+        "forest",
+        "--count",
+        "16",
+        "--methods",
+        "as+is",
+        "--size",
+        "240x135",
+        "--msaa",
+        "1",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--json",
+        &json.display().to_string(),
+        "--cache",
+        &cache.display().to_string(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let m = &r["methods"]["as+is"];
+    let kinds = m["instances_by_kind"].as_object().unwrap();
+    let trees = ["full tree", "cloud", "clumps", "tree impostor"];
+    assert!(!kinds.is_empty(), "{kinds:?}");
+    assert!(
+        kinds.keys().all(|k| trees.contains(&k.as_str())),
+        "only trees in a forest: {kinds:?}"
+    );
+    // Trees far along the forest are coarser than those near: more than one kind.
+    assert!(kinds.len() >= 2, "{kinds:?}");
+    if r["timing"] == "gpu timestamps" && m["overdraw"].is_number() {
+        let foliage = &m["fragments_by_pass"]["foliage"];
+        let f = |k: &str| {
+            foliage[k]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{k}: {foliage}"))
+        };
+        assert!(f("covered") > 0.0 && f("covered") < 1.0, "{foliage}");
+        assert!(f("per_covered_pixel") > f("per_pixel"), "{foliage}");
+        assert!(
+            (f("per_pixel") / f("covered") - f("per_covered_pixel")).abs()
+                <= 0.5 * f("per_covered_pixel"),
+            "the three figures agree: {foliage}"
+        );
+    }
 }

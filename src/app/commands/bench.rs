@@ -24,6 +24,7 @@ use std::process::ExitCode;
 
 use super::shot::histogram;
 use crate::atomic::check_target;
+use crate::bake::gpu_data::drawable::LevelKind;
 use crate::render::targets::Offscreen;
 use crate::render::timer::{FrameTimer, Pass, PassTimes, overdraw_median, pass_medians};
 use crate::render::{CharacterShader, FrameStats, Gpu};
@@ -48,6 +49,9 @@ const SETTLE_STEPS: usize = 60;
 pub const MIN_FRAMES: usize = 6;
 /// At most this many frames of one method in a row.
 const MAX_BLOCK: usize = 5;
+/// Views along the path at which each method's passes are drawn apart to see the pixels they
+/// cover (see [`crate::measure::coverage`]): outside the timed frames.
+const COVERAGE_VIEWS: usize = 4;
 
 /// The version of [`BenchReport`]'s JSON: bumped whenever a field changes meaning or goes.
 /// 2: `schema_version`, `warmup_seconds`, `measured_seconds` and each method's `frame_ms`.
@@ -128,6 +132,26 @@ pub struct MethodFigures {
     /// path, interleaved with the other methods').
     #[serde(default)]
     pub frame_ms: Vec<f64>,
+    /// Each pass's fragments against the pixels it covers, by pass name, where the adapter
+    /// counts fragments.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub fragments_by_pass: BTreeMap<String, PassFragments>,
+    /// Mean instances per frame by what their level shows ([`LevelKind`]'s names), the kinds
+    /// drawn only.
+    #[serde(default)]
+    pub instances_by_kind: BTreeMap<String, f64>,
+}
+
+/// A pass's fragments, medians over [`COVERAGE_VIEWS`] views along the path.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct PassFragments {
+    /// Fragments shaded per pixel of the whole view.
+    pub per_pixel: f64,
+    /// Fragments shaded per pixel the pass covers, drawn alone: how many times over it shades
+    /// its own pixels.
+    pub per_covered_pixel: f64,
+    /// The share of the view it covers.
+    pub covered: f64,
 }
 
 /// The frame times and statistics of one method.
@@ -142,6 +166,10 @@ struct Samples {
     influences: u64,
     levels: [u64; MAX_LEVELS],
     in_transition: u64,
+    kinds: [u64; LevelKind::COUNT],
+    /// Per coverage view, each pass's fragments per pixel of the view, per pixel covered, and
+    /// share covered.
+    coverage: Vec<[Option<[f64; 3]>; Pass::COUNT]>,
 }
 
 /// The scene, its target and its timer: what a frame needs.
@@ -225,9 +253,10 @@ pub fn run(o: &BenchArgs) -> Result<BenchReport> {
     bar.set_prefix("bench");
     let warmup_seconds = warm.elapsed().as_secs_f64();
     let measuring = Instant::now();
-    let samples = measure(&mut bench, &order, n, block, &bar)?;
+    let mut samples = measure(&mut bench, &order, n, block, &bar)?;
     bar.finish_and_clear();
     let measured_seconds = measuring.elapsed().as_secs_f64();
+    cover(&mut bench, &order, &mut samples)?;
 
     let methods = method_figures(&samples, &order, n, width, height);
     let calibration = calibration(&order, &methods);
@@ -373,11 +402,50 @@ fn measure(
                 for (sum, &c) in s.levels.iter_mut().zip(&stats.levels) {
                     *sum += c as u64;
                 }
+                for (sum, &c) in s.kinds.iter_mut().zip(&stats.kinds) {
+                    *sum += c as u64;
+                }
                 bar.inc(1);
             }
         }
     }
     Ok(samples)
+}
+
+/// The pixels each pass covers, at [`COVERAGE_VIEWS`] views along the path per method (where
+/// the adapter counts fragments): the frame timed once for its fragment counts, then each
+/// pass it drew drawn alone (see [`crate::measure::coverage`]). Outside the measured time.
+fn cover(bench: &mut Bench, order: &[LodMethod], samples: &mut [Samples]) -> Result<()> {
+    let path = bench.path;
+    let pixels = (bench.size[0] as u64 * bench.size[1] as u64).max(1) as f64;
+    for (s, &m) in samples.iter_mut().zip(order) {
+        for i in 0..COVERAGE_VIEWS {
+            bench.show(m, path_time(&path, i, COVERAGE_VIEWS));
+            let Some(times) = bench.time(CharacterShader::Skinned)?.1 else {
+                return Ok(());
+            };
+            let mut view = [None; Pass::COUNT];
+            for pass in Pass::ALL {
+                let Some(fragments) = times.fragments[pass as usize] else {
+                    continue;
+                };
+                let covered = crate::measure::coverage::covered_pixels(
+                    &bench.gpu,
+                    &bench.world.renderer,
+                    &bench.target,
+                    pass,
+                )?;
+                let f = fragments as f64;
+                view[pass as usize] = Some([
+                    f / pixels,
+                    f / covered.max(1) as f64,
+                    covered as f64 / pixels,
+                ]);
+            }
+            s.coverage.push(view);
+        }
+    }
+    Ok(())
 }
 
 /// Each method's figures from its samples, keyed by name for the report.
@@ -433,6 +501,28 @@ fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
         passes: pass_medians(&s.passes),
         overdraw: overdraw_median(&s.passes, width, height),
         frame_ms: s.skinned.clone(),
+        fragments_by_pass: Pass::ALL
+            .into_iter()
+            .filter_map(|p| {
+                let views: Vec<[f64; 3]> =
+                    s.coverage.iter().filter_map(|v| v[p as usize]).collect();
+                let at =
+                    |k: usize| percentile(&views.iter().map(|v| v[k]).collect::<Vec<_>>(), 0.5);
+                (!views.is_empty()).then(|| {
+                    let figures = PassFragments {
+                        per_pixel: at(0),
+                        per_covered_pixel: at(1),
+                        covered: at(2),
+                    };
+                    (p.name().to_string(), figures)
+                })
+            })
+            .collect(),
+        instances_by_kind: LevelKind::ALL
+            .into_iter()
+            .filter(|&k| s.kinds[k as usize] > 0)
+            .map(|k| (k.name().to_string(), s.kinds[k as usize] as f64 / n as f64))
+            .collect(),
     }
 }
 
@@ -511,6 +601,90 @@ pub fn markdown(r: &BenchReport) -> String {
         );
     }
     out.push_str(&pass_table(r));
+    out.push_str(&fragment_table(r));
+    out.push_str(&kind_table(r));
+    out
+}
+
+/// How many times over each pass shades the pixels it covers (medians over a few views along
+/// the path); empty where the adapter does not count fragments.
+fn fragment_table(r: &BenchReport) -> String {
+    let drawn: Vec<Pass> = Pass::ALL
+        .into_iter()
+        .filter(|p| {
+            r.methods
+                .values()
+                .any(|f| f.fragments_by_pass.contains_key(p.name()))
+        })
+        .collect();
+    if drawn.is_empty() {
+        return String::new();
+    }
+    let mut out = format!(
+        "\nFragments by pass (median over {COVERAGE_VIEWS} views: per pixel of the view · per \
+         pixel the pass covers · share of the view it covers):\n\n| method |"
+    );
+    for p in &drawn {
+        let _ = write!(out, " {} |", p.name());
+    }
+    out.push_str("\n|---|");
+    out.push_str(&"---:|".repeat(drawn.len()));
+    out.push('\n');
+    for name in &r.order {
+        let Some(f) = r.methods.get(name) else {
+            continue;
+        };
+        let _ = write!(out, "| {name} |");
+        for p in &drawn {
+            match f.fragments_by_pass.get(p.name()) {
+                Some(x) => {
+                    let _ = write!(
+                        out,
+                        " {:.2} · {:.2} · {:.0}% |",
+                        x.per_pixel,
+                        x.per_covered_pixel,
+                        x.covered * 100.0
+                    );
+                }
+                None => out.push_str(" – |"),
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Instances per frame by what their level shows (mean over the frames).
+fn kind_table(r: &BenchReport) -> String {
+    let kinds: Vec<LevelKind> = LevelKind::ALL
+        .into_iter()
+        .filter(|k| {
+            r.methods
+                .values()
+                .any(|f| f.instances_by_kind.contains_key(k.name()))
+        })
+        .collect();
+    if kinds.is_empty() {
+        return String::new();
+    }
+    let mut out = String::from("\nInstances by level kind (mean per frame):\n\n| method |");
+    for k in &kinds {
+        let _ = write!(out, " {} |", k.name());
+    }
+    out.push_str("\n|---|");
+    out.push_str(&"---:|".repeat(kinds.len()));
+    out.push('\n');
+    for name in &r.order {
+        let Some(f) = r.methods.get(name) else {
+            continue;
+        };
+        let _ = write!(out, "| {name} |");
+        for k in &kinds {
+            let x = f.instances_by_kind.get(k.name()).copied().unwrap_or(0.0);
+            let _ = write!(out, " {x:.1} |");
+        }
+        out.push('\n');
+    }
     out
 }
 

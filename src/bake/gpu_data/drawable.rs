@@ -54,6 +54,31 @@ pub enum DrawKind {
     CharacterImpostor(animated::AnimatedFrame),
 }
 
+crate::choice! {
+    own_values;
+    /// What an instance drawn at a level shows: the representation `bench` counts instances
+    /// by (a finer cut than [`DrawClass`], which only says how it is drawn).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+    pub enum LevelKind {
+        /// A character's mesh (its full detail or a simplified level).
+        Mesh => "mesh",
+        /// A tree with every leaf.
+        Tree => "full tree",
+        /// A billboard cloud whose every billboard is drawn (skeleton or spectral).
+        Cloud => "cloud",
+        /// View-selected clumps: each view draws one billboard of a clump.
+        Clumps => "clumps",
+        /// A tree's octahedral impostor.
+        TreeImpostor => "tree impostor",
+        /// A character's animated impostor.
+        CharacterImpostor => "character impostor",
+    }
+}
+
+impl LevelKind {
+    pub const COUNT: usize = LevelKind::ALL.len();
+}
+
 /// [`DrawKind`] without its data: what the renderer keeps of it and picks pipelines by.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DrawClass {
@@ -113,6 +138,21 @@ impl DrawClass {
 }
 
 impl CharacterBake {
+    /// What it shows: a billboard cloud is foliage with billboard outlines, a clump level one
+    /// whose billboards have view windows.
+    pub fn level_kind(&self) -> LevelKind {
+        match self.kind {
+            DrawKind::Mesh => LevelKind::Mesh,
+            DrawKind::TreeImpostor(_) => LevelKind::TreeImpostor,
+            DrawKind::CharacterImpostor(_) => LevelKind::CharacterImpostor,
+            DrawKind::Foliage { .. } if self.outlines.is_empty() => LevelKind::Tree,
+            DrawKind::Foliage { .. } if self.animation_space.view_windows.is_empty() => {
+                LevelKind::Cloud
+            }
+            DrawKind::Foliage { .. } => LevelKind::Clumps,
+        }
+    }
+
     /// Bytes its textures, meshes and index lists hold on the CPU.
     pub fn heap_bytes(&self) -> u64 {
         let am = &self.animation_space;

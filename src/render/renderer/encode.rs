@@ -74,6 +74,7 @@ impl SceneRenderer {
             // drawn at its only level).
             stats.levels[(draw.nearest_level() as usize).min(MAX_LEVELS - 1)] += 1;
             stats.in_transition += draw.in_transition() as u64;
+            stats.kinds[c.level_kind as usize] += 1;
         }
         let mut count = |k: usize, extra_influences: u32| {
             let l = &set.levels[k];

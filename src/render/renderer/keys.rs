@@ -1,6 +1,7 @@
 //! The keys a frame's instances are grouped by: (pass, side, model, level, hops), one
 //! instanced draw per key, and the figures a prepared frame reports.
 
+use crate::bake::gpu_data::drawable::LevelKind;
 use crate::render::uniforms::GpuInstance;
 use crate::scene::lod::MAX_LEVELS;
 
@@ -19,6 +20,9 @@ pub struct FrameStats {
     /// Instances by the level they mostly show (the last bin holds the coarser ones too).
     pub levels: [u32; MAX_LEVELS],
     pub in_transition: u64,
+    /// Instances by what their level shows, indexed by [`LevelKind`] (a transition's
+    /// instance by the level it goes to).
+    pub kinds: [u32; LevelKind::COUNT],
 }
 
 /// The kinds of draw, in the order they are issued.
