@@ -161,6 +161,16 @@ pub trait MeasureColour {
         bake: CharacterBake,
         heights_px: &[f32],
     ) -> Result<Vec<f32>>;
+
+    /// The fragments `level` (drawn as `bake`) shades when drawn `heights_px` high, a mean over
+    /// the metric's views; None where the adapter cannot count fragments.
+    fn fragments(
+        &self,
+        tree: &Model,
+        level: &Model,
+        bake: CharacterBake,
+        heights_px: &[f32],
+    ) -> Result<Option<Vec<f64>>>;
 }
 
 /// Measures, for placing an impostor, its colour error and a level's, both against full

@@ -153,14 +153,15 @@ impl<'g> GpuColourError<'g> {
     }
 }
 
-impl crate::bake::seams::MeasureColour for GpuColourError<'_> {
-    fn colour_errors(
+impl GpuColourError<'_> {
+    /// The worlds of `tree` with `level` (drawn as `bake`) in the level's: made for a new
+    /// tree, the level's character replaced for the same tree.
+    fn worlds(
         &self,
         tree: &Model,
         level: &Model,
         bake: CharacterBake,
-        heights_px: &[f32],
-    ) -> Result<Vec<f32>> {
+    ) -> Result<std::sync::MutexGuard<'_, Option<Measuring>>> {
         let gpu = self.gpu;
         let mut worlds = self
             .worlds
@@ -179,6 +180,67 @@ impl crate::bake::seams::MeasureColour for GpuColourError<'_> {
                 });
             }
         }
+        Ok(worlds)
+    }
+}
+
+impl crate::bake::seams::MeasureColour for GpuColourError<'_> {
+    fn fragments(
+        &self,
+        tree: &Model,
+        level: &Model,
+        bake: CharacterBake,
+        heights_px: &[f32],
+    ) -> Result<Option<Vec<f64>>> {
+        let gpu = self.gpu;
+        let Some(mut timer) = crate::render::timer::FrameTimer::new(gpu) else {
+            return Ok(None);
+        };
+        let mut worlds = self.worlds(tree, level, bake)?;
+        let m = worlds.as_mut().expect("just made");
+        let bounds = m.original.bakes[0].bounds;
+        let mut out = Vec::with_capacity(heights_px.len());
+        for &px in heights_px {
+            let (size, distance) = framing(px);
+            let target = Offscreen::new(gpu, size[0], size[1], 1);
+            let mut sum = 0.0;
+            for camera in metric_views(bounds, size, distance) {
+                m.level.camera = camera;
+                m.level.prepare(gpu, size, 0.0, 0.0);
+                m.level.renderer.render_timed(
+                    gpu,
+                    &target.targets,
+                    &target.view,
+                    Some(&mut timer),
+                )?;
+                let times = timer.read(gpu)?;
+                // The level's own passes: the sky and ground behind it are not its cost.
+                for pass in crate::render::timer::Pass::ALL {
+                    if pass == crate::render::timer::Pass::Environment
+                        || times.ms[pass as usize].is_none()
+                    {
+                        continue;
+                    }
+                    let Some(f) = times.fragments[pass as usize] else {
+                        return Ok(None);
+                    };
+                    sum += f as f64;
+                }
+            }
+            out.push(sum / METRIC_VIEWS as f64);
+        }
+        Ok(Some(out))
+    }
+
+    fn colour_errors(
+        &self,
+        tree: &Model,
+        level: &Model,
+        bake: CharacterBake,
+        heights_px: &[f32],
+    ) -> Result<Vec<f32>> {
+        let gpu = self.gpu;
+        let mut worlds = self.worlds(tree, level, bake)?;
         let m = worlds.as_mut().expect("just made");
         heights_px
             .iter()
@@ -274,6 +336,28 @@ pub(crate) fn picture(
     img
 }
 
+/// The metric's [`METRIC_VIEWS`] cameras round a tree of `bounds` for a `size` picture,
+/// `distance` tree heights off: at ground level, far enough for the whole tree to fit with a
+/// margin.
+fn metric_views(
+    bounds: crate::model::Bounds,
+    size: [u32; 2],
+    distance: f32,
+) -> impl Iterator<Item = crate::scene::Camera> {
+    // The whole tree in every view: its height, or its widest span across (seen from any
+    // side, at most the diagonal of its bounds' footprint) if that fills the width sooner.
+    let span = glam::Vec2::new(bounds.size().x, bounds.size().z).length();
+    let height = bounds
+        .size()
+        .y
+        .max(span * size[1] as f32 / size[0] as f32)
+        .max(1e-3);
+    (0..METRIC_VIEWS).map(move |view| {
+        let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
+        metric_camera(bounds.center(), height, yaw, 0.0, distance)
+    })
+}
+
 /// The share of `a`'s covered pixels that `b` disagrees on (see [`colour_error`]); `original`
 /// gives the loop's length. The camera stands `distance` tree heights off, its field of view
 /// narrowed to frame the tree as from [`FRAMING`] heights.
@@ -288,21 +372,10 @@ fn disagreement(
 ) -> Result<f32> {
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
-    // The whole tree in every view: its height, or its widest span across (seen from any
-    // side, at most the diagonal of its bounds' footprint) if that fills the width sooner.
-    let span = glam::Vec2::new(bounds.size().x, bounds.size().z).length();
-    let height = bounds
-        .size()
-        .y
-        .max(span * size[1] as f32 / size[0] as f32)
-        .max(1e-3);
     let duration = original.clips.first().map_or(1.0, |c| c.duration);
     let (mut wrong, mut covered) = (0u64, 0u64);
     let shoot = |w: &mut World, camera, t, empty| picture(gpu, w, &target, camera, t, empty);
-    for view in 0..METRIC_VIEWS {
-        let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
-        // At ground level, far enough for the whole tree to fit with a margin.
-        let camera = metric_camera(bounds.center(), height, yaw, 0.0, distance);
+    for camera in metric_views(bounds, size, distance) {
         let background = shoot(a, camera, 0.0, true)?;
         for frame in 0..frames.max(1) {
             let t = duration * frame as f32 / frames.max(1) as f32;

@@ -305,11 +305,24 @@ impl FrameTimer {
     /// to finish it.
     pub fn read(&mut self, gpu: &Gpu) -> Result<PassTimes> {
         gpu.wait()?;
-        let mut last = None;
-        while let Some(t) = self.take_oldest()? {
-            last = Some(t);
+        // Where other threads poll the same device (tree bakes measuring side by side), one of
+        // them may run the read-back's callback a moment after this wait returns: poll on
+        // until it has (or a read-back is plainly lost).
+        let start = std::time::Instant::now();
+        loop {
+            let mut last = None;
+            while let Some(t) = self.take_oldest()? {
+                last = Some(t);
+            }
+            if let Some(t) = last {
+                return Ok(t);
+            }
+            if self.queued.is_empty() || start.elapsed() > std::time::Duration::from_secs(30) {
+                return Err(anyhow!("no pass timestamps were recorded"));
+            }
+            std::thread::yield_now();
+            let _ = gpu.device.poll(wgpu::PollType::Poll);
         }
-        last.ok_or_else(|| anyhow!("no pass timestamps were recorded"))
     }
 
     /// The figures of the newest frame that has come back, without waiting; `None` when none

@@ -7,7 +7,9 @@ use crate::bake::cache::{LodCache, Origin};
 use crate::bake::character::lod::LodLevel;
 use crate::bake::character::lod::SkinnedLods;
 use crate::bake::character::simplify::Method;
-use crate::bake::foliage::billboard::chain::{ChainOptions, chain_file, load_or_build_chain};
+use crate::bake::foliage::billboard::chain::{
+    ChainOptions, chain_file, load_or_build_chain, order_file,
+};
 use crate::bake::foliage::billboard::is_tree;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::gpu_data::lod_pack::LodPack;
@@ -317,9 +319,16 @@ fn impostor_level(
 pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOptions) -> bool {
     let name = &s.model.name;
     let path = if is_tree(&s.model) {
-        match chain_file(cache, name, &s.hash, chain) {
-            Ok((path, _)) => path,
-            Err(_) => return false,
+        let order = match chain.order {
+            crate::bake::foliage::billboard::chain::levels::FoliageOrder::Epsilon => None,
+            crate::bake::foliage::billboard::chain::levels::FoliageOrder::Cost => {
+                Some(order_file(cache, name, &s.hash, chain))
+            }
+        };
+        match (chain_file(cache, name, &s.hash, chain), order) {
+            (Ok((path, _)), None) => path,
+            (Ok((path, _)), Some(Ok((order, _)))) if order.is_file() => path,
+            _ => return false,
         }
     } else {
         cache

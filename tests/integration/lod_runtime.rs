@@ -214,12 +214,19 @@ fn background_bakes_finish_and_fill_the_cache() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     files.sort();
+    // The tree's chain, and which of its levels each size draws (the default orders them by
+    // error per cost).
     assert_eq!(
         files.len(),
-        2,
-        "one cache file per (model, method) and per tree: {files:?}"
+        3,
+        "one cache file per (model, method), two per tree: {files:?}"
     );
-    assert!(files[0].starts_with("sapling-clouds-") && files[1].starts_with("walker-as-"));
+    assert!(
+        files[0].starts_with("sapling-clouds-")
+            && files[1].starts_with("sapling-order-")
+            && files[2].starts_with("walker-as-"),
+        "{files:?}"
+    );
     let (again, _, _) = wait(bake(sources.clone(), vec![false, false]));
     let Some(Ok(Levels::Pack(again_pack, _))) = &again[0] else {
         panic!("the walker has no packed levels the second time");

@@ -810,3 +810,98 @@ fn the_foliage_policy_decides_what_trees_become() {
         .count();
     assert!(changed > 2000, "the tint changed {changed} pixels");
 }
+
+/// Ordered by error per cost (the default), every stretch of sizes of the three built-in
+/// trees' chains draws a level whose colour error at the stretch's switch size is no worse
+/// than the ε chain's level there, never finer further off, and all of them cost no more than
+/// the ε chain's; the chain that results is what selection switches along, ε rising level by
+/// level. The clump levels the ε chain cuts off
+/// behind the impostor stand in for a cloud somewhere: the point of ordering by cost.
+#[test]
+fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
+    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash};
+    use lodlab::bake::foliage::billboard::chain::levels::FoliageOrder;
+    use lodlab::bake::foliage::billboard::chain::{
+        ChainOptions, CloudKind, load_or_build_chain, load_or_build_chains, load_or_choose, order,
+    };
+    let gpu = crate::common::gpu();
+    let cache = LodCache::new(Some(crate::common::shared_cache()));
+    let raster = lodlab::render::atlas::AtlasRasterizer::new(gpu);
+    let measure = lodlab::measure::colour_error::GpuColourError::new(gpu);
+    let opts = ChainOptions::default();
+    assert_eq!(opts.order, FoliageOrder::Cost);
+    let mut clumps_for_clouds = 0;
+    for name in ["broadleaf", "conifer", "sapling"] {
+        let tree = lodlab::import::load_model(name).unwrap();
+        let source = source_hash(&lodlab::import::source_path(name)).unwrap();
+        let (shown, _) =
+            load_or_build_chain(&raster, &measure, &cache, &tree, &source, &opts, &|_| {}).unwrap();
+        let (chains, origin) =
+            load_or_build_chains(&raster, &measure, &cache, &tree, &source, &opts, &|_| {})
+                .unwrap();
+        assert_eq!(origin, Origin::Cache, "{name}: baked once for both orders");
+        let (choices, origin) =
+            load_or_choose(&measure, &cache, &tree, &source, &opts, &chains).unwrap();
+        assert_eq!(origin, Origin::Cache, "{name}: the choices are cached");
+        assert_eq!(choices.len(), chains.epsilon.len() - 1, "{name}");
+        let total = |f: &dyn Fn(&order::CostChoice) -> f64| choices.iter().map(f).sum::<f64>();
+        assert!(
+            total(&|c| c.drawn_cost) <= total(&|c| c.epsilon_cost),
+            "{name}: {choices:?}"
+        );
+        assert!(
+            choices
+                .windows(2)
+                .all(|w| w[0].drawn_level <= w[1].drawn_level),
+            "{name}: {choices:?}"
+        );
+        for c in &choices {
+            assert!(c.drawn_error <= c.epsilon_error, "{name}: {c:?}");
+            assert!(
+                c.drawn_level >= chains.reference[c.epsilon_level],
+                "{name}: never finer than the ε chain's level: {c:?}"
+            );
+            let cloud = |k: &Option<CloudKind>| {
+                matches!(k, Some(CloudKind::Skeleton(_) | CloudKind::Spectral(_)))
+            };
+            let clumps = |k: &Option<CloudKind>| matches!(k, Some(CloudKind::Clumps { .. }));
+            clumps_for_clouds += (cloud(&chains.epsilon[c.epsilon_level].kind)
+                && clumps(&chains.candidates[c.drawn_level].kind))
+                as usize;
+        }
+        // What selection switches along: the chosen levels, from their stretches' ε.
+        let expected = order::chain_of(&chains, &choices);
+        let epsilons = |l: &[lodlab::bake::foliage::billboard::chain::TreeLevel]| {
+            l.iter().map(|l| l.epsilon).collect::<Vec<_>>()
+        };
+        assert_eq!(epsilons(&shown), epsilons(&expected), "{name}");
+        assert!(
+            shown.windows(2).all(|w| w[1].epsilon > w[0].epsilon),
+            "{name}"
+        );
+        // The ε order is the chain the cut made, ending in the impostor.
+        let epsilon_opts = ChainOptions {
+            order: FoliageOrder::Epsilon,
+            ..opts
+        };
+        let (epsilon_chain, _) = load_or_build_chain(
+            &raster,
+            &measure,
+            &cache,
+            &tree,
+            &source,
+            &epsilon_opts,
+            &|_| {},
+        )
+        .unwrap();
+        assert_eq!(
+            epsilons(&epsilon_chain),
+            epsilons(&chains.epsilon),
+            "{name}"
+        );
+    }
+    assert!(
+        clumps_for_clouds > 0,
+        "no clump level stands in for a cloud"
+    );
+}

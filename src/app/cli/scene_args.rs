@@ -167,6 +167,12 @@ pub struct FoliageArgs {
     /// Schmid's thesis "Animated Billboard Clouds for Foliage Simplification" (2007) §6.4).
     #[arg(long)]
     pub plain_sca: bool,
+    /// Which of a tree's levels each size draws: epsilon (each level from where its ε
+    /// projects to the tolerance, the thesis's chain) or cost (at each switch size the
+    /// cheapest level, in measured fragments and triangles, whose measured colour error is no
+    /// worse than the ε chain's there).
+    #[arg(long, default_value = "cost", value_enum)]
+    pub foliage_order: crate::bake::foliage::billboard::chain::levels::FoliageOrder,
     /// Wind strength: scales every tree's sway (0: still air; 1: as baked).
     #[arg(long, default_value_t = 1.0, value_parser = parse_wind)]
     pub wind: f32,
@@ -200,6 +206,7 @@ impl FoliageArgs {
                 description: self.description,
                 bins: self.bins as usize,
                 shared_bone: !self.plain_sca,
+                order: self.foliage_order,
                 ..Default::default()
             },
             wind: self.wind,

@@ -2,6 +2,7 @@
 //! controls.
 
 use crate::bake::foliage::billboard::chain::MIN_EPSILON_GROWTH;
+use crate::bake::foliage::billboard::chain::levels::FoliageOrder;
 
 use crate::app::viewer::figures::{chain_table, memory, pass_times, statistics};
 use crate::app::viewer::history::FrameHistory;
@@ -437,6 +438,19 @@ fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     let spectral = matches!(f.policy, FoliagePolicy::Spectral | FoliagePolicy::Automatic);
     ui.add_enabled_ui(clouds, |ui| {
         let c = &mut f.chain;
+        egui::ComboBox::from_label("level order")
+            .selected_text(c.order.name())
+            .show_ui(ui, |ui| {
+                for o in FoliageOrder::ALL {
+                    ui.selectable_value(&mut c.order, o, o.name());
+                }
+            })
+            .response
+            .on_hover_text(
+                "cost: at each size the cheapest level (fragments and triangles, measured) \
+                 whose colour error is no worse than the ε chain's there; epsilon: each level \
+                 from where its ε projects to the tolerance (the thesis's chain)",
+            );
         ui.add(
             egui::Slider::new(&mut c.first_epsilon, 0.001..=0.05)
                 .logarithmic(true)

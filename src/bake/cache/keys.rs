@@ -13,7 +13,10 @@ use std::path::Path;
 pub const FORMAT_VERSION: u32 = 10;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
-pub const CHAIN_VERSION: u32 = 24;
+pub const CHAIN_VERSION: u32 = 25;
+/// Which of a tree's levels each size draws when ordered by cost
+/// (`bake::foliage::billboard::chain::order`).
+pub const ORDER_VERSION: u32 = 1;
 /// A character's animated impostor (`bake::impostor::animated`).
 pub const IMPOSTOR_VERSION: u32 = 5;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the
@@ -94,6 +97,15 @@ pub fn chain_key(source: &[u8; 32], options: &impl Serialize) -> Result<[u8; 32]
     h.update(source);
     // Options that failed to encode must not share a key with others: no fallback.
     h.update(&postcard::to_stdvec(options).map_err(|e| format!("encoding chain options: {e}"))?);
+    Ok(*h.finalize().as_bytes())
+}
+
+/// The key of a tree's cost order: its chain's key, the order's version and the options.
+pub fn order_key(source: &[u8; 32], options: &impl Serialize) -> Result<[u8; 32], String> {
+    let mut h = blake3::Hasher::new();
+    h.update(b"lodlab tree order");
+    h.update(&chain_key(source, options)?);
+    h.update(&ORDER_VERSION.to_le_bytes());
     Ok(*h.finalize().as_bytes())
 }
 

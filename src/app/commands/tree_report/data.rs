@@ -85,6 +85,8 @@ pub struct TreeReport {
     /// Each cloud level's lighting against the full tree's under two suns, billboards lit
     /// by their planes and through their atlases, the tree [`LIGHTING_PX`] pixels high.
     pub lighting: Vec<crate::measure::foliage_lighting::LevelLighting>,
+    /// The levels each switch size draws by ε and by error per cost.
+    pub orders: super::orders::OrdersReport,
 }
 
 /// How high the lighting comparison draws the tree, pixels.

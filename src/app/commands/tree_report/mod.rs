@@ -6,7 +6,8 @@
 //! leaves' trajectories against their billboards' (`motion.png`), and the thesis's figures
 //! beside this tree's at the same billboard counts (`against-thesis.md`), and how each level
 //! is lit beside the full tree under two suns, its billboards lit by their planes and per
-//! texel through their atlases (`lighting.md`).
+//! texel through their atlases (`lighting.md`), and the levels each size draws ordered by ε
+//! and by measured error per cost (`orders.md`, `error-per-cost.png`).
 //!
 //! Besides the chain (skeleton clouds, spectral ones, then clumps), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
@@ -15,6 +16,7 @@
 
 pub mod charts;
 pub mod data;
+pub mod orders;
 
 use crate::app::commands::tree_report::charts::{contact_sheet, motion_plot, plot};
 use crate::app::commands::tree_report::data::{
@@ -73,6 +75,13 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         .collect();
     let lighting =
         crate::measure::foliage_lighting::foliage_lighting(&gpu, tree, &clouds, LIGHTING_PX)?;
+    let orders = orders::orders(
+        &raster,
+        &crate::measure::colour_error::GpuColourError::new(&gpu),
+        tree,
+        &chain,
+        &opts,
+    )?;
     let points = |f: &dyn Fn(&LevelReport) -> f32| -> Vec<(usize, f32)> {
         levels[1..]
             .iter()
@@ -124,18 +133,36 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         description_types,
         against_thesis,
         lighting,
+        orders,
     };
+    write_files(&gpu, &report, &chain, &skeleton_chain, out)?;
+    Ok(report)
+}
+
+/// Writes the report's files into `out`: the JSON, the tables and the charts.
+fn write_files(
+    gpu: &Gpu,
+    report: &TreeReport,
+    chain: &[TreeLevel],
+    skeleton_chain: &[TreeLevel],
+    out: &Path,
+) -> Result<()> {
     write_atomic(
         &out.join("report.json"),
-        serde_json::to_string_pretty(&report)?.as_bytes(),
+        serde_json::to_string_pretty(report)?.as_bytes(),
     )?;
     write_atomic(
         &out.join("against-thesis.md"),
-        thesis_table(&report).as_bytes(),
+        thesis_table(report).as_bytes(),
     )?;
-    write_atomic(&out.join("lighting.md"), lighting_table(&report).as_bytes())?;
-    plot(&report, &out.join("colour-error.png"))?;
-    contact_sheet(&gpu, &chain, &report, &out.join("levels.png"))?;
+    write_atomic(&out.join("lighting.md"), lighting_table(report).as_bytes())?;
+    write_atomic(
+        &out.join("orders.md"),
+        orders::orders_table(&report.orders).as_bytes(),
+    )?;
+    orders::orders_plot(&report.orders, &out.join("error-per-cost.png"))?;
+    plot(report, &out.join("colour-error.png"))?;
+    contact_sheet(gpu, chain, report, &out.join("levels.png"))?;
     // The finest spectral level against the skeleton-only level at the same ε.
     let spectral = chain
         .iter()
@@ -149,8 +176,8 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
                 .map(|l| (k.min(skeleton_chain.len() - 1), l)),
         )
     });
-    motion_plot(&report, pair, &out.join("motion.png"))?;
-    Ok(report)
+    motion_plot(report, pair, &out.join("motion.png"))?;
+    Ok(())
 }
 
 /// A level of a chain with its colour error (said on stderr as it goes).

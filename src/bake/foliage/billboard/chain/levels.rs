@@ -109,6 +109,18 @@ pub struct CloudLevel {
     pub views: usize,
 }
 
+crate::choice! {
+    /// How a tree's chain orders its levels by screen size (see [`super::order`]).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+    pub enum FoliageOrder {
+        /// Each level from where its ε projects to the tolerance (the thesis's chain).
+        Epsilon => "epsilon",
+        /// At each switch size the cheapest level no worse than the ε chain's there.
+        #[default]
+        Cost => "cost",
+    }
+}
+
 /// How a tree's chain of levels is cut.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ChainOptions {
@@ -143,6 +155,9 @@ pub struct ChainOptions {
     pub clumps_from: usize,
     pub clump_views: usize,
     pub seed: u64,
+    /// Which level each size draws: by ε alone, or the cheapest no worse (see
+    /// [`super::order`]).
+    pub order: FoliageOrder,
 }
 
 impl ChainOptions {
@@ -195,6 +210,7 @@ impl Default for ChainOptions {
             clumps_from: 128,
             clump_views: crate::bake::foliage::billboard::clumps::DEFAULT_VIEWS,
             seed: 1,
+            order: FoliageOrder::Cost,
         }
     }
 }

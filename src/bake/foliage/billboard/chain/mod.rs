@@ -5,6 +5,7 @@
 
 pub mod impostor;
 pub mod levels;
+pub mod order;
 
 pub use impostor::impostor_level;
 pub use levels::{ChainOptions, ChainStyle, CloudKind, CloudLevel, TreeLevel};
@@ -412,15 +413,31 @@ fn full_tree(tree: &Model) -> TreeLevel {
 }
 
 /// The cache file of `tree`'s chain cut as `opts` (its source hashing to `source`), and the
-/// key inside it.
+/// key inside it: the same file for either order (see [`ChainBake`]).
 pub fn chain_file(
     cache: &LodCache,
     tree: &str,
     source: &[u8; 32],
     opts: &ChainOptions,
 ) -> Result<(std::path::PathBuf, [u8; 32])> {
-    let key = crate::bake::cache::keys::chain_key(source, opts).map_err(anyhow::Error::msg)?;
+    let epsilon_opts = ChainOptions {
+        order: order::FoliageOrder::Epsilon,
+        ..*opts
+    };
+    let key =
+        crate::bake::cache::keys::chain_key(source, &epsilon_opts).map_err(anyhow::Error::msg)?;
     Ok((cache.file(tree, "clouds", &key), key))
+}
+
+/// The cache file of the cost order's choices for `tree`'s chain cut as `opts`, and its key.
+pub fn order_file(
+    cache: &LodCache,
+    tree: &str,
+    source: &[u8; 32],
+    opts: &ChainOptions,
+) -> Result<(std::path::PathBuf, [u8; 32])> {
+    let key = crate::bake::cache::keys::order_key(source, opts).map_err(anyhow::Error::msg)?;
+    Ok((cache.file(tree, "order", &key), key))
 }
 
 /// The chain of `tree` (whose source file hashes to `source`) from `cache` if a good one is
@@ -436,25 +453,102 @@ pub fn load_or_build_chain(
     opts: &ChainOptions,
     progress: &(dyn Fn(f32) + Sync),
 ) -> Result<(Vec<TreeLevel>, Origin)> {
-    let build = || -> Result<Vec<TreeLevel>> {
-        let foliage = crate::bake::foliage::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
-        let mut chain = tree_chain(raster, tree, &foliage, opts, progress)?;
-        if let Some((impostor, k)) = impostor_level(raster, measure, tree, &chain, opts)? {
-            chain.truncate(k);
-            chain.push(impostor);
-        }
-        chain.remove(0);
-        Ok(chain)
+    let (chains, origin) =
+        load_or_build_chains(raster, measure, cache, tree, source, opts, progress)?;
+    if opts.order == order::FoliageOrder::Epsilon {
+        return Ok((chains.epsilon, origin));
+    }
+    let (choices, chosen) = load_or_choose(measure, cache, tree, source, opts, &chains)?;
+    let origin = if origin == Origin::Cache {
+        chosen
+    } else {
+        origin
     };
-    let (coarse, origin) = if source == &[0; 32] {
+    Ok((order::chain_of(&chains, &choices), origin))
+}
+
+/// Every level of `tree`'s chain cut as `opts` and its ε chain (see [`order::Chains`]), from
+/// `cache` or built now and stored: the same for either order.
+pub fn load_or_build_chains(
+    raster: &dyn RasterizeAtlas,
+    measure: &dyn MeasureColour,
+    cache: &LodCache,
+    tree: &Model,
+    source: &[u8; 32],
+    opts: &ChainOptions,
+    progress: &(dyn Fn(f32) + Sync),
+) -> Result<(order::Chains, Origin)> {
+    let build = || -> Result<ChainBake> {
+        let foliage = crate::bake::foliage::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
+        let mut levels = tree_chain(raster, tree, &foliage, opts, progress)?;
+        let mut impostor_from = None;
+        if let Some((impostor, k)) = impostor_level(raster, measure, tree, &levels, opts)? {
+            impostor_from = Some(k);
+            levels.push(impostor);
+        }
+        levels.remove(0);
+        Ok(ChainBake {
+            levels,
+            impostor_from,
+        })
+    };
+    let (bake, origin) = if source == &[0; 32] {
         (build()?, Origin::Baked { warning: None })
     } else {
         let (path, key) = chain_file(cache, &tree.name, source, opts)?;
         cache.load_or_build(&path, &key, build)?
     };
-    let mut levels = vec![full_tree(tree)];
-    levels.extend(coarse);
-    Ok((levels, origin))
+    Ok((bake.chains(full_tree(tree)), origin))
+}
+
+/// A tree's chain as it is cached: every level the bake made (levels 1…: the clouds, then
+/// the impostor where it found a place), and where the ε order puts the impostor. The cost
+/// order chooses among them all, clump levels past the impostor's place included.
+#[derive(serde::Serialize, serde::Deserialize)]
+pub struct ChainBake {
+    pub levels: Vec<TreeLevel>,
+    /// The index (level 0 the tree) from which the impostor takes the ε chain's place: the
+    /// levels from there on give way to it.
+    pub impostor_from: Option<usize>,
+}
+
+impl ChainBake {
+    /// With `full` as level 0: every level made and the ε chain.
+    pub fn chains(self, full: TreeLevel) -> order::Chains {
+        let mut candidates = vec![full];
+        candidates.extend(self.levels);
+        let last = candidates.len() - 1;
+        let reference: Vec<usize> = match self.impostor_from {
+            Some(k) => (0..k.min(last)).chain([last]).collect(),
+            None => (0..=last).collect(),
+        };
+        order::Chains {
+            epsilon: reference.iter().map(|&i| candidates[i].clone()).collect(),
+            reference,
+            candidates,
+        }
+    }
+}
+
+/// The cost order's choices (see [`order::by_cost`]) among `tree`'s levels for the stretches
+/// of its ε chain (`chains`), cut as
+/// `opts`, from `cache` if a good file is there, else measured now and stored (a tree with no
+/// source is measured and not cached).
+pub fn load_or_choose(
+    measure: &dyn MeasureColour,
+    cache: &LodCache,
+    tree: &Model,
+    source: &[u8; 32],
+    opts: &ChainOptions,
+    chains: &order::Chains,
+) -> Result<(Vec<order::CostChoice>, Origin)> {
+    let height = crate::bake::foliage::billboard::tree_height(tree);
+    let choose = || order::by_cost(measure, tree, chains, height, opts.tolerance_px);
+    if source == &[0; 32] {
+        return Ok((choose()?, Origin::Baked { warning: None }));
+    }
+    let (path, key) = order_file(cache, &tree.name, source, opts)?;
+    cache.load_or_build(&path, &key, choose)
 }
 
 /// The tree standing still in its rest pose: its clips keep their length but move nothing.
