@@ -10,8 +10,11 @@
 //! error measured at s_k (where the ε chain's own level k is closest, so errs most) is no
 //! worse than level k's there. Cost is what the adapter pays for the level at that size:
 //! the fragments it shades, measured, and its triangles at [`TRIANGLE_FRAGMENTS`] fragments
-//! each. The result is again a chain of levels with switch sizes (the stretches' ε), so
-//! selection and transitions treat it as they treat the ε chain.
+//! each. The levels drawn never get finer as the tree gets smaller: of the sequences that keep
+//! both rules the cheapest in all is drawn (see [`choose`]). The result is again a chain of
+//! levels with switch sizes (the stretches' ε), so selection and transitions treat it as they
+//! treat the ε chain. (Issue 44: the clump levels matched the clouds' error at a sixth of
+//! their billboards, and the ε chain never drew them in the default scene.)
 
 pub use crate::bake::foliage::billboard::chain::levels::FoliageOrder;
 use crate::bake::foliage::billboard::chain::levels::TreeLevel;
