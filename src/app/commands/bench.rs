@@ -617,41 +617,25 @@ fn fragment_table(r: &BenchReport) -> String {
                 .any(|f| f.fragments_by_pass.contains_key(p.name()))
         })
         .collect();
-    if drawn.is_empty() {
-        return String::new();
-    }
-    let mut out = format!(
-        "\nFragments by pass (median over {COVERAGE_VIEWS} views: per pixel of the view · per \
-         pixel the pass covers · share of the view it covers):\n\n| method |"
+    let heading = format!(
+        "Fragments by pass (median over {COVERAGE_VIEWS} views: per pixel of the view · per \
+         pixel the pass covers · share of the view it covers):"
     );
-    for p in &drawn {
-        let _ = write!(out, " {} |", p.name());
-    }
-    out.push_str("\n|---|");
-    out.push_str(&"---:|".repeat(drawn.len()));
-    out.push('\n');
-    for name in &r.order {
-        let Some(f) = r.methods.get(name) else {
-            continue;
-        };
-        let _ = write!(out, "| {name} |");
-        for p in &drawn {
-            match f.fragments_by_pass.get(p.name()) {
-                Some(x) => {
-                    let _ = write!(
-                        out,
-                        " {:.2} · {:.2} · {:.0}% |",
+    method_table(r, &heading, &names(&drawn, Pass::name), |f| {
+        drawn
+            .iter()
+            .map(|p| {
+                f.fragments_by_pass.get(p.name()).map(|x| {
+                    format!(
+                        "{:.2} · {:.2} · {:.0}%",
                         x.per_pixel,
                         x.per_covered_pixel,
                         x.covered * 100.0
-                    );
-                }
-                None => out.push_str(" – |"),
-            }
-        }
-        out.push('\n');
-    }
-    out
+                    )
+                })
+            })
+            .collect()
+    })
 }
 
 /// Instances per frame by what their level shows (mean over the frames).
@@ -664,28 +648,16 @@ fn kind_table(r: &BenchReport) -> String {
                 .any(|f| f.instances_by_kind.contains_key(k.name()))
         })
         .collect();
-    if kinds.is_empty() {
-        return String::new();
-    }
-    let mut out = String::from("\nInstances by level kind (mean per frame):\n\n| method |");
-    for k in &kinds {
-        let _ = write!(out, " {} |", k.name());
-    }
-    out.push_str("\n|---|");
-    out.push_str(&"---:|".repeat(kinds.len()));
-    out.push('\n');
-    for name in &r.order {
-        let Some(f) = r.methods.get(name) else {
-            continue;
-        };
-        let _ = write!(out, "| {name} |");
-        for k in &kinds {
-            let x = f.instances_by_kind.get(k.name()).copied().unwrap_or(0.0);
-            let _ = write!(out, " {x:.1} |");
-        }
-        out.push('\n');
-    }
-    out
+    let heading = "Instances by level kind (mean per frame):";
+    method_table(r, heading, &names(&kinds, LevelKind::name), |f| {
+        kinds
+            .iter()
+            .map(|k| {
+                let x = f.instances_by_kind.get(k.name()).copied().unwrap_or(0.0);
+                Some(format!("{x:.1}"))
+            })
+            .collect()
+    })
 }
 
 /// Where each method's frame goes: the median GPU milliseconds of each pass, and the
@@ -695,41 +667,53 @@ fn pass_table(r: &BenchReport) -> String {
         .into_iter()
         .filter(|p| r.methods.values().any(|f| f.passes.contains_key(p.name())))
         .collect();
-    if drawn.is_empty() {
+    let overdraw = r.methods.values().any(|f| f.overdraw.is_some());
+    let mut columns = names(&drawn, Pass::name);
+    if overdraw && !drawn.is_empty() {
+        columns.push("fragments per pixel");
+    }
+    method_table(r, "GPU time by pass (median ms):", &columns, |f| {
+        let mut cells: Vec<Option<String>> = drawn
+            .iter()
+            .map(|p| f.passes.get(p.name()).map(|ms| format!("{ms:.1}")))
+            .collect();
+        if overdraw {
+            cells.push(f.overdraw.map(|x| format!("{x:.2}")));
+        }
+        cells
+    })
+}
+
+/// The names of `items`, as table columns.
+fn names<T: Copy>(items: &[T], name: fn(T) -> &'static str) -> Vec<&'static str> {
+    items.iter().map(|&i| name(i)).collect()
+}
+
+/// A Markdown table after `heading` with a row per method in the order measured and the
+/// figures `cells` gives under `columns` (None: "–"); empty where there are no columns.
+fn method_table(
+    r: &BenchReport,
+    heading: &str,
+    columns: &[&str],
+    cells: impl Fn(&MethodFigures) -> Vec<Option<String>>,
+) -> String {
+    if columns.is_empty() {
         return String::new();
     }
-    let overdraw = r.methods.values().any(|f| f.overdraw.is_some());
-    let mut out = String::from("\nGPU time by pass (median ms):\n\n| method |");
-    for p in &drawn {
-        let _ = write!(out, " {} |", p.name());
+    let mut out = format!("\n{heading}\n\n| method |");
+    for c in columns {
+        let _ = write!(out, " {c} |");
     }
-    out.push_str(if overdraw {
-        " fragments per pixel |\n|---|"
-    } else {
-        "\n|---|"
-    });
-    out.push_str(&"---:|".repeat(drawn.len() + overdraw as usize));
+    out.push_str("\n|---|");
+    out.push_str(&"---:|".repeat(columns.len()));
     out.push('\n');
     for name in &r.order {
         let Some(f) = r.methods.get(name) else {
             continue;
         };
         let _ = write!(out, "| {name} |");
-        for p in &drawn {
-            match f.passes.get(p.name()) {
-                Some(ms) => {
-                    let _ = write!(out, " {ms:.1} |");
-                }
-                None => out.push_str(" – |"),
-            }
-        }
-        if overdraw {
-            match f.overdraw {
-                Some(x) => {
-                    let _ = write!(out, " {x:.2} |");
-                }
-                None => out.push_str(" – |"),
-            }
+        for cell in cells(f) {
+            let _ = write!(out, " {} |", cell.as_deref().unwrap_or("–"));
         }
         out.push('\n');
     }

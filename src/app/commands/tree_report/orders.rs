@@ -4,9 +4,7 @@
 
 use crate::app::plotting::{plot_error, register_font, write_plot};
 use crate::bake::foliage::billboard::chain::order::{self, CostChoice};
-use crate::bake::foliage::billboard::chain::{
-    ChainBake, ChainOptions, CloudKind, TreeLevel, impostor_level,
-};
+use crate::bake::foliage::billboard::chain::{ChainBake, ChainOptions, CloudKind, TreeLevel};
 use crate::bake::seams::{MeasureColour, RasterizeAtlas};
 use crate::model::Model;
 use anyhow::Result;
@@ -43,17 +41,8 @@ pub fn orders(
     chain: &[TreeLevel],
     opts: &ChainOptions,
 ) -> Result<OrdersReport> {
-    let mut levels: Vec<TreeLevel> = chain[1..].to_vec();
-    let mut impostor_from = None;
-    if let Some((impostor, k)) = impostor_level(raster, measure, tree, chain, opts)? {
-        impostor_from = Some(k);
-        levels.push(impostor);
-    }
-    let chains = ChainBake {
-        levels,
-        impostor_from,
-    }
-    .chains(chain[0].clone());
+    let chains = ChainBake::placing_impostor(raster, measure, tree, chain.to_vec(), opts)?
+        .chains(chain[0].clone());
     let height = crate::bake::foliage::billboard::tree_height(tree);
     let table = order::measure_costs(measure, tree, &chains, height, opts.tolerance_px)?;
     let choices = order::choose(

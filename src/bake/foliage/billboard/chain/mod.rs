@@ -480,17 +480,8 @@ pub fn load_or_build_chains(
 ) -> Result<(order::Chains, Origin)> {
     let build = || -> Result<ChainBake> {
         let foliage = crate::bake::foliage::billboard::foliage(tree).map_err(anyhow::Error::msg)?;
-        let mut levels = tree_chain(raster, tree, &foliage, opts, progress)?;
-        let mut impostor_from = None;
-        if let Some((impostor, k)) = impostor_level(raster, measure, tree, &levels, opts)? {
-            impostor_from = Some(k);
-            levels.push(impostor);
-        }
-        levels.remove(0);
-        Ok(ChainBake {
-            levels,
-            impostor_from,
-        })
+        let levels = tree_chain(raster, tree, &foliage, opts, progress)?;
+        ChainBake::placing_impostor(raster, measure, tree, levels, opts)
     };
     let (bake, origin) = if source == &[0; 32] {
         (build()?, Origin::Baked { warning: None })
@@ -513,6 +504,27 @@ pub struct ChainBake {
 }
 
 impl ChainBake {
+    /// The chain `levels` (level 0 the tree, as `tree_chain` makes it) with the tree's
+    /// impostor placed after it (see [`impostor_level`]), where it finds a place.
+    pub fn placing_impostor(
+        raster: &dyn RasterizeAtlas,
+        measure: &dyn MeasureColour,
+        tree: &Model,
+        mut levels: Vec<TreeLevel>,
+        opts: &ChainOptions,
+    ) -> Result<ChainBake> {
+        let mut impostor_from = None;
+        if let Some((impostor, k)) = impostor_level(raster, measure, tree, &levels, opts)? {
+            impostor_from = Some(k);
+            levels.push(impostor);
+        }
+        levels.remove(0);
+        Ok(ChainBake {
+            levels,
+            impostor_from,
+        })
+    }
+
     /// With `full` as level 0: every level made and the ε chain.
     pub fn chains(self, full: TreeLevel) -> order::Chains {
         let mut candidates = vec![full];
