@@ -13,6 +13,26 @@ pub struct WindowGpu {
     pub surface: wgpu::Surface<'static>,
     pub config: wgpu::SurfaceConfiguration,
     pub gpu: Gpu,
+    /// The panel's meshes as egui last tessellated them.
+    pub panel: PanelMeshes,
+}
+
+/// The panel's meshes as egui last tessellated them: drawn again as they are on a frame where
+/// the panel did not run, without egui's layout, tessellation or uploads.
+#[derive(Default)]
+pub struct PanelMeshes {
+    pub primitives: Vec<egui::ClippedPrimitive>,
+    pub pixels_per_point: f32,
+    /// The surface size and scale egui's buffers were last filled for, if they hold these
+    /// meshes: `None` until they are uploaded (and after a new device or renderer).
+    uploaded: Option<([u32; 2], f32)>,
+}
+
+impl PanelMeshes {
+    /// Forgets that egui's buffers hold the meshes: a new renderer has none.
+    pub fn renderer_replaced(&mut self) {
+        self.uploaded = None;
+    }
 }
 
 impl WindowGpu {
@@ -50,6 +70,7 @@ impl WindowGpu {
             surface,
             config,
             gpu,
+            panel: PanelMeshes::default(),
         })
     }
 
@@ -108,12 +129,11 @@ impl WindowGpu {
 /// A frame of a window with an egui panel, from the surface acquired to the frame presented:
 /// the part of drawing a frame the viewer and the study window share ([`WindowGpu::begin_frame`],
 /// [`WindowGpu::finish_frame`]). What the window draws goes into `encoder`, onto `view`;
-/// egui's own pass draws `primitives` at `screen`.
+/// egui's own pass draws the window's [`PanelMeshes`] at `screen`.
 pub struct PanelFrame {
     surface: wgpu::SurfaceTexture,
     pub view: wgpu::TextureView,
     pub encoder: wgpu::CommandEncoder,
-    pub primitives: Vec<egui::ClippedPrimitive>,
     pub screen: egui_wgpu::ScreenDescriptor,
     /// egui's vertex and index uploads, submitted before the frame.
     egui_buffers: Vec<wgpu::CommandBuffer>,
@@ -132,26 +152,32 @@ pub enum Began {
 }
 
 impl WindowGpu {
-    /// Begins a frame of egui's `output` (of `ctx`, drawn by `renderer`): tessellates it and
-    /// uploads its textures, acquires the surface (making it again where it was lost), and
-    /// records egui's buffer uploads. Where no frame comes, egui's freed textures are freed at
-    /// once.
+    /// Begins a frame of egui's `output` (of `ctx`, drawn by `renderer`), or of the panel as
+    /// it was where `output` is `None` (the panel did not run): tessellates the output into
+    /// [`Self::panel`] and uploads its textures, acquires the surface (making it again where
+    /// it was lost), and records egui's buffer uploads where the meshes or the surface
+    /// changed. Where no frame comes, egui's freed textures are freed at once.
     pub fn begin_frame(
         &mut self,
         ctx: &egui::Context,
         renderer: &mut egui_wgpu::Renderer,
-        mut output: egui::FullOutput,
+        output: Option<egui::FullOutput>,
     ) -> Result<Began> {
-        let ppp = output.pixels_per_point;
-        let primitives = ctx.tessellate(std::mem::take(&mut output.shapes), ppp);
-        // egui's texture uploads go in whether or not this frame reaches the screen; its frees
-        // once the frame no longer needs the textures.
-        for (id, deltas) in output.textures_delta.set.drain() {
-            for delta in &deltas {
-                renderer.update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+        let mut frees = Vec::new();
+        if let Some(mut output) = output {
+            let ppp = output.pixels_per_point;
+            self.panel.primitives = ctx.tessellate(std::mem::take(&mut output.shapes), ppp);
+            self.panel.pixels_per_point = ppp;
+            self.panel.uploaded = None;
+            // egui's texture uploads go in whether or not this frame reaches the screen; its
+            // frees once the frame no longer needs the textures.
+            for (id, deltas) in output.textures_delta.set.drain() {
+                for delta in &deltas {
+                    renderer.update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+                }
             }
+            frees = output.textures_delta.free.drain().collect();
         }
-        let frees: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
         let surface = match self.acquire() {
             Ok(Acquired::Frame(f)) => f,
             other => {
@@ -168,24 +194,30 @@ impl WindowGpu {
                 };
             }
         };
+        let size = [self.config.width, self.config.height];
+        let ppp = self.panel.pixels_per_point;
         let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [self.config.width, self.config.height],
+            size_in_pixels: size,
             pixels_per_point: ppp,
         };
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let egui_buffers = renderer.update_buffers(
-            &self.gpu.device,
-            &self.gpu.queue,
-            &mut encoder,
-            &primitives,
-            &screen,
-        );
+        // egui's renderer keeps the meshes it was last given: upload only what changed.
+        let mut egui_buffers = Vec::new();
+        if self.panel.uploaded != Some((size, ppp)) {
+            egui_buffers = renderer.update_buffers(
+                &self.gpu.device,
+                &self.gpu.queue,
+                &mut encoder,
+                &self.panel.primitives,
+                &screen,
+            );
+            self.panel.uploaded = Some((size, ppp));
+        }
         let view = surface.texture.create_view(&Default::default());
         Ok(Began::Frame(Box::new(PanelFrame {
             surface,
             view,
             encoder,
-            primitives,
             screen,
             egui_buffers,
             frees,

@@ -13,6 +13,7 @@ const SHADOW: &str = include_str!("../../shaders/shadow.wgsl");
 const ATLAS: &str = include_str!("../../shaders/atlas.wgsl");
 const IMPOSTOR: &str = include_str!("../../shaders/impostor.wgsl");
 const IMPOSTOR_BAKE: &str = include_str!("../../shaders/impostor_bake.wgsl");
+const PANEL_IMAGE: &str = include_str!("../../shaders/panel_image.wgsl");
 
 /// Colours of the levels of detail, finest first, as the `lod` debug view paints them and the
 /// viewer's panel shows them: the one copy, which WGSL gets as `level_palette`.
@@ -105,8 +106,13 @@ pub const IMPOSTOR_BAKE_SHADER: ShaderSource = ShaderSource {
     name: "impostor views",
     parts: &[IMPOSTOR_BAKE],
 };
+/// The viewer's panel, drawn once into a texture, copied onto each frame.
+pub const PANEL_IMAGE_SHADER: ShaderSource = ShaderSource {
+    name: "panel image",
+    parts: &[PANEL_IMAGE],
+};
 
-/// Every module the renderer builds.
+/// Every module the renderer and the viewer build.
 pub const ALL: &[&ShaderSource] = &[
     &ATLAS_SHADER,
     &IMPOSTOR_BAKE_SHADER,
@@ -115,4 +121,5 @@ pub const ALL: &[&ShaderSource] = &[
     &CAPTURE_SHADER,
     &ENVIRONMENT_SHADER,
     &SHADOW_SHADER,
+    &PANEL_IMAGE_SHADER,
 ];

@@ -190,3 +190,125 @@ fn viewer_without_a_display_points_to_shot_and_exits_2() {
         assert!(lines[0].contains("lodlab shot"), "{args:?}: {stderr}");
     }
 }
+
+/// The panel copied from its image onto a frame looks as egui drawing it straight onto the
+/// frame does: the fill, the text, a label over the view and a frame left as it was beside.
+#[test]
+fn the_panel_image_matches_egui_drawing_the_panel_directly() {
+    use lodlab::app::panel_image::PanelImage;
+    use lodlab::render::targets::Offscreen;
+    let gpu = crate::common::gpu();
+    let (w, h) = (320u32, 200u32);
+    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let ctx = egui::Context::default();
+    let raw = egui::RawInput {
+        screen_rect: Some(egui::Rect::from_min_size(
+            egui::Pos2::ZERO,
+            egui::vec2(w as f32, h as f32),
+        )),
+        ..Default::default()
+    };
+    let frame = |ctx: &egui::Context| {
+        ctx.run_ui(raw.clone(), |ui| {
+            egui::Panel::left("test panel")
+                .exact_size(120.0)
+                .show(ui, |ui| {
+                    ui.heading("lodlab");
+                    ui.label("triangles 10,392");
+                    let _ = ui.button("Open…");
+                });
+            ui.painter().text(
+                egui::pos2(250.0, 30.0),
+                egui::Align2::CENTER_CENTER,
+                "as+is",
+                egui::FontId::proportional(16.0),
+                egui::Color32::WHITE,
+            );
+        })
+    };
+    // The first run lays the fonts out (and sends their atlas); the second is the frame drawn.
+    let mut first = frame(&ctx);
+    let mut output = frame(&ctx);
+    let primitives = ctx.tessellate(std::mem::take(&mut output.shapes), output.pixels_per_point);
+    let screen = egui_wgpu::ScreenDescriptor {
+        size_in_pixels: [w, h],
+        pixels_per_point: output.pixels_per_point,
+    };
+    let mut renderer = egui_wgpu::Renderer::new(&gpu.device, format, Default::default());
+    let sets = first.textures_delta.set.drain();
+    for (id, deltas) in sets.chain(output.textures_delta.set.drain()) {
+        for delta in &deltas {
+            renderer.update_texture(&gpu.device, &gpu.queue, id, delta);
+        }
+    }
+    first.textures_delta.clear();
+    output.textures_delta.clear();
+    let background = wgpu::Color {
+        r: 0.2,
+        g: 0.4,
+        b: 0.7,
+        a: 1.0,
+    };
+    let direct = Offscreen::with_format(gpu, w, h, 1, format);
+    let copied = Offscreen::with_format(gpu, w, h, 1, format);
+    let mut image = PanelImage::new(&gpu.device, format);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let uploads =
+        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
+    lodlab::app::window::draw_panel(
+        &renderer,
+        &mut encoder,
+        &direct.view,
+        &primitives,
+        &screen,
+        "direct",
+        Some(background),
+        None,
+    );
+    assert!(image.needs_refresh([w, h]));
+    image.refresh(
+        &gpu.device,
+        &renderer,
+        &mut encoder,
+        &primitives,
+        &screen,
+        None,
+    );
+    assert!(!image.needs_refresh([w, h]));
+    // The frame under the panel: the background colour, then the image over it.
+    lodlab::app::window::draw_panel(
+        &renderer,
+        &mut encoder,
+        &copied.view,
+        &[],
+        &screen,
+        "background",
+        Some(background),
+        None,
+    );
+    image.draw(&mut encoder, &copied.view, None, true);
+    gpu.queue
+        .submit(uploads.into_iter().chain([encoder.finish()]));
+    let a = direct.read_rgba(gpu).unwrap();
+    let b = copied.read_rgba(gpu).unwrap();
+    let mut worst = 0u8;
+    for (p, q) in a.pixels().zip(b.pixels()) {
+        for c in 0..3 {
+            worst = worst.max(p[c].abs_diff(q[c]));
+        }
+    }
+    // sRGB storage of the image's premultiplied colours rounds a little at the text's edges.
+    assert!(
+        worst <= 3,
+        "the copy differs from egui's drawing by {worst} of 255"
+    );
+    // And the copy did draw: the panel's fill is not the background, the text over the view
+    // is there, and the view away from the panel is untouched.
+    let bg = b.get_pixel(200, 150).0;
+    assert_ne!(b.get_pixel(60, 190).0, bg, "the panel's fill");
+    assert!(
+        (230..270).any(|x| b.get_pixel(x, 30).0 != bg),
+        "the label over the view"
+    );
+    assert_eq!(a.get_pixel(200, 150).0, bg);
+}

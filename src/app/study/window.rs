@@ -344,7 +344,7 @@ impl StudyWindow {
         );
         let began = self
             .win
-            .begin_frame(self.egui.egui_ctx(), &mut self.renderer, output)?;
+            .begin_frame(self.egui.egui_ctx(), &mut self.renderer, Some(output))?;
         let mut frame = match began {
             Began::Frame(f) => f,
             Began::Skipped => return Ok(()),
@@ -358,7 +358,7 @@ impl StudyWindow {
             &self.renderer,
             &mut frame.encoder,
             &frame.view,
-            &frame.primitives,
+            &self.win.panel.primitives,
             &frame.screen,
             "study",
             Some(wgpu::Color::BLACK),

@@ -38,8 +38,17 @@ pub(crate) fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameSt
     level_histogram(ui, &st.levels);
 }
 
-/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel.
-pub(crate) fn pass_times(ui: &mut egui::Ui, passes: Option<&PassTimes>, pixels: u64) {
+/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel; and
+/// the panel's own CPU time, `panel_cpu_ms` a frame.
+pub(crate) fn pass_times(
+    ui: &mut egui::Ui,
+    passes: Option<&PassTimes>,
+    pixels: u64,
+    panel_cpu_ms: f64,
+) {
+    ui.label(
+        egui::RichText::new(format!("this panel: {panel_cpu_ms:.2} ms of CPU a frame")).small(),
+    );
     let Some(p) = passes else {
         ui.label(egui::RichText::new("GPU time by pass: no timestamp queries here").small());
         return;

@@ -9,8 +9,10 @@ mod event_loop;
 mod figures;
 mod history;
 mod panel;
+mod panel_schedule;
 
-use super::window::{Began, WindowGpu, draw_panel};
+use super::panel_image::PanelImage;
+use super::window::{Began, WindowGpu};
 use crate::atomic::write_png;
 use crate::render::DebugView;
 use crate::render::FrameStats;
@@ -26,6 +28,7 @@ use controls::{Controls, KeyAction};
 pub use event_loop::{display_available, run};
 use history::FrameHistory;
 use panel::{Info, Settings};
+use panel_schedule::PanelSchedule;
 use std::path::PathBuf;
 use std::time::Instant;
 use winit::event::WindowEvent;
@@ -107,6 +110,10 @@ struct Viewer {
     notice: Option<String>,
     /// The frame at which to destroy the device, to try recovery ([`LOSE_DEVICE_ENV`]).
     lose_device_at: Option<usize>,
+    /// When the panel runs again (it is drawn as it was in between).
+    panel: PanelSchedule,
+    /// The panel's last drawing, copied onto each frame.
+    panel_image: PanelImage,
 }
 
 /// `LODLAB_LOSE_DEVICE_AT_FRAME=N` destroys the GPU device before frame N, as a driver reset
@@ -152,6 +159,7 @@ impl Viewer {
             samples,
         );
         let (egui, egui_renderer) = win.egui();
+        let panel_image = PanelImage::new(&gpu.device, config.format);
         let timer = FrameTimer::new(gpu);
         let settings = Settings {
             count: world.spec.count,
@@ -203,6 +211,8 @@ impl Viewer {
             lose_device_at: std::env::var(LOSE_DEVICE_ENV)
                 .ok()
                 .and_then(|v| v.parse().ok()),
+            panel: PanelSchedule::default(),
+            panel_image,
         })
     }
 
@@ -242,12 +252,14 @@ impl Viewer {
                 self.world.lod.policy = self.settings.policy;
                 self.world.apply_foliage(&self.settings.foliage);
                 self.world.reset_camera();
+                self.panel.touch();
                 self.notice = Some(format!("opened {}", path.display()));
                 eprintln!("lodlab: opened {}", path.display());
             }
             Err(e) => {
                 let line = format!("{e:#}");
                 eprintln!("lodlab: {line}");
+                self.panel.touch();
                 self.notice = Some(line);
             }
         }
@@ -312,7 +324,10 @@ impl Viewer {
         let response = self.egui.on_window_event(&self.win.window, event);
         match event {
             WindowEvent::CloseRequested => return Ok(false),
-            WindowEvent::Resized(size) => self.resize(size.width, size.height),
+            WindowEvent::Resized(size) => {
+                self.resize(size.width, size.height);
+                self.panel.touch();
+            }
             WindowEvent::RedrawRequested => return self.redraw(options),
             WindowEvent::DroppedFile(path) => self.open_model(path),
             _ => {
@@ -330,6 +345,10 @@ impl Viewer {
                     pointer_free,
                     keyboard_free,
                 );
+                if action.is_some() {
+                    // A key changed what the panel shows.
+                    self.panel.touch();
+                }
                 let s = &mut self.settings;
                 match action {
                     Some(KeyAction::TogglePlay) => s.playing = !s.playing,
@@ -399,8 +418,11 @@ impl Viewer {
         self.remake_targets();
         // A new egui context sends its whole font atlas again, to the new renderer.
         (self.egui, self.egui_renderer) = self.win.egui();
+        self.win.panel.renderer_replaced();
+        self.panel_image = PanelImage::new(&self.win.gpu.device, self.win.config.format);
         self.timer = FrameTimer::new(&self.win.gpu);
         self.passes = None;
+        self.panel.touch();
         self.notice = Some("the GPU device was lost and has been reopened".into());
         eprintln!("lodlab: the scene is back on a new device");
         Ok(())
@@ -432,8 +454,22 @@ impl Viewer {
             self.recover_device()?;
         }
         let dt = self.tick();
-        let (output, central) = self.run_panel()?;
-        let ppp = output.pixels_per_point;
+        self.upkeep()?;
+        let raw = self.egui.take_egui_input(&self.win.window);
+        let started = Instant::now();
+        let image = &self.panel_image;
+        let ppp_now = self.win.panel.pixels_per_point;
+        let attention = panel_schedule::Attention {
+            covers: &|p| image.covers(p * ppp_now),
+            keyboard: self.egui.egui_ctx().egui_wants_keyboard_input(),
+        };
+        let due = self.panel.due(started, &raw, attention);
+        let output = due.then(|| self.run_panel(raw));
+        let ran = output.is_some().then(|| started.elapsed());
+        let central = self.panel.central;
+        let ppp = output
+            .as_ref()
+            .map_or(self.win.panel.pixels_per_point, |o| o.pixels_per_point);
 
         // The 3D view: what the panel leaves.
         let (w, h) = (self.win.config.width, self.win.config.height);
@@ -446,9 +482,19 @@ impl Viewer {
             .world
             .prepare(&self.win.gpu, [self.view[2], self.view[3]], self.time, dt);
 
+        let panel_started = Instant::now();
+        if output.is_some() {
+            self.panel_image.stale();
+        }
         let began = self
             .win
             .begin_frame(self.egui.egui_ctx(), &mut self.egui_renderer, output);
+        // The panel's CPU time: running it, and tessellating and uploading its meshes.
+        let panel_cpu = match ran {
+            Some(run) => run + panel_started.elapsed(),
+            None => std::time::Duration::ZERO,
+        };
+        self.panel.count(panel_cpu);
         let mut frame = match began {
             Ok(Began::Frame(f)) => f,
             Ok(Began::Skipped) => return Ok(true),
@@ -460,13 +506,30 @@ impl Viewer {
             Err(_) if self.win.gpu.is_lost() => return Ok(true),
             Err(e) => return Err(e),
         };
-        self.encode(
+        self.world.renderer.encode(
             &mut frame.encoder,
             &self.targets,
             &frame.view,
-            &frame.primitives,
-            &frame.screen,
+            Some(self.view),
             self.timer.as_ref(),
+        );
+        // The panel drawn again where it changed (its timing begins there), then copied.
+        let refreshed = self.panel_image.needs_refresh(frame.screen.size_in_pixels);
+        if refreshed {
+            self.panel_image.refresh(
+                &self.win.gpu.device,
+                &self.egui_renderer,
+                &mut frame.encoder,
+                &self.win.panel.primitives,
+                &frame.screen,
+                self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
+            );
+        }
+        self.panel_image.draw(
+            &mut frame.encoder,
+            &frame.view,
+            self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
+            !refreshed,
         );
         if let Some(t) = &mut self.timer {
             t.resolve(&mut frame.encoder);
@@ -482,14 +545,16 @@ impl Viewer {
                 self.targets.sample_count,
                 self.win.config.format,
             );
-            self.encode(
+            let renderer = &self.world.renderer;
+            renderer.encode(
                 &mut frame.encoder,
                 &shot.targets,
                 &shot.view,
-                &frame.primitives,
-                &frame.screen,
+                Some(self.view),
                 None,
             );
+            self.panel_image
+                .draw(&mut frame.encoder, &shot.view, None, true);
             shot
         });
         if let Err(e) = self.win.finish_frame(&mut self.egui_renderer, frame) {
@@ -519,6 +584,7 @@ impl Viewer {
             self.screenshot_requested = false;
             let path = Self::screenshot_path();
             let where_ = std::env::current_dir().map_or(path.clone(), |d| d.join(&path));
+            self.panel.touch();
             self.notice = Some(match self.write_screenshot(&shot, &path) {
                 Ok(()) => format!("screenshot: {}", where_.display()),
                 Err(e) => format!("screenshot failed: {e:#}"),
@@ -564,12 +630,10 @@ impl Viewer {
         dt
     }
 
-    /// Runs the panel for this frame and acts on what it asked for: its output to draw, and
-    /// the rectangle it leaves to the 3D view (in points).
-    fn run_panel(&mut self) -> Result<(egui::FullOutput, egui::Rect)> {
-        let raw = self.egui.take_egui_input(&self.win.window);
+    /// What every frame does besides drawing: levels baked and loaded, where memory goes
+    /// (once a second: it reads /proc), the panel's settings handed to the world.
+    fn upkeep(&mut self) -> Result<()> {
         self.update_levels()?;
-        // Where memory goes, once a second (it reads /proc).
         if self
             .memory_at
             .is_none_or(|t| t.elapsed().as_secs_f32() >= 1.0)
@@ -577,6 +641,14 @@ impl Viewer {
             self.memory = self.world.memory(self.targets.bytes());
             self.memory_at = Some(Instant::now());
         }
+        self.world.renderer.shadows = self.settings.shadows;
+        self.apply_lod_settings();
+        Ok(())
+    }
+
+    /// Runs the panel on egui's input `raw` and acts on what it asked for: its output to
+    /// draw. The rectangle it leaves to the 3D view goes to [`Self::panel`].
+    fn run_panel(&mut self, raw: egui::RawInput) -> egui::FullOutput {
         let info = Info {
             adapter: &self.adapter,
             backend: &self.backend,
@@ -585,6 +657,7 @@ impl Viewer {
             stats: self.stats,
             passes: self.passes,
             view_pixels: self.view[2] as u64 * self.view[3] as u64,
+            panel_cpu_ms: self.panel.cpu_ms(),
             memory: &self.memory,
             time: self.time,
             baking: self.bake.as_ref().map(|b| (b.status(), b.fraction())),
@@ -618,6 +691,11 @@ impl Viewer {
         if requests.reset_camera {
             self.world.reset_camera();
         }
+        let repaint = output
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .map_or(std::time::Duration::MAX, |v| v.repaint_delay);
+        self.panel.ran(Instant::now(), central, repaint);
         if requests.open {
             // The platform's file dialog (XDG portal or GTK); none where there is no desktop
             // to ask, and then the panel says to drop a file instead.
@@ -627,13 +705,15 @@ impl Viewer {
             {
                 Some(path) => self.open_model(&path),
                 None => {
+                    self.panel.touch();
                     self.notice = Some("no file picked: drop a .glb or .gltf on the window".into())
                 }
             }
         }
+        // What the panel changed reaches the world this frame.
         self.world.renderer.shadows = self.settings.shadows;
         self.apply_lod_settings();
-        Ok((output, central))
+        output
     }
 
     /// Writes the screenshot taken into `shot` (the window's size) to `path` as an RGBA PNG.
@@ -651,11 +731,16 @@ impl Viewer {
         let image = image::RgbaImage::from_raw(w, h, bytes)
             .ok_or_else(|| anyhow!("screenshot size mismatch"))?;
         write_png(path, &image)?;
+        let panel_gpu = self
+            .passes
+            .and_then(|p| p.ms[Pass::Ui as usize])
+            .map_or(String::new(), |ms| format!(", {ms:.2} ms of GPU"));
         eprintln!(
-            "lodlab: wrote {} after {} frames ({:.1} fps)",
+            "lodlab: wrote {} after {} frames ({:.1} fps; the panel took {:.2} ms of CPU{panel_gpu} a frame)",
             path.display(),
             self.frames,
-            self.history.fps()
+            self.history.fps(),
+            self.panel.cpu_ms(),
         );
         Ok(())
     }
@@ -684,29 +769,5 @@ impl Viewer {
             self.foliage_changed = Instant::now();
             self.bake_error = None;
         }
-    }
-    /// Records the scene into the 3D view and the panel over it.
-    fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &RenderTargets,
-        view: &wgpu::TextureView,
-        primitives: &[egui::ClippedPrimitive],
-        screen: &egui_wgpu::ScreenDescriptor,
-        timer: Option<&FrameTimer>,
-    ) {
-        self.world
-            .renderer
-            .encode(encoder, targets, view, Some(self.view), timer);
-        draw_panel(
-            &self.egui_renderer,
-            encoder,
-            view,
-            primitives,
-            screen,
-            "panel",
-            None,
-            timer.map(|t| t.writes(Pass::Ui)),
-        );
     }
 }

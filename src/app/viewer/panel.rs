@@ -58,6 +58,8 @@ pub struct Info<'a> {
     pub passes: Option<PassTimes>,
     /// Pixels of the 3D view, for fragments per pixel.
     pub view_pixels: u64,
+    /// The panel's own CPU time, ms a frame.
+    pub panel_cpu_ms: f64,
     /// Where memory goes, bytes by kind.
     pub memory: &'a [(&'static str, u64)],
     pub time: f32,
@@ -122,7 +124,12 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     ui.separator();
 
     statistics(ui, history, &info.stats);
-    pass_times(ui, info.passes.as_ref(), info.view_pixels);
+    pass_times(
+        ui,
+        info.passes.as_ref(),
+        info.view_pixels,
+        info.panel_cpu_ms,
+    );
     memory(ui, info.memory);
     ui.separator();
     level_of_detail(ui, s, info);
@@ -642,6 +649,7 @@ mod clicks {
                         stats: FrameStats::default(),
                         passes: None,
                         view_pixels: 0,
+                        panel_cpu_ms: 0.0,
                         memory: &[],
                         time: 0.0,
                         baking: None,

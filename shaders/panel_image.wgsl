@@ -1,0 +1,17 @@
+// The viewer's panel as an image: egui draws the panel into a texture when it changes, and
+// every frame copies that texture's pixels over the frame inside the panel's rectangles (the
+// scissor rectangles), which costs a software rasteriser a fraction of egui's own shading.
+// The texture holds premultiplied colour, drawn "over" what is there.
+
+@group(0) @binding(0) var panel: texture_2d<f32>;
+
+@vertex
+fn vs_main(@builtin(vertex_index) vi: u32) -> @builtin(position) vec4<f32> {
+    let xy = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u)) * 2.0 - 1.0;
+    return vec4<f32>(xy, 0.0, 1.0);
+}
+
+@fragment
+fn fs_main(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
+    return textureLoad(panel, vec2<i32>(pixel.xy), 0);
+}
