@@ -607,6 +607,17 @@ fn a_report_of_a_tree_writes_its_three_files() {
         .filter(|p| p[0] > 180 && p[1] < 90 && p[2] < 90)
         .count();
     assert!(blue > 100 && red > 100, "blue {blue}, red {red}");
+    // Both orders' chains drawn as curves: the ε order red, the cost order blue.
+    let chains = image::open(out_dir.join("chains-error-per-cost.png"))
+        .unwrap()
+        .to_rgb8();
+    let near = |p: &image::Rgb<u8>, c: [i32; 3]| (0..3).all(|i| (p[i] as i32 - c[i]).abs() < 30);
+    let epsilon = chains.pixels().filter(|p| near(p, [200, 60, 40])).count();
+    let cost = chains.pixels().filter(|p| near(p, [30, 110, 200])).count();
+    assert!(
+        epsilon > 50 && cost > 50,
+        "ε order {epsilon}, cost order {cost}"
+    );
     let sheet = image::open(out_dir.join("levels.png")).unwrap().to_rgb8();
     let columns = levels.len().min(6) as u32;
     assert_eq!(sheet.width(), 300 * columns);

@@ -7,7 +7,8 @@
 //! beside this tree's at the same billboard counts (`against-thesis.md`), and how each level
 //! is lit beside the full tree under two suns, its billboards lit by their planes and per
 //! texel through their atlases (`lighting.md`), and the levels each size draws ordered by ε
-//! and by measured error per cost (`orders.md`, `error-per-cost.png`).
+//! and by measured error per cost (`orders.md`, `error-per-cost.png`,
+//! `chains-error-per-cost.png`).
 //!
 //! Besides the chain (skeleton clouds, spectral ones, then clumps), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
@@ -161,6 +162,7 @@ fn write_files(
         orders::orders_table(&report.orders).as_bytes(),
     )?;
     orders::orders_plot(&report.orders, &out.join("error-per-cost.png"))?;
+    orders::chains_plot(&report.orders, &out.join("chains-error-per-cost.png"))?;
     plot(report, &out.join("colour-error.png"))?;
     contact_sheet(gpu, chain, report, &out.join("levels.png"))?;
     // The finest spectral level against the skeleton-only level at the same ε.

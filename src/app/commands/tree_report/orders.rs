@@ -1,6 +1,8 @@
 //! The report's two orders of a tree's levels: what the ε chain draws at each switch size and
 //! what ordering by measured error per cost draws there instead (`orders.md`), and each
-//! level's colour error against its cost at every switch size (`error-per-cost.png`).
+//! level's colour error against its cost at every switch size (`error-per-cost.png`), and each
+//! order's chain as one curve, the error and cost of what it draws from size to size
+//! (`chains-error-per-cost.png`).
 
 use crate::app::plotting::{plot_error, register_font, write_plot};
 use crate::bake::foliage::billboard::chain::order::{self, CostChoice};
@@ -175,6 +177,85 @@ pub fn orders_plot(r: &OrdersReport, path: &Path) -> Result<()> {
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::LowerLeft)
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .draw()
+            .map_err(plot_error)?;
+        root.present().map_err(plot_error)?;
+    }
+    write_plot(path, w, h, buf)
+}
+
+/// `chains-error-per-cost.png`: each order's chain as a curve through what it draws at each
+/// switch size, colour error against cost (log), the sizes marked on the ε chain's points.
+pub fn chains_plot(r: &OrdersReport, path: &Path) -> Result<()> {
+    register_font();
+    let (w, h) = (900u32, 600u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    let by_order: [(&str, RGBColor, Vec<(f64, f64)>); 2] = [
+        ("ε order", RGBColor(200, 60, 40), {
+            let c = r.stretches.iter().map(|s| &s.choice);
+            c.map(|c| (c.epsilon_cost.max(1.0), c.epsilon_error as f64))
+                .collect()
+        }),
+        ("cost order", RGBColor(30, 110, 200), {
+            let c = r.stretches.iter().map(|s| &s.choice);
+            c.map(|c| (c.drawn_cost.max(1.0), c.drawn_error as f64))
+                .collect()
+        }),
+    ];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let all = || by_order.iter().flat_map(|(_, _, p)| p.iter().copied());
+        // Room on the right for the last size's label.
+        let max_cost = all().map(|p| p.0).fold(10.0, f64::max) * 3.0;
+        let min_cost = all().map(|p| p.0).fold(max_cost, f64::min) / 1.5;
+        let max_error = all().map(|p| p.1).fold(0.1, f64::max) * 1.1;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "What each order draws, from one switch size to the next",
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
+            .build_cartesian_2d((min_cost..max_cost).log_scale(), 0.0..max_error)
+            .map_err(plot_error)?;
+        chart
+            .configure_mesh()
+            .x_desc("cost (fragments + 9 a triangle)")
+            .y_desc("colour error")
+            .x_label_formatter(&|v| crate::app::plotting::log_label(*v))
+            .draw()
+            .map_err(plot_error)?;
+        for (name, colour, points) in &by_order {
+            let colour = *colour;
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .map_err(plot_error)?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                .map_err(plot_error)?;
+        }
+        // Which size each step is: the ε chain's points, labelled.
+        chart
+            .draw_series(r.stretches.iter().zip(&by_order[0].2).map(|(s, &p)| {
+                EmptyElement::at(p)
+                    + Text::new(
+                        format!("from {:.0} px", s.choice.px),
+                        (8, -18),
+                        ("sans-serif", 13).into_font().color(&BLACK),
+                    )
+            }))
+            .map_err(plot_error)?;
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .border_style(BLACK)
             .background_style(WHITE.mix(0.9))
             .draw()
