@@ -397,7 +397,8 @@ fn dissolved(in: FoliageOut) -> bool {
 // Billboards lit through their atlas (a normal per texel) have a pipeline of their own,
 // `vs_foliage_lit` below.
 struct FoliageOut {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: the depth pre-pass and the colour pass after it must agree to the bit.
+    @invariant @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
     @location(1) @interpolate(flat) material: u32,
     @location(2) tint: vec3<f32>,
@@ -471,6 +472,25 @@ fn fs_foliage(in: FoliageOut, @builtin(front_facing) front: bool) -> @location(0
     if (texel.a < 0.5 || dissolved(in)) {
         discard;
     }
+    return vec4<f32>(foliage_color(in, texel.rgb, front), 1.0);
+}
+
+// The foliage depth pre-pass (without multisampling): depth only, where the texture's alpha
+// keeps the leaf. One texture read a layer; the colour pass after it shades each pixel once.
+@fragment
+fn fs_foliage_depth(in: FoliageOut) {
+    let alpha = textureSample(material_tex, material_sampler, in.uv, in.material).a;
+    if (alpha < 0.5 || dissolved(in)) {
+        discard;
+    }
+}
+
+// The colour pass after the depth pre-pass: drawn where the depth equals the pre-pass's, so
+// only the nearest leaf's fragment at each pixel passes, and without a discard, so that the
+// rasteriser's early depth test holds.
+@fragment
+fn fs_foliage_equal(in: FoliageOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     return vec4<f32>(foliage_color(in, texel.rgb, front), 1.0);
 }
 

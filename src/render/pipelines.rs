@@ -145,6 +145,10 @@ pub enum Stage {
     FadeColor,
     /// Lines, coloured by level (where the adapter draws lines).
     Wireframe,
+    /// Foliage's depth pre-pass: depth only, alpha tested (see `FoliagePhase`).
+    PrepassDepth,
+    /// Foliage's colour after its pre-pass: where the depth is equal, no alpha test.
+    PrepassColour,
 }
 
 /// How a character pipeline paints.
@@ -203,6 +207,14 @@ impl PipelineKey {
         }
         keys.push(Self::own(DrawClass::Foliage, false));
         keys.push(Self::own(DrawClass::Foliage, true));
+        for morph in [false, true] {
+            for stage in [PrepassDepth, PrepassColour] {
+                keys.push(PipelineKey {
+                    stage,
+                    ..Self::own(DrawClass::Foliage, morph)
+                });
+            }
+        }
         keys.push(Self::own(DrawClass::AtlasLitFoliage, false));
         keys.push(Self::own(DrawClass::TreeImpostor, false));
         keys.push(Self::own(DrawClass::CharacterImpostor, false));
@@ -221,7 +233,11 @@ impl PipelineKey {
                 } else {
                     "vs_foliage"
                 },
-                cut("fs_foliage", "fs_foliage_coverage"),
+                match self.stage {
+                    Stage::PrepassDepth => "fs_foliage_depth",
+                    Stage::PrepassColour => "fs_foliage_equal",
+                    _ => cut("fs_foliage", "fs_foliage_coverage"),
+                },
             ),
             DrawClass::AtlasLitFoliage => (
                 "vs_foliage_lit",
@@ -270,10 +286,20 @@ impl PipelineKey {
         };
         if self.class != DrawClass::Mesh {
             // Cut out: no culling, the texture's alpha as a cut-out; with multisampling, alpha
-            // to coverage smooths the cut edges.
-            return PipelineSpec {
-                alpha_to_coverage: true,
-                ..base
+            // to coverage smooths the cut edges. The pre-pass's two stages cut out by depth.
+            return match self.stage {
+                Stage::PrepassDepth => PipelineSpec {
+                    depth_only: true,
+                    ..base
+                },
+                Stage::PrepassColour => PipelineSpec {
+                    depth: Depth::Equal,
+                    ..base
+                },
+                _ => PipelineSpec {
+                    alpha_to_coverage: true,
+                    ..base
+                },
             };
         }
         let mesh = PipelineSpec {
@@ -281,7 +307,8 @@ impl PipelineKey {
             ..base
         };
         match self.stage {
-            Stage::Opaque | Stage::Dither => mesh,
+            // (The pre-pass stages are foliage's only; a mesh never has them.)
+            Stage::Opaque | Stage::Dither | Stage::PrepassDepth | Stage::PrepassColour => mesh,
             Stage::FadeDepth => PipelineSpec {
                 depth_only: true,
                 ..mesh

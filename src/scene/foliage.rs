@@ -68,6 +68,8 @@ pub struct FoliageView {
     /// planes, as the thesis did (the crown's occlusion is in their colour either way). None:
     /// by adapter (see `Gpu::atlas_lighting`).
     pub atlas_lighting: Option<bool>,
+    /// Draw plain foliage's depth before its colour (see the renderer's `FoliagePhase`).
+    pub prepass: bool,
 }
 
 impl Default for FoliageView {
@@ -79,6 +81,7 @@ impl Default for FoliageView {
             outlines: false,
             tint: false,
             atlas_lighting: None,
+            prepass: false,
         }
     }
 }

@@ -916,3 +916,63 @@ fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
         "no clump level stands in for a cloud"
     );
 }
+
+/// The foliage depth pre-pass (`--foliage-prepass`) draws the same forest as the single
+/// alpha-tested pass: each pixel's nearest leaf, shaded alike; and it does run (the fragment
+/// shaders invoked go up, where the adapter counts them: the leaves are drawn twice).
+#[test]
+fn the_foliage_depth_prepass_draws_the_same_forest() {
+    use lodlab::app::commands::shot::{ShotOptions, run};
+    use lodlab::runtime::spec::SceneSpec;
+    let dir = tempfile::tempdir().unwrap();
+    let shot = |prepass: bool| {
+        let out = dir.path().join(format!("forest-{prepass}.png"));
+        let mut lod = lodlab::runtime::headless::ShotLod::default();
+        lod.foliage.prepass = prepass;
+        let report = run(&ShotOptions {
+            spec: SceneSpec {
+                scene: lodlab::scene::SceneKind::Forest,
+                count: 4,
+                cache_dir: Some(crate::common::shared_cache()),
+                ..Default::default()
+            },
+            out: out.clone(),
+            width: 320,
+            height: 240,
+            time: 1.5,
+            samples: Some(1),
+            camera: None,
+            timed_frames: 1,
+            calibrate: false,
+            lod,
+        })
+        .unwrap();
+        (image::open(&out).unwrap().to_rgb8(), report.overdraw)
+    };
+    let (single, single_overdraw) = shot(false);
+    let (prepass, prepass_overdraw) = shot(true);
+    let differing = single
+        .pixels()
+        .zip(prepass.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
+        .count();
+    let n = (single.width() * single.height()) as usize;
+    let green = prepass
+        .pixels()
+        .filter(|p| p[1] as i32 > p[0] as i32 + 15 && p[1] as i32 > p[2] as i32 + 10)
+        .count();
+    assert!(
+        green > n / 50,
+        "the forest's leaves: {green} green pixels of {n}"
+    );
+    assert!(
+        differing * 200 < n,
+        "{differing} of {n} pixels differ with the pre-pass"
+    );
+    if let (Some(a), Some(b)) = (single_overdraw, prepass_overdraw) {
+        assert!(
+            b > a * 1.2,
+            "fragments per pixel {a:.2} alone, {b:.2} with the pre-pass"
+        );
+    }
+}

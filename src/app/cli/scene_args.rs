@@ -187,6 +187,12 @@ pub struct FoliageArgs {
     /// either way [default: flat on a CPU adapter such as lavapipe, else atlas].
     #[arg(long, value_enum)]
     pub billboard_lighting: Option<BillboardLighting>,
+    /// Draw plane-lit foliage's depth first (alpha tested, one texture read), then its colour
+    /// where the depth is equal, shading each pixel once; one sample a pixel only. Off by
+    /// default: on lavapipe the second pass rasterises every layer again and the foliage
+    /// pass takes about 1.6× as long.
+    #[arg(long)]
+    pub foliage_prepass: bool,
 }
 
 /// How billboards are lit (see `FoliageArgs::billboard_lighting`).
@@ -215,6 +221,7 @@ impl FoliageArgs {
             atlas_lighting: self
                 .billboard_lighting
                 .map(|l| l == BillboardLighting::Atlas),
+            prepass: self.foliage_prepass,
         }
     }
 }

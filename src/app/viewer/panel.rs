@@ -502,6 +502,13 @@ fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     {
         f.atlas_lighting = Some(lit);
     }
+    ui.checkbox(&mut f.prepass, "foliage depth pre-pass")
+        .on_hover_text(
+            "plane-lit leaves drawn twice: depth first (alpha tested), then colour where the \
+             depth is equal, so each pixel is shaded once; one sample a pixel only. On \
+             lavapipe the second pass rasterises every layer again: the foliage pass takes \
+             about 1.6× as long",
+        );
     for (name, current, levels) in &info.chains {
         let title = if *current {
             format!("{name}: {} levels", levels.len())

@@ -49,6 +49,16 @@ impl SceneRenderer {
         self.outlines && self.shader != CharacterShader::Plain && !self.wireframe()
     }
 
+    /// Whether the foliage pass draws plain foliage's depth first (see [`FoliagePhase`]):
+    /// asked for, one sample a pixel (with more, alpha to coverage needs the cut-out's
+    /// alpha), and neither lines nor the plain calibration draw.
+    fn uses_foliage_prepass(&self) -> bool {
+        self.foliage_prepass
+            && self.sample_count == 1
+            && !self.wireframe()
+            && self.shader != CharacterShader::Plain
+    }
+
     /// Whether the frame is drawn as lines: asked for, where the adapter draws lines.
     fn wireframe(&self) -> bool {
         self.debug == DebugView::Wireframe && self.pipelines.has_wireframe()
@@ -76,8 +86,12 @@ impl SceneRenderer {
         };
         pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
         match which {
-            Pass::Characters => self.draw_opaque(pass, &mut scissor, false),
-            Pass::Foliage => self.draw_opaque(pass, &mut scissor, true),
+            Pass::Characters => self.draw_opaque(pass, &mut scissor, None),
+            Pass::Foliage if self.uses_foliage_prepass() => {
+                self.draw_opaque(pass, &mut scissor, Some(FoliagePhase::Depth));
+                self.draw_opaque(pass, &mut scissor, Some(FoliagePhase::Colour));
+            }
+            Pass::Foliage => self.draw_opaque(pass, &mut scissor, Some(FoliagePhase::Single)),
             Pass::Environment => {
                 // Over the whole view.
                 scissor.whole(pass);
@@ -191,10 +205,15 @@ impl SceneRenderer {
         pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
     }
 
-    /// The opaque draws of the characters (`foliage` false) or of the trees: levels and
-    /// geomorphs (in wireframe mode the faded levels of alpha transitions too, as lines), or
-    /// the plain calibration draw of everything.
-    fn draw_opaque(&self, pass: &mut wgpu::RenderPass<'_>, scissor: &mut Scissor, foliage: bool) {
+    /// The opaque draws of the characters (`foliage` None) or of the trees in one of their
+    /// phases: levels and geomorphs (in wireframe mode the faded levels of alpha transitions
+    /// too, as lines), or the plain calibration draw of everything.
+    fn draw_opaque(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        scissor: &mut Scissor,
+        foliage: Option<FoliagePhase>,
+    ) {
         if self.shader == CharacterShader::Plain {
             pass.set_pipeline(&self.pipelines.plain);
             pass.set_vertex_buffer(1, self.instance_buffer.slice(..));
@@ -218,14 +237,16 @@ impl SceneRenderer {
         let mut current = None;
         for &(key, ref range) in &self.draws {
             let c = &self.characters[key.model()];
-            if c.class.is_tree() != foliage {
+            if c.class.is_tree() != foliage.is_some() {
                 continue;
             }
             let class = match c.class {
                 DrawClass::AtlasLitFoliage if !self.atlas_lighting => DrawClass::Foliage,
                 class => class,
             };
-            let Some(pipeline) = opaque_pipeline(class, key.pass(), wire, || self.look(&key))
+            let phase = foliage.unwrap_or(FoliagePhase::Single);
+            let Some(pipeline) =
+                opaque_pipeline(class, key.pass(), wire, phase, || self.look(&key))
             else {
                 continue;
             };
@@ -247,11 +268,22 @@ fn opaque_pipeline(
     class: DrawClass,
     pass: u64,
     wire: bool,
+    phase: FoliagePhase,
     look: impl FnOnce() -> Look,
 ) -> Option<PipelineKey> {
     let morph = pass == PASS_MORPH;
+    let prepass = |stage| PipelineKey {
+        stage,
+        ..PipelineKey::own(DrawClass::Foliage, morph)
+    };
     Some(match class {
         _ if pass == PASS_FADE && !wire => return None,
+        // The pre-pass is plain foliage's; everything else draws in the colour phase.
+        DrawClass::Foliage if phase == FoliagePhase::Depth && !wire => prepass(Stage::PrepassDepth),
+        DrawClass::Foliage if phase == FoliagePhase::Colour && !wire => {
+            prepass(Stage::PrepassColour)
+        }
+        _ if phase == FoliagePhase::Depth => return None,
         // An impostor's mesh is only where its rows sway (or, animated, four corners): it is
         // always drawn as the quad its shader makes, in wireframe too.
         DrawClass::TreeImpostor | DrawClass::CharacterImpostor => PipelineKey::own(class, false),
@@ -263,6 +295,20 @@ fn opaque_pipeline(
             _ => PipelineKey::mesh(morph, Stage::Opaque, look()),
         },
     })
+}
+
+/// How the foliage pass draws plain foliage (plane-lit billboards and leaves, the default on
+/// a CPU adapter). Alpha-tested geometry defeats early depth testing on llvmpipe, so every
+/// layer of leaves at a pixel pays the full shader; with the pre-pass, every layer pays a
+/// depth-only shader with one texture read, and the nearest alone the colour shader.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FoliagePhase {
+    /// In one pass, alpha tested.
+    Single,
+    /// The pre-pass: depth only, alpha tested.
+    Depth,
+    /// After the pre-pass: colour where the depth is equal, no alpha test.
+    Colour,
 }
 
 /// The scissor rectangle of the side being drawn, set only when the side changes.
@@ -388,19 +434,41 @@ mod tests {
         for class in classes {
             for pass in passes {
                 for wire in [false, true] {
-                    for look in [Look::Shaded, Look::Debug, Look::Mapped] {
-                        let Some(key) = opaque_pipeline(class, pass, wire, || look) else {
-                            assert!(pass == PASS_FADE && !wire, "{class:?} {pass} {wire}");
+                    for phase in [
+                        FoliagePhase::Single,
+                        FoliagePhase::Depth,
+                        FoliagePhase::Colour,
+                    ] {
+                        if wire && phase != FoliagePhase::Single {
+                            // The renderer draws no pre-pass in wireframe.
                             continue;
-                        };
-                        assert!(built.contains(&key), "{key:?} is not built");
-                        chosen.insert(key);
-                        if class.faces_eye() {
-                            assert_eq!(key, PipelineKey::own(class, false));
-                        } else if wire {
-                            assert_eq!(key.stage, Stage::Wireframe);
-                        } else if class != DrawClass::Mesh {
-                            assert_eq!((key.stage, key.look), (Stage::Opaque, Look::Shaded));
+                        }
+                        for look in [Look::Shaded, Look::Debug, Look::Mapped] {
+                            let Some(key) = opaque_pipeline(class, pass, wire, phase, || look)
+                            else {
+                                assert!(
+                                    (pass == PASS_FADE && !wire)
+                                        || (phase == FoliagePhase::Depth
+                                            && class != DrawClass::Foliage),
+                                    "{class:?} {pass} {wire} {phase:?}"
+                                );
+                                continue;
+                            };
+                            assert!(built.contains(&key), "{key:?} is not built");
+                            chosen.insert(key);
+                            if class.faces_eye() {
+                                assert_eq!(key, PipelineKey::own(class, false));
+                            } else if wire {
+                                assert_eq!(key.stage, Stage::Wireframe);
+                            } else if class == DrawClass::Foliage && phase != FoliagePhase::Single {
+                                let stage = match phase {
+                                    FoliagePhase::Depth => Stage::PrepassDepth,
+                                    _ => Stage::PrepassColour,
+                                };
+                                assert_eq!((key.stage, key.look), (stage, Look::Shaded));
+                            } else if class != DrawClass::Mesh {
+                                assert_eq!((key.stage, key.look), (Stage::Opaque, Look::Shaded));
+                            }
                         }
                     }
                 }

@@ -126,6 +126,11 @@ pub struct SceneRenderer {
     /// Light billboard clouds per texel through their atlases (see `bake::billboard::atlas`);
     /// off, by their planes' normals. By adapter at first (`Gpu::atlas_lighting`).
     pub atlas_lighting: bool,
+    /// Draw plain foliage's depth first, then its colour where the depth is equal (see
+    /// `draw::FoliagePhase`); only without multisampling.
+    pub foliage_prepass: bool,
+    /// Samples per pixel of the targets this renderer's pipelines draw into.
+    sample_count: u32,
     frame_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
     pub(crate) frame_layout: wgpu::BindGroupLayout,
@@ -203,6 +208,8 @@ impl SceneRenderer {
             outlines: false,
             foliage_tint: false,
             atlas_lighting: gpu.lights_atlases(),
+            foliage_prepass: false,
+            sample_count,
             frame_buffer,
             frame_bind_group,
             frame_layout,

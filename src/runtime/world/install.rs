@@ -67,12 +67,13 @@ impl World {
     }
 
     /// Shows the trees as `foliage` says: their level policy and chains (see
-    /// [`World::set_foliage`]), wind, outlines and tint.
+    /// [`World::set_foliage`]), wind, outlines, tint and depth pre-pass.
     pub fn apply_foliage(&mut self, foliage: &FoliageView) {
         self.set_foliage(foliage.policy, foliage.chain);
         self.renderer.wind = foliage.wind;
         self.renderer.outlines = foliage.outlines;
         self.renderer.foliage_tint = foliage.tint;
+        self.renderer.foliage_prepass = foliage.prepass;
         if let Some(on) = foliage.atlas_lighting {
             self.renderer.atlas_lighting = on;
         }

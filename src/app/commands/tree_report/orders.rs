@@ -186,13 +186,16 @@ pub fn orders_plot(r: &OrdersReport, path: &Path) -> Result<()> {
     write_plot(path, w, h, buf)
 }
 
+/// A curve of a plot: its name, colour and points.
+type Curve = (&'static str, RGBColor, Vec<(f64, f64)>);
+
 /// `chains-error-per-cost.png`: each order's chain as a curve through what it draws at each
 /// switch size, colour error against cost (log), the sizes marked on the ε chain's points.
 pub fn chains_plot(r: &OrdersReport, path: &Path) -> Result<()> {
     register_font();
     let (w, h) = (900u32, 600u32);
     let mut buf = vec![0u8; (w * h * 3) as usize];
-    let by_order: [(&str, RGBColor, Vec<(f64, f64)>); 2] = [
+    let by_order: [Curve; 2] = [
         ("ε order", RGBColor(200, 60, 40), {
             let c = r.stretches.iter().map(|s| &s.choice);
             c.map(|c| (c.epsilon_cost.max(1.0), c.epsilon_error as f64))
