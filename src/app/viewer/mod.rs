@@ -12,7 +12,7 @@ mod panel;
 mod panel_schedule;
 
 use super::panel_image::PanelImage;
-use super::window::{Began, WindowGpu};
+use super::window::{Began, PanelFrame, WindowGpu};
 use crate::atomic::write_png;
 use crate::render::DebugView;
 use crate::render::FrameStats;
@@ -455,17 +455,7 @@ impl Viewer {
         }
         let dt = self.tick();
         self.upkeep()?;
-        let raw = self.egui.take_egui_input(&self.win.window);
-        let started = Instant::now();
-        let image = &self.panel_image;
-        let ppp_now = self.win.panel.pixels_per_point;
-        let attention = panel_schedule::Attention {
-            covers: &|p| image.covers(p * ppp_now),
-            keyboard: self.egui.egui_ctx().egui_wants_keyboard_input(),
-        };
-        let due = self.panel.due(started, &raw, attention);
-        let output = due.then(|| self.run_panel(raw));
-        let ran = output.is_some().then(|| started.elapsed());
+        let (output, ran) = self.panel_if_due();
         let central = self.panel.central;
         let ppp = output
             .as_ref()
@@ -506,31 +496,7 @@ impl Viewer {
             Err(_) if self.win.gpu.is_lost() => return Ok(true),
             Err(e) => return Err(e),
         };
-        self.world.renderer.encode(
-            &mut frame.encoder,
-            &self.targets,
-            &frame.view,
-            Some(self.view),
-            self.timer.as_ref(),
-        );
-        // The panel drawn again where it changed (its timing begins there), then copied.
-        let refreshed = self.panel_image.needs_refresh(frame.screen.size_in_pixels);
-        if refreshed {
-            self.panel_image.refresh(
-                &self.win.gpu.device,
-                &self.egui_renderer,
-                &mut frame.encoder,
-                &self.win.panel.primitives,
-                &frame.screen,
-                self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
-            );
-        }
-        self.panel_image.draw(
-            &mut frame.encoder,
-            &frame.view,
-            self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
-            !refreshed,
-        );
+        self.encode_frame(&mut frame);
         if let Some(t) = &mut self.timer {
             t.resolve(&mut frame.encoder);
         }
@@ -591,6 +557,53 @@ impl Viewer {
             });
         }
         Ok(true)
+    }
+
+    /// Runs the panel if it is due (see [`PanelSchedule::due`]): its output, and the CPU time
+    /// running it took.
+    fn panel_if_due(&mut self) -> (Option<egui::FullOutput>, Option<std::time::Duration>) {
+        let raw = self.egui.take_egui_input(&self.win.window);
+        let started = Instant::now();
+        let image = &self.panel_image;
+        let ppp = self.win.panel.pixels_per_point;
+        let attention = panel_schedule::Attention {
+            covers: &|p| image.covers(p * ppp),
+            keyboard: self.egui.egui_ctx().egui_wants_keyboard_input(),
+        };
+        let due = self.panel.due(started, &raw, attention);
+        let output = due.then(|| self.run_panel(raw));
+        let ran = output.is_some().then(|| started.elapsed());
+        (output, ran)
+    }
+
+    /// Records the frame: the scene into the 3D view, the panel drawn again where it changed
+    /// (its timing begins there), and the panel's image copied over the frame.
+    fn encode_frame(&mut self, frame: &mut PanelFrame) {
+        self.world.renderer.encode(
+            &mut frame.encoder,
+            &self.targets,
+            &frame.view,
+            Some(self.view),
+            self.timer.as_ref(),
+        );
+        // The panel drawn again where it changed (its timing begins there), then copied.
+        let refreshed = self.panel_image.needs_refresh(frame.screen.size_in_pixels);
+        if refreshed {
+            self.panel_image.refresh(
+                &self.win.gpu.device,
+                &self.egui_renderer,
+                &mut frame.encoder,
+                &self.win.panel.primitives,
+                &frame.screen,
+                self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
+            );
+        }
+        self.panel_image.draw(
+            &mut frame.encoder,
+            &frame.view,
+            self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
+            !refreshed,
+        );
     }
 
     /// Says on stderr when the first frame was shown, and when every level the view asks for
