@@ -20,6 +20,7 @@ pub mod foliage_lighting;
 pub mod impostor_fit;
 pub mod shading_error;
 pub mod ssim;
+pub mod statistics;
 
 use crate::bake::character::lod::LodLevel;
 use crate::bake::gpu_data::drawable::CharacterBake;

@@ -25,6 +25,7 @@ use std::process::ExitCode;
 use super::shot::histogram;
 use crate::atomic::check_target;
 use crate::bake::gpu_data::drawable::LevelKind;
+use crate::measure::statistics::{medians, percentile};
 use crate::render::targets::Offscreen;
 use crate::render::timer::{FrameTimer, Pass, PassTimes, overdraw_median, pass_medians};
 use crate::render::{CharacterShader, FrameStats, Gpu};
@@ -140,6 +141,10 @@ pub struct MethodFigures {
     /// drawn only.
     #[serde(default)]
     pub instances_by_kind: BTreeMap<String, f64>,
+    /// Each level kind's instances drawn alone (no other kind hiding them), medians over
+    /// [`COVERAGE_VIEWS`] views: GPU ms of its pass and fragments per pixel of the view.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub cost_by_kind: BTreeMap<String, [f64; 2]>,
 }
 
 /// A pass's fragments, medians over [`COVERAGE_VIEWS`] views along the path.
@@ -170,6 +175,9 @@ struct Samples {
     /// Per coverage view, each pass's fragments per pixel of the view, per pixel covered, and
     /// share covered.
     coverage: Vec<[Option<[f64; 3]>; Pass::COUNT]>,
+    /// Per coverage view, each level kind drawn alone: its pass's GPU ms and fragments per
+    /// pixel of the view.
+    kind_costs: Vec<[Option<[f64; 2]>; LevelKind::COUNT]>,
 }
 
 /// The scene, its target and its timer: what a frame needs.
@@ -443,6 +451,14 @@ fn cover(bench: &mut Bench, order: &[LodMethod], samples: &mut [Samples]) -> Res
                 ]);
             }
             s.coverage.push(view);
+            if let Some(timer) = &mut bench.timer {
+                s.kind_costs.push(crate::measure::coverage::kinds_alone(
+                    &bench.gpu,
+                    &mut bench.world.renderer,
+                    &bench.target,
+                    timer,
+                )?);
+            }
         }
     }
     Ok(())
@@ -504,18 +520,13 @@ fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
         fragments_by_pass: Pass::ALL
             .into_iter()
             .filter_map(|p| {
-                let views: Vec<[f64; 3]> =
-                    s.coverage.iter().filter_map(|v| v[p as usize]).collect();
-                let at =
-                    |k: usize| percentile(&views.iter().map(|v| v[k]).collect::<Vec<_>>(), 0.5);
-                (!views.is_empty()).then(|| {
-                    let figures = PassFragments {
-                        per_pixel: at(0),
-                        per_covered_pixel: at(1),
-                        covered: at(2),
-                    };
-                    (p.name().to_string(), figures)
-                })
+                let [per_pixel, per_covered_pixel, covered] = medians(&s.coverage, p as usize)?;
+                let figures = PassFragments {
+                    per_pixel,
+                    per_covered_pixel,
+                    covered,
+                };
+                Some((p.name().to_string(), figures))
             })
             .collect(),
         instances_by_kind: LevelKind::ALL
@@ -523,19 +534,11 @@ fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
             .filter(|&k| s.kinds[k as usize] > 0)
             .map(|k| (k.name().to_string(), s.kinds[k as usize] as f64 / n as f64))
             .collect(),
+        cost_by_kind: LevelKind::ALL
+            .into_iter()
+            .filter_map(|k| Some((k.name().to_string(), medians(&s.kind_costs, k as usize)?)))
+            .collect(),
     }
-}
-
-/// The `q` quantile of `values`, linearly interpolated between the closest ranks.
-pub fn percentile(values: &[f64], q: f64) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let x = q.clamp(0.0, 1.0) * (v.len() - 1) as f64;
-    let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
-    v[lo] + (v[hi] - v[lo]) * (x - lo as f64)
 }
 
 /// The report as Markdown: a line on the set-up, the calibration, and a table, one row per
@@ -638,7 +641,8 @@ fn fragment_table(r: &BenchReport) -> String {
     })
 }
 
-/// Instances per frame by what their level shows (mean over the frames).
+/// Instances per frame by what their level shows (mean over the frames), and what each kind
+/// costs drawn alone.
 fn kind_table(r: &BenchReport) -> String {
     let kinds: Vec<LevelKind> = LevelKind::ALL
         .into_iter()
@@ -649,7 +653,8 @@ fn kind_table(r: &BenchReport) -> String {
         })
         .collect();
     let heading = "Instances by level kind (mean per frame):";
-    method_table(r, heading, &names(&kinds, LevelKind::name), |f| {
+    let columns = names(&kinds, LevelKind::name);
+    let mut out = method_table(r, heading, &columns, |f| {
         kinds
             .iter()
             .map(|k| {
@@ -657,7 +662,23 @@ fn kind_table(r: &BenchReport) -> String {
                 Some(format!("{x:.1}"))
             })
             .collect()
-    })
+    });
+    if r.methods.values().any(|f| !f.cost_by_kind.is_empty()) {
+        let heading = format!(
+            "Each level kind drawn alone (median over {COVERAGE_VIEWS} views: GPU ms of its \
+             pass · fragments per pixel of the view):"
+        );
+        out.push_str(&method_table(r, &heading, &columns, |f| {
+            kinds
+                .iter()
+                .map(|k| {
+                    let [ms, x] = f.cost_by_kind.get(k.name())?;
+                    Some(format!("{ms:.1} · {x:.2}"))
+                })
+                .collect()
+        }));
+    }
+    out
 }
 
 /// Where each method's frame goes: the median GPU milliseconds of each pass, and the

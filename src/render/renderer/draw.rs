@@ -237,7 +237,9 @@ impl SceneRenderer {
         let mut current = None;
         for &(key, ref range) in &self.draws {
             let c = &self.characters[key.model()];
-            if c.class.is_tree() != foliage.is_some() {
+            if c.class.is_tree() != foliage.is_some()
+                || self.only_kind.is_some_and(|k| k != c.level_kind)
+            {
                 continue;
             }
             let class = match c.class {

@@ -129,6 +129,9 @@ pub struct SceneRenderer {
     /// Draw plain foliage's depth first, then its colour where the depth is equal (see
     /// `draw::FoliagePhase`); only without multisampling.
     pub foliage_prepass: bool,
+    /// A measurement's filter: the opaque passes draw only instances whose level is of this
+    /// kind (`None`: every instance). See `bench`'s cost by level kind.
+    pub only_kind: Option<crate::bake::gpu_data::drawable::LevelKind>,
     /// Samples per pixel of the targets this renderer's pipelines draw into.
     sample_count: u32,
     frame_buffer: wgpu::Buffer,
@@ -209,6 +212,7 @@ impl SceneRenderer {
             foliage_tint: false,
             atlas_lighting: gpu.lights_atlases(),
             foliage_prepass: false,
+            only_kind: None,
             sample_count,
             frame_buffer,
             frame_bind_group,
