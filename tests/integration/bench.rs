@@ -260,15 +260,18 @@ fn bench_counts_trees_by_level_kind_and_foliage_by_covered_pixel() {
                 <= 0.5 * f("per_covered_pixel"),
             "the three figures agree: {foliage}"
         );
-        // Each kind drawn alone is a tree kind, shades some of the foliage, and none shades
-        // more than the whole foliage pass did with every kind hiding others, times the
-        // kinds (drawn alone, nothing in front hides it).
+        // Each kind drawn alone is a tree kind and shades some foliage, but not far more than
+        // the whole foliage pass (alone, nothing in front of it is drawn to hide it, hence
+        // the margin).
         let alone = m["cost_by_kind"].as_object().unwrap();
         assert!(!alone.is_empty(), "{m}");
         for (kind, figures) in alone {
             assert!(trees.contains(&kind.as_str()), "{kind}");
             let x = figures[1].as_f64().unwrap();
-            assert!(x > 0.0 && x <= f("per_pixel") * 4.0, "{kind}: {figures} against {foliage}");
+            assert!(
+                x > 0.0 && x <= f("per_pixel") * 4.0,
+                "{kind}: {figures} against {foliage}"
+            );
         }
     }
 }

@@ -258,35 +258,44 @@ fn trees_stand_on_the_ground_and_are_metric() {
     }
 }
 
+/// A 320×240 shot of a forest of 4 trees at 1.5 s with `samples` per pixel, into `out`.
+fn forest_shot(
+    out: &std::path::Path,
+    samples: u32,
+    lod: lodlab::runtime::headless::ShotLod,
+) -> lodlab::app::commands::shot::ShotReport {
+    use lodlab::app::commands::shot::{ShotOptions, run};
+    use lodlab::runtime::spec::SceneSpec;
+    run(&ShotOptions {
+        spec: SceneSpec {
+            scene: lodlab::scene::SceneKind::Forest,
+            count: 4,
+            cache_dir: Some(crate::common::shared_cache()),
+            ..Default::default()
+        },
+        out: out.to_path_buf(),
+        width: 320,
+        height: 240,
+        time: 1.5,
+        samples: Some(samples),
+        camera: None,
+        timed_frames: 1,
+        calibrate: false,
+        lod,
+    })
+    .unwrap()
+}
+
 /// The forest renders: trees with green foliage whose quads are cut out by the leaf alpha
 /// (no dark quad corners), with and without multisampling; and every pixel is opaque, so no
 /// leaf edge shows what lies under the image (a pale fringe over a viewer's white) where alpha
 /// to coverage smooths it.
 #[test]
 fn a_forest_shot_shows_trees_with_cut_out_leaves() {
-    use lodlab::app::commands::shot::{ShotOptions, run};
-    use lodlab::runtime::spec::SceneSpec;
     let dir = tempfile::tempdir().unwrap();
     for samples in [1, 4] {
         let out = dir.path().join(format!("forest{samples}.png"));
-        let report = run(&ShotOptions {
-            spec: SceneSpec {
-                scene: lodlab::scene::SceneKind::Forest,
-                count: 4,
-                cache_dir: Some(crate::common::shared_cache()),
-                ..Default::default()
-            },
-            out: out.clone(),
-            width: 320,
-            height: 240,
-            time: 1.5,
-            samples: Some(samples),
-            camera: None,
-            timed_frames: 1,
-            calibrate: false,
-            lod: Default::default(),
-        })
-        .unwrap();
+        let report = forest_shot(&out, samples, Default::default());
         assert_eq!(report.scene, "forest");
         assert_eq!(report.instances + report.culled, 4);
         let img = image::open(&out).unwrap().to_rgba8();
@@ -922,31 +931,12 @@ fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
 /// shaders invoked go up, where the adapter counts them: the leaves are drawn twice).
 #[test]
 fn the_foliage_depth_prepass_draws_the_same_forest() {
-    use lodlab::app::commands::shot::{ShotOptions, run};
-    use lodlab::runtime::spec::SceneSpec;
     let dir = tempfile::tempdir().unwrap();
     let shot = |prepass: bool| {
         let out = dir.path().join(format!("forest-{prepass}.png"));
         let mut lod = lodlab::runtime::headless::ShotLod::default();
         lod.foliage.prepass = prepass;
-        let report = run(&ShotOptions {
-            spec: SceneSpec {
-                scene: lodlab::scene::SceneKind::Forest,
-                count: 4,
-                cache_dir: Some(crate::common::shared_cache()),
-                ..Default::default()
-            },
-            out: out.clone(),
-            width: 320,
-            height: 240,
-            time: 1.5,
-            samples: Some(1),
-            camera: None,
-            timed_frames: 1,
-            calibrate: false,
-            lod,
-        })
-        .unwrap();
+        let report = forest_shot(&out, 1, lod);
         (image::open(&out).unwrap().to_rgb8(), report.overdraw)
     };
     let (single, single_overdraw) = shot(false);

@@ -122,26 +122,8 @@ pub fn orders_plot(r: &OrdersReport, path: &Path) -> Result<()> {
             .iter()
             .flat_map(|s| s.measured.iter().map(|&(_, e, c)| (c.max(1.0), e as f64)))
             .collect();
-        let max_cost = points.iter().map(|p| p.0).fold(10.0, f64::max) * 1.5;
-        let min_cost = points.iter().map(|p| p.0).fold(max_cost, f64::min) / 1.5;
-        let max_error = points.iter().map(|p| p.1).fold(0.1, f64::max) * 1.1;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                "Colour error against cost at each switch size",
-                ("sans-serif", 20),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(56)
-            .build_cartesian_2d((min_cost..max_cost).log_scale(), 0.0..max_error)
-            .map_err(plot_error)?;
-        chart
-            .configure_mesh()
-            .x_desc("cost (fragments + 9 a triangle)")
-            .y_desc("colour error")
-            .x_label_formatter(&|v| crate::app::plotting::log_label(*v))
-            .draw()
-            .map_err(plot_error)?;
+        let caption = "Colour error against cost at each switch size";
+        let mut chart = cost_chart(&root, caption, &points, 1.5)?;
         for (i, s) in r.stretches.iter().enumerate() {
             let colour = Palette99::pick(i).to_rgba();
             let mut curve: Vec<(f64, f64)> = s
@@ -186,6 +168,40 @@ pub fn orders_plot(r: &OrdersReport, path: &Path) -> Result<()> {
     write_plot(path, w, h, buf)
 }
 
+/// A chart of colour error against cost (log) on `root`, with its axes drawn, holding
+/// `points` with `headroom` times the largest cost as the right edge.
+fn cost_chart<'a, 'b>(
+    root: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
+    caption: &str,
+    points: &[(f64, f64)],
+    headroom: f64,
+) -> Result<
+    ChartContext<
+        'a,
+        BitMapBackend<'b>,
+        Cartesian2d<LogCoord<f64>, plotters::coord::types::RangedCoordf64>,
+    >,
+> {
+    let max_cost = points.iter().map(|p| p.0).fold(10.0, f64::max) * headroom;
+    let min_cost = points.iter().map(|p| p.0).fold(max_cost, f64::min) / 1.5;
+    let max_error = points.iter().map(|p| p.1).fold(0.1, f64::max) * 1.1;
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(56)
+        .build_cartesian_2d((min_cost..max_cost).log_scale(), 0.0..max_error)
+        .map_err(plot_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("cost (fragments + 9 a triangle)")
+        .y_desc("colour error")
+        .x_label_formatter(&|v| crate::app::plotting::log_label(*v))
+        .draw()
+        .map_err(plot_error)?;
+    Ok(chart)
+}
+
 /// A curve of a plot: its name, colour and points.
 type Curve = (&'static str, RGBColor, Vec<(f64, f64)>);
 
@@ -210,28 +226,10 @@ pub fn chains_plot(r: &OrdersReport, path: &Path) -> Result<()> {
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;
-        let all = || by_order.iter().flat_map(|(_, _, p)| p.iter().copied());
+        let all: Vec<(f64, f64)> = by_order.iter().flat_map(|(_, _, p)| p.clone()).collect();
+        let caption = "What each order draws, from one switch size to the next";
         // Room on the right for the last size's label.
-        let max_cost = all().map(|p| p.0).fold(10.0, f64::max) * 3.0;
-        let min_cost = all().map(|p| p.0).fold(max_cost, f64::min) / 1.5;
-        let max_error = all().map(|p| p.1).fold(0.1, f64::max) * 1.1;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                "What each order draws, from one switch size to the next",
-                ("sans-serif", 20),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(56)
-            .build_cartesian_2d((min_cost..max_cost).log_scale(), 0.0..max_error)
-            .map_err(plot_error)?;
-        chart
-            .configure_mesh()
-            .x_desc("cost (fragments + 9 a triangle)")
-            .y_desc("colour error")
-            .x_label_formatter(&|v| crate::app::plotting::log_label(*v))
-            .draw()
-            .map_err(plot_error)?;
+        let mut chart = cost_chart(&root, caption, &all, 3.0)?;
         for (name, colour, points) in &by_order {
             let colour = *colour;
             chart
