@@ -31,7 +31,35 @@ struct ImpostorFrame {
     grid: vec4<f32>,
     // x: a texel's share of a view's cell.
     cell: vec4<f32>,
+    // The tree's bounds at rest, model space (xyz of each): the quad covers their outline.
+    lo: vec4<f32>,
+    hi: vec4<f32>,
 };
+
+// The quad's extent round the sphere's centre, in radii along the view's axes (x0, x1, y0,
+// y1): the outline of the bounds seen along `d`, a little wider, within the sphere's square.
+// A point of the tree lands on the quad where it projects along `d` (the parallax of the
+// views is undone by their heights), so nothing drawn lies outside; a tall tree's quad is
+// a crown wide instead of a tree high, and a forest patch's is its trees high.
+fn quad_extent(axes: ViewAxes, centre: vec3<f32>, radius: f32) -> vec4<f32> {
+    var e = vec4<f32>(1e9, -1e9, 1e9, -1e9);
+    for (var k = 0u; k < 8u; k = k + 1u) {
+        let corner = vec3<f32>(
+            select(impostor.lo.x, impostor.hi.x, (k & 1u) != 0u),
+            select(impostor.lo.y, impostor.hi.y, (k & 2u) != 0u),
+            select(impostor.lo.z, impostor.hi.z, (k & 4u) != 0u),
+        ) - centre;
+        let x = dot(corner, axes.right) / radius;
+        let y = dot(corner, axes.up) / radius;
+        e = vec4<f32>(min(e.x, x), max(e.y, x), min(e.z, y), max(e.w, y));
+    }
+    let margin = QUAD_MARGIN;
+    return clamp(e + vec4<f32>(-margin, margin, -margin, margin), vec4<f32>(-1.0), vec4<f32>(1.0));
+}
+
+// The margin round the outline, in radii: filtering and the views' blend reach a little
+// beyond it.
+const QUAD_MARGIN: f32 = 0.06;
 
 // An animated impostor's rectangle of each view's cell that any frame covers (s0, t0, s1, t1),
 // texel k for view k, row by row (`AnimatedFrame::rects`).
@@ -118,7 +146,11 @@ fn vs_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> ImpostorOut {
     let v = frame.camera_pos.xyz - instance_point(inst, centre);
     let d = normalize(inst.row0.xyz * v.x + inst.row1.xyz * v.y + inst.row2.xyz * v.z);
     let axes = view_axes(d);
-    let q = vec2<f32>(2.0 * f32(vi & 1u) - 1.0, 2.0 * f32(vi >> 1u) / f32(rows) - 1.0);
+    let extent = select(vec4<f32>(-1.0, 1.0, -1.0, 1.0), quad_extent(axes, centre, radius), impostor.hi.w > 0.5);
+    let q = vec2<f32>(
+        mix(extent.x, extent.y, f32(vi & 1u)),
+        mix(extent.z, extent.w, f32(vi >> 1u) / f32(rows)),
+    );
     let offset = radius * (q.x * axes.right + q.y * axes.up);
     let rest = centre + offset;
     // Sway with the rows round this point's height.

@@ -17,6 +17,9 @@ struct CharacterUniform {
     sphere: [f32; 4],
     grid: [f32; 4],
     cell: [f32; 4],
+    /// A tree impostor's bounds at rest (w of `hi` 1 where they are set).
+    lo: [f32; 4],
+    hi: [f32; 4],
 }
 
 /// A character's shared GPU data: animation texture, materials, blob shadow, and one set of
@@ -262,6 +265,12 @@ impl GpuCharacter {
             cell: frame.map_or([0.0; 4], |f| {
                 let texels = bake.materials.width as f32 / f.frames.max(1) as f32;
                 [1.0 / texels.max(1.0), 0.0, 0.0, 0.0]
+            }),
+            lo: frame.map_or([0.0; 4], |f| {
+                [f.bounds[0][0], f.bounds[0][1], f.bounds[0][2], 0.0]
+            }),
+            hi: frame.map_or([0.0; 4], |f| {
+                [f.bounds[1][0], f.bounds[1][1], f.bounds[1][2], 1.0]
             }),
         };
         if let Some(a) = bake.kind.character_impostor() {

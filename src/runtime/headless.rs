@@ -102,7 +102,14 @@ impl Headless {
                 "--debug-view wireframe: this adapter cannot draw lines (POLYGON_MODE_LINE)"
             );
         }
-        world.ensure_levels(&self.gpu, self.measure)
+        world.ensure_levels(&self.gpu, self.measure)?;
+        if lod.foliage.patches {
+            let colour = self.measure.colour(&self.gpu);
+            world.ensure_patches(&self.gpu, colour.as_ref())
+        } else {
+            world.drop_patches();
+            Ok(())
+        }
     }
 }
 

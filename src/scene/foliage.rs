@@ -70,6 +70,9 @@ pub struct FoliageView {
     pub atlas_lighting: Option<bool>,
     /// Draw plain foliage's depth before its colour (see the renderer's `FoliagePhase`).
     pub prepass: bool,
+    /// Far trees drawn as forest patches, a card per layout cell (see
+    /// `bake::foliage::patch`).
+    pub patches: bool,
 }
 
 impl Default for FoliageView {
@@ -82,6 +85,7 @@ impl Default for FoliageView {
             tint: false,
             atlas_lighting: None,
             prepass: false,
+            patches: false,
         }
     }
 }

@@ -25,6 +25,7 @@ mod lod_render;
 mod lod_runtime;
 mod malformed;
 mod normal_maps;
+mod patches;
 mod record;
 mod shaders;
 mod soak;

@@ -193,6 +193,11 @@ pub struct FoliageArgs {
     /// pass takes about 1.6× as long.
     #[arg(long)]
     pub foliage_prepass: bool,
+    /// Far trees as forest patches: beyond where a tree's impostor comes in, the trees of a
+    /// layout cell share one impostor card composed from theirs, where it measures no worse
+    /// than their impostors (baked for the layout on first use, then cached).
+    #[arg(long)]
+    pub forest_patches: bool,
 }
 
 /// How billboards are lit (see `FoliageArgs::billboard_lighting`).
@@ -222,6 +227,7 @@ impl FoliageArgs {
                 .billboard_lighting
                 .map(|l| l == BillboardLighting::Atlas),
             prepass: self.foliage_prepass,
+            patches: self.forest_patches,
         }
     }
 }

@@ -66,6 +66,14 @@ pub struct ShotReport {
     pub billboard_lighting: String,
     /// Instances by level of detail, finest first (the last bin holds coarser ones too).
     pub levels: Vec<u32>,
+    /// Instances by what their level shows (mesh, cloud, forest patch, ...), those drawn.
+    pub level_kinds: BTreeMap<String, u32>,
+    /// The layout's forest patches where they were asked for: how many, and the trees'
+    /// height in pixels below which they are drawn (None: never, they measured worse).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forest_patches: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub patch_switch_px: Option<f32>,
     pub in_transition: u64,
     /// Median over the timed frames, submit to GPU completion.
     pub frame_ms: f64,
@@ -172,6 +180,13 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         }
         .into(),
         levels: histogram(&stats.levels),
+        level_kinds: crate::bake::gpu_data::drawable::LevelKind::ALL
+            .into_iter()
+            .filter(|&k| stats.kinds[k as usize] > 0)
+            .map(|k| (k.name().to_string(), stats.kinds[k as usize]))
+            .collect(),
+        forest_patches: world.patches().map(|p| p.patches.len()),
+        patch_switch_px: world.patches().and_then(|p| p.switch_px),
         in_transition: stats.in_transition,
         frame_ms,
         passes: pass_medians(&passes),

@@ -17,6 +17,8 @@ pub const CHAIN_VERSION: u32 = 25;
 /// Which of a tree's levels each size draws when ordered by cost
 /// (`bake::foliage::billboard::chain::order`).
 pub const ORDER_VERSION: u32 = 1;
+/// A layout's forest patches (`bake::foliage::patch`).
+pub const PATCH_VERSION: u32 = 1;
 /// A character's animated impostor (`bake::impostor::animated`).
 pub const IMPOSTOR_VERSION: u32 = 5;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the
@@ -133,4 +135,24 @@ pub fn placement_key(levels: &[u8; 32], impostor: &[u8; 32], tolerance_px: f32) 
     h.update(impostor);
     h.update(&tolerance_px.to_le_bytes());
     *h.finalize().as_bytes()
+}
+
+/// The key of a layout's forest patches: every tree model's chain key, the trees as they
+/// stand (`layout`, encoded as the cache encodes), the tolerance they are placed for and the
+/// versions.
+pub fn patch_key(
+    chains: &[[u8; 32]],
+    layout: &impl Serialize,
+    tolerance_px: f32,
+) -> Result<[u8; 32], String> {
+    let mut h = blake3::Hasher::new();
+    h.update(b"lodlab forest patches");
+    h.update(&FORMAT_VERSION.to_le_bytes());
+    h.update(&PATCH_VERSION.to_le_bytes());
+    for c in chains {
+        h.update(c);
+    }
+    h.update(&postcard::to_stdvec(layout).map_err(|e| format!("encoding the layout: {e}"))?);
+    h.update(&tolerance_px.to_le_bytes());
+    Ok(*h.finalize().as_bytes())
 }

@@ -3,4 +3,5 @@
 //! for ([`spectral`]).
 
 pub mod billboard;
+pub mod patch;
 pub mod spectral;

@@ -72,6 +72,9 @@ crate::choice! {
         TreeImpostor => "tree impostor",
         /// A character's animated impostor.
         CharacterImpostor => "character impostor",
+        /// A forest patch: one impostor card for the trees of a layout cell
+        /// (`bake::foliage::patch`).
+        ForestPatch => "forest patch",
     }
 }
 

@@ -419,28 +419,11 @@ pub(crate) fn dilate_cells(pixels: &mut [u8], width: u32, height: u32, cell: u32
     }
 }
 
-/// The octahedral impostor of `tree`: its views drawn through `raster` of the tree at rest
-/// ([`at_rest`]), averaged down and dilated, and the quad model that shows them.
-pub fn bake_impostor(
-    raster: &dyn RasterizeAtlas,
-    tree: &Model,
-    grid: ViewGrid,
-) -> Result<(Model, ImpostorFrame)> {
-    let posed = at_rest(tree);
-    let tree = &posed;
-    let (request, radius) = view_request(tree, grid, SUPERSAMPLE)?;
-    let materials = MaterialLayers::bake(&tree.materials);
-    let drawn = raster.rasterize_views(&request, &materials)?;
-    let mut images = average_down(&drawn, SUPERSAMPLE);
-    // The alpha test at one half would drop the twigs and leaf edges that cover less than
-    // half a texel: scale alpha so that as many texels pass as the drawn views covered
-    // (coverage-preserving, as the material mipmaps are).
-    let drawn_px = &drawn.colour.pixels;
-    let covered = drawn_px.chunks_exact(4).filter(|p| p[3] >= 128).count();
-    preserve_coverage(
-        &mut images.colour.pixels,
-        covered as f32 / (drawn_px.len() / 4) as f32,
-    );
+/// The last step of an impostor's views (a tree's, or a forest patch's composed from its
+/// trees'): `images` as drawn and averaged (colour alpha the coverage, the normal's alpha the
+/// height towards the eye) dilated so that filtering never pulls in an unset texel: the
+/// colour round each outline, the normals and heights over whole `cell`-texel cells.
+pub(crate) fn finish_views(images: &mut ViewImages, cell: u32) {
     // Heights of the covered texels, uncovered ones at the centre plane, then spread out
     // from the silhouettes: a parallax probe that lands just off a view's outline moves with
     // the edge next to it, and filtering never mixes in a height from nowhere.
@@ -466,8 +449,8 @@ pub fn bake_impostor(
     dilate(&mut images.colour.pixels, w, h, DILATE_RINGS);
     // Normals and heights fill whole cells: their layer is filtered as plain data (its alpha
     // never falls under the cut-off), so no texel may hold an unset one.
-    dilate_cells(&mut images.normal.pixels, w, h, grid.cell);
-    dilate_cells(&mut heights, w, h, grid.cell);
+    dilate_cells(&mut images.normal.pixels, w, h, cell);
+    dilate_cells(&mut heights, w, h, cell);
     for (n, h) in images
         .normal
         .pixels
@@ -476,6 +459,31 @@ pub fn bake_impostor(
     {
         n[3] = h[0];
     }
+}
+
+/// The octahedral impostor of `tree`: its views drawn through `raster` of the tree at rest
+/// ([`at_rest`]), averaged down and dilated, and the quad model that shows them.
+pub fn bake_impostor(
+    raster: &dyn RasterizeAtlas,
+    tree: &Model,
+    grid: ViewGrid,
+) -> Result<(Model, ImpostorFrame)> {
+    let posed = at_rest(tree);
+    let tree = &posed;
+    let (request, radius) = view_request(tree, grid, SUPERSAMPLE)?;
+    let materials = MaterialLayers::bake(&tree.materials);
+    let drawn = raster.rasterize_views(&request, &materials)?;
+    let mut images = average_down(&drawn, SUPERSAMPLE);
+    // The alpha test at one half would drop the twigs and leaf edges that cover less than
+    // half a texel: scale alpha so that as many texels pass as the drawn views covered
+    // (coverage-preserving, as the material mipmaps are).
+    let drawn_px = &drawn.colour.pixels;
+    let covered = drawn_px.chunks_exact(4).filter(|p| p[3] >= 128).count();
+    preserve_coverage(
+        &mut images.colour.pixels,
+        covered as f32 / (drawn_px.len() / 4) as f32,
+    );
+    finish_views(&mut images, grid.cell);
     let bounds = Bounds::of(tree.mesh.positions.iter().copied())
         .ok_or_else(|| anyhow!("{}: no vertices", tree.name))?;
     let frame = ImpostorFrame {

@@ -273,6 +273,18 @@ impl SceneRenderer {
         Ok(self.characters.len() - 1)
     }
 
+    /// Counts character `index`'s instances as `kind` in the frame's figures (a forest patch
+    /// is drawn as a tree impostor but counted apart).
+    pub fn set_level_kind(
+        &mut self,
+        index: usize,
+        kind: crate::bake::gpu_data::drawable::LevelKind,
+    ) {
+        if let Some(c) = self.characters.get_mut(index) {
+            c.level_kind = kind;
+        }
+    }
+
     /// Uploads `bake` in place of character `index` (one no instance draws any more), freeing
     /// what that one held; returns `index`.
     pub fn replace_character(

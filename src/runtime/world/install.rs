@@ -319,6 +319,11 @@ impl World {
             opts: *opts,
             characters,
             levels: chain.iter().map(LevelSummary::of).collect(),
+            impostor: chain
+                .iter()
+                .rev()
+                .find(|l| super::patches::is_impostor(&l.kind))
+                .map(|l| Box::new(l.cloud.clone())),
         });
         if *opts == self.lod.chain || self.tree_levels[m].is_none() {
             self.show_chain(self.chains.len() - 1);

@@ -15,6 +15,7 @@ use crate::scene::{
 use anyhow::{Result, bail};
 
 mod install;
+mod patches;
 mod view;
 
 use view::impostor_draws;
@@ -47,6 +48,8 @@ pub struct World {
     impostors: Vec<Option<InstalledImpostor>>,
     /// Per model and method slot: its levels' normal maps as uploaded.
     normal_maps: Vec<Vec<Option<NormalMapInfo>>>,
+    /// The layout's forest patches, once baked ([`World::ensure_patches`]).
+    patches: Option<patches::InstalledPatches>,
 }
 
 /// A set of levels' normal maps, as the panel reports them.
@@ -81,6 +84,8 @@ struct InstalledChain {
     /// The renderer's character of every level (level 0 the tree itself).
     characters: Vec<usize>,
     levels: Vec<LevelSummary>,
+    /// Its impostor level (what forest patches are composed from), if it has one.
+    impostor: Option<Box<crate::bake::foliage::billboard::chain::CloudLevel>>,
 }
 
 /// One level of a tree's chain, as the foliage panel lists it.
@@ -171,6 +176,7 @@ impl World {
             drawn: Default::default(),
             impostors: vec![None; n_models],
             normal_maps: vec![Vec::new(); n_models],
+            patches: None,
         })
     }
 
@@ -206,6 +212,8 @@ impl World {
         self.spec.count = count;
         self.spec.clip = clip;
         self.crowd = layout_crowd(&self.spec, &self.bakes, only);
+        // Patches stand for the old layout's cells.
+        self.drop_patches();
     }
 
     pub fn reset_camera(&mut self) {
@@ -242,6 +250,7 @@ impl World {
         }
         self.lod.trackers = trackers;
         self.lod.draws = draws;
+        self.select_patches(&screen, dt);
     }
 
     /// Runs selection over the `seconds` before `time` at 60 frames per second, so that a
@@ -276,10 +285,19 @@ impl World {
                     Some((lod.impostor_level(m, slot)?, character))
                 })
                 .collect();
+            // Per agent: how far its forest patch has come in on this side.
+            let fades = match &self.patches {
+                Some(p) if self.shows_patches(method) => p.fades(),
+                _ => Vec::new(),
+            };
             let (instances, draws) = &mut self.drawn[i];
             instances.clear();
             draws.clear();
-            for (inst, d) in self.instances.iter().zip(&lod.draws[i]) {
+            for (a, (inst, d)) in self.instances.iter().zip(&lod.draws[i]).enumerate() {
+                let fade = fades.get(a).copied().unwrap_or(0.0);
+                if fade >= 1.0 {
+                    continue;
+                }
                 let Some(levels) = self.tree_levels.get(inst.model).and_then(Option::as_ref) else {
                     match far.get(inst.model).copied().flatten() {
                         Some((far, character)) => {
@@ -300,6 +318,17 @@ impl World {
                     model: levels[(k as usize).min(levels.len() - 1)],
                     ..*inst
                 };
+                if fade > 0.0 {
+                    // Its patch is coming in: the tree's outgoing half of the dissolve.
+                    let level = d.nearest_level();
+                    instances.push(at(level));
+                    draws.push(LodDraw::Dissolve {
+                        level,
+                        p: fade,
+                        incoming: false,
+                    });
+                    continue;
+                }
                 match *d {
                     LodDraw::Level(k) | LodDraw::Dissolve { level: k, .. } => {
                         instances.push(at(k));
@@ -318,6 +347,11 @@ impl World {
                         }
                     }
                 }
+            }
+            if !fades.is_empty()
+                && let Some(p) = &self.patches
+            {
+                p.draws(instances, draws);
             }
         }
         let drawn = &self.drawn;

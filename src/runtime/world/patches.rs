@@ -1,0 +1,390 @@
+//! Forest patches in a world (see [`crate::bake::foliage::patch`]): composed for the world's
+//! layout from its trees' impostors and placed by measuring a sample cell (or read from the
+//! cache), uploaded as characters of their own, and drawn in place of their cells' trees
+//! where selection finds a patch within the tolerance, as it finds any level. A cell going
+//! to or from its patch cross-dissolves (its trees out, the card in, on complementary
+//! pixels) over the transition's duration, or pops where transitions pop.
+
+use super::World;
+use crate::bake::foliage::billboard::chain::{CloudKind, CloudLevel};
+use crate::bake::foliage::patch::{
+    self, CELL_TREES, ForestPatches, PATCH_GRID, PatchTree, PlacementInputs, TreeViews,
+};
+use crate::bake::gpu_data::drawable::LevelKind;
+use crate::bake::seams::MeasureColour;
+use crate::render::Gpu;
+use crate::scene::{Instance, LodDraw, LodMethod, ScreenProjection, Transition};
+use anyhow::{Result, anyhow};
+use glam::{Affine3A, Vec3, Vec4};
+use rayon::prelude::*;
+
+/// A layout's patches on the GPU and the state of each.
+pub(super) struct InstalledPatches {
+    patches: Vec<PatchState>,
+    /// Per agent of the crowd: the patch that stands for it.
+    of_agent: Vec<Option<u32>>,
+    /// What was baked: where they come in, and the figures measured.
+    pub(super) baked: ForestPatches,
+}
+
+struct PatchState {
+    character: usize,
+    instance: Instance,
+    /// The card's view sphere in the world: what selection projects its error from.
+    centre: Vec3,
+    radius: f32,
+    /// Its error bound (see [`ForestPatches::epsilon`]).
+    epsilon: f32,
+    /// 0: its trees are drawn; 1: the patch; between, a cross-dissolve under way.
+    fade: f32,
+}
+
+impl InstalledPatches {
+    /// Per agent, how far its patch has come in (0 where it has none).
+    pub(super) fn fades(&self) -> Vec<f32> {
+        self.of_agent
+            .iter()
+            .map(|p| p.map_or(0.0, |k| self.patches[k as usize].fade))
+            .collect()
+    }
+
+    /// Appends the patches that are drawn to a side's instances and draws: whole, or the
+    /// incoming half of a dissolve.
+    pub(super) fn draws(&self, instances: &mut Vec<Instance>, draws: &mut Vec<LodDraw>) {
+        for p in self.patches.iter().filter(|p| p.fade > 0.0) {
+            instances.push(p.instance);
+            draws.push(if p.fade >= 1.0 {
+                LodDraw::Level(0)
+            } else {
+                LodDraw::Dissolve {
+                    level: 0,
+                    p: p.fade,
+                    incoming: true,
+                }
+            });
+        }
+    }
+}
+
+/// One tree as the cache key sees it.
+#[derive(serde::Serialize)]
+struct KeyedTree {
+    model: u32,
+    transform: [f32; 12],
+    tint: [f32; 4],
+    wind: f32,
+    time_offset: f32,
+    speed: f32,
+}
+
+impl World {
+    /// Bakes (or reads from the cache) and uploads the patches of this world's layout, once;
+    /// does nothing where the foliage policy keeps trees full or no tree shows an impostor.
+    /// Patches are dropped when the layout changes ([`World::relayout`]).
+    pub fn ensure_patches(&mut self, gpu: &Gpu, measure: &dyn MeasureColour) -> Result<()> {
+        if self.patches.is_some() || self.lod.stays_full(true) {
+            return Ok(());
+        }
+        let impostors: Vec<Option<&CloudLevel>> = (0..self.bakes.len())
+            .map(|m| self.shown_impostor(m))
+            .collect();
+        if impostors.iter().all(Option::is_none) {
+            return Ok(());
+        }
+        let mut trees = Vec::new();
+        let mut agent_of = Vec::new();
+        for (a, agent) in self.crowd.agents.iter().enumerate() {
+            if impostors.get(agent.model).copied().flatten().is_some() {
+                let i = agent.instance_at(0.0);
+                trees.push(PatchTree {
+                    model: i.model,
+                    transform: i.transform,
+                    tint: i.tint,
+                    wind: i.wind,
+                    time_offset: i.time_offset,
+                    speed: i.speed,
+                });
+                agent_of.push(a);
+            }
+        }
+        let baked = self.load_or_bake_patches(&trees, &impostors, measure)?;
+        let installed = self.upload_patches(gpu, baked, &agent_of)?;
+        self.patches = Some(installed);
+        Ok(())
+    }
+
+    /// The impostor level of tree `m`'s shown chain, if it has one.
+    fn shown_impostor(&self, m: usize) -> Option<&CloudLevel> {
+        let shown = self.tree_levels.get(m)?.as_ref()?;
+        self.chains
+            .iter()
+            .find(|c| c.model == m && &c.characters == shown)?
+            .impostor
+            .as_deref()
+    }
+
+    fn load_or_bake_patches(
+        &self,
+        trees: &[PatchTree],
+        impostors: &[Option<&CloudLevel>],
+        measure: &dyn MeasureColour,
+    ) -> Result<ForestPatches> {
+        let tolerance = self.lod.policy.tolerance_px;
+        let chains: Vec<[u8; 32]> = (0..self.bakes.len())
+            .filter(|&m| impostors[m].is_some())
+            .map(|m| crate::bake::cache::keys::order_key(&self.sources[m].hash, &self.lod.chain))
+            .collect::<Result<_, String>>()
+            .map_err(|e| anyhow!(e))?;
+        let layout: Vec<KeyedTree> = trees
+            .iter()
+            .map(|t| KeyedTree {
+                model: t.model as u32,
+                transform: t.transform.to_cols_array(),
+                tint: t.tint.to_array(),
+                wind: t.wind,
+                time_offset: t.time_offset,
+                speed: t.speed,
+            })
+            .collect();
+        let key = crate::bake::cache::keys::patch_key(&chains, &layout, tolerance)
+            .map_err(|e| anyhow!(e))?;
+        let cache = self.cache();
+        let path = cache.file(&format!("{}-trees", trees.len()), "patches", &key);
+        let (baked, origin) = cache.load_or_build(&path, &key, || {
+            self.bake_patches(trees, impostors, measure, tolerance)
+        })?;
+        if let crate::bake::cache::Origin::Baked {
+            warning: Some(w), ..
+        } = origin
+        {
+            eprintln!("warning: {w}");
+        }
+        Ok(baked)
+    }
+
+    /// Composes a patch for every cell of `trees` and places them by measuring the cell with
+    /// the most trees.
+    fn bake_patches(
+        &self,
+        trees: &[PatchTree],
+        impostors: &[Option<&CloudLevel>],
+        measure: &dyn MeasureColour,
+        tolerance_px: f32,
+    ) -> Result<ForestPatches> {
+        let start = std::time::Instant::now();
+        let views: Vec<Option<TreeViews>> = impostors
+            .iter()
+            .map(|l| l.and_then(TreeViews::of))
+            .collect();
+        // Cells a few crowns across: the widest crown with the layout's air between.
+        let crown = (0..self.bakes.len())
+            .filter(|&m| views[m].is_some())
+            .map(|m| {
+                let s = self.bakes[m].bounds.size();
+                s.x.max(s.z)
+            })
+            .fold(1.0f32, f32::max);
+        let cells = patch::cells(trees, CELL_TREES * crown * 1.05);
+        let at_rest: Vec<crate::model::Model> = self
+            .sources
+            .iter()
+            .map(|s| crate::bake::impostor::octahedral::at_rest(&s.model))
+            .collect();
+        let patches: Vec<patch::ForestPatch> = cells
+            .par_iter()
+            .map(|members| {
+                let rep = commonest(trees, members);
+                patch::compose(trees, members, &views, &at_rest[rep], PATCH_GRID)
+            })
+            .collect::<Result<_>>()?;
+        log::debug!(
+            "{} forest patches composed in {:.2} s",
+            patches.len(),
+            start.elapsed().as_secs_f64()
+        );
+        let Some(sample) = (0..patches.len()).max_by_key(|&k| patches[k].members.len()) else {
+            return Ok(ForestPatches {
+                patches,
+                switch_px: None,
+                tolerance_px,
+                measured: Vec::new(),
+            });
+        };
+        let p = &patches[sample];
+        let members: Vec<usize> = p.members.iter().map(|&m| m as usize).collect();
+        let rest: Vec<&crate::model::Model> = at_rest.iter().collect();
+        let cell = patch::cell_model(
+            &format!("forest cell {sample}"),
+            trees,
+            &members,
+            &rest,
+            Vec3::from(p.origin),
+        );
+        let inputs = PlacementInputs {
+            cell: &cell,
+            impostors: (0..self.bakes.len())
+                .map(|m| impostors[m].map(|l| (&self.sources[m].model, l)))
+                .collect(),
+        };
+        // From where the last of the sample's trees shows its impostor.
+        let from_px = members
+            .iter()
+            .filter_map(|&i| self.impostor_switch_px(trees[i].model, tolerance_px))
+            .fold(f32::INFINITY, f32::min);
+        if !from_px.is_finite() {
+            return Err(anyhow!("no tree of the forest shows an impostor"));
+        }
+        let (switch_px, measured) = patch::place(from_px, |px| {
+            patch::errors_at(measure, p, trees, &inputs, px)
+        })?;
+        for m in &measured {
+            log::debug!(
+                "forest patch {sample} at {:.1} px: colour error {:.3}, its trees' impostors {:.3}",
+                m.px,
+                m.patch,
+                m.trees
+            );
+        }
+        Ok(ForestPatches {
+            patches,
+            switch_px,
+            tolerance_px,
+            measured: vec![(sample as u32, measured)],
+        })
+    }
+
+    /// The tree's height in pixels below which model `m` shows its impostor, at
+    /// `tolerance_px`.
+    fn impostor_switch_px(&self, m: usize, tolerance_px: f32) -> Option<f32> {
+        let chain = self
+            .chains
+            .iter()
+            .find(|c| c.model == m && Some(&c.characters) == self.tree_levels[m].as_ref())?;
+        let last = chain.levels.last().filter(|l| l.kind == "impostor")?;
+        let height = self.bakes[m].bounds.size().y;
+        Some(tolerance_px * height / last.epsilon.max(1e-6))
+    }
+
+    fn upload_patches(
+        &mut self,
+        gpu: &Gpu,
+        baked: ForestPatches,
+        agent_of: &[usize],
+    ) -> Result<InstalledPatches> {
+        let mut patches = Vec::with_capacity(baked.patches.len());
+        let mut of_agent = vec![None; self.crowd.agents.len()];
+        for (k, p) in baked.patches.iter().enumerate() {
+            let bake = p
+                .level
+                .bake()
+                .map_err(|e| anyhow!("{}: {e}", p.level.model.name))?;
+            let character = match self.free_characters.pop() {
+                Some(c) => self.renderer.replace_character(gpu, c, &bake)?,
+                None => self.renderer.add_character(gpu, &bake)?,
+            };
+            self.renderer
+                .set_level_kind(character, LevelKind::ForestPatch);
+            let frame = p.level.impostor.expect("a patch is an impostor");
+            let origin = Vec3::from(p.origin);
+            for &m in &p.members {
+                if let Some(&a) = agent_of.get(m as usize) {
+                    of_agent[a] = Some(k as u32);
+                }
+            }
+            patches.push(PatchState {
+                character,
+                instance: Instance {
+                    model: character,
+                    transform: Affine3A::from_translation(origin),
+                    clip: 0,
+                    time_offset: p.time_offset,
+                    speed: p.speed,
+                    wind: p.wind,
+                    tint: Vec4::ONE,
+                    fade: None,
+                },
+                centre: origin + Vec3::from(frame.centre),
+                radius: frame.radius,
+                epsilon: baked.epsilon(p.tree_height).unwrap_or(f32::INFINITY),
+                fade: 0.0,
+            });
+        }
+        Ok(InstalledPatches {
+            patches,
+            of_agent,
+            baked,
+        })
+    }
+
+    /// Lets the layout's patches go (their characters are reused).
+    pub fn drop_patches(&mut self) {
+        if let Some(p) = self.patches.take() {
+            self.free_characters
+                .extend(p.patches.iter().map(|s| s.character));
+        }
+    }
+
+    /// Whether side `method` draws patches: a simplified method whose trees are not kept full.
+    pub(super) fn shows_patches(&self, method: LodMethod) -> bool {
+        self.patches.is_some() && method != LodMethod::None && !self.lod.stays_full(true)
+    }
+
+    /// Moves every patch towards being drawn or not, `dt` seconds on: drawn where its error
+    /// projects within the tolerance (a patch not drawn yet waits until it is within the
+    /// hysteresis's share of it, as a coarser level does).
+    pub(super) fn select_patches(&mut self, screen: &ScreenProjection, dt: f32) {
+        let policy = self.lod.policy;
+        let Some(installed) = self.patches.as_mut() else {
+            return;
+        };
+        for p in &mut installed.patches {
+            let error = screen.projected(p.epsilon, screen.sphere_distance(p.centre, p.radius));
+            let limit = if p.fade > 0.0 {
+                policy.tolerance_px
+            } else {
+                policy.tolerance_px * (1.0 - policy.hysteresis)
+            };
+            let target = if error <= limit { 1.0 } else { 0.0 };
+            p.fade = if policy.transition == Transition::Pop || policy.duration <= 0.0 {
+                target
+            } else {
+                let step = dt / policy.duration;
+                if target > p.fade {
+                    (p.fade + step).min(1.0)
+                } else {
+                    (p.fade - step).max(0.0)
+                }
+            };
+        }
+    }
+
+    /// The layout's patches, where they are baked: how many, where they come in (the trees'
+    /// height in pixels at the tolerance they were placed for) and the sample's figures.
+    pub fn patches(&self) -> Option<&ForestPatches> {
+        self.patches.as_ref().map(|p| &p.baked)
+    }
+
+    /// Patches drawn now (wholly or coming in).
+    pub fn patches_drawn(&self) -> usize {
+        self.patches
+            .as_ref()
+            .map_or(0, |p| p.patches.iter().filter(|s| s.fade > 0.0).count())
+    }
+}
+
+/// The model most of `members` are (the first of equals): the one a patch is skinned like.
+fn commonest(trees: &[PatchTree], members: &[usize]) -> usize {
+    let mut counts: std::collections::BTreeMap<usize, usize> = Default::default();
+    for &i in members {
+        *counts.entry(trees[i].model).or_default() += 1;
+    }
+    counts
+        .into_iter()
+        .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
+        .map_or(0, |(m, _)| m)
+}
+
+/// Whether a chain level is an impostor (what a patch is composed from).
+pub(super) fn is_impostor(kind: &Option<CloudKind>) -> bool {
+    matches!(kind, Some(CloudKind::Impostor { .. }))
+}
