@@ -322,7 +322,7 @@ impl World {
             impostor: chain
                 .iter()
                 .rev()
-                .find(|l| super::patches::is_impostor(&l.kind))
+                .find(|l| super::patch_state::is_impostor(&l.kind))
                 .map(|l| Box::new(l.cloud.clone())),
         });
         if *opts == self.lod.chain || self.tree_levels[m].is_none() {

@@ -15,6 +15,7 @@ use crate::scene::{
 use anyhow::{Result, bail};
 
 mod install;
+mod patch_state;
 mod patches;
 mod view;
 
@@ -49,7 +50,7 @@ pub struct World {
     /// Per model and method slot: its levels' normal maps as uploaded.
     normal_maps: Vec<Vec<Option<NormalMapInfo>>>,
     /// The layout's forest patches, once baked ([`World::ensure_patches`]).
-    patches: Option<patches::InstalledPatches>,
+    patches: Option<patch_state::InstalledPatches>,
 }
 
 /// A set of levels' normal maps, as the panel reports them.

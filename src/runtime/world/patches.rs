@@ -6,65 +6,18 @@
 //! pixels) over the transition's duration, or pops where transitions pop.
 
 use super::World;
-use crate::bake::foliage::billboard::chain::{CloudKind, CloudLevel};
+use super::patch_state::{InstalledPatches, PatchState};
+use crate::bake::foliage::billboard::chain::CloudLevel;
 use crate::bake::foliage::patch::{
     self, CELL_TREES, ForestPatches, PATCH_GRID, PatchTree, PlacementInputs, TreeViews,
 };
 use crate::bake::gpu_data::drawable::LevelKind;
 use crate::bake::seams::MeasureColour;
 use crate::render::Gpu;
-use crate::scene::{Instance, LodDraw, LodMethod, ScreenProjection, Transition};
+use crate::scene::{Instance, LodMethod, ScreenProjection};
 use anyhow::{Result, anyhow};
 use glam::{Affine3A, Vec3, Vec4};
 use rayon::prelude::*;
-
-/// A layout's patches on the GPU and the state of each.
-pub(super) struct InstalledPatches {
-    patches: Vec<PatchState>,
-    /// Per agent of the crowd: the patch that stands for it.
-    of_agent: Vec<Option<u32>>,
-    /// What was baked: where they come in, and the figures measured.
-    pub(super) baked: ForestPatches,
-}
-
-struct PatchState {
-    character: usize,
-    instance: Instance,
-    /// The card's view sphere in the world: what selection projects its error from.
-    centre: Vec3,
-    radius: f32,
-    /// Its error bound (see [`ForestPatches::epsilon`]).
-    epsilon: f32,
-    /// 0: its trees are drawn; 1: the patch; between, a cross-dissolve under way.
-    fade: f32,
-}
-
-impl InstalledPatches {
-    /// Per agent, how far its patch has come in (0 where it has none).
-    pub(super) fn fades(&self) -> Vec<f32> {
-        self.of_agent
-            .iter()
-            .map(|p| p.map_or(0.0, |k| self.patches[k as usize].fade))
-            .collect()
-    }
-
-    /// Appends the patches that are drawn to a side's instances and draws: whole, or the
-    /// incoming half of a dissolve.
-    pub(super) fn draws(&self, instances: &mut Vec<Instance>, draws: &mut Vec<LodDraw>) {
-        for p in self.patches.iter().filter(|p| p.fade > 0.0) {
-            instances.push(p.instance);
-            draws.push(if p.fade >= 1.0 {
-                LodDraw::Level(0)
-            } else {
-                LodDraw::Dissolve {
-                    level: 0,
-                    p: p.fade,
-                    incoming: true,
-                }
-            });
-        }
-    }
-}
 
 /// One tree as the cache key sees it.
 #[derive(serde::Serialize)]
@@ -329,32 +282,12 @@ impl World {
         self.patches.is_some() && method != LodMethod::None && !self.lod.stays_full(true)
     }
 
-    /// Moves every patch towards being drawn or not, `dt` seconds on: drawn where its error
-    /// projects within the tolerance (a patch not drawn yet waits until it is within the
-    /// hysteresis's share of it, as a coarser level does).
+    /// Moves every patch towards being drawn or not, `dt` seconds on (see
+    /// [`InstalledPatches::select`]).
     pub(super) fn select_patches(&mut self, screen: &ScreenProjection, dt: f32) {
         let policy = self.lod.policy;
-        let Some(installed) = self.patches.as_mut() else {
-            return;
-        };
-        for p in &mut installed.patches {
-            let error = screen.projected(p.epsilon, screen.sphere_distance(p.centre, p.radius));
-            let limit = if p.fade > 0.0 {
-                policy.tolerance_px
-            } else {
-                policy.tolerance_px * (1.0 - policy.hysteresis)
-            };
-            let target = if error <= limit { 1.0 } else { 0.0 };
-            p.fade = if policy.transition == Transition::Pop || policy.duration <= 0.0 {
-                target
-            } else {
-                let step = dt / policy.duration;
-                if target > p.fade {
-                    (p.fade + step).min(1.0)
-                } else {
-                    (p.fade - step).max(0.0)
-                }
-            };
+        if let Some(p) = self.patches.as_mut() {
+            p.select(&policy, screen, dt);
         }
     }
 
@@ -382,9 +315,4 @@ fn commonest(trees: &[PatchTree], members: &[usize]) -> usize {
         .into_iter()
         .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)))
         .map_or(0, |(m, _)| m)
-}
-
-/// Whether a chain level is an impostor (what a patch is composed from).
-pub(super) fn is_impostor(kind: &Option<CloudKind>) -> bool {
-    matches!(kind, Some(CloudKind::Impostor { .. }))
 }
