@@ -10,6 +10,7 @@ mod figures;
 mod history;
 mod panel;
 mod panel_schedule;
+mod patches;
 
 use super::panel_image::PanelImage;
 use super::window::{Began, PanelFrame, WindowGpu};
@@ -150,6 +151,11 @@ impl Viewer {
             // the cache load faster than a first frame at full detail draws, so the viewer
             // waits for those too. Anything to bake is baked in the background instead.
             world.ensure_levels(gpu, &crate::measure::GpuMeasurer)?;
+            if foliage.patches {
+                let colour =
+                    crate::runtime::levels::Measurer::colour(&crate::measure::GpuMeasurer, gpu);
+                world.ensure_patches(gpu, colour.as_ref())?;
+            }
         }
         let targets = RenderTargets::new(
             &gpu.device,
@@ -301,6 +307,9 @@ impl Viewer {
             if !over {
                 return Ok(());
             }
+        }
+        if self.world.missing_levels().is_none() {
+            self.patches_as_asked()?;
         }
         if let Some(method) = self.world.missing_levels()
             && self.bake_error.is_none()
