@@ -631,6 +631,105 @@ mod tests {
         }
     }
 
+    /// A tree impostor on a 2 × 2 grid (views along −x, +z, −z, +x) whose every view is a
+    /// disc, red on its left half and green on its right, but for the view from −z, which
+    /// sees the other side: red on its right.
+    fn disc_views(cell: u32) -> (ImpostorFrame, Rgba8Image, Rgba8Image) {
+        let side = 2 * cell;
+        let mut colour = vec![0u8; (side * side * 4) as usize];
+        let mut normal = vec![0u8; (side * side * 4) as usize];
+        for y in 0..side {
+            for x in 0..side {
+                let st = Vec2::new(
+                    ((x % cell) as f32 + 0.5) / cell as f32,
+                    ((y % cell) as f32 + 0.5) / cell as f32,
+                );
+                let at = 4 * (y * side + x) as usize;
+                let inside = st.distance(Vec2::splat(0.5)) < 0.45;
+                // The view from −z, view (0, 1), has its red on the right: it sees the tree's
+                // back.
+                let back = x / cell == 0 && y / cell == 1;
+                let c = if (st.x < 0.5) != back {
+                    [255, 0, 0]
+                } else {
+                    [0, 255, 0]
+                };
+                colour[at..at + 4].copy_from_slice(&[
+                    c[0],
+                    c[1],
+                    c[2],
+                    if inside { 255 } else { 0 },
+                ]);
+                normal[at..at + 4].copy_from_slice(&[188, 188, 255, encode_height(0.0)]);
+            }
+        }
+        let frame = ImpostorFrame {
+            frames: 2,
+            centre: [0.0, 1.0, 0.0],
+            radius: 1.0,
+            base: 0.0,
+            height: 2.0,
+            rows: ROWS,
+            bounds: [[-1.0, 0.0, -1.0], [1.0, 2.0, 1.0]],
+        };
+        let image = |pixels| Rgba8Image {
+            width: side,
+            height: side,
+            pixels,
+        };
+        (frame, image(colour), image(normal))
+    }
+
+    /// Two trees 6 m apart, the second turned half round: seen from +z, each stands where it
+    /// is, with a gap between them. The first shows its +z view; the turned one its own −z
+    /// view (its back), whose right is its −x, which its turn brings round to the world's
+    /// +x: red on the right.
+    #[test]
+    fn a_patch_view_places_and_turns_each_tree() {
+        let (frame, colour, normal) = disc_views(16);
+        let views = [Some(TreeViews {
+            frame: &frame,
+            colour: &colour,
+            normal: &normal,
+        })];
+        let mut trees = vec![tree_at(-3.0, 0.0, 0), tree_at(3.0, 0.0, 0)];
+        trees[1].transform = Affine3A::from_rotation_translation(
+            glam::Quat::from_rotation_y(std::f32::consts::PI),
+            Vec3::new(3.0, 0.0, 0.0),
+        );
+        let rep = crate::generate::tree::sapling();
+        let grid = ViewGrid {
+            frames: 2,
+            cell: 32,
+        };
+        let patch = compose(&trees, &[0, 1], &views, &rep, grid).unwrap();
+        assert_eq!(patch.origin, [0.0, 0.0, 0.0]);
+        let frame = patch.level.impostor.unwrap();
+        assert!((frame.radius - 4.0 * 1.02).abs() < 1e-3, "{}", frame.radius);
+        let img = patch.level.model.materials[0].texture.as_ref().unwrap();
+        // View (1, 0) looks along +z: its cell is the grid's second column, first row.
+        assert!((grid.direction(1, 0) - Vec3::Z).length() < 1e-5);
+        let texel = |x: u32, y: u32| {
+            let at = 4 * ((y * img.width) + 32 + x) as usize;
+            [
+                img.pixels[at],
+                img.pixels[at + 1],
+                img.pixels[at + 2],
+                img.pixels[at + 3],
+            ]
+        };
+        // Tree centres at x = (0.5 ± 0.5 · 3 / 4.08) · 32 = 4.2 and 27.8; the middle row is
+        // the trees' centre height, the patch's too.
+        let y = 16;
+        for (x, red) in [(2, true), (6, false), (26, false), (30, true)] {
+            let t = texel(x, y);
+            assert!(t[3] > 128, "texel {x} is covered: {t:?}");
+            assert_eq!(t[0] > t[1], red, "texel {x}: {t:?}");
+        }
+        assert_eq!(texel(16, y)[3], 0, "the gap between the trees is empty");
+        assert!(patch.tree_height > 1.9 && patch.tree_height < 2.1);
+    }
+
     #[test]
     fn cells_group_neighbours_and_leave_lone_trees_out() {
         let trees: Vec<PatchTree> = (0..10)
