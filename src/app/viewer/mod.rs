@@ -154,7 +154,9 @@ impl Viewer {
             if foliage.patches {
                 let colour =
                     crate::runtime::levels::Measurer::colour(&crate::measure::GpuMeasurer, gpu);
-                world.ensure_patches(gpu, colour.as_ref())?;
+                if let Err(e) = world.ensure_patches(gpu, colour.as_ref()) {
+                    eprintln!("warning: forest patches: {e:#}; the trees are drawn as they are");
+                }
             }
         }
         let targets = RenderTargets::new(

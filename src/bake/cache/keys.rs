@@ -18,7 +18,7 @@ pub const CHAIN_VERSION: u32 = 25;
 /// (`bake::foliage::billboard::chain::order`).
 pub const ORDER_VERSION: u32 = 1;
 /// A layout's forest patches (`bake::foliage::patch`).
-pub const PATCH_VERSION: u32 = 1;
+pub const PATCH_VERSION: u32 = 2;
 /// A character's animated impostor (`bake::impostor::animated`).
 pub const IMPOSTOR_VERSION: u32 = 5;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the

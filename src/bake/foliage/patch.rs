@@ -399,15 +399,27 @@ fn lay_tree(
         for x in x0..x1 {
             let u = (x as f32 + 0.5) / c * 2.0 - 1.0;
             let v = 1.0 - (y as f32 + 0.5) / c * 2.0;
-            let q = centre + (right * u + up * v) * radius - p.centre;
+            // The patch pixel's line of sight where it crosses the tree's middle plane (the
+            // plane through its centre facing the eye), from the tree's centre.
+            let q = (right * u + up * v) * radius - (o - d * depth);
+            let st_of = |r: Vec3, up_k: Vec3| {
+                Vec2::new(
+                    0.5 + 0.5 * q.dot(r) / p.radius,
+                    0.5 - 0.5 * q.dot(up_k) / p.radius,
+                )
+            };
+            // As the impostor shader does: the height of the surface under the pixel from the
+            // heaviest view, then every view read where that surface point falls in it.
+            let &(heaviest, _, r0, u0) = views
+                .iter()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .expect("a blend has a view");
+            let probe = sample_view(&p.views, own.cell, heaviest, st_of(r0, u0)).1.w;
             let mut sample = Vec4::ZERO;
             let mut n = Vec3::ZERO;
             let mut h = 0.0;
             for &((a, b), w, r, up_k) in &views {
-                let st = Vec2::new(
-                    0.5 + 0.5 * q.dot(r) / p.radius,
-                    0.5 - 0.5 * q.dot(up_k) / p.radius,
-                );
+                let st = st_of(r, up_k) + probe * 0.5 * Vec2::new(d.dot(r), -d.dot(up_k));
                 let (col, nor) = sample_view(&p.views, own.cell, (a, b), st);
                 sample += col * w;
                 n += nor.truncate() * w;

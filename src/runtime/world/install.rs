@@ -63,6 +63,8 @@ impl World {
                 self.show_chain(c);
             }
         }
+        // Patches stand for the impostors of the chains shown before.
+        self.drop_patches();
         self.lod.reset();
     }
 
@@ -344,8 +346,12 @@ impl World {
         Ok(())
     }
 
-    /// Shows installed chain `c` for its tree: selection switches along its levels.
+    /// Shows installed chain `c` for its tree: selection switches along its levels (forest
+    /// patches made from another chain's impostor are let go).
     fn show_chain(&mut self, c: usize) {
+        if self.tree_levels[self.chains[c].model].as_ref() != Some(&self.chains[c].characters) {
+            self.drop_patches();
+        }
         let chain = &self.chains[c];
         let m = chain.model;
         let errors: Vec<f32> = chain.levels.iter().map(|l| l.epsilon).collect();

@@ -66,14 +66,17 @@ impl World {
         Ok(())
     }
 
-    /// The impostor level of tree `m`'s shown chain, if it has one.
-    fn shown_impostor(&self, m: usize) -> Option<&CloudLevel> {
+    /// Tree `m`'s shown chain.
+    fn shown(&self, m: usize) -> Option<&super::InstalledChain> {
         let shown = self.tree_levels.get(m)?.as_ref()?;
         self.chains
             .iter()
-            .find(|c| c.model == m && &c.characters == shown)?
-            .impostor
-            .as_deref()
+            .find(|c| c.model == m && &c.characters == shown)
+    }
+
+    /// The impostor level of tree `m`'s shown chain, if it has one.
+    fn shown_impostor(&self, m: usize) -> Option<&CloudLevel> {
+        self.shown(m)?.impostor.as_deref()
     }
 
     fn load_or_bake_patches(
@@ -83,9 +86,11 @@ impl World {
         measure: &dyn MeasureColour,
     ) -> Result<ForestPatches> {
         let tolerance = self.lod.policy.tolerance_px;
+        // Each tree's key of the chain it shows (the impostor the patches are made from).
         let chains: Vec<[u8; 32]> = (0..self.bakes.len())
-            .filter(|&m| impostors[m].is_some())
-            .map(|m| crate::bake::cache::keys::order_key(&self.sources[m].hash, &self.lod.chain))
+            .filter_map(|m| Some((m, self.shown(m)?.opts)))
+            .filter(|&(m, _)| impostors[m].is_some())
+            .map(|(m, opts)| crate::bake::cache::keys::order_key(&self.sources[m].hash, &opts))
             .collect::<Result<_, String>>()
             .map_err(|e| anyhow!(e))?;
         let layout: Vec<KeyedTree> = trees
@@ -209,11 +214,11 @@ impl World {
     /// The tree's height in pixels below which model `m` shows its impostor, at
     /// `tolerance_px`.
     fn impostor_switch_px(&self, m: usize, tolerance_px: f32) -> Option<f32> {
-        let chain = self
-            .chains
-            .iter()
-            .find(|c| c.model == m && Some(&c.characters) == self.tree_levels[m].as_ref())?;
-        let last = chain.levels.last().filter(|l| l.kind == "impostor")?;
+        let last = self
+            .shown(m)?
+            .levels
+            .last()
+            .filter(|l| l.kind == "impostor")?;
         let height = self.bakes[m].bounds.size().y;
         Some(tolerance_px * height / last.epsilon.max(1e-6))
     }
@@ -224,16 +229,25 @@ impl World {
         baked: ForestPatches,
         agent_of: &[usize],
     ) -> Result<InstalledPatches> {
-        let mut patches = Vec::with_capacity(baked.patches.len());
+        let mut patches: Vec<PatchState> = Vec::with_capacity(baked.patches.len());
         let mut of_agent = vec![None; self.crowd.agents.len()];
         for (k, p) in baked.patches.iter().enumerate() {
-            let bake = p
+            let uploaded = p
                 .level
                 .bake()
-                .map_err(|e| anyhow!("{}: {e}", p.level.model.name))?;
-            let character = match self.free_characters.pop() {
-                Some(c) => self.renderer.replace_character(gpu, c, &bake)?,
-                None => self.renderer.add_character(gpu, &bake)?,
+                .map_err(|e| anyhow!("{}: {e}", p.level.model.name))
+                .and_then(|bake| match self.free_characters.pop() {
+                    Some(c) => self.renderer.replace_character(gpu, c, &bake),
+                    None => self.renderer.add_character(gpu, &bake),
+                });
+            let character = match uploaded {
+                Ok(c) => c,
+                Err(e) => {
+                    // The cards uploaded so far are reused later.
+                    self.free_characters
+                        .extend(patches.iter().map(|s| s.character));
+                    return Err(e);
+                }
             };
             self.renderer
                 .set_level_kind(character, LevelKind::ForestPatch);
