@@ -21,7 +21,6 @@
 //!   each tree, and the patches come in at the first size where the patch is no worse.
 
 use crate::bake::foliage::billboard::chain::levels::CloudLevel;
-use crate::bake::foliage::spectral::metrics::AnimationError;
 use crate::bake::impostor::octahedral::{
     self, ImpostorFrame, ROWS, ViewGrid, encode_height, finish_views,
 };
@@ -228,29 +227,11 @@ pub fn compose(
     let mut images = compose_views(&placed, centre, radius, grid);
     finish_views(&mut images, grid.cell);
     let model = octahedral::impostor_model(rep, &frame, images);
-    let texture_bytes = model
-        .materials
-        .iter()
-        .filter_map(|m| m.texture.as_ref())
-        .map(|t| t.pixels.len())
-        .sum();
     let first = &trees[members[0]];
     Ok(ForestPatch {
         members: members.iter().map(|&i| i as u32).collect(),
         origin: origin.to_array(),
-        level: CloudLevel {
-            model,
-            motion: None,
-            groups: members.len(),
-            animation: AnimationError::default(),
-            billboards: 1,
-            area: 4.0 * radius * radius,
-            texture_bytes,
-            impostor: Some(frame),
-            occlusion: Vec::new(),
-            view_windows: Vec::new(),
-            views: 1,
-        },
+        level: CloudLevel::impostor(model, frame, members.len()),
         wind: members.iter().map(|&i| trees[i].wind).sum::<f32>() / n,
         time_offset: first.time_offset,
         speed: first.speed,

@@ -310,13 +310,6 @@ impl World {
     pub fn patches(&self) -> Option<&ForestPatches> {
         self.patches.as_ref().map(|p| &p.baked)
     }
-
-    /// Patches drawn now (wholly or coming in).
-    pub fn patches_drawn(&self) -> usize {
-        self.patches
-            .as_ref()
-            .map_or(0, |p| p.patches.iter().filter(|s| s.fade > 0.0).count())
-    }
 }
 
 /// The model most of `members` are (the first of equals): the one a patch is skinned like.

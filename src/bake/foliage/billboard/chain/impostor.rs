@@ -5,7 +5,6 @@
 use crate::bake::foliage::billboard::chain::levels::{
     ChainOptions, CloudKind, CloudLevel, TreeLevel,
 };
-use crate::bake::foliage::spectral::metrics::AnimationError;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::impostor::octahedral::{self, ViewGrid};
 use crate::bake::impostor::placement;
@@ -41,25 +40,7 @@ pub fn impostor_level(
         tree.name,
         start.elapsed().as_secs_f64()
     );
-    let texture_bytes = model
-        .materials
-        .iter()
-        .filter_map(|m| m.texture.as_ref())
-        .map(|t| t.pixels.len())
-        .sum();
-    let level = CloudLevel {
-        model,
-        motion: None,
-        groups: 1,
-        animation: AnimationError::default(),
-        billboards: 1,
-        area: 4.0 * frame.radius * frame.radius,
-        texture_bytes,
-        impostor: Some(frame),
-        occlusion: Vec::new(),
-        view_windows: Vec::new(),
-        views: 1,
-    };
+    let level = CloudLevel::impostor(model, frame, 1);
     let mut fit = TreeFit {
         measure,
         tree,

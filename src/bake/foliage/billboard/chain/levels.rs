@@ -249,6 +249,30 @@ impl CloudLevel {
         (model, motion)
     }
 
+    /// An octahedral impostor's card (`model`, framed by `frame`) as a level standing for
+    /// `groups` trees: one billboard, its texture bytes counted from the model's materials.
+    pub fn impostor(model: Model, frame: ImpostorFrame, groups: usize) -> CloudLevel {
+        let texture_bytes = model
+            .materials
+            .iter()
+            .filter_map(|m| m.texture.as_ref())
+            .map(|t| t.pixels.len())
+            .sum();
+        CloudLevel {
+            model,
+            motion: None,
+            groups,
+            animation: AnimationError::default(),
+            billboards: 1,
+            area: 4.0 * frame.radius * frame.radius,
+            texture_bytes,
+            impostor: Some(frame),
+            occlusion: Vec::new(),
+            view_windows: Vec::new(),
+            views: 1,
+        }
+    }
+
     /// The tree itself, leaves and all, as a level.
     pub fn full(tree: &Model) -> CloudLevel {
         CloudLevel {
