@@ -39,6 +39,21 @@ pub fn load(path: &Path) -> Result<Model, InputError> {
     Ok(model)
 }
 
+/// Loads a built-in model from the copy built into the binary.
+pub fn load_builtin(asset: &crate::assets::Builtin) -> Result<Model, InputError> {
+    let (model, warnings) = from_bytes(
+        asset.name,
+        asset.bytes.to_vec(),
+        Path::new("."),
+        &validate::limits(),
+    )
+    .map_err(|p| InputError::new(asset.label(), p))?;
+    for w in warnings {
+        log::warn!("{}: {w}", asset.label().display());
+    }
+    Ok(model)
+}
+
 /// A model from the bytes of a `.glb` or `.gltf` whose external files lie in `base`, and the
 /// warnings to show with it; the error is the problem, without the file's name. What [`load`]
 /// runs once it has read the file, and what the fuzzer feeds (see `fuzz/`).
@@ -104,7 +119,32 @@ pub fn add_clips(model: &mut Model, path: &Path) -> Result<usize, InputError> {
     validate::check_file(&meta, &limits).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
-    let (doc, buffers) = read_document(read, base, &limits).map_err(fail)?;
+    clips_into(model, read, base, &limits).map_err(fail)
+}
+
+/// [`add_clips`] from a model named on the command line: a built-in (`mocap-walk`) or a file.
+pub fn add_clips_from(
+    model: &mut Model,
+    from: &crate::import::source::Source,
+) -> Result<usize, InputError> {
+    match from {
+        crate::import::source::Source::File(path) => add_clips(model, path),
+        crate::import::source::Source::Builtin(b) => {
+            clips_into(model, b.bytes.to_vec(), Path::new("."), &validate::limits())
+                .map_err(|p| InputError::new(b.label(), p))
+        }
+    }
+}
+
+/// The clips of the glTF bytes `read` bound onto `model`'s skeleton by joint name; the error
+/// is the problem, without the file's name.
+fn clips_into(
+    model: &mut Model,
+    read: Vec<u8>,
+    base: &Path,
+    limits: &validate::Limits,
+) -> Result<usize, String> {
+    let (doc, buffers) = read_document(read, base, limits)?;
     let skeleton = &model.skeleton;
     let mut remap = vec![u32::MAX; doc.nodes().len()];
     for n in doc.nodes() {
@@ -144,23 +184,23 @@ pub fn add_clips(model: &mut Model, path: &Path) -> Result<usize, InputError> {
             .iter()
             .map(|&j| model.skeleton.nodes[j as usize].name.clone())
             .collect();
-        return Err(fail(format!(
+        return Err(format!(
             "its clips animate {} joint(s) that {} does not have: {} (its joints are {})",
             unmatched.len(),
             model.name,
             list(&unmatched),
             list(&joints)
-        )));
+        ));
     }
     let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
     let mut clips = Vec::new();
     for anim in doc.animations() {
-        if let Some(clip) = read_clip(&anim, buffer, &remap).map_err(fail)? {
+        if let Some(clip) = read_clip(&anim, buffer, &remap)? {
             clips.push(clip);
         }
     }
     if clips.is_empty() {
-        return Err(fail("has no clips to add".into()));
+        return Err("has no clips to add".into());
     }
     // Ground speeds into the model's scene units, as `place_in_scene` does for its own.
     let scale = model.skeleton.root_transform.matrix3.x_axis.length();

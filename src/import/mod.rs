@@ -7,6 +7,7 @@ pub mod gltfpack;
 pub mod nodes;
 pub mod palette;
 pub mod primitives;
+pub mod source;
 pub mod sources;
 pub mod validate;
 
@@ -14,6 +15,8 @@ use crate::error::InputError;
 use crate::model::Model;
 use std::path::{Path, PathBuf};
 use std::sync::RwLock;
+
+pub use source::{Source, source};
 
 /// Files whose clips every model loaded by [`load_model`] gets (the command line's
 /// `--clips`), in order.
@@ -38,11 +41,11 @@ pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
     let mut model = load_file(name_or_path)?;
     for file in extra_clips() {
         // A built-in's name (`mocap-walk`) or a path.
-        let path = source_path(&file.to_string_lossy());
-        let added = gltf::add_clips(&mut model, &path)?;
+        let from = source(&file.to_string_lossy());
+        let added = gltf::add_clips_from(&mut model, &from)?;
         log::info!(
             "{}: {added} clip(s) added to {}",
-            path.display(),
+            from.label().display(),
             model.name
         );
     }
@@ -51,35 +54,27 @@ pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
 
 /// [`load_model`] without the extra clips.
 fn load_file(name_or_path: &str) -> Result<Model, InputError> {
-    match crate::assets::builtin(name_or_path) {
-        Some(asset) => gltf::load(&asset.path()).map(|mut m| {
-            m.name = asset.name.to_string();
-            m
-        }),
-        None => {
-            let path = Path::new(name_or_path);
-            // A bare name that is neither a file nor a built-in: most likely a misspelt
-            // built-in, so say which there are.
-            let bare = path.components().count() == 1 && path.extension().is_none();
-            if bare && !path.exists() {
-                let names: Vec<&str> = crate::assets::BUILTINS.iter().map(|b| b.name).collect();
-                return Err(InputError::new(
-                    path,
-                    format!(
-                        "no such file, and no built-in model of that name (built-in: {})",
-                        names.join(", ")
-                    ),
-                ));
-            }
-            gltf::load(path)
-        }
+    if let Some(asset) = crate::assets::builtin(name_or_path) {
+        let mut model = match source(name_or_path) {
+            Source::File(path) => gltf::load(&path)?,
+            Source::Builtin(b) => gltf::load_builtin(b)?,
+        };
+        model.name = asset.name.to_string();
+        return Ok(model);
     }
-}
-
-/// The file a model name or path given on the command line refers to.
-pub fn source_path(name_or_path: &str) -> PathBuf {
-    match crate::assets::builtin(name_or_path) {
-        Some(asset) => asset.path(),
-        None => PathBuf::from(name_or_path),
+    let path = Path::new(name_or_path);
+    // A bare name that is neither a file nor a built-in: most likely a misspelt built-in, so
+    // say which there are.
+    let bare = path.components().count() == 1 && path.extension().is_none();
+    if bare && !path.exists() {
+        let names: Vec<&str> = crate::assets::BUILTINS.iter().map(|b| b.name).collect();
+        return Err(InputError::new(
+            path,
+            format!(
+                "no such file, and no built-in model of that name (built-in: {})",
+                names.join(", ")
+            ),
+        ));
     }
+    gltf::load(path)
 }

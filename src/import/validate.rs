@@ -97,6 +97,24 @@ impl Limits {
         ),
     ];
 
+    /// The value of the limit `name` (one of [`Limits::NAMES`]), as `--limit` writes it.
+    pub fn value(&self, name: &str) -> Option<String> {
+        Some(match name {
+            "file-mb" => self.file_mb.to_string(),
+            "nodes" => self.nodes.to_string(),
+            "joints" => self.joints.to_string(),
+            "clip-seconds" => self.clip_seconds.to_string(),
+            "clips-seconds" => self.clips_seconds.to_string(),
+            "materials" => self.materials.to_string(),
+            "texture-side" => self.texture_side.to_string(),
+            "texture-mb" => self.texture_mb.to_string(),
+            "vertices" => self.vertices.to_string(),
+            "triangles" => self.triangles.to_string(),
+            "decoded-mb" => self.decoded_mb.to_string(),
+            _ => return None,
+        })
+    }
+
     /// Applies one `NAME=VALUE` (see [`Limits::NAMES`]).
     pub fn set(&mut self, assignment: &str) -> Result<(), String> {
         let names = || {

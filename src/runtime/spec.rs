@@ -3,11 +3,11 @@
 //! the tests, so they all show the same thing.
 
 use super::levels::LevelSource;
-use crate::bake::cache::keys::source_hash;
+use crate::bake::cache::keys::source_hash_of;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::bake::impostor::animated::ImpostorOptions;
 use crate::error::InputError;
-use crate::import::{load_model, source_path};
+use crate::import::{load_model, source};
 use crate::model::Model;
 use crate::scene::kind::DEFAULT_MIXED_TREES;
 use crate::scene::{Camera, Crowd, CrowdConfig, CrowdModel, SceneKind};
@@ -78,8 +78,9 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
         .map(|name| {
             let model = load_model(name)?;
             let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-            let path = source_path(name);
-            let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
+            let from = source(name);
+            let hash =
+                source_hash_of(&from).map_err(|e| InputError::new(from.label(), e.to_string()))?;
             Ok((
                 bake,
                 LevelSource {

@@ -19,12 +19,12 @@ fn generated() -> Vec<Model> {
 fn committed_assets_are_what_the_generator_writes() {
     for b in BUILTINS {
         let fresh = lodlab::generate::file(b.name).unwrap();
-        let committed =
-            std::fs::read(b.path()).unwrap_or_else(|e| panic!("{}: {e}", b.path().display()));
+        let path = b.committed_path();
+        let committed = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert!(
-            fresh == committed,
-            "{} differs from what the generator writes ({} vs {} bytes): run `lodlab gen-assets`",
-            b.path().display(),
+            fresh == committed && b.bytes == committed,
+            "{} differs from what the generator writes ({} vs {} bytes): run `lodlab gen-assets --out assets`",
+            path.display(),
             fresh.len(),
             committed.len()
         );

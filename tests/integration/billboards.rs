@@ -362,7 +362,7 @@ fn the_chain_falls_to_a_handful_of_billboards() {
             w + 2 * l.cloud.billboards
         );
         assert!(w <= wood(&tree));
-        // Its atlas is as sharp as the README says: about two texels a pixel where the level
+        // Its atlas is as sharp as docs/trees.md says: about two texels a pixel where the level
         // comes in (at least 8 a metre, at most 800 across the tree), and a clump level's never fewer than 256
         // across the tree, so that the coarse end looked at closer (forced, or with the
         // tolerance raised) still shows leaves; an atlas at the largest size may have been
@@ -557,14 +557,14 @@ fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
 /// chains baked) started last ran alone at the end while the other thread idled.
 #[test]
 fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
-    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash};
+    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash_of};
     use lodlab::bake::foliage::billboard::chain::{ChainOptions, load_or_build_chain};
     let gpu = crate::common::gpu().clone();
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let tree_and_hash = |name: &str| {
         let tree = load_model(name).unwrap();
-        let hash = source_hash(&lodlab::import::source_path(name)).unwrap();
+        let hash = source_hash_of(&lodlab::import::source(name)).unwrap();
         (tree, hash)
     };
     // The broadleaf's chain ends in its impostor, which is to be cached too; the sapling's

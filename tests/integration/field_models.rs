@@ -469,7 +469,7 @@ fn clips_come_from_another_file_by_joint_name() {
     let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
     assert_eq!(errors.len(), 1, "{stderr}");
     assert!(
-        errors[0].contains("robot.glb")
+        errors[0].contains("built-in robot")
             && errors[0].contains("shoulder_l")
             && errors[0].contains("mixamorig:Hips"),
         "{stderr}"
@@ -478,8 +478,11 @@ fn clips_come_from_another_file_by_joint_name() {
 
     // Added by the library: the walk is the model's second clip, and it moves the hands.
     let mut m = load_model("mocap").unwrap();
-    let walk = lodlab::import::source_path("mocap-walk");
-    assert_eq!(lodlab::import::gltf::add_clips(&mut m, &walk).unwrap(), 1);
+    let walk = lodlab::import::source("mocap-walk");
+    assert_eq!(
+        lodlab::import::gltf::add_clips_from(&mut m, &walk).unwrap(),
+        1
+    );
     assert_eq!(m.clips.len(), 2);
     assert_eq!(m.clips[1].name, "Walking");
     let hand = m
@@ -584,8 +587,8 @@ fn a_model_coloured_by_materials_keeps_its_colours_at_every_level() {
 #[test]
 fn normal_maps_do_not_make_the_worst_tile_worse() {
     let mut model = load_model("mocap").unwrap();
-    let walk = lodlab::import::source_path("mocap-walk");
-    lodlab::import::gltf::add_clips(&mut model, &walk).unwrap();
+    let walk = lodlab::import::source("mocap-walk");
+    lodlab::import::gltf::add_clips_from(&mut model, &walk).unwrap();
     model.clips.reverse();
     for s in shading_at_switch(&model, Method::InfluenceSimplification, 1.5, 300.0, 1..7) {
         assert!(

@@ -225,13 +225,13 @@ fn a_bad_impostor_option_is_one_line() {
 #[test]
 fn the_background_bake_hands_over_levels_then_the_impostor() {
     let _serial = serial();
-    use lodlab::bake::cache::{LodCache, keys::source_hash};
+    use lodlab::bake::cache::{LodCache, keys::source_hash_of};
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Poll};
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let source = LevelSource {
         model: load_model("walker").unwrap(),
-        hash: source_hash(&lodlab::import::source_path("walker")).unwrap(),
+        hash: source_hash_of(&lodlab::import::source("walker")).unwrap(),
         impostor: Some(OPTIONS.parse().unwrap()),
     };
     let run = || {

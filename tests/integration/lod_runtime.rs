@@ -139,14 +139,14 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
 /// billboard-cloud chain per tree, and a second bake of the same method comes from the cache.
 #[test]
 fn background_bakes_finish_and_fill_the_cache() {
-    use lodlab::bake::cache::{LodCache, keys::source_hash};
+    use lodlab::bake::cache::{LodCache, keys::source_hash_of};
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Levels, Poll};
     let dir = tempfile::tempdir().unwrap();
     let sources: Vec<LevelSource> = ["walker", "sapling"]
         .iter()
         .map(|name| LevelSource {
             model: load_model(name).unwrap(),
-            hash: source_hash(&lodlab::import::source_path(name)).unwrap(),
+            hash: source_hash_of(&lodlab::import::source(name)).unwrap(),
             impostor: None,
         })
         .collect();

@@ -839,7 +839,7 @@ fn the_foliage_policy_decides_what_trees_become() {
 /// behind the impostor stand in for a cloud somewhere: the point of ordering by cost.
 #[test]
 fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
-    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash};
+    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash_of};
     use lodlab::bake::foliage::billboard::chain::levels::FoliageOrder;
     use lodlab::bake::foliage::billboard::chain::{
         ChainOptions, CloudKind, load_or_build_chain, load_or_build_chains, load_or_choose, order,
@@ -853,7 +853,7 @@ fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
     let mut clumps_for_clouds = 0;
     for name in ["broadleaf", "conifer", "sapling"] {
         let tree = lodlab::import::load_model(name).unwrap();
-        let source = source_hash(&lodlab::import::source_path(name)).unwrap();
+        let source = source_hash_of(&lodlab::import::source(name)).unwrap();
         let (shown, _) =
             load_or_build_chain(&raster, &measure, &cache, &tree, &source, &opts, &|_| {}).unwrap();
         let (chains, origin) =

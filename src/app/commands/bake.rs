@@ -5,7 +5,7 @@
 use crate::app::cli::BakeArgs;
 use std::process::ExitCode;
 
-use crate::bake::cache::{LodCache, Origin, keys::source_hash};
+use crate::bake::cache::{LodCache, Origin, keys::source_hash_of};
 use crate::bake::character::lod::{
     SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options,
 };
@@ -13,7 +13,7 @@ use crate::bake::character::simplify::Method;
 use crate::bake::foliage::billboard::is_tree;
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use crate::error::InputError;
-use crate::import::{load_model, source_path};
+use crate::import::{load_model, source};
 use crate::render::atlas::AtlasRasterizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -81,8 +81,9 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<BakeResults> {
     let mut models = Vec::new();
     for name in a.models.iter().chain(&a.model_flags) {
         let model = load_model(name)?;
-        let path = source_path(name);
-        let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
+        let from = source(name);
+        let hash =
+            source_hash_of(&from).map_err(|e| InputError::new(from.label(), e.to_string()))?;
         models.push((model, hash));
     }
     // Tree chains render their atlases on the GPU.
@@ -604,7 +605,7 @@ pub fn command(a: BakeArgs) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {warning}");
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&summary(&results))?);
+        println!("{}", crate::app::json::pretty(&summary(&results))?);
     } else {
         print!("{}", table(&results));
     }

@@ -13,11 +13,11 @@
 use crate::app::cli::ExportArgs;
 use std::process::ExitCode;
 
-use crate::bake::cache::{LodCache, Origin, keys::source_hash};
+use crate::bake::cache::{LodCache, Origin, keys::source_hash_of};
 use crate::bake::character::lod::{SkinnedLods, model_height};
 use crate::error::InputError;
 use crate::generate::glb::{to_glb, to_lod_glb};
-use crate::import::{load_model, source_path};
+use crate::import::{load_model, source};
 use crate::model::{Model, SkinnedMesh};
 use anyhow::Result;
 use serde::Serialize;
@@ -136,8 +136,8 @@ pub fn run(opts: &ExportArgs) -> Result<Exported> {
             name
         );
     }
-    let path = source_path(name);
-    let hash = source_hash(&path).map_err(|e| InputError::new(&path, e.to_string()))?;
+    let from = source(name);
+    let hash = source_hash_of(&from).map_err(|e| InputError::new(from.label(), e.to_string()))?;
     crate::atomic::make_folder(&opts.out)?;
     let cache = LodCache::new(opts.cache.clone());
     let options = crate::runtime::levels::runtime_options(&model);
@@ -265,7 +265,7 @@ pub fn table(e: &Exported) -> String {
 pub fn command(a: ExportArgs) -> anyhow::Result<ExitCode> {
     let exported = run(&a)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&exported)?);
+        println!("{}", crate::app::json::pretty(&exported)?);
     } else {
         print!("{}", crate::app::commands::export::table(&exported));
     }

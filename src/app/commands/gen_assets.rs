@@ -1,4 +1,4 @@
-//! `lodlab gen-assets`: regenerate the demo creatures under `assets/`.
+//! `lodlab gen-assets --out DIR`: the built-in models, written afresh by their generators.
 
 use crate::app::cli::GenAssetsArgs;
 use std::process::ExitCode;
@@ -66,8 +66,7 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
 
 /// `lodlab gen-assets`: the built-in models as .glb files.
 pub fn command(a: GenAssetsArgs) -> anyhow::Result<ExitCode> {
-    let dir = a.out.unwrap_or_else(crate::assets::assets_dir);
-    for w in run(&dir, &a.only)? {
+    for w in run(&a.out, &a.only)? {
         println!("{}", serde_json::to_string(&w)?);
     }
     Ok(ExitCode::SUCCESS)

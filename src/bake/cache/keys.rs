@@ -7,7 +7,6 @@ use crate::bake::character::lod::LodOptions;
 use crate::bake::character::simplify::Method;
 use crate::bake::character::simplify::expectation::MIN_SAMPLES;
 use serde::Serialize;
-use std::path::Path;
 
 /// The cache file's encoding and the progressive-mesh levels' bake.
 pub const FORMAT_VERSION: u32 = 10;
@@ -58,23 +57,28 @@ pub fn levels_key(source: &[u8; 32], method: Method, options: &LodOptions) -> [u
 /// Files are read as the import reads them ([`crate::import::sources::read_regular`]): regular
 /// files within the limits and the folder policy, so that a FIFO or `/dev/zero` named by a
 /// buffer does not hang the hash before the import can refuse it.
-pub fn source_hash(path: &Path) -> std::io::Result<[u8; 32]> {
+pub fn source_hash(path: &std::path::Path) -> std::io::Result<[u8; 32]> {
+    source_hash_of(&crate::import::Source::File(path.to_path_buf()))
+}
+
+/// [`source_hash`] of a model named on the command line: a built-in's bytes, or a file's.
+pub fn source_hash_of(source: &crate::import::Source) -> std::io::Result<[u8; 32]> {
     let limits = crate::import::validate::limits();
-    let read = |p: &Path| {
-        crate::import::sources::read_regular(p, &limits)
-            .map_err(|e| std::io::Error::other(format!("{}: {e}", p.display())))
+    let read = |s: &crate::import::Source| {
+        s.read(&limits)
+            .map_err(|e| std::io::Error::other(format!("{}: {e}", s.label().display())))
     };
-    let bytes = read(path)?;
+    let bytes = read(source)?;
     let mut h = blake3::Hasher::new();
     h.update(&bytes);
     // Clips added from other files (`--clips`) change what the metric is estimated from.
     for file in crate::import::extra_clips() {
-        let file = crate::import::source_path(&file.to_string_lossy());
+        let file = crate::import::source(&file.to_string_lossy());
         h.update(b"clips");
         h.update(&read(&file)?);
     }
     if let Ok(json) = serde_json::from_slice::<serde_json::Value>(&bytes) {
-        let dir = path.parent().unwrap_or(Path::new("."));
+        let dir = source.folder();
         for list in ["buffers", "images"] {
             for item in json[list].as_array().into_iter().flatten() {
                 if let Some(uri) = item["uri"].as_str().filter(|u| !u.starts_with("data:"))
