@@ -4,7 +4,9 @@
 
 pub mod bake;
 pub mod bench;
+pub mod doctor;
 pub mod export;
+pub mod first_run;
 pub mod gen_assets;
 pub mod record;
 pub mod report;
@@ -34,6 +36,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Soak(a)) => soak::command(a),
         Some(Command::Study(a)) => study::command(a.command),
         Some(Command::View(a)) => view::command(a),
+        Some(Command::Doctor(a)) => doctor::command(a),
         None => view::command(cli.view),
     }
 }

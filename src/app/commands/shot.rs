@@ -220,8 +220,13 @@ fn draw_divider(image: &mut image::RgbaImage) {
 
 /// `lodlab shot`: one PNG and a JSON line of figures.
 pub fn command(a: ShotArgs) -> anyhow::Result<ExitCode> {
+    let spec = a.scene.spec();
+    let lod = a.lod.shot_lod(LodMethod::None);
+    if lod.method != LodMethod::None {
+        super::first_run::first_run_note(spec.cache_dir.as_deref(), true);
+    }
     let report = run(&ShotOptions {
-        spec: a.scene.spec(),
+        spec,
         out: a.out,
         width: a.size.0,
         height: a.size.1,
@@ -230,8 +235,8 @@ pub fn command(a: ShotArgs) -> anyhow::Result<ExitCode> {
         camera: a.camera,
         timed_frames: a.frames,
         calibrate: a.calibrate,
-        lod: a.lod.shot_lod(LodMethod::None),
+        lod,
     })?;
-    println!("{}", serde_json::to_string(&report)?);
+    println!("{}", crate::app::json::line(&report)?);
     Ok(ExitCode::SUCCESS)
 }

@@ -7,8 +7,10 @@ use std::process::ExitCode;
 
 /// `lodlab view` (and `lodlab` alone): the viewer.
 pub fn command(a: ViewArgs) -> anyhow::Result<ExitCode> {
+    let spec = a.scene.spec();
+    super::first_run::first_run_note(spec.cache_dir.as_deref(), a.screenshot.is_some());
     viewer::run(viewer::ViewOptions {
-        spec: a.scene.spec(),
+        spec,
         width: a.size.0,
         height: a.size.1,
         samples: a.msaa,

@@ -262,6 +262,9 @@ impl World {
             let skip = self.has_levels(m);
             let chain = self.lod.chain;
             let cache = self.cache();
+            let names: Vec<&str> = self.sources.iter().map(|s| s.model.name.as_str()).collect();
+            let what = format!("{m} levels");
+            let progress = BakeProgress::new(&names, &skip, &what);
             let packs = bake_all(
                 gpu,
                 measure,
@@ -270,7 +273,7 @@ impl World {
                 m,
                 &chain,
                 &cache,
-                &|_, _| {},
+                &|i, f| progress.report(i, f),
                 &warn,
             );
             // A model that failed is reported by install_levels; none is retried for ever.
@@ -379,5 +382,65 @@ impl World {
                 )
             })
             .collect()
+    }
+}
+
+/// Progress of a bake the caller waits for, on stderr every few seconds (a line each, so that
+/// it reads the same in a terminal and in a log): a cold `shot` or `view --screenshot` would
+/// otherwise wait a minute in silence.
+struct BakeProgress<'a> {
+    what: &'a str,
+    names: &'a [&'a str],
+    start: std::time::Instant,
+    /// When the last line was said, and each model's share done (never going back: a model's
+    /// impostor reports from 0 again after its levels).
+    state: std::sync::Mutex<(std::time::Instant, Vec<f32>)>,
+}
+
+impl<'a> BakeProgress<'a> {
+    /// Seconds between lines, and before the first: a bake from the cache says nothing.
+    const EVERY: f32 = 5.0;
+
+    fn new(names: &'a [&'a str], skip: &[bool], what: &'a str) -> BakeProgress<'a> {
+        let done = skip.iter().map(|&s| if s { 1.0 } else { 0.0 }).collect();
+        let now = std::time::Instant::now();
+        BakeProgress {
+            what,
+            names,
+            start: now,
+            state: std::sync::Mutex::new((now, done)),
+        }
+    }
+
+    /// Model `i` is `fraction` done.
+    fn report(&self, i: usize, fraction: f32) {
+        let Ok(mut state) = self.state.lock() else {
+            return;
+        };
+        let (last, done) = &mut *state;
+        if let Some(d) = done.get_mut(i) {
+            *d = d.max(fraction.clamp(0.0, 1.0));
+        }
+        if last.elapsed().as_secs_f32() < Self::EVERY {
+            return;
+        }
+        *last = std::time::Instant::now();
+        let open: Vec<String> = self
+            .names
+            .iter()
+            .zip(done.iter())
+            .filter(|&(_, &d)| d < 1.0)
+            .map(|(n, d)| format!("{n} {:.0}%", d * 100.0))
+            .collect();
+        let open = if open.is_empty() {
+            "finishing".to_string()
+        } else {
+            open.join(", ")
+        };
+        eprintln!(
+            "lodlab: baking {} for {:.0} s: {open} (kept in the cache for next time)",
+            self.what,
+            self.start.elapsed().as_secs_f32()
+        );
     }
 }
