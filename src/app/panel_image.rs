@@ -11,8 +11,9 @@ pub struct PanelImage {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     format: wgpu::TextureFormat,
-    /// The texture egui draws the panel into, its size, and its bind group; `None` before
-    /// the first drawing.
+    /// The texture egui draws the panel into, the view egui draws through (without sRGB
+    /// encoding: egui blends in gamma space), and the bind group that reads it (decoding sRGB,
+    /// as the frame is linear); `None` before the first drawing.
     image: Option<(wgpu::Texture, wgpu::TextureView, wgpu::BindGroup)>,
     /// The rectangles (x, y, width, height in pixels) the panel's meshes cover, none inside
     /// another: where the image is copied.
@@ -102,6 +103,9 @@ impl PanelImage {
     ) {
         let [w, h] = screen.size_in_pixels;
         if self.image.as_ref().map(|(t, ..)| [t.width(), t.height()]) != Some([w, h]) {
+            let plain = self.format.remove_srgb_suffix();
+            let views: Vec<wgpu::TextureFormat> =
+                self.format.is_srgb().then_some(plain).into_iter().collect();
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("panel image"),
                 size: wgpu::Extent3d {
@@ -115,18 +119,22 @@ impl PanelImage {
                 format: self.format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
+                view_formats: &views,
             });
-            let view = texture.create_view(&Default::default());
+            let read = texture.create_view(&Default::default());
+            let drawn = texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(plain),
+                ..Default::default()
+            });
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("panel image"),
                 layout: &self.layout,
                 entries: &[wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view),
+                    resource: wgpu::BindingResource::TextureView(&read),
                 }],
             });
-            self.image = Some((texture, view, bind_group));
+            self.image = Some((texture, drawn, bind_group));
         }
         let (_, view, _) = self.image.as_ref().expect("just made");
         crate::app::window::draw_panel(

@@ -36,7 +36,14 @@ impl PanelMeshes {
 }
 
 impl WindowGpu {
-    pub fn open(event_loop: &ActiveEventLoop, attributes: WindowAttributes) -> Result<WindowGpu> {
+    /// Opens a window and a device for it. Its surface is sRGB where offered when `srgb`
+    /// (the scene writes linear colours), else not (a window egui alone draws, in the
+    /// gamma-space colours it blends in).
+    pub fn open(
+        event_loop: &ActiveEventLoop,
+        attributes: WindowAttributes,
+        srgb: bool,
+    ) -> Result<WindowGpu> {
         let window = Arc::new(
             event_loop
                 .create_window(attributes)
@@ -56,8 +63,8 @@ impl WindowGpu {
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
             .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
         let caps = surface.get_capabilities(&gpu.adapter);
-        if let Some(srgb) = caps.formats.iter().copied().find(|f| f.is_srgb()) {
-            config.format = srgb;
+        if let Some(format) = caps.formats.iter().copied().find(|f| f.is_srgb() == srgb) {
+            config.format = format;
         }
         config.present_mode = wgpu::PresentMode::AutoVsync;
         // The window is a picture, not a layer over the desktop.
@@ -112,9 +119,11 @@ impl WindowGpu {
             None,
             Some(self.gpu.device.limits().max_texture_dimension_2d as usize),
         );
+        // egui blends in gamma space: it draws into views without sRGB encoding (the
+        // viewer's panel image has one, see `PanelImage`).
         let renderer = egui_wgpu::Renderer::new(
             &self.gpu.device,
-            self.config.format,
+            self.config.format.remove_srgb_suffix(),
             egui_wgpu::RendererOptions::default(),
         );
         (state, renderer)

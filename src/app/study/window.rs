@@ -269,7 +269,7 @@ impl StudyWindow {
         if o.fullscreen {
             attributes = attributes.with_fullscreen(Some(Fullscreen::Borderless(None)));
         }
-        let win = WindowGpu::open(event_loop, attributes)?;
+        let win = WindowGpu::open(event_loop, attributes, false)?;
         let (egui, renderer) = win.egui();
         Ok(StudyWindow {
             win,

@@ -3,7 +3,7 @@
 
 use crate::app::viewer::history::FrameHistory;
 use crate::render::FrameStats;
-use crate::render::timer::PassTimes;
+use crate::render::timer::{Pass, PassTimes};
 use crate::runtime::world::LevelSummary;
 
 pub(crate) fn level_color(k: usize) -> egui::Color32 {
@@ -20,44 +20,66 @@ pub(crate) fn statistics(ui: &mut egui::Ui, history: &FrameHistory, st: &FrameSt
         history.mean_ms()
     ));
     history.graph(ui);
-    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
-        for (label, value) in [
+    // Two figures a row: the panel fits a 720-line window.
+    egui::Grid::new("stats").num_columns(4).show(ui, |ui| {
+        let figures = [
             ("instances", st.instances),
-            ("culled", st.culled),
             ("triangles", st.triangles),
+            ("culled", st.culled),
             ("influences", st.influences),
             ("in transition", st.in_transition),
             ("draw calls", st.draw_calls as u64),
-        ] {
-            ui.label(label);
-            ui.label(thousands(value));
+        ];
+        for pair in figures.chunks(2) {
+            for (label, value) in pair {
+                ui.label(*label);
+                ui.label(thousands(*value));
+            }
             ui.end_row();
         }
     });
-    ui.label("instances per level");
     level_histogram(ui, &st.levels);
 }
 
-/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel; and
-/// the panel's own CPU time, `panel_cpu_ms` a frame.
+/// Where the frame's GPU time goes, pass by pass, and the fragments shaded per pixel; the
+/// panel's own CPU time, `panel_cpu_ms` a frame; and where memory goes. Folded, its title
+/// saying the frame's GPU time, so that the panel fits a 720-line window.
 pub(crate) fn pass_times(
     ui: &mut egui::Ui,
     passes: Option<&PassTimes>,
     pixels: u64,
     panel_cpu_ms: f64,
+    rows: &[(&'static str, u64)],
 ) {
-    ui.label(
-        egui::RichText::new(format!("this panel: {panel_cpu_ms:.2} ms of CPU a frame")).small(),
-    );
-    let Some(p) = passes else {
-        ui.label(egui::RichText::new("GPU time by pass: no timestamp queries here").small());
-        return;
+    let title = match passes {
+        Some(p) => format!("GPU time: {:.1} ms a frame", p.frame_ms),
+        None => "GPU time: no timestamp queries here".to_string(),
     };
-    ui.label(format!("GPU time by pass ({:.1} ms a frame)", p.frame_ms));
-    egui::Grid::new("passes").num_columns(2).show(ui, |ui| {
-        for (pass, ms) in p.drawn() {
-            ui.label(pass.name());
-            ui.label(format!("{ms:.2} ms"));
+    egui::CollapsingHeader::new(title)
+        .id_salt("gpu time")
+        .default_open(false)
+        .show(ui, |ui| {
+            ui.label(
+                egui::RichText::new(format!("this panel: {panel_cpu_ms:.2} ms of CPU a frame"))
+                    .small(),
+            );
+            if let Some(p) = passes {
+                pass_grid(ui, p, pixels);
+            }
+            memory(ui, rows);
+        });
+}
+
+/// GPU milliseconds of every pass, two a row; a pass not drawn shows a dash, so that nothing
+/// below moves when a pass comes and goes (transitions do, every few seconds).
+fn pass_grid(ui: &mut egui::Ui, p: &PassTimes, pixels: u64) {
+    egui::Grid::new("passes").num_columns(4).show(ui, |ui| {
+        let rows: Vec<_> = Pass::ALL.iter().zip(&p.ms).collect();
+        for pair in rows.chunks(2) {
+            for (pass, ms) in pair {
+                ui.label(pass.name());
+                ui.label(ms.map_or_else(|| "–".to_string(), |ms| format!("{ms:.2}")));
+            }
             ui.end_row();
         }
         if let Some(x) = p.overdraw(pixels) {
@@ -69,7 +91,7 @@ pub(crate) fn pass_times(
 }
 
 /// Where memory goes, in MB by kind.
-pub(crate) fn memory(ui: &mut egui::Ui, rows: &[(&'static str, u64)]) {
+fn memory(ui: &mut egui::Ui, rows: &[(&'static str, u64)]) {
     egui::CollapsingHeader::new("Memory")
         .id_salt("memory")
         .show(ui, |ui| {
@@ -88,8 +110,9 @@ pub(crate) fn memory(ui: &mut egui::Ui, rows: &[(&'static str, u64)]) {
 /// Instances per level as bars in the levels' debug colours.
 pub(crate) fn level_histogram(ui: &mut egui::Ui, levels: &[u32]) {
     let used = levels.iter().rposition(|&n| n > 0).map_or(1, |i| i + 1);
-    let (rect, _) =
+    let (rect, response) =
         ui.allocate_exact_size(egui::vec2(ui.available_width(), 56.0), egui::Sense::hover());
+    response.on_hover_text("Instances drawn at each level of detail, in the level tint's colours");
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
     let top = levels.iter().copied().max().unwrap_or(0).max(1) as f32;

@@ -8,6 +8,7 @@ mod controls;
 mod event_loop;
 mod figures;
 mod history;
+mod open;
 mod panel;
 mod panel_schedule;
 mod patches;
@@ -134,7 +135,7 @@ impl Viewer {
         let attributes = Window::default_attributes()
             .with_title("lodlab")
             .with_inner_size(winit::dpi::PhysicalSize::new(options.width, options.height));
-        let win = WindowGpu::open(event_loop, attributes)?;
+        let win = WindowGpu::open(event_loop, attributes, true)?;
         let (gpu, config) = (&win.gpu, &win.config);
         let samples = gpu.samples(options.samples);
         let mut world = World::new(gpu, loaded, config.format, samples)?;
@@ -144,7 +145,8 @@ impl Viewer {
         world.renderer.debug = options.lod.debug;
         world.renderer.normal_maps = options.lod.normal_maps;
         let mut foliage = options.lod.foliage;
-        foliage.atlas_lighting = Some(gpu.atlas_lighting(foliage.atlas_lighting));
+        foliage.atlas_lighting =
+            Some(gpu.atlas_lighting(foliage.atlas_lighting, world.has_trees()));
         world.apply_foliage(&foliage);
         if options.screenshot.is_some() || world.levels_cached() {
             // A screenshot shows the levels asked for, so it waits for them; and levels all in
@@ -222,55 +224,6 @@ impl Viewer {
             panel: PanelSchedule::default(),
             panel_image,
         })
-    }
-
-    /// Opens the model at `path` (dropped on the window, or picked by "Open…") in place of the
-    /// scene's characters: the same scene, settings and camera, its levels baked in the
-    /// background as at start-up. A file that does not load leaves everything as it was and
-    /// says why in the panel.
-    fn open_model(&mut self, path: &std::path::Path) {
-        let spec = SceneSpec {
-            models: vec![path.to_string_lossy().into_owned()],
-            ..self.world.spec.clone()
-        };
-        let opened = Loaded::new(spec).and_then(|loaded| {
-            World::new(
-                &self.win.gpu,
-                loaded,
-                self.win.config.format,
-                self.targets.sample_count,
-            )
-        });
-        match opened {
-            Ok(mut world) => {
-                world.camera = self.world.camera;
-                world.renderer.debug = self.world.renderer.debug;
-                world.renderer.normal_maps = self.world.renderer.normal_maps;
-                world.renderer.shadows = self.world.renderer.shadows;
-                self.model_names = world.bakes.iter().map(|b| b.name.clone()).collect();
-                self.clip_names = world.bakes.iter().map(|b| b.clip_names()).collect();
-                self.world = world;
-                self.bake = None;
-                self.bake_error = None;
-                self.settings.model = None;
-                self.settings.clip = None;
-                self.settings.count = self.world.spec.count;
-                self.world.lod.method = self.settings.method;
-                self.world.lod.compare = self.settings.compare;
-                self.world.lod.policy = self.settings.policy;
-                self.world.apply_foliage(&self.settings.foliage);
-                self.world.reset_camera();
-                self.panel.touch();
-                self.notice = Some(format!("opened {}", path.display()));
-                eprintln!("lodlab: opened {}", path.display());
-            }
-            Err(e) => {
-                let line = format!("{e:#}");
-                eprintln!("lodlab: {line}");
-                self.panel.touch();
-                self.notice = Some(line);
-            }
-        }
     }
 
     /// The first `lodlab-screenshot-N.png` in the working folder that is not there yet.
@@ -721,18 +674,7 @@ impl Viewer {
             .map_or(std::time::Duration::MAX, |v| v.repaint_delay);
         self.panel.ran(Instant::now(), central, repaint);
         if requests.open {
-            // The platform's file dialog (XDG portal or GTK); none where there is no desktop
-            // to ask, and then the panel says to drop a file instead.
-            match rfd::FileDialog::new()
-                .add_filter("glTF", &["glb", "gltf"])
-                .pick_file()
-            {
-                Some(path) => self.open_model(&path),
-                None => {
-                    self.panel.touch();
-                    self.notice = Some("no file picked: drop a .glb or .gltf on the window".into())
-                }
-            }
+            self.pick_and_open();
         }
         // What the panel changed reaches the world this frame.
         self.world.renderer.shadows = self.settings.shadows;

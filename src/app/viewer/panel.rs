@@ -4,7 +4,7 @@
 use crate::bake::foliage::billboard::chain::MIN_EPSILON_GROWTH;
 use crate::bake::foliage::billboard::chain::levels::FoliageOrder;
 
-use crate::app::viewer::figures::{chain_table, memory, pass_times, statistics};
+use crate::app::viewer::figures::{chain_table, pass_times, statistics};
 use crate::app::viewer::history::FrameHistory;
 use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::render::timer::PassTimes;
@@ -129,32 +129,35 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
         info.passes.as_ref(),
         info.view_pixels,
         info.panel_cpu_ms,
+        info.memory,
     );
-    memory(ui, info.memory);
     ui.separator();
     level_of_detail(ui, s, info);
     ui.separator();
-    compare(ui, s, info);
-    ui.separator();
-    debug_views(ui, s, info);
-    ui.separator();
+    // The rest fold, closed at first, so that at 720 lines every section's title is on screen
+    // and nothing moves under the cursor until one is opened.
+    section(ui, "Compare", |ui| compare(ui, s, info));
+    section(ui, "Debug view", |ui| debug_views(ui, s, info));
     if info.trees {
-        foliage(ui, s, info);
-        ui.separator();
+        section(ui, "Foliage", |ui| foliage(ui, s, info));
     }
-
-    let relayout = crowd(ui, s, info);
-    ui.separator();
-
-    animation(ui, s, info);
-    ui.separator();
-
-    let reset_camera = camera(ui);
+    let relayout = section(ui, "Crowd", |ui| crowd(ui, s, info)).unwrap_or(false);
+    section(ui, "Animation", |ui| animation(ui, s, info));
+    let reset_camera = section(ui, "Camera", camera).unwrap_or(false);
     Requests {
         relayout,
         reset_camera,
         open,
     }
+}
+
+/// A section of the panel that folds, closed at first; what `body` returned where it is open.
+fn section<R>(ui: &mut egui::Ui, title: &str, body: impl FnOnce(&mut egui::Ui) -> R) -> Option<R> {
+    egui::CollapsingHeader::new(egui::RichText::new(title).strong())
+        .id_salt(title)
+        .default_open(false)
+        .show(ui, body)
+        .body_returned
 }
 
 /// The panel's head: the name and "Open…", the adapter, the keys, and the latest notice.
@@ -165,7 +168,7 @@ fn header(ui: &mut egui::Ui, info: &Info) -> bool {
         ui.heading("lodlab");
         open = ui
             .button("Open…")
-            .on_hover_text("Show a .glb or .gltf model instead of the scene's characters (or drop one on the window)")
+            .on_hover_text("Show a .glb or .gltf model instead of the scene's models, trees too (or drop one on the window)")
             .clicked();
     });
     ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
@@ -181,7 +184,6 @@ fn header(ui: &mut egui::Ui, info: &Info) -> bool {
 /// ([`Requests::relayout`]).
 fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
     let mut relayout = false;
-    ui.strong("Crowd");
     if ui
         .add(
             egui::Slider::new(&mut s.count, 0..=MAX_PANEL_COUNT)
@@ -256,7 +258,6 @@ fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
 
 /// Animation: play or pause, the clock, the speed, and blob shadows.
 fn animation(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
-    ui.strong("Animation");
     ui.horizontal(|ui| {
         let label = if s.playing { "Pause" } else { "Play" };
         if ui.button(label).clicked() {
@@ -272,7 +273,6 @@ fn animation(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
 /// was clicked, for [`Requests::reset_camera`].
 fn camera(ui: &mut egui::Ui) -> bool {
     let mut reset = false;
-    ui.strong("Camera");
     if ui.button("reset view (R)").clicked() {
         reset = true;
     }
@@ -302,8 +302,8 @@ fn method_combo(ui: &mut egui::Ui, id: &str, value: &mut LodMethod, info: &Info)
 }
 
 fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
-    ui.strong("Level of detail");
-    ui.label(egui::RichText::new("M: next method · T: next transition").small());
+    ui.strong("Level of detail")
+        .on_hover_text("Keys: M next method, T next transition");
     method_combo(ui, "method", &mut s.method, info);
     if let Some((what, f)) = &info.baking {
         ui.add(
@@ -357,12 +357,12 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
             .labelled_by(label.id);
         p.force_level = on.then_some(level);
     });
+    // What each model's impostor and normal maps are is in the tooltips, not in lines of
+    // their own, so that the panel fits a 720-line window.
     ui.checkbox(&mut s.impostors, "far characters as impostors")
-        .on_hover_text("Below its coarsest mesh a character becomes one quad showing it baked from the nearest of a grid of views at the frames round its time, under every simplified method (--impostors)");
-    ui.label(egui::RichText::new(&info.impostors).small());
+        .on_hover_text(format!("Below its coarsest mesh a character becomes one quad showing it baked from the nearest of a grid of views at the frames round its time, under every simplified method (--impostors). Costs a texture per model, baked once.\n\n{}", info.impostors));
     ui.checkbox(&mut s.normal_maps, "normal maps on coarse levels")
-        .on_hover_text("Coarse levels are lit by full detail's normals, baked into a normal map on each level's texture coordinates (Merry et al.); off, by their own vertex normals (--no-normal-maps). Models without usable texture coordinates keep their vertex normals");
-    ui.label(egui::RichText::new(&info.normal_maps).small());
+        .on_hover_text(format!("Coarse levels are lit by full detail's normals, baked into a normal map on each level's texture coordinates (Merry et al.); off, by their own vertex normals (--no-normal-maps). Models without usable texture coordinates keep their vertex normals. Costs one texture read a pixel.\n\n{}", info.normal_maps));
     ui.add(
         egui::Slider::new(&mut p.hysteresis, 0.0..=0.9)
             .text("hysteresis")
@@ -371,7 +371,6 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
 }
 
 fn compare(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
-    ui.strong("Compare");
     let mut on = s.compare.is_some();
     if ui
         .checkbox(&mut on, "split screen: method left, this right (C)")
@@ -395,7 +394,6 @@ pub fn toggle_compare(s: &Settings) -> Option<LodMethod> {
 }
 
 fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
-    ui.strong("Debug view");
     ui.label(egui::RichText::new("V: next view").small());
     for (view, label) in [
         (DebugView::Shaded, "shaded"),
@@ -427,7 +425,6 @@ fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
 /// the chains shown.
 fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     let f = &mut s.foliage;
-    ui.strong("Foliage");
     egui::ComboBox::from_label("level policy")
         .selected_text(f.policy.name())
         .show_ui(ui, |ui| {
