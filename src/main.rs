@@ -9,7 +9,8 @@ fn main() -> ExitCode {
     quiet_device_select();
     // Diagnostics (`RUST_LOG=debug`: the bake and the cache's decisions) go to stderr beside
     // the user-facing lines, which stay plain `eprintln!`s.
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
+    // rfd's own lines about a missing file dialog are left out: the panel says it in one.
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn,rfd=off"))
         .format_timestamp(None)
         .init();
     match lodlab::app::commands::run(Cli::parse()) {

@@ -3,6 +3,7 @@
 
 pub mod cli;
 pub mod commands;
+pub mod json;
 pub mod panel_image;
 pub mod plotting;
 pub mod study;

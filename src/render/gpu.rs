@@ -178,9 +178,13 @@ impl Gpu {
         } else {
             (4, "a GPU", 1)
         };
-        eprintln!(
-            "lodlab: multisampling {samples}× (the default on {why}; --msaa {other} for {other}×)"
-        );
+        // Said once a process: bench and soak make several worlds.
+        static SAID: std::sync::Once = std::sync::Once::new();
+        SAID.call_once(|| {
+            eprintln!(
+                "lodlab: multisampling {samples}× (the default on {why}; --msaa {other} for {other}×)"
+            );
+        });
         samples
     }
 
@@ -188,25 +192,26 @@ impl Gpu {
     /// adapter, off on a CPU adapter (the per-pixel lighting's second texture read costs lavapipe
     /// about a fifth of the default scene's frame, and the crown's occlusion, which is most of
     /// what the atlas's lighting buys, is in the atlas's colour either way) and on elsewhere.
-    /// A default is said on stderr, with how to change it.
-    pub fn atlas_lighting(&self, asked: Option<bool>) -> bool {
+    /// A default is said on stderr, with how to change it, once a process and only where
+    /// there are `trees` to light.
+    pub fn atlas_lighting(&self, asked: Option<bool>, trees: bool) -> bool {
         if let Some(on) = asked {
             return on;
         }
         let on = self.lights_atlases();
-        let (why, other) = if on {
-            ("a GPU", "flat")
-        } else {
-            ("a CPU adapter", "atlas")
-        };
-        eprintln!(
-            "lodlab: billboards lit {} (the default on {why}; --billboard-lighting {other} for the other)",
-            if on {
-                "per texel through their atlases"
-            } else {
-                "by their planes"
-            }
-        );
+        static SAID: std::sync::Once = std::sync::Once::new();
+        if trees {
+            SAID.call_once(|| {
+                let (how, why, other) = if on {
+                    ("per texel through their atlases", "a GPU", "flat")
+                } else {
+                    ("by their planes", "a CPU adapter", "atlas")
+                };
+                eprintln!(
+                    "lodlab: billboards lit {how} (the default on {why}; --billboard-lighting {other} for the other)"
+                );
+            });
+        }
         on
     }
 

@@ -95,7 +95,10 @@ impl Headless {
         world.renderer.debug = lod.debug;
         world.renderer.normal_maps = lod.normal_maps;
         let mut foliage = lod.foliage;
-        foliage.atlas_lighting = Some(self.gpu.atlas_lighting(foliage.atlas_lighting));
+        foliage.atlas_lighting = Some(
+            self.gpu
+                .atlas_lighting(foliage.atlas_lighting, world.has_trees()),
+        );
         world.apply_foliage(&foliage);
         if lod.debug == DebugView::Wireframe && !world.renderer.has_wireframe() {
             anyhow::bail!(

@@ -106,7 +106,7 @@ fn patches_come_in_where_they_are_no_worse_than_the_trees_impostors() {
 fn far_forests_draw_patches_that_look_like_their_trees() {
     let dir = tempfile::tempdir().unwrap();
     // The 12-tree forest's cell measures no worse than its trees' impostors once they are
-    // 19 px high (10 s of measuring on a fresh cache; see README, Forest patches).
+    // 19 px high (10 s of measuring on a fresh cache; see docs/trees.md, Forest patches).
     let mut h = Headless::new(&spec(12), 160, 120, Some(1), &lodlab::measure::GpuMeasurer).unwrap();
     h.show(&lod(true)).unwrap();
     let baked = h.world.patches().expect("patches baked");

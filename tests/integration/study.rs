@@ -80,6 +80,14 @@ fn a_study_is_made_run_and_analyzed() {
         "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--msaa", "1",
     ]));
 
+    // No answers yet: analyze says so in one line and writes nothing (not "share B 50%").
+    let o = lodlab(&["study", "analyze", &d]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no answers yet"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!dir.join("analysis.md").exists());
+
     // Every distinct clip once: three methods at one tolerance, 5 frames each.
     let clips: Vec<_> = std::fs::read_dir(dir.join("clips")).unwrap().collect();
     assert_eq!(clips.len(), 3);

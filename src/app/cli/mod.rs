@@ -31,16 +31,9 @@ pub struct Cli {
     /// The viewer's options, for `lodlab` without a subcommand.
     #[command(flatten)]
     pub view: ViewArgs,
-    /// Raise (or lower) a bound on what one model file may ask for or expand to, NAME=VALUE,
-    /// repeatable: file-mb (1024: the file and each file it refers to, MiB), nodes (100000),
-    /// joints (1024: bones, all skins' joints and the nodes unskinned parts ride on),
-    /// clip-seconds (600 a clip), clips-seconds (3600, all clips), materials (256 textured
-    /// ones; plain colours share one palette), texture-side
-    /// (8192 texels), texture-mb (1024: decoded texels of the textured materials), vertices
-    /// and triangles (4000000 each, every primitive as often as nodes draw it), decoded-mb
-    /// (1024: accessors and decoded compressed views).
-    /// Each keeps a small hostile file from taking the machine; a model past one is refused
-    /// in one line naming the option.
+    /// Raise (or lower) a bound on what one model file may expand to, NAME=VALUE, repeatable:
+    /// file-mb, nodes, joints, clip-seconds, clips-seconds, materials, texture-side,
+    /// texture-mb, vertices, triangles, decoded-mb (`lodlab doctor` lists their defaults).
     #[arg(long = "limit", value_name = "NAME=VALUE", global = true, value_parser = parse_limit)]
     pub limits: Vec<String>,
     /// Let a model's buffers and images be files outside its folder (absolute paths, '..',
@@ -119,9 +112,9 @@ pub enum Command {
     View(ViewArgs),
     /// Render a scene headless to a PNG and print one JSON line of figures.
     Shot(ShotArgs),
-    /// Regenerate the demo models (horse, walker, broadleaf, conifer, sapling), the test
-    /// models (split-tube, armour, patchwork, lowpoly, robot, mocap, knight) and the clips of
-    /// mocap-walk as .glb files.
+    /// Write the built-in models afresh from their generators as .glb files: the demo models
+    /// (horse, walker, broadleaf, conifer, sapling), the test models (split-tube, armour,
+    /// patchwork, lowpoly, robot, mocap, knight) and the clips of mocap-walk.
     GenAssets(GenAssetsArgs),
     /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS; a
     /// tree's chain of billboard clouds), or fetch them from the cache, and print them as a
@@ -149,6 +142,9 @@ pub enum Command {
     /// A perceptual study (Merry et al. §6.2): make its clips and sessions from a plan, run a
     /// participant's session in a window, analyze the answers.
     Study(StudyArgs),
+    /// Say what lodlab finds on this machine (adapter, driver, defaults, cache, models, the
+    /// tests' checkers, import limits) and the problems it sees, each with its remedy.
+    Doctor(DoctorArgs),
 }
 
 #[derive(Args, Debug)]
@@ -368,7 +364,7 @@ pub struct BakeArgs {
 
 #[derive(Args, Debug)]
 pub struct ExportArgs {
-    /// Model: a built-in asset name or a glTF path; the same as --model.
+    /// Model: a built-in asset name (as for bake) or a glTF path; the same as --model.
     #[arg(value_name = "MODEL", required_unless_present = "model_flag")]
     pub model: Option<String>,
     /// A model, as shot, bench and view take it.
@@ -393,10 +389,18 @@ pub struct ExportArgs {
 }
 
 #[derive(Args, Debug)]
+pub struct DoctorArgs {
+    /// Cache folder to look at (default: the platform cache folder's lodlab/).
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
 pub struct GenAssetsArgs {
-    /// Folder to write into (default: the project's assets/ folder).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
+    /// Folder to write into (`assets` in a checkout regenerates the committed files; point
+    /// `LODLAB_ASSETS` at another to have lodlab read its models from there).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
     /// Only these assets.
     #[arg(long = "only", value_name = "NAME")]
     pub only: Vec<String>,

@@ -24,8 +24,9 @@ pub struct SceneArgs {
     /// record].
     #[arg(long, value_enum)]
     pub scene: Option<SceneKind>,
-    /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling) or a glTF path.
-    /// Repeat for several.
+    /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling, split-tube,
+    /// armour, patchwork, lowpoly, robot, mocap, knight) or a glTF path. Repeat for several;
+    /// the models replace the scene's own, trees included.
     #[arg(long = "model", value_name = "NAME|PATH")]
     pub models: Vec<String>,
     /// Number of characters (or trees in the forest) [default: 300 characters, 500 trees, 100

@@ -756,7 +756,7 @@ pub fn command(a: BenchArgs) -> anyhow::Result<ExitCode> {
     let table = markdown(&report);
     print!("{table}");
     if let Some(p) = &a.json {
-        write_atomic(p, serde_json::to_string_pretty(&report)?.as_bytes())?;
+        write_atomic(p, crate::app::json::pretty(&report)?.as_bytes())?;
     }
     if let Some(p) = &a.markdown {
         write_atomic(p, table.as_bytes())?;

@@ -206,6 +206,6 @@ pub fn command(a: RecordArgs) -> anyhow::Result<ExitCode> {
         frames_dir: a.frames_dir,
         progress: true,
     })?;
-    println!("{}", serde_json::to_string(&report)?);
+    println!("{}", crate::app::json::line(&report)?);
     Ok(ExitCode::SUCCESS)
 }

@@ -229,7 +229,7 @@ pub fn markdown(a: &Analysis) -> String {
         let c = &r.condition;
         let _ = writeln!(
             out,
-            "| {} | {} vs {} | {} | {} | {} | {} | {:.0}% | {} |",
+            "| {} | {} vs {} | {} | {} | {} | {} | {} | {} |",
             c.model,
             c.method_a,
             c.method_b,
@@ -237,8 +237,16 @@ pub fn markdown(a: &Analysis) -> String {
             r.answers,
             r.prefer_a,
             r.prefer_b,
-            r.share_b * 100.0,
-            format_p(r.p_value)
+            if r.answers > 0 {
+                format!("{:.0}%", r.share_b * 100.0)
+            } else {
+                "–".into()
+            },
+            if r.answers > 0 {
+                format_p(r.p_value)
+            } else {
+                "–".into()
+            }
         );
     }
     for p in &a.proxy {
@@ -419,10 +427,18 @@ pub fn chart(a: &Analysis, path: &Path) -> Result<()> {
 /// it.
 pub fn run(dir: &Path) -> Result<Analysis> {
     let a = analyze(dir)?;
+    // No answers is no result: a share of 50% and a p of 1 would read as one.
+    if a.conditions.iter().all(|r| r.answers == 0) {
+        anyhow::bail!(
+            "{}: no answers yet, nothing to analyze (a participant answers in `lodlab study run {} --participant ID`)",
+            dir.join(super::ANSWERS).display(),
+            dir.display()
+        );
+    }
     write_atomic(&dir.join("analysis.md"), markdown(&a).as_bytes())?;
     write_atomic(
         &dir.join("analysis.json"),
-        serde_json::to_string_pretty(&a)?.as_bytes(),
+        crate::app::json::pretty(&a)?.as_bytes(),
     )?;
     chart(&a, &dir.join("preferences.png"))?;
     Ok(a)

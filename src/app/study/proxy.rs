@@ -298,7 +298,7 @@ fn write_outputs(dir: &Path, p: &Proxy) -> Result<()> {
     write_atomic(&dir.join("proxy.md"), markdown(p).as_bytes())?;
     write_atomic(
         &dir.join(PROXY_JSON),
-        serde_json::to_string_pretty(p)?.as_bytes(),
+        crate::app::json::pretty(p)?.as_bytes(),
     )?;
     plot(p, &dir.join("proxy.png"))
 }

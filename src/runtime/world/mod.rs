@@ -121,6 +121,11 @@ impl LevelSummary {
 }
 
 impl World {
+    /// Whether the scene has trees (models with alpha-cut foliage).
+    pub fn has_trees(&self) -> bool {
+        self.lod.trees.iter().any(|&t| t)
+    }
+
     pub fn new(
         gpu: &Gpu,
         loaded: Loaded,

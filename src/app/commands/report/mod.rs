@@ -139,7 +139,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     )?;
     crate::atomic::write(
         &opts.out.join("report.json"),
-        serde_json::to_string_pretty(&report)?.as_bytes(),
+        crate::app::json::pretty(&report)?.as_bytes(),
     )?;
     plot(&report, &opts.out.join("error.png"))?;
     Ok(report)

@@ -150,7 +150,7 @@ fn write_files(
 ) -> Result<()> {
     write_atomic(
         &out.join("report.json"),
-        serde_json::to_string_pretty(report)?.as_bytes(),
+        crate::app::json::pretty(report)?.as_bytes(),
     )?;
     write_atomic(
         &out.join("against-thesis.md"),

@@ -33,7 +33,7 @@ pub enum Rejection {
 /// the bake. Turning them down costs nothing in quality: the collapse of so large a fan into
 /// one of its ring's vertices makes a fan of slivers, never a cheap step, and each collapse
 /// along the ring takes a triangle off the fan, so the vertex comes up again once its ring
-/// has thinned. No fan of the models the figures in the README come from is this large at full
+/// has thinned. No fan of the models the figures in docs/levels.md come from is this large at full
 /// detail.
 pub const MAX_FAN: usize = 32;
 
