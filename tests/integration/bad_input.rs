@@ -342,3 +342,49 @@ fn headless_commands_print_no_window_system_noise() {
         "lines that are not lodlab's: {stderr}"
     );
 }
+
+/// `lodlab doctor` on a machine like a bare container (no `XDG_RUNTIME_DIR`, no display): it
+/// names the adapter and the cache, shows the limits in force (`--limit` included), and lists
+/// each problem it sees with its remedy, its own noise-free output on stdout.
+#[test]
+fn doctor_names_the_adapter_the_limits_and_the_problems_it_sees() {
+    let cache = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(["doctor", "--limit", "nodes=5", "--cache"])
+        .arg(cache.path())
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    let line = |key: &str| {
+        stdout
+            .lines()
+            .find(|l| l.starts_with(key))
+            .unwrap_or_else(|| panic!("no {key} line: {stdout}"))
+            .to_string()
+    };
+    assert!(line("adapter").len() > "adapter".len() + 4, "{stdout}");
+    assert!(line("cache").contains("empty"), "{stdout}");
+    let limits = line("limits");
+    assert!(
+        limits.contains("nodes=5") && limits.contains("file-mb=1024"),
+        "{limits}"
+    );
+    let problems = &stdout[stdout.find("problems:").expect("a problems list")..];
+    for seen in ["XDG_RUNTIME_DIR is not set", "no display"] {
+        let p = problems
+            .lines()
+            .find(|l| l.contains(seen))
+            .unwrap_or_else(|| panic!("{seen}: {problems}"));
+        assert!(
+            p.contains(':') && p.len() > seen.len() + 20,
+            "no remedy: {p}"
+        );
+    }
+}
