@@ -6,6 +6,7 @@ pub mod commands;
 pub mod json;
 pub mod panel_image;
 pub mod plotting;
+pub mod progress;
 pub mod study;
 pub mod video;
 pub mod viewer;

@@ -355,7 +355,19 @@ fn a_study_proxy_scores_clips_against_full_detail() {
             })
             .unwrap()
     };
-    assert!(mean("none") > 0.9999, "{}", mean("none"));
+    // Frames are scored before encoding: full detail against its reference is the same
+    // picture, exactly.
+    assert!(mean("none") > 1.0 - 1e-9, "{}", mean("none"));
+    let reference_frames = std::fs::read_dir(dir.join("clips/cylinder-reference-frames"))
+        .unwrap()
+        .count();
+    assert_eq!(reference_frames, 5);
+    // The codec's own loss is measured on the reference and said beside the scores.
+    let codec = &proxy["codec"][0];
+    assert_eq!(codec["model"], model.display().to_string());
+    let codec_mean = codec["mean"].as_f64().unwrap();
+    assert!((0.5..1.0).contains(&codec_mean), "{codec}");
+    assert!(codec["lowest"].as_f64().unwrap() <= codec_mean);
     for m in ["as", "rest-pose"] {
         assert!(
             (-1.0..=mean("none") + 1e-9).contains(&mean(m)),
@@ -375,6 +387,7 @@ fn a_study_proxy_scores_clips_against_full_detail() {
     }
     let md = std::fs::read_to_string(dir.join("proxy.md")).unwrap();
     assert_eq!(String::from_utf8_lossy(&o.stdout), md);
+    assert!(md.contains("The codec's own loss"), "{md}");
     assert!(
         md.contains("| none vs as | 8 |") && md.contains("| rest-pose vs as | 8 |"),
         "{md}"

@@ -8,6 +8,7 @@
 use crate::app::cli::RecordArgs;
 use std::process::ExitCode;
 
+use crate::app::progress::Progress;
 use crate::app::video::Mp4Video;
 use crate::atomic::{check_target, write_png};
 use crate::render::DebugView;
@@ -16,7 +17,6 @@ use crate::runtime::spec::SceneSpec;
 use crate::scene::camera_path::PathKind;
 use crate::scene::{CameraPath, Drive, LodMethod, SceneKind, Transition};
 use anyhow::{Context, Result, bail};
-use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -89,8 +89,23 @@ fn prepare_frames_dir(dir: &Path) -> Result<()> {
     crate::atomic::make_folder(dir)
 }
 
-pub fn run(o: &RecordOptions) -> Result<RecordReport> {
-    check_target(&o.out)?;
+/// What rendering a clip's frames found (beside the frames themselves).
+pub struct Rendered {
+    pub models: Vec<String>,
+    pub count: usize,
+    pub frames: u32,
+    pub triangles: u64,
+    pub influences: u64,
+    pub render_seconds: f64,
+}
+
+/// Renders the frames of the clip `o` describes, in order, handing each to `each` (frame
+/// index, RGBA image) before the next is drawn: what [`run`] encodes, and what `study proxy`
+/// scores before any encoding. `o.out` and `o.frames_dir` are not touched here.
+pub fn render_frames(
+    o: &RecordOptions,
+    each: &mut dyn FnMut(u32, &image::RgbaImage) -> Result<()>,
+) -> Result<Rendered> {
     if !(o.seconds.is_finite() && o.seconds > 0.0) {
         bail!("--seconds must be positive");
     }
@@ -101,11 +116,6 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
     let lod = &o.lod;
     if lod.compare.is_some() {
         bail!("a clip shows one method; record the two of a comparison as two clips");
-    }
-    // The encoder checks size and rate before anything is rendered.
-    let mut video = Mp4Video::create(&o.out, o.width, o.height, o.fps)?;
-    if let Some(dir) = &o.frames_dir {
-        prepare_frames_dir(dir)?;
     }
     let mut scene = Headless::new(
         &o.spec,
@@ -132,14 +142,11 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
         world.camera = path.at(t, home.fov_y);
         world.select(o.height, t, settle);
     }
-    let bar = if o.progress {
-        let bar = ProgressBar::new(frames as u64);
-        bar.set_style(super::bake::bar_style());
-        bar.set_prefix("record");
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let name = o
+        .out
+        .file_name()
+        .map_or_else(|| "record".into(), |n| n.to_string_lossy().into_owned());
+    let progress = Progress::new(o.progress, name, frames as u64);
     let started = Instant::now();
     let dt = 1.0 / o.fps as f32;
     let (mut triangles, mut influences) = (0u64, 0u64);
@@ -154,20 +161,42 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
             .renderer
             .render_to(&gpu, &target.targets, &target.view)?;
         let image = target.read_rgba(&gpu)?;
+        each(k, &image)?;
+        progress.inc();
+    }
+    progress.finish();
+    Ok(Rendered {
+        models: world.bakes.iter().map(|b| b.name.clone()).collect(),
+        count: world.crowd.agents.len(),
+        frames,
+        triangles,
+        influences,
+        render_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+pub fn run(o: &RecordOptions) -> Result<RecordReport> {
+    check_target(&o.out)?;
+    // The encoder checks size and rate before anything is rendered.
+    let mut video = Mp4Video::create(&o.out, o.width, o.height, o.fps)?;
+    if let Some(dir) = &o.frames_dir {
+        prepare_frames_dir(dir)?;
+    }
+    let r = render_frames(o, &mut |k, image| {
         video.push(image.as_raw())?;
         if let Some(dir) = &o.frames_dir {
-            write_png(&dir.join(format!("frame_{k:04}.png")), &image)?;
+            write_png(&dir.join(frame_file(k)), image)?;
         }
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+        Ok(())
+    })?;
     let written = video.frames();
     video.finish()?;
+    let lod = &o.lod;
     Ok(RecordReport {
         out: o.out.display().to_string(),
         scene: o.spec.scene,
-        models: world.bakes.iter().map(|b| b.name.clone()).collect(),
-        count: world.crowd.agents.len(),
+        models: r.models,
+        count: r.count,
         method: lod.method,
         transition: lod.policy.transition,
         drive: lod.policy.drive,
@@ -178,11 +207,16 @@ pub fn run(o: &RecordOptions) -> Result<RecordReport> {
         fps: o.fps,
         seconds: o.seconds,
         frames: written,
-        triangles_per_frame: triangles as f64 / frames as f64,
-        influences_per_frame: influences as f64 / frames as f64,
-        total_influences: influences,
-        render_seconds: started.elapsed().as_secs_f64(),
+        triangles_per_frame: r.triangles as f64 / r.frames as f64,
+        influences_per_frame: r.influences as f64 / r.frames as f64,
+        total_influences: r.influences,
+        render_seconds: r.render_seconds,
     })
+}
+
+/// The file of frame `k` in a frames folder.
+pub fn frame_file(k: u32) -> String {
+    format!("frame_{k:04}.png")
 }
 
 /// `lodlab record`: a study clip as MP4.
