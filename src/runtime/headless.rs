@@ -68,7 +68,9 @@ impl Headless {
     ) -> Result<Headless> {
         let loaded = Loaded::new(spec.clone())?;
         let gpu = Gpu::headless()?;
-        eprintln!("lodlab: adapter {}", gpu.describe());
+        // Said once a process: bench, soak and study proxy make several scenes.
+        static SAID: std::sync::Once = std::sync::Once::new();
+        SAID.call_once(|| eprintln!("lodlab: adapter {}", gpu.describe()));
         let samples = gpu.samples(samples);
         let target = Offscreen::new(&gpu, width, height, samples);
         let world = World::new(

@@ -314,3 +314,73 @@ fn levels_count_as_cached_once_baked() {
         "rest-pose levels were never baked"
     );
 }
+
+/// Picking and inspecting, as the viewer's click and its Selection section do: the ray
+/// through the centre of a view looking at an instance picks it (and a ray into the sky picks
+/// nothing); its levels are bands of screen height, finest first and widest on screen, fewer
+/// triangles each, and the level it draws is the one whose band holds its height on screen.
+#[test]
+fn a_click_picks_the_instance_under_it_and_its_levels_read_as_bands() {
+    use lodlab::runtime::headless::{Headless, ShotLod};
+    use lodlab::runtime::spec::SceneSpec;
+    use lodlab::scene::{LodMethod, Transition};
+    let spec = SceneSpec {
+        scene: lodlab::scene::SceneKind::Crowd,
+        models: vec!["walker".into()],
+        count: 12,
+        cache_dir: Some(crate::common::shared_cache()),
+        ..Default::default()
+    };
+    let (w, h) = (320u32, 240u32);
+    let mut scene = Headless::new(&spec, w, h, Some(1), &lodlab::measure::GpuMeasurer).unwrap();
+    scene
+        .show(&ShotLod {
+            method: LodMethod::AS_IS,
+            policy: LodPolicy {
+                transition: Transition::Pop,
+                hysteresis: 0.0,
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+        .unwrap();
+    let world = &mut scene.world;
+    world.select(h, 1.0, 1.0 / 60.0);
+    let aspect = w as f32 / h as f32;
+    for target in [0usize, 5, 11] {
+        let (centre, radius) = world.instance_sphere(target).unwrap();
+        world.camera.target = centre;
+        world.camera.distance = radius * 6.0;
+        world.select(h, 1.0, 1.0 / 60.0);
+        assert_eq!(world.pick(glam::Vec2::ZERO, aspect), Some(target));
+        // The top corner of the view looks over everyone's heads.
+        world.camera.pitch = 0.0;
+        assert_eq!(world.pick(glam::Vec2::new(-0.99, 0.99), aspect), None);
+        world.camera.pitch = 0.3;
+        world.select(h, 1.0, 1.0 / 60.0);
+        let p = world.inspect(target, h).unwrap();
+        assert_eq!((p.instance, p.name.as_str()), (target, "walker"));
+        assert!(p.bands.len() >= 4, "{:?}", p.bands);
+        assert!(p.bands[0].from_px.is_infinite());
+        for pair in p.bands.windows(2) {
+            assert!(pair[1].from_px < pair[0].from_px, "{:?}", p.bands);
+            if let (Some(a), Some(b)) = (pair[0].triangles, pair[1].triangles) {
+                assert!(b < a, "{:?}", p.bands);
+            }
+        }
+        let LodDraw::Level(k) = p.draw else {
+            panic!("a pop transition draws one level: {:?}", p.draw);
+        };
+        let band = &p.bands[k as usize];
+        let below = p.bands.get(k as usize + 1).map_or(0.0, |b| b.from_px);
+        // The shown level's band holds the instance's height (its nearest point decides, so
+        // allow a little).
+        assert!(
+            p.height_px <= band.from_px * 1.1 && p.height_px >= below * 0.9,
+            "level {k} at {} px: {:?}",
+            p.height_px,
+            p.bands
+        );
+        assert!(p.error_px <= 1.5 * 1.1, "{}", p.error_px);
+    }
+}

@@ -1,6 +1,7 @@
 //! The command line's arguments: every subcommand and its options, with clap. `main.rs`
 //! parses them and hands each command to its front end.
 
+pub mod command_line;
 pub mod scene_args;
 pub mod values;
 

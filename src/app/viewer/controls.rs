@@ -16,7 +16,13 @@ pub struct Controls {
     drag: Option<MouseButton>,
     cursor: Option<(f64, f64)>,
     ctrl: bool,
+    shift: bool,
+    /// Where the left button went down over the view: a release near it is a click.
+    pressed_at: Option<(f64, f64)>,
 }
+
+/// Pixels the cursor may move between press and release for a click (more is a drag).
+const CLICK_SLOP: f64 = 4.0;
 
 /// Keys that do something once, rather than while held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,6 +43,15 @@ pub enum KeyAction {
     ToggleFullscreen,
     /// F12: save a screenshot.
     Screenshot,
+    /// A left click on the 3D view (pressed and released without dragging): select what is
+    /// under the cursor.
+    Pick,
+    /// F: frame the selection and follow it.
+    Frame,
+    /// B: bookmark the camera (and print it as `--camera`).
+    Bookmark,
+    /// Shift+B: back to the bookmark.
+    BackToBookmark,
 }
 
 /// What a key pressed does wherever the keyboard is (a text field of the panel included).
@@ -58,6 +73,8 @@ pub fn view_key(code: KeyCode) -> Option<KeyAction> {
         KeyCode::KeyT => Some(KeyAction::NextTransition),
         KeyCode::KeyV => Some(KeyAction::NextDebugView),
         KeyCode::KeyC => Some(KeyAction::ToggleCompare),
+        KeyCode::KeyF => Some(KeyAction::Frame),
+        KeyCode::KeyB => Some(KeyAction::Bookmark),
         KeyCode::Escape => Some(KeyAction::Quit),
         _ => None,
     }
@@ -82,7 +99,10 @@ impl Controls {
         keyboard_free: bool,
     ) -> Option<KeyAction> {
         match event {
-            WindowEvent::ModifiersChanged(m) => self.ctrl = m.state().control_key(),
+            WindowEvent::ModifiersChanged(m) => {
+                self.ctrl = m.state().control_key();
+                self.shift = m.state().shift_key();
+            }
             // The window's own keys (F11, F12, Ctrl+Q) work whoever has the keyboard.
             WindowEvent::KeyboardInput { event, .. }
                 if event.state == ElementState::Pressed
@@ -103,7 +123,12 @@ impl Controls {
                     ElementState::Pressed => {
                         let first = self.held.insert(code);
                         if first {
-                            return view_key(code);
+                            return match view_key(code) {
+                                Some(KeyAction::Bookmark) if self.shift => {
+                                    Some(KeyAction::BackToBookmark)
+                                }
+                                action => action,
+                            };
                         }
                     }
                     ElementState::Released => {
@@ -121,8 +146,22 @@ impl Controls {
             }
             WindowEvent::Focused(false) => self.held.clear(),
             WindowEvent::MouseInput { state, button, .. } => match state {
-                ElementState::Pressed if pointer_free => self.drag = Some(*button),
-                ElementState::Released if self.drag == Some(*button) => self.drag = None,
+                ElementState::Pressed if pointer_free => {
+                    self.drag = Some(*button);
+                    self.pressed_at = (*button == MouseButton::Left)
+                        .then_some(self.cursor)
+                        .flatten();
+                }
+                ElementState::Released if self.drag == Some(*button) => {
+                    self.drag = None;
+                    let clicked =
+                        self.pressed_at.take().zip(self.cursor).is_some_and(
+                            |((x0, y0), (x1, y1))| (x1 - x0).hypot(y1 - y0) <= CLICK_SLOP,
+                        );
+                    if clicked && *button == MouseButton::Left {
+                        return Some(KeyAction::Pick);
+                    }
+                }
                 _ => {}
             },
             WindowEvent::CursorMoved { position, .. } => {

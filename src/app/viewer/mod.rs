@@ -7,11 +7,15 @@
 mod controls;
 mod event_loop;
 mod figures;
+mod foliage_panel;
 mod history;
+mod inspect;
 mod open;
 mod panel;
 mod panel_schedule;
 mod patches;
+mod select;
+mod selection;
 
 use super::panel_image::PanelImage;
 use super::window::{Began, PanelFrame, WindowGpu};
@@ -116,6 +120,8 @@ struct Viewer {
     panel: PanelSchedule,
     /// The panel's last drawing, copied onto each frame.
     panel_image: PanelImage,
+    /// The instance looked at, the camera's bookmark, the recent files.
+    selection: selection::Selection,
 }
 
 /// `LODLAB_LOSE_DEVICE_AT_FRAME=N` destroys the GPU device before frame N, as a driver reset
@@ -223,6 +229,7 @@ impl Viewer {
                 .and_then(|v| v.parse().ok()),
             panel: PanelSchedule::default(),
             panel_image,
+            selection: selection::Selection::load(),
         })
     }
 
@@ -340,6 +347,10 @@ impl Viewer {
                         });
                     }
                     Some(KeyAction::Screenshot) => self.screenshot_requested = true,
+                    Some(KeyAction::Pick) => self.pick_at_cursor(),
+                    Some(KeyAction::Frame) => self.frame_selection(),
+                    Some(KeyAction::Bookmark) => self.bookmark(false),
+                    Some(KeyAction::BackToBookmark) => self.bookmark(true),
                     None => {}
                 }
             }
@@ -604,6 +615,7 @@ impl Viewer {
             self.time += dt * self.settings.speed;
         }
         self.controls.fly(&mut self.world.camera, dt);
+        self.follow_selection();
         dt
     }
 
@@ -626,6 +638,10 @@ impl Viewer {
     /// Runs the panel on egui's input `raw` and acts on what it asked for: its output to
     /// draw. The rectangle it leaves to the 3D view goes to [`Self::panel`].
     fn run_panel(&mut self, raw: egui::RawInput) -> egui::FullOutput {
+        let inspected = self
+            .selection
+            .picked
+            .and_then(|i| self.world.inspect(i, self.view[3]));
         let info = Info {
             adapter: &self.adapter,
             backend: &self.backend,
@@ -646,6 +662,13 @@ impl Viewer {
             impostors: self.world.impostor_summary(),
             normal_maps: self.world.normal_map_summary(),
             notice: self.notice.as_deref(),
+            selection: inspect::SelectionInfo {
+                inspected: inspected.as_ref(),
+                just_picked: std::mem::take(&mut self.selection.just_picked),
+                bookmarked: self.selection.bookmark.is_some(),
+                command: self.selection.command.as_deref(),
+                recent: &self.selection.recent,
+            },
         };
         let (settings, history) = (&mut self.settings, &self.history);
         let mut requests = panel::Requests::default();
@@ -658,6 +681,8 @@ impl Viewer {
             std::mem::take(&mut output.platform_output),
         );
         if requests.relayout {
+            // Instances are laid out afresh: an index no longer names the one picked.
+            self.selection.picked = None;
             self.world.spec.cross_fade = self.settings.cross_fade;
             self.world.relayout(
                 self.settings.model,
@@ -676,6 +701,7 @@ impl Viewer {
         if requests.open {
             self.pick_and_open();
         }
+        self.act_on_selection(&requests.selection);
         // What the panel changed reaches the world this frame.
         self.world.renderer.shadows = self.settings.shadows;
         self.apply_lod_settings();

@@ -70,6 +70,8 @@ impl Viewer {
                 self.world.reset_camera();
                 self.panel.touch();
                 self.notice = Some(format!("opened {}", path.display()));
+                self.selection.picked = None;
+                self.selection.opened(path);
                 eprintln!("lodlab: opened {}", path.display());
             }
             Err(e) => {

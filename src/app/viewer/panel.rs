@@ -1,16 +1,13 @@
 //! The egui side panel: statistics, levels of detail, comparison, debug views, and the crowd's
 //! controls.
 
-use crate::bake::foliage::billboard::chain::MIN_EPSILON_GROWTH;
-use crate::bake::foliage::billboard::chain::levels::FoliageOrder;
-
-use crate::app::viewer::figures::{chain_table, pass_times, statistics};
+use crate::app::viewer::figures::{pass_times, statistics};
 use crate::app::viewer::history::FrameHistory;
-use crate::bake::foliage::spectral::description::DescriptionType;
+use crate::app::viewer::inspect::{SelectionInfo, SelectionRequests};
 use crate::render::timer::PassTimes;
 use crate::render::{DebugView, FrameStats};
 use crate::runtime::world::LevelSummary;
-use crate::scene::foliage::{FoliagePolicy, FoliageView};
+use crate::scene::foliage::FoliageView;
 use crate::scene::{Drive, LodMethod, LodPolicy, Transition};
 
 /// The instance slider's top: a 10,000-character crowd and then some (`--count` goes
@@ -62,6 +59,8 @@ pub struct Info<'a> {
     pub panel_cpu_ms: f64,
     /// Where memory goes, bytes by kind.
     pub memory: &'a [(&'static str, u64)],
+    /// What the Selection section shows.
+    pub selection: SelectionInfo<'a>,
     pub time: f32,
     /// The method being baked and the fraction done.
     pub baking: Option<(String, f32)>,
@@ -83,12 +82,14 @@ pub struct Info<'a> {
 }
 
 /// What the panel asks for beyond changing [`Settings`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Requests {
     pub relayout: bool,
     pub reset_camera: bool,
     /// "Open…": pick a model file to show instead.
     pub open: bool,
+    /// The Selection section's buttons.
+    pub selection: SelectionRequests,
 }
 
 /// Width of the side panel in points.
@@ -134,21 +135,24 @@ pub fn show(ui: &mut egui::Ui, s: &mut Settings, history: &FrameHistory, info: &
     ui.separator();
     level_of_detail(ui, s, info);
     ui.separator();
+    let mut requests = Requests {
+        open,
+        ..Default::default()
+    };
     // The rest fold, closed at first, so that at 720 lines every section's title is on screen
     // and nothing moves under the cursor until one is opened.
+    super::inspect::section(ui, &info.selection, &mut requests.selection);
     section(ui, "Compare", |ui| compare(ui, s, info));
     section(ui, "Debug view", |ui| debug_views(ui, s, info));
     if info.trees {
-        section(ui, "Foliage", |ui| foliage(ui, s, info));
+        section(ui, "Foliage", |ui| {
+            super::foliage_panel::foliage(ui, &mut s.foliage, s.method, &info.chains)
+        });
     }
-    let relayout = section(ui, "Crowd", |ui| crowd(ui, s, info)).unwrap_or(false);
+    requests.relayout = section(ui, "Crowd", |ui| crowd(ui, s, info)).unwrap_or(false);
     section(ui, "Animation", |ui| animation(ui, s, info));
-    let reset_camera = section(ui, "Camera", camera).unwrap_or(false);
-    Requests {
-        relayout,
-        reset_camera,
-        open,
-    }
+    requests.reset_camera = section(ui, "Camera", camera).unwrap_or(false);
+    requests
 }
 
 /// A section of the panel that folds, closed at first; what `body` returned where it is open.
@@ -173,9 +177,11 @@ fn header(ui: &mut egui::Ui, info: &Info) -> bool {
     });
     ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
     ui.label(egui::RichText::new("F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit").small());
-    if let Some(notice) = info.notice {
-        ui.label(egui::RichText::new(notice).small().strong());
-    }
+    // The notice has one line, there or not, so that nothing below moves when one comes;
+    // a longer one is cut, whole in its tooltip.
+    let notice = info.notice.unwrap_or(" ");
+    ui.add(egui::Label::new(egui::RichText::new(notice).small().strong()).truncate())
+        .on_hover_text(notice);
     open
 }
 
@@ -190,6 +196,7 @@ fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
                 .logarithmic(true)
                 .text("instances"),
         )
+        .on_hover_text("Characters in the scene (trees apart): each costs its level's triangles and vertex skinning a frame; the crowd is laid out again (--count)")
         .changed()
     {
         relayout = true;
@@ -210,7 +217,9 @@ fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
                     relayout = true;
                 }
             }
-        });
+        })
+        .response
+        .on_hover_text("Which of the scene's models the crowd is made of: all, or one alone (nothing is reloaded)");
     let mut names: Vec<String> = Vec::new();
     for (i, clips) in info.clips.iter().enumerate() {
         if s.model.is_none_or(|m| m == i) {
@@ -235,7 +244,9 @@ fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
                     relayout = true;
                 }
             }
-        });
+        })
+        .response
+        .on_hover_text("The clip every character plays, or a mix of their clips (--clip)");
     // Walkers stopping to play a clip on the spot (a wave), cross-fading into it and back.
     let mut stopping = s.cross_fade > 0.0;
     if ui
@@ -249,6 +260,7 @@ fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
     if stopping
         && ui
             .add(egui::Slider::new(&mut s.cross_fade, 0.1..=3.0).text("cross-fade s"))
+            .on_hover_text("Seconds the walk and the wave blend over (--cross-fade); a fading instance reads twice the bone matrices")
             .changed()
     {
         relayout = true;
@@ -260,20 +272,30 @@ fn crowd(ui: &mut egui::Ui, s: &mut Settings, info: &Info) -> bool {
 fn animation(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.horizontal(|ui| {
         let label = if s.playing { "Pause" } else { "Play" };
-        if ui.button(label).clicked() {
+        if ui
+            .button(label)
+            .on_hover_text("Stop or start the animation clock (Space); levels keep being chosen")
+            .clicked()
+        {
             s.playing = !s.playing;
         }
         ui.label(format!("t = {:.2} s", info.time));
     });
-    ui.add(egui::Slider::new(&mut s.speed, 0.0..=3.0).text("speed"));
-    ui.checkbox(&mut s.shadows, "blob shadows");
+    ui.add(egui::Slider::new(&mut s.speed, 0.0..=3.0).text("speed"))
+        .on_hover_text("Playback speed of every clip; costs nothing");
+    ui.checkbox(&mut s.shadows, "blob shadows")
+        .on_hover_text("A soft disc under each character, blended over the ground: one small pass");
 }
 
 /// The camera: a reset button and the mouse and keyboard controls. Returns whether the reset
 /// was clicked, for [`Requests::reset_camera`].
 fn camera(ui: &mut egui::Ui) -> bool {
     let mut reset = false;
-    if ui.button("reset view (R)").clicked() {
+    if ui
+        .button("reset view (R)")
+        .on_hover_text("Back to the camera the scene opened with")
+        .clicked()
+    {
         reset = true;
     }
     ui.label(
@@ -298,24 +320,34 @@ fn method_combo(ui: &mut egui::Ui, id: &str, value: &mut LodMethod, info: &Info)
                 };
                 ui.selectable_value(value, m, label);
             }
-        });
+        })
+        .response
+        .on_hover_text("How characters are simplified (Merry et al.): none (full detail), rest-pose (the rest pose's quadric error), as (animation space's L2,2 metric over the clips), as+is (as, with influence simplification: fewer bones a vertex, cheaper skinning). Trees follow their foliage policy under any simplified method. M: next");
 }
 
 fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     ui.strong("Level of detail")
         .on_hover_text("Keys: M next method, T next transition");
     method_combo(ui, "method", &mut s.method, info);
-    if let Some((what, f)) = &info.baking {
-        ui.add(
-            egui::ProgressBar::new(*f)
-                .text(format!("{:.0}%", f * 100.0))
-                .desired_height(14.0),
-        );
-        ui.label(egui::RichText::new(format!("baking {what}")).small());
-    }
-    if let Some(e) = info.bake_error {
-        ui.colored_label(ui.visuals().error_fg_color, e);
-    }
+    // The bake's progress, its failure or "in place" share one line of fixed height, so that
+    // nothing below moves when a bake starts or ends.
+    let slot = egui::vec2(ui.available_width(), 16.0);
+    ui.allocate_ui_with_layout(slot, egui::Layout::left_to_right(egui::Align::Center), |ui| {
+        ui.set_min_size(slot);
+        if let Some(e) = info.bake_error {
+            ui.add(egui::Label::new(egui::RichText::new(e).small().color(ui.visuals().error_fg_color)).truncate())
+                .on_hover_text(e);
+        } else if let Some((what, f)) = &info.baking {
+            ui.add(
+                egui::ProgressBar::new(*f)
+                    .text(egui::RichText::new(format!("baking {what}: {:.0}%", f * 100.0)).small())
+                    .desired_height(14.0),
+            )
+            .on_hover_text(format!("baking {what} in the background; full detail is drawn until each model's levels are in"));
+        } else {
+            ui.label(egui::RichText::new("every level in place").small().weak());
+        }
+    });
     let p = &mut s.policy;
     egui::ComboBox::from_label("transition")
         .selected_text(p.transition.name())
@@ -323,23 +355,33 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
             for t in Transition::ALL {
                 ui.selectable_value(&mut p.transition, t, t.name());
             }
-        });
+        })
+        .response
+        .on_hover_text("How a character changes level (Houle & Poulin): pop (at once), alpha (both levels drawn, the new one fading in: twice the cost while it lasts), morph (geomorph: vertices glide, one level drawn), dither (each level on its share of the pixels). T: next");
     if p.transition != Transition::Pop {
         ui.horizontal(|ui| {
-            ui.radio_value(&mut p.drive, Drive::Time, "over time");
-            ui.radio_value(&mut p.drive, Drive::Zone, "morph zones");
+            ui.radio_value(&mut p.drive, Drive::Time, "over time")
+                .on_hover_text("A transition runs for a fixed time once the level changes");
+            ui.radio_value(&mut p.drive, Drive::Zone, "morph zones")
+                .on_hover_text("A transition follows the distance across a zone round each switch distance (Houle & Poulin's morph zones): no time, no popping when the camera stops");
         });
         match p.drive {
-            Drive::Time => ui.add(
-                egui::Slider::new(&mut p.duration, 0.05..=3.0)
-                    .suffix(" s")
-                    .text("duration"),
-            ),
-            Drive::Zone => ui.add(
-                egui::Slider::new(&mut p.zone_width, 0.05..=1.0)
-                    .text("zone width")
-                    .custom_formatter(|x, _| format!("{:.0}%", x * 100.0)),
-            ),
+            Drive::Time => ui
+                .add(
+                    egui::Slider::new(&mut p.duration, 0.05..=3.0)
+                        .suffix(" s")
+                        .text("duration"),
+                )
+                .on_hover_text("Seconds a transition takes (--duration)"),
+            Drive::Zone => ui
+                .add(
+                    egui::Slider::new(&mut p.zone_width, 0.05..=1.0)
+                        .text("zone width")
+                        .custom_formatter(|x, _| format!("{:.0}%", x * 100.0)),
+                )
+                .on_hover_text(
+                    "Width of a morph zone, as a share of its switch distance (--zone-width)",
+                ),
         };
     }
     ui.add(
@@ -347,7 +389,8 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
             .logarithmic(true)
             .suffix(" px")
             .text("tolerance"),
-    );
+    )
+    .on_hover_text("The largest error a level may show on screen, in pixels: each instance draws the coarsest level within it. Larger: fewer triangles, more visible error (--tolerance)");
     ui.horizontal(|ui| {
         let mut on = p.force_level.is_some();
         let mut level = p.force_level.unwrap_or(0);
@@ -367,13 +410,15 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
         egui::Slider::new(&mut p.hysteresis, 0.0..=0.9)
             .text("hysteresis")
             .custom_formatter(|x, _| format!("{:.0}%", x * 100.0)),
-    );
+    )
+    .on_hover_text("A coarser level must undercut the tolerance by this share before it comes in, so that an instance at a switch distance does not flicker between levels (--hysteresis)");
 }
 
 fn compare(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     let mut on = s.compare.is_some();
     if ui
         .checkbox(&mut on, "split screen: method left, this right (C)")
+        .on_hover_text("The same camera and time, the panel's method on the left half and another on the right: both are selected and drawn, so the frame costs both (--compare)")
         .changed()
     {
         s.compare = toggle_compare(s);
@@ -405,6 +450,7 @@ fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
         let enabled = view != DebugView::Wireframe || info.wireframe;
         ui.add_enabled_ui(enabled, |ui| {
             ui.radio_value(&mut s.debug, view, label)
+                .on_hover_text("What the characters are drawn with; only the colours change, the levels and the cost stay (V: next; --debug-view)")
                 .on_disabled_hover_text("this adapter cannot draw lines");
         });
     }
@@ -418,103 +464,6 @@ fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     };
     if let Some(l) = legend {
         ui.label(egui::RichText::new(l).small());
-    }
-}
-
-/// Trees: the level policy, how their chains are cut, wind, outlines, tint, and the levels of
-/// the chains shown.
-fn foliage(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
-    let f = &mut s.foliage;
-    egui::ComboBox::from_label("level policy")
-        .selected_text(f.policy.name())
-        .show_ui(ui, |ui| {
-            for p in FoliagePolicy::ALL {
-                ui.selectable_value(&mut f.policy, p, p.name());
-            }
-        });
-    if s.method == LodMethod::None && f.policy != FoliagePolicy::Full {
-        ui.label(
-            egui::RichText::new("method none: trees are drawn full; pick a method to see clouds")
-                .small(),
-        );
-    }
-    let clouds = f.policy != FoliagePolicy::Full;
-    let spectral = matches!(f.policy, FoliagePolicy::Spectral | FoliagePolicy::Automatic);
-    ui.add_enabled_ui(clouds, |ui| {
-        let c = &mut f.chain;
-        egui::ComboBox::from_label("level order")
-            .selected_text(c.order.name())
-            .show_ui(ui, |ui| {
-                for o in FoliageOrder::ALL {
-                    ui.selectable_value(&mut c.order, o, o.name());
-                }
-            })
-            .response
-            .on_hover_text(
-                "cost: at each size the cheapest level (fragments and triangles, measured) \
-                 whose colour error is no worse than the ε chain's there; epsilon: each level \
-                 from where its ε projects to the tolerance (the thesis's chain)",
-            );
-        ui.add(
-            egui::Slider::new(&mut c.first_epsilon, 0.001..=0.05)
-                .logarithmic(true)
-                .text("ε of level 1")
-                .custom_formatter(|x, _| format!("{:.2}% h", x * 100.0)),
-        )
-        .on_hover_text("ε of the first cloud level, as a share of the tree's height");
-        ui.add(
-            egui::Slider::new(&mut c.epsilon_growth, MIN_EPSILON_GROWTH..=4.0)
-                .text("ε per level")
-                .custom_formatter(|x, _| format!("×{x:.2}")),
-        )
-        .on_hover_text("each level's ε is the last one's times this");
-        ui.add_enabled_ui(spectral, |ui| {
-            egui::ComboBox::from_label("description")
-                .selected_text(c.description.name())
-                .show_ui(ui, |ui| {
-                    for d in DescriptionType::ALL {
-                        ui.selectable_value(&mut c.description, d, d.name());
-                    }
-                });
-            ui.add(egui::Slider::new(&mut c.bins, 1..=16).text("K lines per axis"));
-            ui.checkbox(&mut c.shared_bone, "shared bone (§6.4)")
-                .on_hover_text(
-                    "billboards follow their leaves' deepest shared bone; off: plain SCA, \
-                     billboards hang from the root with all the motion in their spectra",
-                );
-        });
-    });
-    ui.add(egui::Slider::new(&mut f.wind, 0.0..=3.0).text("wind strength"));
-    ui.checkbox(&mut f.outlines, "billboard outlines");
-    ui.checkbox(&mut f.tint, "tint trees by level");
-    let mut lit = f.atlas_lighting.unwrap_or(true);
-    if ui
-        .checkbox(&mut lit, "light billboards per texel")
-        .on_hover_text(
-            "each billboard texel lit by the normal of the leaf drawn there; off: one \
-             shade per billboard, by its plane (the thesis); off by default on a CPU \
-             adapter, where it costs about a fifth of the frame",
-        )
-        .changed()
-    {
-        f.atlas_lighting = Some(lit);
-    }
-    ui.checkbox(&mut f.prepass, "foliage depth pre-pass")
-        .on_hover_text(
-            "plane-lit leaves drawn twice: depth first (alpha tested), then colour where the \
-             depth is equal, so each pixel is shaded once; one sample a pixel only. On \
-             lavapipe the second pass rasterises every layer again: the foliage pass takes \
-             about 1.6× as long",
-        );
-    for (name, current, levels) in &info.chains {
-        let title = if *current {
-            format!("{name}: {} levels", levels.len())
-        } else {
-            format!("{name}: {} levels (earlier settings)", levels.len())
-        };
-        egui::CollapsingHeader::new(title)
-            .id_salt(("chain", name))
-            .show(ui, |ui| chain_table(ui, name, levels));
     }
 }
 
@@ -655,6 +604,7 @@ mod clicks {
                         view_pixels: 0,
                         panel_cpu_ms: 0.0,
                         memory: &[],
+                        selection: SelectionInfo::default(),
                         time: 0.0,
                         baking: None,
                         bake_error: None,

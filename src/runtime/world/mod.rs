@@ -17,6 +17,7 @@ use anyhow::{Result, bail};
 mod install;
 mod patch_state;
 mod patches;
+pub mod selection;
 mod view;
 
 use view::impostor_draws;
