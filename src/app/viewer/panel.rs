@@ -176,12 +176,15 @@ fn header(ui: &mut egui::Ui, info: &Info) -> bool {
             .clicked();
     });
     ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
-    ui.label(egui::RichText::new("F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit").small());
-    // The notice has one line, there or not, so that nothing below moves when one comes;
-    // a longer one is cut, whole in its tooltip.
-    let notice = info.notice.unwrap_or(" ");
-    ui.add(egui::Label::new(egui::RichText::new(notice).small().strong()).truncate())
-        .on_hover_text(notice);
+    // A notice takes the keys' line (one line either way, so that nothing below moves when
+    // one comes); a longer one is cut, whole in its tooltip.
+    let keys = "F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit";
+    let line = match info.notice {
+        Some(notice) => egui::RichText::new(notice).small().strong(),
+        None => egui::RichText::new(keys).small(),
+    };
+    ui.add(egui::Label::new(line).truncate())
+        .on_hover_text(info.notice.unwrap_or(keys));
     open
 }
 
@@ -326,28 +329,28 @@ fn method_combo(ui: &mut egui::Ui, id: &str, value: &mut LodMethod, info: &Info)
 }
 
 fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
-    ui.strong("Level of detail")
-        .on_hover_text("Keys: M next method, T next transition");
-    method_combo(ui, "method", &mut s.method, info);
-    // The bake's progress, its failure or "in place" share one line of fixed height, so that
-    // nothing below moves when a bake starts or ends.
-    let slot = egui::vec2(ui.available_width(), 16.0);
-    ui.allocate_ui_with_layout(slot, egui::Layout::left_to_right(egui::Align::Center), |ui| {
-        ui.set_min_size(slot);
+    // The heading shares its line with the bake's progress, its failure or "in place", so
+    // that nothing below moves when a bake starts or ends.
+    ui.horizontal(|ui| {
+        ui.strong("Level of detail")
+            .on_hover_text("Keys: M next method, T next transition");
         if let Some(e) = info.bake_error {
-            ui.add(egui::Label::new(egui::RichText::new(e).small().color(ui.visuals().error_fg_color)).truncate())
-                .on_hover_text(e);
+            let text = egui::RichText::new(e).small().color(ui.visuals().error_fg_color);
+            ui.add(egui::Label::new(text).truncate()).on_hover_text(e);
         } else if let Some((what, f)) = &info.baking {
             ui.add(
                 egui::ProgressBar::new(*f)
-                    .text(egui::RichText::new(format!("baking {what}: {:.0}%", f * 100.0)).small())
+                    .text(egui::RichText::new(format!("baking {:.0}%", f * 100.0)).small())
                     .desired_height(14.0),
             )
-            .on_hover_text(format!("baking {what} in the background; full detail is drawn until each model's levels are in"));
+            .on_hover_text(format!(
+                "baking {what} in the background; full detail is drawn until each model's levels are in"
+            ));
         } else {
-            ui.label(egui::RichText::new("every level in place").small().weak());
+            ui.label(egui::RichText::new("levels in place").small().weak());
         }
     });
+    method_combo(ui, "method", &mut s.method, info);
     let p = &mut s.policy;
     egui::ComboBox::from_label("transition")
         .selected_text(p.transition.name())
