@@ -29,7 +29,9 @@ check() { if eval "$2"; then echo "ok    $1"; else echo "FAIL  $1"; failed=1; fi
 # Waits up to $2 seconds for the command $1 to succeed.
 until_ok() { for _ in $(seq $(($2 * 2))); do eval "$1" && return 0; sleep 0.5; done; return 1; }
 viewer() {
-    (cd "$work" && "$lodlab" view --scene crowd --count 20 --size 1000x700 >"$work/log" 2>&1; echo "exit $?" >>"$work/log") &
+    local args=("$@")
+    [ ${#args[@]} -gt 0 ] || args=(--scene crowd --count 20)
+    (cd "$work" && "$lodlab" view "${args[@]}" --size 1000x700 >"$work/log" 2>&1; echo "exit $?" >>"$work/log") &
     until_ok 'grep -q "first frame" "$work/log"' 120
     win=$(xdotool search --name "^lodlab$" | tail -1)
     xdotool windowactivate --sync "$win" 2>/dev/null || xdotool windowfocus "$win"
@@ -62,5 +64,30 @@ rm -f "$work/log"
 viewer
 xdotool key Escape
 check "Esc quits with exit 0" 'until_ok "grep -q \"^exit 0\" \"$work/log\"" 30'
+
+# One horse standing in the middle of the view: a click there selects it, F frames it (the
+# camera comes close), B prints the camera, Ctrl+C prints the view as a shot command.
+rm -f "$work/log"
+viewer --scene study --count 1
+xdotool key space
+eval "$(xdotool getwindowgeometry --shell "$win")"
+# The 3D view is right of the 270-point panel; the wheel backs away from the horse first.
+xdotool mousemove $((X + 270 + (WIDTH - 270) / 2)) $((Y + HEIGHT / 2))
+for _ in 1 2 3 4 5 6 7 8; do xdotool click 5; sleep 0.2; done
+sleep 1
+xdotool click 1
+sleep 1
+xdotool key ctrl+c
+check "Ctrl+C prints the view as a shot command" 'until_ok "grep -q \"this view as a command: lodlab shot\" \"$work/log\"" 20'
+far=$(grep -o -- "--camera [^ ]*" "$work/log" | tail -1 | cut -d, -f3)
+xdotool key f
+sleep 1
+xdotool key ctrl+c
+sleep 1
+near=$(grep -o -- "--camera [^ ]*" "$work/log" | tail -1 | cut -d, -f3)
+check "a click selects the horse and F frames it ($far m -> $near m)" 'awk -v a="$far" -v b="$near" "BEGIN { exit !(b < a * 0.8) }"'
+xdotool key b
+check "B prints the camera as --camera" 'until_ok "grep -q \"camera bookmarked: --camera\" \"$work/log\"" 20'
+xdotool key Escape
 [ $failed = 0 ] || cat "$work/log"
 exit $failed

@@ -52,6 +52,8 @@ pub enum KeyAction {
     Bookmark,
     /// Shift+B: back to the bookmark.
     BackToBookmark,
+    /// Ctrl+C: the view as a `lodlab shot` command, on the clipboard.
+    CopyCommand,
 }
 
 /// What a key pressed does wherever the keyboard is (a text field of the panel included).
@@ -126,6 +128,9 @@ impl Controls {
                             return match view_key(code) {
                                 Some(KeyAction::Bookmark) if self.shift => {
                                     Some(KeyAction::BackToBookmark)
+                                }
+                                Some(KeyAction::ToggleCompare) if self.ctrl => {
+                                    Some(KeyAction::CopyCommand)
                                 }
                                 action => action,
                             };

@@ -88,7 +88,7 @@ fn body(ui: &mut egui::Ui, info: &SelectionInfo, requests: &mut SelectionRequest
             .clicked();
     });
     requests.copy_command |= ui
-        .button("copy as command")
+        .button("copy as command (Ctrl+C)")
         .on_hover_text("The lodlab shot line that renders this view (scene, levels of detail, camera, size, time) headless: on the clipboard and on stderr. Animation speed, pause and shadows are not in it.")
         .clicked();
     if let Some(line) = info.command {

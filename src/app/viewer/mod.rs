@@ -351,6 +351,7 @@ impl Viewer {
                     Some(KeyAction::Frame) => self.frame_selection(),
                     Some(KeyAction::Bookmark) => self.bookmark(false),
                     Some(KeyAction::BackToBookmark) => self.bookmark(true),
+                    Some(KeyAction::CopyCommand) => self.copy_command(),
                     None => {}
                 }
             }
