@@ -11,9 +11,9 @@ pub fn first_run_note(cache: Option<&std::path::Path>, waits: bool) {
         return;
     }
     let how = if waits {
-        "this waits for them, about a minute on 2 cores for the default scene"
+        "this waits for them, a minute or two on 2 cores for the default scene"
     } else {
-        "they bake in the background, about a minute on 2 cores for the default scene, and full detail is drawn until each model's are in"
+        "they bake in the background, a minute or two on 2 cores for the default scene, and full detail is drawn until each model's are in"
     };
     eprintln!(
         "lodlab: first run: the models' levels of detail are baked now ({how}) and kept in {} for next time (rm -r it to clear; --cache DIR for another folder)",
