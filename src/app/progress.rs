@@ -14,9 +14,9 @@ pub struct Progress {
     label: String,
     total: u64,
     bar: Option<ProgressBar>,
-    /// Lines where there is no bar: steps done and when the last line was said; None when
-    /// nothing is shown.
-    lines: Option<Mutex<(u64, Instant)>>,
+    /// Lines where there is no bar: steps done, when the last line was said, and the stage
+    /// named last; None when nothing is shown.
+    lines: Option<Mutex<(u64, Instant, String)>>,
     start: Instant,
 }
 
@@ -32,7 +32,7 @@ impl Progress {
             bar
         });
         Progress {
-            lines: (show && !terminal).then(|| Mutex::new((0, Instant::now()))),
+            lines: (show && !terminal).then(|| Mutex::new((0, Instant::now(), String::new()))),
             label,
             total,
             bar,
@@ -45,20 +45,69 @@ impl Progress {
         if let Some(bar) = &self.bar {
             bar.inc(1);
         }
+        self.advance(|done| *done += 1);
+    }
+
+    /// `f` (0 to 1) of the job done, for jobs measured in fractions (`total` then counts
+    /// thousandths).
+    pub fn set_fraction(&self, f: f32) {
+        let steps = (f.clamp(0.0, 1.0) as f64 * self.total as f64) as u64;
+        if let Some(bar) = &self.bar {
+            bar.set_position(steps);
+        }
+        self.advance(|done| *done = steps);
+    }
+
+    /// The job has come to a stage of its own (`measuring`, a method's name): on the bar, or
+    /// said at once on a line.
+    pub fn set_stage(&self, stage: &str) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(stage.to_string());
+        }
+        if let Some(lines) = &self.lines
+            && let Ok(mut state) = lines.lock()
+            && state.2 != stage
+        {
+            state.2 = stage.to_string();
+            state.1 = Instant::now();
+            eprintln!(
+                "lodlab: {}: {stage} after {:.0} s",
+                self.label,
+                self.start.elapsed().as_secs_f32()
+            );
+        }
+    }
+
+    /// Where there is no bar: moves the count by `step`, and says it every [`EVERY`] seconds.
+    fn advance(&self, step: impl FnOnce(&mut u64)) {
         if let Some(lines) = &self.lines
             && let Ok(mut state) = lines.lock()
         {
-            state.0 += 1;
+            step(&mut state.0);
             if state.1.elapsed().as_secs_f32() >= EVERY {
                 state.1 = Instant::now();
+                let stage = if state.2.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", state.2)
+                };
                 eprintln!(
-                    "lodlab: {}: {}/{} after {:.0} s",
+                    "lodlab: {}{stage}: {}/{} after {:.0} s",
                     self.label,
                     state.0,
                     self.total,
                     self.start.elapsed().as_secs_f32()
                 );
             }
+        }
+    }
+
+    /// The job is over, and `message` says how it went: kept on the bar's line, or said.
+    pub fn finish_with(&self, message: String) {
+        if let Some(bar) = &self.bar {
+            bar.finish_with_message(message);
+        } else if self.lines.is_some() {
+            eprintln!("lodlab: {}: {message}", self.label);
         }
     }
 

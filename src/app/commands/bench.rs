@@ -23,6 +23,7 @@ use crate::atomic::write as write_atomic;
 use std::process::ExitCode;
 
 use super::shot::histogram;
+use crate::app::progress::Progress;
 use crate::atomic::check_target;
 use crate::bake::gpu_data::drawable::LevelKind;
 use crate::measure::statistics::{medians, percentile};
@@ -37,7 +38,6 @@ use crate::scene::foliage::FoliageView;
 use crate::scene::lod::MAX_LEVELS;
 use crate::scene::{CameraPath, LodMethod, LodPolicy};
 use anyhow::{Result, bail};
-use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -256,13 +256,11 @@ pub fn run(o: &BenchArgs) -> Result<BenchReport> {
     });
     let block = (n / 4).clamp(1, MAX_BLOCK);
 
-    let bar = ProgressBar::new((n * order.len()) as u64);
-    bar.set_style(super::bake::bar_style());
-    bar.set_prefix("bench");
+    let bar = Progress::new(true, "bench", (n * order.len()) as u64);
     let warmup_seconds = warm.elapsed().as_secs_f64();
     let measuring = Instant::now();
     let mut samples = measure(&mut bench, &order, n, block, &bar)?;
-    bar.finish_and_clear();
+    bar.finish();
     let measured_seconds = measuring.elapsed().as_secs_f64();
     cover(&mut bench, &order, &mut samples)?;
 
@@ -388,13 +386,13 @@ fn measure(
     order: &[LodMethod],
     n: usize,
     block: usize,
-    bar: &ProgressBar,
+    bar: &Progress,
 ) -> Result<Vec<Samples>> {
     let path = bench.path;
     let mut samples: Vec<Samples> = order.iter().map(|_| Samples::default()).collect();
     for start in (0..n).step_by(block) {
         for (s, &m) in samples.iter_mut().zip(order) {
-            bar.set_message(m.name());
+            bar.set_stage(m.name());
             for i in start..(start + block).min(n) {
                 let stats = bench.show(m, path_time(&path, i, n));
                 let (ms, passes) = bench.time(CharacterShader::Skinned)?;
@@ -413,7 +411,7 @@ fn measure(
                 for (sum, &c) in s.kinds.iter_mut().zip(&stats.kinds) {
                     *sum += c as u64;
                 }
-                bar.inc(1);
+                bar.inc();
             }
         }
     }

@@ -57,8 +57,15 @@ fn body(ui: &mut egui::Ui, info: &SelectionInfo, requests: &mut SelectionRequest
     match info.inspected {
         Some(p) => {
             ui.label(what_it_draws(p));
+            let triangles = match p.bands.get(p.level as usize) {
+                Some(b) if b.impostor => " · 2 triangles".to_string(),
+                Some(Band {
+                    triangles: Some(t), ..
+                }) => format!(" · {} triangles", thousands(*t)),
+                _ => String::new(),
+            };
             ui.label(format!(
-                "{:.0} px high · its error {:.2} px",
+                "{:.0} px high · error {:.2} px{triangles}",
                 p.height_px, p.error_px
             ));
             strip(ui, p);

@@ -24,6 +24,7 @@ use crate::app::commands::report::data::{
 };
 use crate::app::commands::report::markdown::timings_markdown;
 use crate::app::commands::report::plot::plot;
+use crate::app::progress::Progress;
 use crate::bake::character::lod::{Replay, SkinnedLods, bake_lods, progressive_mesh};
 use crate::bake::character::lod_error::{MeshError, Probe};
 use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
@@ -31,7 +32,6 @@ use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use crate::import::load_model;
 use crate::model::{Model, SkinnedMesh};
 use anyhow::Result;
-use indicatif::ProgressBar;
 use std::collections::BTreeMap;
 
 /// Runs the whole report and writes `timings.md`, `report.json` and `error.png` into `out`,
@@ -54,15 +54,15 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
     for method in Method::ALL {
         let bar = bar(opts.progress, &format!("{} {method}", model.name));
-        let progress = |f: f32| bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+        let progress = |f: f32| bar.set_fraction(f);
         let lods = bake_lods(&model, method, &lod_opts, &progress);
-        bar.set_message("measuring");
+        bar.set_stage("measuring");
         let clock = std::time::Instant::now();
         let curve = measure_sequence(&probe, &base, &lods.sequence);
         let measured = clock.elapsed().as_secs_f64();
-        bar.set_message("silhouettes");
+        bar.set_stage("silhouettes");
         let levels = level_reports(&lods, &poses);
-        bar.set_message("lighting");
+        bar.set_stage("lighting");
         let shading = match &gpu {
             Some(gpu) => {
                 let which: Vec<usize> = (1..lods.levels.len()).collect();
@@ -83,7 +83,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
             lods.bake_seconds,
             clock.elapsed().as_secs_f64() - measured
         );
-        bar.finish_with_message(format!("{:.2} s", lods.bake_seconds));
+        bar.finish_with(format!("{:.2} s", lods.bake_seconds));
         methods.insert(
             method.name().to_string(),
             MethodReport {
@@ -174,14 +174,9 @@ fn level_reports(lods: &SkinnedLods, poses: &[Vec<glam::Affine3A>]) -> Vec<Level
         .collect()
 }
 
-fn bar(show: bool, prefix: &str) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(1000);
-    bar.set_style(super::bake::bar_style());
-    bar.set_prefix(prefix.to_string());
-    bar
+/// A method's progress: a bar in a terminal, a line every few seconds elsewhere.
+fn bar(show: bool, prefix: &str) -> Progress {
+    Progress::new(show, prefix, 1000)
 }
 
 /// The error along a sequence at [`CURVE_POINTS`] prefixes spaced evenly in log(influences).
