@@ -151,7 +151,7 @@ fn cache(dir: Option<PathBuf>) -> String {
     let (files, bytes) = folder_size(&dir);
     if files == 0 {
         format!(
-            "{} (empty: the first run bakes levels of detail, a minute or so on 2 cores, and keeps them here)",
+            "{} (empty: the first run bakes levels of detail, a minute or two on 2 cores, and keeps them here)",
             dir.display()
         )
     } else {

@@ -83,7 +83,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
             lods.bake_seconds,
             clock.elapsed().as_secs_f64() - measured
         );
-        bar.finish_with(format!("{:.2} s", lods.bake_seconds));
+        bar.finish_with(format!("baked in {:.2} s", lods.bake_seconds));
         methods.insert(
             method.name().to_string(),
             MethodReport {
