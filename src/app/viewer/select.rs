@@ -73,6 +73,7 @@ impl Viewer {
     /// Each frame: a followed selection keeps the camera's target on it; a target the user
     /// moved (panning, flying) ends the following.
     pub(super) fn follow_selection(&mut self) {
+        self.world.highlight = self.selection.picked;
         let Some(last) = self.selection.following else {
             return;
         };
