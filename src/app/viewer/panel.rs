@@ -361,7 +361,8 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
         })
         .response
         .on_hover_text("How a character changes level (Houle & Poulin): pop (at once), alpha (both levels drawn, the new one fading in: twice the cost while it lasts), morph (geomorph: vertices glide, one level drawn), dither (each level on its share of the pixels). T: next");
-    if p.transition != Transition::Pop {
+    // Greyed out, not hidden, under pop: the rows below stay where they are.
+    ui.add_enabled_ui(p.transition != Transition::Pop, |ui| {
         ui.horizontal(|ui| {
             ui.radio_value(&mut p.drive, Drive::Time, "over time")
                 .on_hover_text("A transition runs for a fixed time once the level changes");
@@ -386,7 +387,7 @@ fn level_of_detail(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
                     "Width of a morph zone, as a share of its switch distance (--zone-width)",
                 ),
         };
-    }
+    });
     ui.add(
         egui::Slider::new(&mut p.tolerance_px, 0.25..=16.0)
             .logarithmic(true)
@@ -694,6 +695,26 @@ mod clicks {
                 "{frames} frames"
             );
         }
+    }
+
+    /// Choosing pop greys the drive and duration rows out instead of taking them away: the
+    /// controls below stay under the cursor.
+    #[test]
+    fn controls_stay_put_when_the_transition_changes() {
+        let mut h = panel(0.1);
+        h.run_steps(2);
+        let force = || {
+            by().label("force level")
+                .include_labels()
+                .role(egui::accesskit::Role::CheckBox)
+        };
+        let before = h.get(force()).rect();
+        let combo = h.get_by_label("transition").rect();
+        click(&mut h, combo, 0);
+        let pop = h.get_by_label(Transition::Pop.name()).rect();
+        click(&mut h, pop, 0);
+        assert_eq!(h.state().0.policy.transition, Transition::Pop);
+        assert_eq!(h.get(force()).rect(), before);
     }
 
     #[test]
