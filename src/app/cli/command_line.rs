@@ -119,20 +119,21 @@ pub fn shot_command(view: &ViewState) -> Vec<String> {
         push("time", Some(view.time.to_string()));
     }
     push("msaa", Some(view.samples.to_string()));
-    let c = view.camera;
-    push(
-        "camera",
-        Some(format!(
-            "{},{},{},{},{},{}",
-            c.yaw.to_degrees(),
-            c.pitch.to_degrees(),
-            c.distance,
-            c.target.x,
-            c.target.y,
-            c.target.z
-        )),
-    );
+    push("camera", Some(camera_value(view.camera)));
     w
+}
+
+/// A camera as `--camera` takes it: `YAW,PITCH,DIST,X,Y,Z` (degrees, metres).
+pub fn camera_value(c: &Camera) -> String {
+    format!(
+        "{},{},{},{},{},{}",
+        c.yaw.to_degrees(),
+        c.pitch.to_degrees(),
+        c.distance,
+        c.target.x,
+        c.target.y,
+        c.target.z
+    )
 }
 
 /// The foliage options of `lod` that differ from `shot`'s defaults `d`.

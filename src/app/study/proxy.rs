@@ -267,6 +267,26 @@ fn record_reference(o: &ProxyOptions, manifest: &Manifest, model: &str, frames: 
     Ok(())
 }
 
+/// Frame `k` of the lossless frames in `dir`, which must be the size of `like` (the frame it is
+/// scored against).
+fn lossless_frame(dir: &Path, k: u32, like: &image::RgbaImage) -> Result<image::RgbaImage> {
+    let file = dir.join(record::frame_file(k));
+    let frame = image::open(&file)
+        .map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?
+        .to_rgba8();
+    if frame.dimensions() != like.dimensions() {
+        bail!(
+            "{}: {}x{}, but the frame it is scored against is {}x{}",
+            file.display(),
+            frame.width(),
+            frame.height(),
+            like.width(),
+            like.height()
+        );
+    }
+    Ok(frame)
+}
+
 /// SSIM of every frame of the MP4 `clip` against the lossless frames it was encoded from, in
 /// `frames`: what the codec alone takes away.
 fn codec_ssim(clip: &Path, frames: &Path) -> Result<Vec<f64>> {
@@ -280,18 +300,8 @@ fn codec_ssim(clip: &Path, frames: &Path) -> Result<Vec<f64>> {
             let Some(decoded) = video.next_frame()? else {
                 break;
             };
-            let file = frames.join(record::frame_file(k));
+            let lossless = lossless_frame(frames, k, &decoded)?;
             k += 1;
-            let lossless = image::open(&file)
-                .map_err(|e| anyhow!("{}: cannot read: {e}", file.display()))?
-                .to_rgba8();
-            if lossless.dimensions() != decoded.dimensions() {
-                bail!(
-                    "{}: its frames differ in size from {}",
-                    clip.display(),
-                    file.display()
-                );
-            }
             batch.push((decoded, lossless));
         }
         if batch.is_empty() {
@@ -331,20 +341,7 @@ fn score_rendered(
         batch.clear();
     };
     record::render_frames(options, &mut |k, frame| {
-        let file = reference.join(record::frame_file(k));
-        let r = image::open(&file)
-            .map_err(|e| anyhow!("{}: cannot read the reference frame: {e}", file.display()))?
-            .to_rgba8();
-        if r.dimensions() != frame.dimensions() {
-            bail!(
-                "{}: {}x{}, but the clip's frames are {}x{}",
-                file.display(),
-                r.width(),
-                r.height(),
-                frame.width(),
-                frame.height()
-            );
-        }
+        let r = lossless_frame(reference, k, frame)?;
         batch.push((frame.clone(), r));
         if batch.len() == BATCH {
             flush(&mut batch);
@@ -352,60 +349,6 @@ fn score_rendered(
         Ok(())
     })?;
     flush(&mut batch);
-    Ok((ssim_of, flip_of))
-}
-
-/// SSIM and ꟻLIP of every frame of `clip` against the same frame of `reference`. The two
-/// must have the same size and frame count (one plan made both).
-pub fn score_clip(clip: &Path, reference: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
-    use rayon::prelude::*;
-    let mut a = ClipReader::open(clip)?;
-    let mut b = ClipReader::open(reference)?;
-    if (a.width, a.height, a.frames) != (b.width, b.height, b.frames) {
-        bail!(
-            "{}: {}x{}, {} frames, but its reference {} is {}x{}, {} frames",
-            clip.display(),
-            a.width,
-            a.height,
-            a.frames,
-            reference.display(),
-            b.width,
-            b.height,
-            b.frames
-        );
-    }
-    if a.width < 11 || a.height < 11 {
-        bail!(
-            "{}: {}x{} is smaller than SSIM's 11×11 window",
-            clip.display(),
-            a.width,
-            a.height
-        );
-    }
-    let (mut ssim_of, mut flip_of) = (Vec::new(), Vec::new());
-    loop {
-        let mut batch = Vec::with_capacity(BATCH);
-        while batch.len() < BATCH {
-            match (a.next_frame()?, b.next_frame()?) {
-                (Some(fa), Some(fb)) => batch.push((fa, fb)),
-                _ => break,
-            }
-        }
-        if batch.is_empty() {
-            break;
-        }
-        let scores: Vec<(f64, f64)> = batch
-            .par_iter()
-            .map(|(fa, fb)| (frame_ssim(fa, fb), frame_flip(fa, fb)))
-            .collect();
-        for (s, f) in scores {
-            ssim_of.push(s);
-            flip_of.push(f);
-        }
-    }
-    if ssim_of.is_empty() {
-        bail!("{}: no frames", clip.display());
-    }
     Ok((ssim_of, flip_of))
 }
 

@@ -6,7 +6,7 @@
 
 use super::Viewer;
 use super::inspect::SelectionRequests;
-use crate::app::cli::command_line::{ViewState, shell_line, shot_command};
+use crate::app::cli::command_line::{ViewState, camera_value, shell_line, shot_command};
 use crate::runtime::headless::ShotLod;
 use glam::Vec2;
 
@@ -106,15 +106,7 @@ impl Viewer {
             return;
         }
         self.selection.bookmark = Some(*camera);
-        let line = format!(
-            "--camera {},{},{},{},{},{}",
-            camera.yaw.to_degrees(),
-            camera.pitch.to_degrees(),
-            camera.distance,
-            camera.target.x,
-            camera.target.y,
-            camera.target.z
-        );
+        let line = format!("--camera {}", camera_value(camera));
         eprintln!("lodlab: camera bookmarked: {line}");
         self.notice = Some(format!("bookmarked (Shift+B: back): {line}"));
     }
