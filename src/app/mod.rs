@@ -7,6 +7,7 @@ pub mod json;
 pub mod panel_image;
 pub mod plotting;
 pub mod progress;
+pub mod shard;
 pub mod study;
 pub mod video;
 pub mod viewer;

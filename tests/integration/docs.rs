@@ -192,8 +192,38 @@ fn lodlab_words(line: &str) -> Option<Vec<String>> {
         line.strip_prefix("lodlab ")?
     };
     let mut words = vec!["lodlab".to_string()];
-    words.extend(args.split_whitespace().map(String::from));
+    words.extend(args.split_whitespace().map(fill_variables));
     Some(words)
+}
+
+/// A shell word with its quotes gone and its variables (`$NAME`, `${NAME}`) read as 1, as a
+/// batch scheduler's task number would be.
+fn fill_variables(word: &str) -> String {
+    let word = word.trim_matches('"');
+    let mut out = String::new();
+    let mut chars = word.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c != '$' {
+            out.push(c);
+            continue;
+        }
+        let braced = chars.next_if_eq(&'{').is_some();
+        while chars
+            .next_if(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .is_some()
+        {}
+        if braced {
+            chars.next_if_eq(&'}');
+        }
+        out.push('1');
+    }
+    out
+}
+
+#[test]
+fn shell_variables_are_filled() {
+    assert_eq!(fill_variables("\"$SLURM_ARRAY_TASK_ID/16\""), "1/16");
+    assert_eq!(fill_variables("${K}/${N}x"), "1/1x");
 }
 
 /// Every line of a fenced `sh` block that runs lodlab parses with the current command line,
@@ -232,7 +262,7 @@ fn the_shell_blocks_parse() {
 }
 
 /// The inline commands of a page (`lodlab …`, and the `bench …`/`shot …` shorthands of its
-/// tables), with their placeholders (`DIR`, `M`, `MODEL`, `T`, `FILE`, `N`, `PX`) filled in;
+/// tables), with their placeholders (`DIR`, `M`, `MODEL`, `T`, `FILE`, `N`, `PX`, `K/N`) filled in;
 /// templates with alternatives (`[…]`, `|`, `…`) are left out.
 fn inline_commands(text: &str) -> Vec<Vec<String>> {
     let (prose, _) = split_fences(text);
@@ -265,6 +295,7 @@ fn inline_commands(text: &str) -> Vec<Vec<String>> {
                         "FILE" => "out.png",
                         "N" => "30",
                         "PX" => "2",
+                        "K/N" => "1/2",
                         w => w,
                     })
                     .map(String::from)

@@ -431,3 +431,125 @@ fn a_study_proxy_scores_clips_against_full_detail() {
     let md = std::fs::read_to_string(dir.join("analysis.md")).unwrap();
     assert!(md.contains("Image-metric proxy"), "{md}");
 }
+
+/// A plan made in two shards into one folder, then merged: each shard renders only its share
+/// (clip i goes to shard i mod N + 1) and writes no sessions; the merge refuses while a clip is
+/// missing and a shard made with other options, then writes the study without rendering again.
+/// `bake --shard` bakes only its share of the models.
+#[test]
+fn a_study_is_made_in_shards_and_merged() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("cylinder.glb");
+    std::fs::write(&model, to_glb(&bent_cylinder(16, 8))).unwrap();
+    let plan = tmp.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "models = [\"{}\"]\npairs = [[\"rest-pose\", \"as\"], [\"as\", \"as+is\"]]\n\
+             tolerances = [2.0]\nparticipants = 2\ncount = 2\nseconds = 0.3\nfps = 10\n\
+             size = \"48x32\"\n",
+            model.display()
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("study");
+    let (d, plan_s) = (dir.display().to_string(), plan.display().to_string());
+    let cache = tmp.path().join("cache").display().to_string();
+    let make = |extra: &[&str]| {
+        let mut args = vec![
+            "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--msaa", "1",
+        ];
+        args.extend_from_slice(extra);
+        lodlab(&args)
+    };
+    let clips = || -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir.join("clips"))
+            .map(|r| {
+                r.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    };
+    // Plan order of the clips: rest-pose, as, as+is. Shard 2/2 takes the second.
+    let o = make(&["--shard", "2/2"]);
+    ok(&o);
+    assert_eq!(clips(), ["cylinder-as-2px.mp4"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("--merge"));
+    assert!(!dir.join("sessions").exists() && !dir.join("study.json").exists());
+    let o = make(&["--merge"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("2 of 3 clips are not made yet") && err.contains("cylinder-rest-pose-2px"),
+        "{err}"
+    );
+    // A shard made with other options does not join.
+    let o = lodlab(&[
+        "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--msaa", "4",
+        "--shard", "2/2",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--msaa 1"));
+    ok(&make(&["--shard", "1/2"]));
+    assert_eq!(
+        clips(),
+        [
+            "cylinder-as-2px.mp4",
+            "cylinder-as-is-2px.mp4",
+            "cylinder-rest-pose-2px.mp4"
+        ]
+    );
+    let before: Vec<_> = clips()
+        .iter()
+        .map(|c| {
+            std::fs::metadata(dir.join("clips").join(c))
+                .unwrap()
+                .modified()
+                .unwrap()
+        })
+        .collect();
+    let o = make(&["--merge"]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.matches("(there already)").count(), 3, "{err}");
+    let after: Vec<_> = clips()
+        .iter()
+        .map(|c| {
+            std::fs::metadata(dir.join("clips").join(c))
+                .unwrap()
+                .modified()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(before, after, "the merge rendered nothing again");
+    let manifest = lodlab::app::study::plan::read_manifest(&dir).unwrap();
+    assert!(manifest.clips.iter().all(|c| c.record.is_some()));
+    assert_eq!(session(&dir, "P02").len(), 2 + 4);
+
+    // bake --shard: model i to shard i mod N + 1.
+    let other = tmp.path().join("other.glb");
+    std::fs::write(&other, to_glb(&bent_cylinder(12, 8))).unwrap();
+    let o = lodlab(&[
+        "bake",
+        &model.display().to_string(),
+        &other.display().to_string(),
+        "--methods",
+        "as",
+        "--cache",
+        &cache,
+        "--shard",
+        "2/2",
+        "--json",
+    ]);
+    ok(&o);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let baked: Vec<&str> = json["characters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["model"].as_str().unwrap())
+        .collect();
+    assert_eq!(baked, ["other"], "{json}");
+}

@@ -171,6 +171,15 @@ pub enum StudyCommand {
         /// Multisampling of the clips: 1 (off) or 4.
         #[arg(long, default_value_t = 4, value_parser = parse_samples)]
         msaa: u32,
+        /// Render only this job's share of the clips, K of N (clip i goes to shard
+        /// i mod N + 1), noted in DIR/shards/K-of-N.json; no sessions are written. A run
+        /// without --shard over the same folder then merges the shards.
+        #[arg(long, value_name = "K/N", conflicts_with = "merge")]
+        shard: Option<crate::app::shard::Shard>,
+        /// Merge the shards only: fail, naming them, if any clips are missing instead of
+        /// rendering them.
+        #[arg(long)]
+        merge: bool,
     },
     /// Run a participant's session: each pair's clips one after the other, then a forced
     /// choice (keys 1 and 2); every answer is saved at once, and a session resumes where it
@@ -361,6 +370,11 @@ pub struct BakeArgs {
     /// influences, error), per tree its billboard-cloud levels.
     #[arg(long)]
     pub json: bool,
+    /// Bake only this job's share of the models, K of N (e.g. a Slurm array's
+    /// $SLURM_ARRAY_TASK_ID/N): model i goes to shard i mod N + 1. The shards fill one
+    /// --cache; a bake of all the models then finds every level there.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<crate::app::shard::Shard>,
 }
 
 #[derive(Args, Debug)]

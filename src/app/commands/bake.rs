@@ -78,8 +78,20 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<BakeResults> {
     if !(a.first_error.is_finite() && a.first_error > 0.0) {
         anyhow::bail!("--first-error must be a positive number of pixels");
     }
+    let mut names: Vec<String> = a.models.iter().chain(&a.model_flags).cloned().collect();
+    if let Some(shard) = a.shard {
+        names = shard.share(&names);
+        eprintln!(
+            "shard {shard}: {}",
+            if names.is_empty() {
+                "no models (more shards than models)".to_string()
+            } else {
+                names.join(", ")
+            }
+        );
+    }
     let mut models = Vec::new();
-    for name in a.models.iter().chain(&a.model_flags) {
+    for name in &names {
         let model = load_model(name)?;
         let from = source(name);
         let hash =

@@ -13,14 +13,40 @@ pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
             out,
             cache,
             msaa,
+            shard,
+            merge,
         } => {
-            let m = study::make(&study::MakeOptions {
-                plan,
+            let options = study::MakeOptions {
+                plan: plan.clone(),
                 out: out.clone(),
                 cache_dir: cache,
                 samples: msaa,
                 progress: true,
-            })?;
+                merge,
+            };
+            if let Some(shard) = shard {
+                let made = study::make::make_shard(&options, shard)?;
+                println!(
+                    "{}: shard {shard}: {} of the study's {} clips ({} rendered now); when \
+                     every shard is done, merge them with: {}",
+                    out.display(),
+                    made.record.clips.len(),
+                    made.total,
+                    made.rendered,
+                    crate::app::cli::command_line::shell_line(&[
+                        "lodlab".into(),
+                        "study".into(),
+                        "make".into(),
+                        "--plan".into(),
+                        plan.to_string_lossy().into_owned(),
+                        "--out".into(),
+                        out.to_string_lossy().into_owned(),
+                        "--merge".into(),
+                    ])
+                );
+                return Ok(ExitCode::SUCCESS);
+            }
+            let m = study::make(&options)?;
             let trials = study::session::plan_session(&m, &m.participants[0]).len();
             println!(
                 "{}: {} clips, {} conditions, {} participants with {trials} trials each",

@@ -157,7 +157,7 @@ pub fn analyze(dir: &Path) -> Result<Analysis> {
     if bad > 0 {
         eprintln!(
             "warning: {}: {bad} line(s) could not be read and are left out",
-            dir.join(super::ANSWERS).display()
+            dir.join(super::plan::ANSWERS).display()
         );
     }
     let training = answers.iter().filter(|a| a.block != TEST).count();
@@ -431,7 +431,7 @@ pub fn run(dir: &Path) -> Result<Analysis> {
     if a.conditions.iter().all(|r| r.answers == 0) {
         anyhow::bail!(
             "{}: no answers yet, nothing to analyze (a participant answers in `lodlab study run {} --participant ID`)",
-            dir.join(super::ANSWERS).display(),
+            dir.join(super::plan::ANSWERS).display(),
             dir.display()
         );
     }

@@ -25,7 +25,7 @@
 //! (SSIM over time, a line per clip). The full-detail clips are kept in `clips/` as
 //! `MODEL-reference.mp4`, their lossless frames in `clips/MODEL-reference-frames/`.
 
-use super::clip_options;
+use super::make::clip_options;
 use super::plan::{CLIPS, Manifest, read_manifest};
 use crate::app::commands::record;
 use crate::app::plotting::{plot_error, register_font, write_plot};
@@ -70,7 +70,7 @@ pub struct ClipScore {
 /// One condition as the proxy sees it: both clips' means by both metrics.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ProxyCondition {
-    pub condition: super::Condition,
+    pub condition: super::plan::Condition,
     pub ssim_a: f64,
     pub ssim_b: f64,
     pub flip_a: f64,
