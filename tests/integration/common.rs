@@ -241,3 +241,26 @@ pub fn gpu() -> &'static lodlab::render::Gpu {
     static GPU: std::sync::OnceLock<lodlab::render::Gpu> = std::sync::OnceLock::new();
     GPU.get_or_init(|| lodlab::render::Gpu::headless().expect("a GPU adapter (lavapipe in CI)"))
 }
+
+/// `tools/web` with puppeteer-core installed and Debian's Chromium (or `$LODLAB_CHROMIUM`), or
+/// `None`, with one line saying so, where either is missing and CI does not require them
+/// (`LODLAB_REQUIRE_BROWSER`, which `.ci/run` sets after installing both).
+pub fn browser_tools() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/web");
+    let chromium = std::env::var_os("LODLAB_CHROMIUM")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/usr/bin/chromium"));
+    let installed = dir.join("node_modules/puppeteer-core").is_dir()
+        && chromium.is_file()
+        && Command::new("node").arg("--version").output().is_ok();
+    if installed {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("LODLAB_REQUIRE_BROWSER").is_none(),
+        "LODLAB_REQUIRE_BROWSER is set but the browser tools are missing (apt install chromium; \
+         npm ci --prefix tools/web)"
+    );
+    eprintln!("skipped: no headless browser (apt install chromium; npm ci --prefix tools/web)");
+    None
+}

@@ -10,6 +10,7 @@ mod assets;
 mod bad_input;
 mod bench;
 mod billboards;
+mod browser;
 mod docs;
 mod export;
 mod field_models;

@@ -181,6 +181,26 @@ pub enum StudyCommand {
         #[arg(long)]
         merge: bool,
     },
+    /// Make a study (as `make` does) and write it as a static site that runs the sessions
+    /// in a browser: index.html?participant=P01 plays that participant's trials, keeps each
+    /// answer in the browser (a reload resumes) and at the end downloads answers-P01.csv,
+    /// which `analyze` reads beside answers.csv.
+    Web {
+        /// The study plan (TOML; docs/study-plan.toml is an example).
+        plan: PathBuf,
+        /// Folder of the study and the site (new or empty, or one made from the same plan).
+        #[arg(long)]
+        out: PathBuf,
+        /// Cache folder of baked levels of detail.
+        #[arg(long, value_name = "DIR")]
+        cache: Option<PathBuf>,
+        /// Multisampling of the clips: 1 (off) or 4.
+        #[arg(long, default_value_t = 4, value_parser = parse_samples)]
+        msaa: u32,
+        /// Also POST each participant's answers (text/csv) to this URL at the end.
+        #[arg(long, value_name = "URL")]
+        post: Option<String>,
+    },
     /// Run a participant's session: each pair's clips one after the other, then a forced
     /// choice (keys 1 and 2); every answer is saved at once, and a session resumes where it
     /// stopped.

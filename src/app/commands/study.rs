@@ -1,11 +1,11 @@
-//! `lodlab study make|run|proxy|analyze`: the front end of the user studies
+//! `lodlab study make|web|run|proxy|analyze`: the front end of the user studies
 //! ([`crate::app::study`]).
 
 use crate::app::cli::StudyCommand;
 use crate::app::study;
 use std::process::ExitCode;
 
-/// `lodlab study make|run|analyze`.
+/// `lodlab study make|web|run|proxy|analyze`.
 pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
     match command {
         StudyCommand::Make {
@@ -15,84 +15,21 @@ pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
             msaa,
             shard,
             merge,
-        } => {
-            let options = study::MakeOptions {
-                plan: plan.clone(),
-                out: out.clone(),
-                cache_dir: cache,
-                samples: msaa,
-                progress: true,
-                merge,
-            };
-            if let Some(shard) = shard {
-                let made = study::make::make_shard(&options, shard)?;
-                println!(
-                    "{}: shard {shard}: {} of the study's {} clips ({} rendered now); when \
-                     every shard is done, merge them with: {}",
-                    out.display(),
-                    made.record.clips.len(),
-                    made.total,
-                    made.rendered,
-                    crate::app::cli::command_line::shell_line(&[
-                        "lodlab".into(),
-                        "study".into(),
-                        "make".into(),
-                        "--plan".into(),
-                        plan.to_string_lossy().into_owned(),
-                        "--out".into(),
-                        out.to_string_lossy().into_owned(),
-                        "--merge".into(),
-                    ])
-                );
-                return Ok(ExitCode::SUCCESS);
-            }
-            let m = study::make(&options)?;
-            let trials = study::session::plan_session(&m, &m.participants[0]).len();
-            println!(
-                "{}: {} clips, {} conditions, {} participants with {trials} trials each",
-                out.display(),
-                m.clips.len(),
-                m.conditions.len(),
-                m.participants.len()
-            );
-            Ok(ExitCode::SUCCESS)
-        }
+        } => make(plan, out, cache, msaa, shard, merge),
+        StudyCommand::Web {
+            plan,
+            out,
+            cache,
+            msaa,
+            post,
+        } => web(plan, out, cache, msaa, post),
         StudyCommand::Run {
             dir,
             participant,
             fullscreen,
             size,
             script,
-        } => {
-            let mut session = study::session::Session::open(&dir, &participant)?;
-            if let Some(script) = script {
-                let answers: Vec<u8> = script
-                    .split(',')
-                    .map(|a| match a.trim() {
-                        "1" => Ok(1),
-                        "2" => Ok(2),
-                        other => Err(anyhow::anyhow!(
-                            "--script: '{other}' is not an answer (1 or 2)"
-                        )),
-                    })
-                    .collect::<anyhow::Result<_>>()?;
-                let given = study::session::run_scripted(&mut session, &answers)?;
-                println!(
-                    "{participant}: {given} answer(s) recorded; {} of {} answered",
-                    session.answered(),
-                    session.total()
-                );
-                return Ok(ExitCode::SUCCESS);
-            }
-            study::window::run(
-                session,
-                study::window::RunOptions {
-                    fullscreen,
-                    width: size.0,
-                    height: size.1,
-                },
-            )
-        }
+        } => run(dir, participant, fullscreen, size, script),
         StudyCommand::Proxy { dir, cache, msaa } => {
             let p = study::proxy::run(&study::proxy::ProxyOptions {
                 dir,
@@ -109,4 +46,125 @@ pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// `study make`: the whole study, or with `--shard` one job's share of its clips.
+fn make(
+    plan: std::path::PathBuf,
+    out: std::path::PathBuf,
+    cache: Option<std::path::PathBuf>,
+    msaa: u32,
+    shard: Option<crate::app::shard::Shard>,
+    merge: bool,
+) -> anyhow::Result<ExitCode> {
+    let options = study::MakeOptions {
+        plan: plan.clone(),
+        out: out.clone(),
+        cache_dir: cache,
+        samples: msaa,
+        progress: true,
+        merge,
+    };
+    if let Some(shard) = shard {
+        let made = study::make::make_shard(&options, shard)?;
+        println!(
+            "{}: shard {shard}: {} of the study's {} clips ({} rendered now); when \
+             every shard is done, merge them with: {}",
+            out.display(),
+            made.record.clips.len(),
+            made.total,
+            made.rendered,
+            crate::app::cli::command_line::shell_line(&[
+                "lodlab".into(),
+                "study".into(),
+                "make".into(),
+                "--plan".into(),
+                plan.to_string_lossy().into_owned(),
+                "--out".into(),
+                out.to_string_lossy().into_owned(),
+                "--merge".into(),
+            ])
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let m = study::make(&options)?;
+    let trials = study::session::plan_session(&m, &m.participants[0]).len();
+    println!(
+        "{}: {} clips, {} conditions, {} participants with {trials} trials each",
+        out.display(),
+        m.clips.len(),
+        m.conditions.len(),
+        m.participants.len()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `study web`: the study made, and written as a site that runs online.
+fn web(
+    plan: std::path::PathBuf,
+    out: std::path::PathBuf,
+    cache: Option<std::path::PathBuf>,
+    msaa: u32,
+    post: Option<String>,
+) -> anyhow::Result<ExitCode> {
+    study::web::check_post_url(post.as_deref())?;
+    let m = study::make(&study::MakeOptions {
+        plan,
+        out: out.clone(),
+        cache_dir: cache,
+        samples: msaa,
+        progress: true,
+        merge: false,
+    })?;
+    study::web::write_site(&out, &m, post.as_deref())?;
+    let first = m.participants.first().map_or("P01", String::as_str);
+    println!(
+        "{}: a static site for {} participants; put the folder on any web server (or \
+         try it with `python3 -m http.server -d {}`) and send each participant their \
+         link, index.html?participant={first}; copy the answers-ID.csv files they \
+         send back into the folder and run `lodlab study analyze {}`",
+        out.display(),
+        m.participants.len(),
+        out.display(),
+        out.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `study run`: a participant's session in a window, or answered by a script.
+fn run(
+    dir: std::path::PathBuf,
+    participant: String,
+    fullscreen: bool,
+    size: (u32, u32),
+    script: Option<String>,
+) -> anyhow::Result<ExitCode> {
+    let mut session = study::session::Session::open(&dir, &participant)?;
+    if let Some(script) = script {
+        let answers: Vec<u8> = script
+            .split(',')
+            .map(|a| match a.trim() {
+                "1" => Ok(1),
+                "2" => Ok(2),
+                other => Err(anyhow::anyhow!(
+                    "--script: '{other}' is not an answer (1 or 2)"
+                )),
+            })
+            .collect::<anyhow::Result<_>>()?;
+        let given = study::session::run_scripted(&mut session, &answers)?;
+        println!(
+            "{participant}: {given} answer(s) recorded; {} of {} answered",
+            session.answered(),
+            session.total()
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    study::window::run(
+        session,
+        study::window::RunOptions {
+            fullscreen,
+            width: size.0,
+            height: size.1,
+        },
+    )
 }

@@ -3,7 +3,7 @@
 //! §6.2 report theirs. Training answers are left out.
 
 use super::plan::{Condition, read_manifest};
-use super::session::{TEST, read_answers};
+use super::session::{TEST, read_all_answers};
 use crate::app::plotting::{plot_error, register_font, write_plot};
 use crate::atomic::write as write_atomic;
 use anyhow::Result;
@@ -27,6 +27,9 @@ pub struct ConditionResult {
 
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Analysis {
+    /// The answer files read (the desktop's answers.csv, the online study's downloads) and the
+    /// answers each added.
+    pub answer_files: Vec<(String, usize)>,
     pub participants: usize,
     pub training_answers_left_out: usize,
     pub conditions: Vec<ConditionResult>,
@@ -153,13 +156,22 @@ pub fn binomial_two_sided(k: usize, n: usize) -> f64 {
 
 pub fn analyze(dir: &Path) -> Result<Analysis> {
     let manifest = read_manifest(dir)?;
-    let (answers, bad) = read_answers(dir)?;
-    if bad > 0 {
+    let all = read_all_answers(dir)?;
+    for (file, bad) in &all.unreadable {
         eprintln!(
             "warning: {}: {bad} line(s) could not be read and are left out",
-            dir.join(super::plan::ANSWERS).display()
+            dir.join(file).display()
         );
     }
+    if all.repeated > 0 {
+        eprintln!(
+            "warning: {}: {} answer(s) to trials answered in an earlier file are left out \
+             (the first answer counts)",
+            dir.display(),
+            all.repeated
+        );
+    }
+    let answers = all.answers;
     let training = answers.iter().filter(|a| a.block != TEST).count();
     let conditions: Vec<ConditionResult> = manifest
         .conditions
@@ -205,6 +217,7 @@ pub fn analyze(dir: &Path) -> Result<Analysis> {
         None => Vec::new(),
     };
     Ok(Analysis {
+        answer_files: all.files,
         participants,
         training_answers_left_out: training,
         conditions,
@@ -221,6 +234,17 @@ pub fn markdown(a: &Analysis) -> String {
          two-sided binomial (sign) test against no preference.\n",
         a.participants, a.training_answers_left_out
     );
+    if a.answer_files
+        .iter()
+        .any(|(f, _)| f != super::plan::ANSWERS)
+    {
+        let files: Vec<String> = a
+            .answer_files
+            .iter()
+            .map(|(f, n)| format!("{f} ({n})"))
+            .collect();
+        let _ = writeln!(out, "Answers read from: {}.\n", files.join(", "));
+    }
     out.push_str(
         "| model | A vs B | tolerance px | answers | prefer A | prefer B | share B | p |\n",
     );
@@ -430,7 +454,7 @@ pub fn run(dir: &Path) -> Result<Analysis> {
     // No answers is no result: a share of 50% and a p of 1 would read as one.
     if a.conditions.iter().all(|r| r.answers == 0) {
         anyhow::bail!(
-            "{}: no answers yet, nothing to analyze (a participant answers in `lodlab study run {} --participant ID`)",
+            "{}: no answers yet, nothing to analyze (a participant answers in `lodlab study run {} --participant ID`, or online in the page `study web` writes)",
             dir.join(super::plan::ANSWERS).display(),
             dir.display()
         );

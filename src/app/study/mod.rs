@@ -9,6 +9,7 @@
 //! - [`session`]: a participant's run: each pair's clips one after the other, never side by
 //!   side, then a forced choice; every answer appended to `answers.csv` and flushed at once, so
 //!   that a crash loses nothing and a session resumes where it stopped.
+//! - [`web`]: the study as a static site that runs the sessions online, in a browser.
 //! - [`analyze`]: per condition, the preference counts and share, and a two-sided binomial (sign)
 //!   test, training answers excluded; a Markdown table and a bar chart.
 
@@ -18,6 +19,7 @@ pub mod plan;
 pub mod proxy;
 pub mod session;
 pub mod shards;
+pub mod web;
 pub mod window;
 
 pub use make::{MakeOptions, clip_options, make};

@@ -11,6 +11,16 @@ use std::path::{Path, PathBuf};
 pub const TRAINING: &str = "training";
 pub const TEST: &str = "test";
 
+/// What a participant sees and does, the same in the window (`study run`) and online (`study
+/// web`): a grey screen of [`GAP`] before each clip, the clips one after the other, then the
+/// question, answered with the keys 1 and 2.
+pub const GAP: std::time::Duration = std::time::Duration::from_millis(800);
+pub const INSTRUCTIONS: &str = "You will see pairs of short clips, one after the other.\n\
+     After each pair, press 1 if the first looked better, 2 if the second did.";
+pub const QUESTION: &str = "Which clip looked better?";
+pub const CHOICES: &str = "1: the first      2: the second";
+pub const THANKS: &str = "Thank you: the session is complete.";
+
 /// One sample: a condition's two clips in the order shown.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Trial {
@@ -111,8 +121,13 @@ pub const HEADER: &str = "participant,trial,block,model,method_a,method_b,tolera
 /// Every complete answer in `DIR/answers.csv` (none when there is no file yet), and how many
 /// lines could not be read (a line cut short by a crash mid-write, say).
 pub fn read_answers(dir: &Path) -> Result<(Vec<Answer>, usize)> {
-    let path = dir.join(ANSWERS);
-    let file = match std::fs::File::open(&path) {
+    read_answers_file(&dir.join(ANSWERS))
+}
+
+/// Every complete answer in the answers file `path` (none when there is no such file), and
+/// how many lines could not be read.
+pub fn read_answers_file(path: &Path) -> Result<(Vec<Answer>, usize)> {
+    let file = match std::fs::File::open(path) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0)),
         Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
@@ -127,6 +142,67 @@ pub fn read_answers(dir: &Path) -> Result<(Vec<Answer>, usize)> {
         }
     }
     Ok((answers, bad))
+}
+
+/// The answers of a study from every file that holds them: the desktop's `answers.csv` and
+/// the files the online study's page downloads (`answers-P01.csv`, …, copied into the folder).
+pub struct Answers {
+    pub answers: Vec<Answer>,
+    /// Each file read, with the answers it added.
+    pub files: Vec<(String, usize)>,
+    /// Lines that could not be read, per file.
+    pub unreadable: Vec<(String, usize)>,
+    /// Answers to a trial already answered in a file read earlier (the same participant
+    /// answering on the desktop and online, or one file copied twice): the first is kept.
+    pub repeated: usize,
+}
+
+/// Reads `DIR/answers.csv`, then every `DIR/answers-*.csv` in name order (see [`Answers`]).
+pub fn read_all_answers(dir: &Path) -> Result<Answers> {
+    let mut paths = vec![dir.join(ANSWERS)];
+    let mut online: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot read", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("answers-") && n.ends_with(".csv"))
+        })
+        .collect();
+    online.sort();
+    paths.extend(online);
+    let mut all = Answers {
+        answers: Vec::new(),
+        files: Vec::new(),
+        unreadable: Vec::new(),
+        repeated: 0,
+    };
+    let mut seen = std::collections::HashSet::new();
+    for path in paths {
+        if !path.exists() {
+            continue;
+        }
+        let name = path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let (answers, bad) = read_answers_file(&path)?;
+        if bad > 0 {
+            all.unreadable.push((name.clone(), bad));
+        }
+        let mut added = 0;
+        for a in answers {
+            if seen.insert((a.participant.clone(), a.trial)) {
+                all.answers.push(a);
+                added += 1;
+            } else {
+                all.repeated += 1;
+            }
+        }
+        all.files.push((name, added));
+    }
+    Ok(all)
 }
 
 /// Appends one answer and makes it durable before returning: the line is written whole, then

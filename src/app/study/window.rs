@@ -4,21 +4,18 @@
 //! keys 1 and 2. Escape leaves; the answers given so far are on disk and the session resumes
 //! at the next trial.
 
-use super::session::Session;
+use super::session::{CHOICES, GAP, INSTRUCTIONS, QUESTION, Session, THANKS};
 use crate::app::video::ClipReader;
 use crate::app::viewer::display_available;
 use crate::app::window::{Began, WindowGpu, draw_panel};
 use anyhow::{Context, Result};
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, KeyEvent, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Fullscreen, Window, WindowId};
-
-/// Grey screen between the two clips of a trial, and after the second.
-const GAP: Duration = Duration::from_millis(800);
 
 pub struct RunOptions {
     pub fullscreen: bool,
@@ -235,19 +232,14 @@ impl App<'_> {
         let progress = format!("{} of {} answered", s.answered(), s.total());
         match &self.stage {
             Stage::Welcome => format!(
-                "Participant {}\n\nYou will see pairs of short clips, one after the other.\n\
-                 After each pair, press 1 if the first looked better, 2 if the second did.\n\n\
+                "Participant {}\n\n{INSTRUCTIONS}\n\n\
                  Press space to start. Escape stops; you can go on later.\n\n{progress}",
                 s.participant
             ),
             Stage::Gap { which, .. } => format!("Clip {which}"),
             Stage::Playing { .. } => String::new(),
-            Stage::Ask => format!(
-                "Which clip looked better?\n\n1: the first      2: the second\n\n{progress}"
-            ),
-            Stage::Done => {
-                "Thank you: the session is complete.\n\nEscape closes the window.".to_string()
-            }
+            Stage::Ask => format!("{QUESTION}\n\n{CHOICES}\n\n{progress}"),
+            Stage::Done => format!("{THANKS}\n\nEscape closes the window."),
         }
     }
 }

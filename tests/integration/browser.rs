@@ -1,0 +1,174 @@
+//! lodlab in a real browser: Debian's Chromium, headless, driven through the DevTools protocol
+//! by `tools/web` (puppeteer-core). The online study is played through by a participant's key
+//! presses, reloaded halfway, its answers downloaded and POSTed, and analysed beside a desktop
+//! participant's.
+
+use crate::common::browser_tools;
+use lodlab::app::study::session::{Trial, read_answers_file};
+use lodlab::generate::cylinder::bent_cylinder;
+use lodlab::generate::glb::to_glb;
+use std::process::{Command, Output};
+
+fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stderr),
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+/// A port nothing listens on now (the page POSTs to the check's server there).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+#[test]
+fn an_online_study_runs_resumes_and_is_analysed() {
+    let Some(tools) = browser_tools() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("cylinder.glb");
+    std::fs::write(&model, to_glb(&bent_cylinder(16, 8))).unwrap();
+    let plan = tmp.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "models = [\"{}\"]\npairs = [[\"rest-pose\", \"as+is\"]]\ntolerances = [2.0]\n\
+             participants = 2\ncount = 3\nseconds = 0.4\nfps = 10\nsize = \"64x48\"\n",
+            model.display()
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("study");
+    let d = dir.display().to_string();
+    let port = free_port();
+    let post = format!("http://127.0.0.1:{port}/answers");
+    let cache = tmp.path().join("cache").display().to_string();
+    let o = lodlab(&[
+        "study",
+        "web",
+        &plan.display().to_string(),
+        "--out",
+        &d,
+        "--cache",
+        &cache,
+        "--msaa",
+        "1",
+        "--post",
+        &post,
+    ]);
+    ok(&o);
+    for f in [
+        "index.html",
+        "study.js",
+        "study-data.js",
+        "sessions/P01.json",
+    ] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+
+    // P01 online: a training trial and the condition in both orders; reloaded after one.
+    let trials: Vec<Trial> =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sessions/P01.json")).unwrap())
+            .unwrap();
+    assert_eq!(trials.len(), 3);
+    let answers = ["2", "1", "2"];
+    let out = tmp.path().join("browser");
+    let o = Command::new("node")
+        .arg(tools.join("study-check.mjs"))
+        .args(["--site", &d, "--participant", "P01", "--answers"])
+        .arg(answers.join(","))
+        .args(["--reload-after", "1", "--port", &port.to_string(), "--out"])
+        .arg(&out)
+        .output()
+        .expect("node runs");
+    ok(&o);
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The desktop's order of screens: welcome, then per trial a grey gap before each clip and
+    // the question; after the reload, welcome again.
+    let stages: Vec<&str> = report["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    let trial = ["gap", "playing", "gap", "playing", "ask"];
+    let mut expected = vec!["welcome"];
+    expected.extend(trial);
+    // The answer starts the next trial's gap; the reload cuts it short.
+    expected.extend(["gap", "welcome"]);
+    expected.extend(trial);
+    expected.extend(trial);
+    expected.extend(["sending", "done"]);
+    assert_eq!(stages, expected, "{report}");
+    assert!(
+        report["resumed"]
+            .as_str()
+            .unwrap()
+            .contains("1 of 3 answered"),
+        "{report}"
+    );
+    assert!(report["done"].as_str().unwrap().contains("were sent"));
+    assert_eq!(
+        report["posted"], true,
+        "the POSTed answers are the download"
+    );
+    // Each clip played at its size and is not black (the cylinders on the study's ground).
+    for f in report["frames"].as_array().unwrap() {
+        assert_eq!(
+            (f["width"].as_u64(), f["height"].as_u64()),
+            (Some(64), Some(48))
+        );
+        assert!(f["mean_luma"].as_f64().unwrap() > 30.0, "{f}");
+    }
+    let download = out.join("answers-P01.csv");
+    let (got, bad) = read_answers_file(&download).unwrap();
+    assert_eq!(bad, 0);
+    assert_eq!(got.len(), 3);
+    for ((a, t), choice) in got.iter().zip(&trials).zip(answers) {
+        assert_eq!(
+            (a.trial, &a.block, a.first, a.second),
+            (t.trial, &t.block, t.first, t.second)
+        );
+        assert_eq!(a.choice.to_string(), choice);
+        assert_eq!(a.preferred, if choice == "1" { t.first } else { t.second });
+    }
+
+    // P02 on the desktop; analyze reads both.
+    std::fs::copy(&download, dir.join("answers-P01.csv")).unwrap();
+    ok(&lodlab(&[
+        "study",
+        "run",
+        &d,
+        "--participant",
+        "P02",
+        "--script",
+        "1,1,1",
+    ]));
+    let o = lodlab(&["study", "analyze", &d]);
+    ok(&o);
+    let analysis: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("analysis.json")).unwrap()).unwrap();
+    assert_eq!(analysis["participants"], 2, "{analysis}");
+    assert_eq!(analysis["training_answers_left_out"], 2);
+    assert_eq!(analysis["conditions"][0]["answers"], 4);
+    let files = analysis["answer_files"].to_string();
+    assert!(
+        files.contains("answers-P01.csv") && files.contains("answers.csv"),
+        "{files}"
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("answers-P01.csv (3)"));
+}
