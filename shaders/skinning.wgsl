@@ -32,7 +32,8 @@ struct Layout {
 
 fn layout_of(t: texture_2d<f32>) -> Layout {
     let w = textureDimensions(t).x;
-    return Layout(w - 1u, countTrailingZeros(w));
+    // log2 of a power of two, exact in f32 (WebGL2's GLSL has no countTrailingZeros).
+    return Layout(w - 1u, u32(log2(f32(w)) + 0.5));
 }
 
 fn texel(t: texture_2d<f32>, l: Layout, i: u32) -> vec4<f32> {

@@ -13,7 +13,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, Once};
+use std::sync::Mutex;
 
 /// Temporary files being written now: what an interrupted run removes.
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -90,9 +90,14 @@ pub fn make_folder(dir: &Path) -> Result<()> {
     })
 }
 
+/// A page gets no signals: the web build has nothing to clean up on one.
+#[cfg(target_arch = "wasm32")]
+fn remove_pending_on_interrupt() {}
+
 /// On Ctrl-C or SIGTERM, removes the temporary files being written and exits with 130.
+#[cfg(not(target_arch = "wasm32"))]
 fn remove_pending_on_interrupt() {
-    static INSTALL: Once = Once::new();
+    static INSTALL: std::sync::Once = std::sync::Once::new();
     INSTALL.call_once(|| {
         // Another handler already installed (a host program's) keeps its say.
         let _ = ctrlc::set_handler(|| {
@@ -115,6 +120,10 @@ pub struct AtomicFile {
 
 impl AtomicFile {
     pub fn create(target: &Path) -> Result<AtomicFile> {
+        // A page has no files to write (the browser's own downloads are another matter).
+        if cfg!(target_arch = "wasm32") {
+            bail!("{}: the web viewer writes no files", target.display());
+        }
         check_target(target)?;
         remove_pending_on_interrupt();
         let name = target

@@ -1,10 +1,20 @@
 //! The `lodlab` command line: parses the arguments (`lodlab::app::cli`) and runs the command
 //! (`lodlab::app::commands`), printing a failure as one line.
 
+#[cfg(not(target_arch = "wasm32"))]
 use clap::Parser;
+#[cfg(not(target_arch = "wasm32"))]
 use lodlab::app::cli::Cli;
+#[cfg(not(target_arch = "wasm32"))]
 use std::process::ExitCode;
 
+/// In the browser: the web viewer (see `lodlab::app::viewer::web`).
+#[cfg(target_arch = "wasm32")]
+fn main() {
+    lodlab::app::viewer::web::start();
+}
+
+#[cfg(not(target_arch = "wasm32"))]
 fn main() -> ExitCode {
     quiet_device_select();
     // Diagnostics (`RUST_LOG=debug`: the bake and the cache's decisions) go to stderr beside
@@ -31,6 +41,7 @@ fn main() -> ExitCode {
 /// user set it up or chose a device through it. What the layer does besides is put the boot
 /// display's GPU first; on a headless machine with several, `WGPU_ADAPTER_NAME` or
 /// `WGPU_POWER_PREF` choose (see `render::gpu`).
+#[cfg(not(target_arch = "wasm32"))]
 fn quiet_device_select() {
     let runtime_dir = std::env::var_os("XDG_RUNTIME_DIR");
     let no_compositor = runtime_dir.is_none_or(|d| !std::path::Path::new(&d).is_dir());

@@ -53,11 +53,22 @@ impl WindowGpu {
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
                 Box::new(event_loop.owned_display_handle()),
             ));
+        pollster::block_on(Self::connect(window, instance, srgb))
+    }
+
+    /// A device for `window` from `instance`, and its surface configured (see [`Self::open`]);
+    /// without blocking, as a page must.
+    pub async fn connect(
+        window: Arc<Window>,
+        instance: wgpu::Instance,
+        srgb: bool,
+    ) -> Result<WindowGpu> {
         let surface = instance
             .create_surface(window.clone())
             .context("cannot draw into the window")?;
-        let gpu = Gpu::with_instance(instance, Some(&surface))?;
+        let gpu = Gpu::with_instance_async(instance, Some(&surface)).await?;
         eprintln!("lodlab: adapter {}", gpu.describe());
+        log::info!("adapter {}", gpu.describe());
         let size = window.inner_size();
         let mut config = surface
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))

@@ -45,6 +45,15 @@ fn field(v: &Value, key: &str, what: &str) -> Result<usize, String> {
 
 /// Decodes one compressed view (its `EXT_meshopt_compression` object `ext`) from `data`, the
 /// bytes of the buffer it names.
+/// The web build has no meshoptimizer (C++) to decode with.
+#[cfg(target_arch = "wasm32")]
+fn decode(_: &Value, _: &[u8], what: &str) -> Result<Vec<u8>, String> {
+    Err(format!(
+        "{what}: EXT_meshopt_compression needs meshoptimizer, which the web build does not have"
+    ))
+}
+
+#[cfg(not(target_arch = "wasm32"))]
 fn decode(ext: &Value, data: &[u8], what: &str) -> Result<Vec<u8>, String> {
     let offset = ext.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
     let length = field(ext, "byteLength", what)?;

@@ -34,8 +34,17 @@ impl Gpu {
         instance: wgpu::Instance,
         surface: Option<&wgpu::Surface<'_>>,
     ) -> Result<Gpu> {
-        let adapter = pollster::block_on(select_adapter(&instance, surface))?;
-        Self::on_adapter(instance, adapter)
+        pollster::block_on(Self::with_instance_async(instance, surface))
+    }
+
+    /// [`Self::with_instance`] without blocking: what a page must do (the browser answers
+    /// adapter and device requests later, on its own event loop).
+    pub async fn with_instance_async(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Gpu> {
+        let adapter = select_adapter(&instance, surface).await?;
+        Self::on_adapter_async(instance, adapter).await
     }
 
     /// A device of its own on the same adapter, with a queue of its own: work for it never
@@ -46,24 +55,25 @@ impl Gpu {
     }
 
     fn on_adapter(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Gpu> {
+        pollster::block_on(Self::on_adapter_async(instance, adapter))
+    }
+
+    async fn on_adapter_async(instance: wgpu::Instance, adapter: wgpu::Adapter) -> Result<Gpu> {
         let info = adapter.get_info();
         // Features that only make the debug views nicer are taken when offered.
         let optional = wgpu::Features::POLYGON_MODE_LINE
             | wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::PIPELINE_STATISTICS_QUERY;
         let required_features = adapter.features() & optional;
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("lodlab"),
-            required_features,
-            // The adapter's own texture sizes and layer counts: models with many materials
-            // need more layers than the portable default of 256.
-            required_limits: wgpu::Limits {
-                max_texture_array_layers: adapter.limits().max_texture_array_layers,
-                ..wgpu::Limits::default().using_resolution(adapter.limits())
-            },
-            ..Default::default()
-        }))
-        .with_context(|| format!("cannot open a device on {}", info.name))?;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("lodlab"),
+                required_features,
+                required_limits: required_limits(&adapter),
+                ..Default::default()
+            })
+            .await
+            .with_context(|| format!("cannot open a device on {}", info.name))?;
         let errors = Arc::new(Mutex::new(Vec::new()));
         let sink = errors.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -109,6 +119,7 @@ impl Gpu {
 
     /// Runs `f`, which creates resources or records work, and fails with what the GPU said if
     /// any of it was invalid or out of memory (rather than leaving the error to the handler).
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -119,6 +130,13 @@ impl Gpu {
             Some(e) => bail!("{what}: the GPU refused it: {}", one_line(&e)),
             None => Ok(out),
         }
+    }
+
+    /// [`Self::checked`] in a page, which cannot wait for the browser's answer: the errors go to
+    /// the handler (logged, and failing the next [`Self::take_error`]).
+    #[cfg(target_arch = "wasm32")]
+    pub fn checked<T>(&self, _what: &str, f: impl FnOnce() -> T) -> Result<T> {
+        Ok(f())
     }
 
     /// Fails, naming `what`, unless a `width`×`height` texture of `layers` layers fits this
@@ -153,9 +171,15 @@ impl Gpu {
 
     /// `"llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)"`.
     pub fn describe(&self) -> String {
+        // A browser keeps its adapter's name to itself.
+        let name = if self.info.name.is_empty() {
+            "an adapter"
+        } else {
+            &self.info.name
+        };
         format!(
-            "{} ({:?}, {:?})",
-            self.info.name, self.info.backend, self.info.device_type
+            "{name} ({:?}, {:?})",
+            self.info.backend, self.info.device_type
         )
     }
 
@@ -230,6 +254,21 @@ impl Gpu {
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| anyhow!("GPU wait failed: {e}"))
+    }
+}
+
+/// The limits a device is asked for: the adapter's own texture sizes and layer counts (models
+/// with many materials need more layers than the portable default of 256); otherwise wgpu's
+/// defaults, or where the adapter is WebGL2, the most WebGL2 offers.
+fn required_limits(adapter: &wgpu::Adapter) -> wgpu::Limits {
+    let base = if adapter.get_info().backend == wgpu::Backend::Gl {
+        wgpu::Limits::downlevel_webgl2_defaults()
+    } else {
+        wgpu::Limits::default()
+    };
+    wgpu::Limits {
+        max_texture_array_layers: adapter.limits().max_texture_array_layers,
+        ..base.using_resolution(adapter.limits())
     }
 }
 

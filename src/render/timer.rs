@@ -308,7 +308,7 @@ impl FrameTimer {
         // Where other threads poll the same device (tree bakes measuring side by side), one of
         // them may run the read-back's callback a moment after this wait returns: poll on
         // until it has (or a read-back is plainly lost).
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         loop {
             let mut last = None;
             while let Some(t) = self.take_oldest()? {

@@ -11,7 +11,7 @@ use crate::render::{DebugView, Gpu, SceneRenderer};
 use crate::scene::foliage::FoliageView;
 use crate::scene::{LodMethod, LodPolicy};
 use anyhow::Result;
-use std::time::Instant;
+use web_time::Instant;
 
 /// The level-of-detail choices of a headless frame (a shot's, a benchmark's, a clip's).
 #[derive(Clone, Copy, Debug, PartialEq)]

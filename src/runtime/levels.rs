@@ -250,7 +250,7 @@ fn impostor_level(
     }
     let tolerance = crate::scene::LodPolicy::default().tolerance_px;
     let place = || -> anyhow::Result<Placement> {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let full = CharacterBake::new(&s.model).map_err(anyhow::Error::msg)?;
         let errors: Vec<f32> = lods.levels.iter().map(|l| l.error).collect();
         let height = full.bounds.size().y.max(1e-3);
@@ -327,7 +327,7 @@ pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOp
         };
         match (chain_file(cache, name, &s.hash, chain), order) {
             (Ok((path, _)), None) => path,
-            (Ok((path, _)), Some(Ok((order, _)))) if order.is_file() => path,
+            (Ok((path, _)), Some(Ok((order, _)))) if cache.has(&order) => path,
             _ => return false,
         }
     } else {
@@ -335,7 +335,7 @@ pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOp
             .levels_file(name, &s.hash, method, &runtime_options(&s.model))
             .0
     };
-    path.is_file()
+    cache.has(&path)
 }
 
 /// A tree's chain from the cache or built now, its levels 1… baked for the GPU.
@@ -447,9 +447,11 @@ impl BackgroundBake {
                         && s.impostor.is_some()
                 })
                 .count();
-        std::thread::spawn(move || {
+        let work = move || {
             // The bake's draws (atlases, impostor views, colour measurements) go to a device
-            // of its own, so that their read-backs do not wait behind the viewer's frames.
+            // of its own, so that their read-backs do not wait behind the viewer's frames. (The
+            // browser opens devices asynchronously only; the page bakes nothing anyway.)
+            #[cfg(not(target_arch = "wasm32"))]
             let gpu = gpu.separate().unwrap_or_else(|e| {
                 log::warn!("baking on the viewer's device: {e:#}");
                 gpu
@@ -467,7 +469,13 @@ impl BackgroundBake {
             bake_each(
                 &gpu, measure, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
             );
-        });
+        };
+        #[cfg(not(target_arch = "wasm32"))]
+        std::thread::spawn(work);
+        // A page has no threads for it: the levels, read from the page's data (never baked
+        // there), are taken in before the next frame.
+        #[cfg(target_arch = "wasm32")]
+        work();
         BackgroundBake {
             method,
             chain,

@@ -1,9 +1,10 @@
 //! lodlab in a real browser: Debian's Chromium, headless, driven through the DevTools protocol
-//! by `tools/web` (puppeteer-core). The online study is played through by a participant's key
+//! by `tools/web` (puppeteer-core). The web viewer is opened on WebGPU (SwiftShader) and its
+//! method switched with the M key; the online study is played through by a participant's key
 //! presses, reloaded halfway, its answers downloaded and POSTed, and analysed beside a desktop
-//! participant's.
+//! participant's. And `lodlab web` itself, without a browser.
 
-use crate::common::browser_tools;
+use crate::common::{browser_tools, shared_cache, web_package};
 use lodlab::app::study::session::{Trial, read_answers_file};
 use lodlab::generate::cylinder::bent_cylinder;
 use lodlab::generate::glb::to_glb;
@@ -171,4 +172,174 @@ fn an_online_study_runs_resumes_and_is_analysed() {
         "{files}"
     );
     assert!(String::from_utf8_lossy(&o.stdout).contains("answers-P01.csv (3)"));
+}
+
+/// `lodlab web` copies exactly the cache files the page's scene reads (under every method),
+/// lists them in its manifest, and writes only into a new folder or its own.
+#[test]
+fn the_web_folder_holds_the_levels_its_scene_reads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    let cache = shared_cache().display().to_string();
+    let view = ["--scene", "study", "--model", "horse", "--count", "3"];
+    let mut args = vec![
+        "web",
+        "--out",
+        site.to_str().unwrap(),
+        "--cache",
+        &cache,
+        "--",
+    ];
+    args.extend(view);
+    let o = lodlab(&args);
+    ok(&o);
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("build-wasm.sh"),
+        "says how to build the viewer itself"
+    );
+    let manifest: lodlab::app::site::SiteManifest =
+        serde_json::from_str(&std::fs::read_to_string(site.join("lodlab-web.json")).unwrap())
+            .unwrap();
+    assert_eq!(manifest.view, view);
+    let names: Vec<&str> = manifest.files.iter().map(|f| f.name.as_str()).collect();
+    for kind in [
+        "horse-rest-pose-",
+        "horse-as-",
+        "horse-as-is-",
+        "horse-impostor-",
+    ] {
+        assert!(
+            names.iter().any(|n| n.starts_with(kind)),
+            "{kind}: {names:?}"
+        );
+    }
+    for f in &manifest.files {
+        let copy = std::fs::read(site.join("levels").join(&f.name)).unwrap();
+        let original = std::fs::read(shared_cache().join(&f.name)).unwrap();
+        assert_eq!(
+            (copy.len() as u64, &copy),
+            (f.bytes, &original),
+            "{}",
+            f.name
+        );
+    }
+    assert!(
+        std::fs::read_to_string(site.join("index.html"))
+            .unwrap()
+            .contains("lodlab.js")
+    );
+    // Written again over its own folder: fine. Into someone else's, or with a bad view: one
+    // line, exit 1.
+    ok(&lodlab(&args));
+    let other = tmp.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    for bad in [
+        vec!["web", "--out", other.to_str().unwrap()],
+        vec![
+            "web",
+            "--out",
+            site.to_str().unwrap(),
+            "--",
+            "--scene",
+            "nowhere",
+        ],
+        vec![
+            "web",
+            "--out",
+            site.to_str().unwrap(),
+            "--wasm",
+            other.to_str().unwrap(),
+        ],
+    ] {
+        let o = lodlab(&bad);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{bad:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(other.join("notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+/// The web viewer in Chromium on WebGPU (SwiftShader): frames come, the screenshot shows the
+/// panel beside the scene, a mouse's drag and a finger's orbit the camera, and M (the next
+/// method) changes the triangles the page shows.
+#[test]
+fn the_web_viewer_draws_and_switches_method_in_a_browser() {
+    let (Some(tools), Some(pkg)) = (browser_tools(), web_package()) else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    let cache = shared_cache().display().to_string();
+    ok(&lodlab(&[
+        "web",
+        "--out",
+        site.to_str().unwrap(),
+        "--cache",
+        &cache,
+        "--wasm",
+        pkg.to_str().unwrap(),
+        "--",
+        "--scene",
+        "study",
+        "--model",
+        "horse",
+        "--count",
+        "12",
+    ]));
+    let out = tmp.path().join("browser");
+    let o = Command::new("node")
+        .arg(tools.join("viewer-check.mjs"))
+        .arg("--site")
+        .arg(&site)
+        .arg("--out")
+        .arg(&out)
+        .args(["--size", "800x450", "--frames", "3"])
+        .output()
+        .expect("node runs");
+    ok(&o);
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["errors"], serde_json::json!([]), "{report}");
+    assert!(
+        report["adapter"]
+            .as_str()
+            .unwrap()
+            .contains("BrowserWebGpu"),
+        "{report}"
+    );
+    let methods = report["methods"].as_array().unwrap();
+    assert_eq!(methods[0]["method"], "as+is", "{report}");
+    assert_eq!(
+        methods[1]["method"], "none",
+        "M goes to the next method: {report}"
+    );
+    let (simplified, full) = (
+        methods[0]["triangles"].as_u64().unwrap(),
+        methods[1]["triangles"].as_u64().unwrap(),
+    );
+    assert!(simplified > 0 && full > simplified, "{report}");
+    // Dragging right orbits one way, a finger dragging left the other.
+    let orbit = &report["orbit"];
+    assert!(
+        orbit["mouse"].as_f64().unwrap() * orbit["touch"].as_f64().unwrap() < 0.0,
+        "{report}"
+    );
+    // The picture: the panel (dark, with text) on the left, the scene (sky and ground,
+    // horses) on the right.
+    let shot = image::open(out.join("viewer.png")).unwrap().to_luma8();
+    let stats = |x0: u32, x1: u32| {
+        let v: Vec<f64> = (0..shot.height())
+            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+            .map(|(x, y)| shot.get_pixel(x, y)[0] as f64 / 255.0)
+            .collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        (mean, sd)
+    };
+    let (panel, scene) = (stats(0, 180), stats(400, 800));
+    assert!(panel.0 < 0.3 && panel.1 > 0.02, "the panel: {panel:?}");
+    assert!(scene.0 > 0.35 && scene.1 > 0.03, "the scene: {scene:?}");
 }

@@ -264,3 +264,20 @@ pub fn browser_tools() -> Option<PathBuf> {
     eprintln!("skipped: no headless browser (apt install chromium; npm ci --prefix tools/web)");
     None
 }
+
+/// The web viewer built for the browser (lodlab.js and lodlab_bg.wasm, from
+/// `tools/web/build-wasm.sh DIR`) in `$LODLAB_WEB_PKG`, or `None`, with one line saying so, where
+/// it is not and CI does not require it (`LODLAB_REQUIRE_BROWSER`).
+pub fn web_package() -> Option<PathBuf> {
+    let dir = std::env::var_os("LODLAB_WEB_PKG").map(PathBuf::from);
+    if let Some(dir) = dir.filter(|d| d.join("lodlab_bg.wasm").is_file()) {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("LODLAB_REQUIRE_BROWSER").is_none(),
+        "LODLAB_REQUIRE_BROWSER is set but LODLAB_WEB_PKG names no built web viewer \
+         (tools/web/build-wasm.sh DIR; LODLAB_WEB_PKG=DIR)"
+    );
+    eprintln!("skipped: no web viewer built (tools/web/build-wasm.sh DIR; LODLAB_WEB_PKG=DIR)");
+    None
+}

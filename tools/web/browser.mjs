@@ -10,20 +10,30 @@ const executablePath = process.env.LODLAB_CHROMIUM || "/usr/bin/chromium";
 export const chromiumArgs = {
   // Clips play without a click (the participant's space bar is the gesture a real page gets).
   video: ["--autoplay-policy=no-user-gesture-required"],
-  // WebGPU on SwiftShader, Chromium's software Vulkan: what a machine without a GPU has.
+  // WebGPU on SwiftShader, Chromium's software Vulkan: what a machine without a GPU has. The
+  // compositor on Vulkan (through ANGLE) too: otherwise the canvas's frames never reach the
+  // page (a screenshot shows it blank).
   webgpu: [
     "--enable-unsafe-webgpu",
     "--use-webgpu-adapter=swiftshader",
     "--enable-unsafe-swiftshader",
+    "--enable-features=Vulkan",
+    "--use-angle=vulkan",
+    "--use-vulkan=swiftshader",
   ],
   // WebGL2 on SwiftShader through ANGLE, where WebGPU is left out.
   webgl: ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-features=WebGPU"],
 };
 
 export function launch(args) {
+  if (process.env.LODLAB_CHROMIUM_ARGS) args = args.concat(process.env.LODLAB_CHROMIUM_ARGS.split(" "));
   return puppeteer.launch({
     executablePath,
     headless: true,
+    // A page building its scene keeps its thread for a while on a software GPU.
+    protocolTimeout: 600000,
+    // The browser's own output (a crashed GPU process says why there).
+    dumpio: Boolean(process.env.LODLAB_CONSOLE),
     // As root (CI's containers) Chromium refuses to start sandboxed.
     args: ["--no-sandbox", "--disable-dev-shm-usage", ...args],
   });

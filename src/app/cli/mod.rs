@@ -146,6 +146,28 @@ pub enum Command {
     /// Say what lodlab finds on this machine (adapter, driver, defaults, cache, models, the
     /// tests' checkers, import limits) and the problems it sees, each with its remedy.
     Doctor(DoctorArgs),
+    /// Write the web viewer's folder: the page, the levels of detail its scene needs
+    /// (baked first where the cache lacks them) and, with --wasm, the viewer built for the
+    /// browser; serve it over HTTP. The view is `lodlab view`'s options after `--`.
+    Web(WebArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct WebArgs {
+    /// Folder to write (new or empty, or one `lodlab web` wrote before).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Cache folder the levels are read from, and baked into where missing.
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Folder holding lodlab.js and lodlab_bg.wasm (wasm-bindgen's output, see
+    /// tools/web/build-wasm.sh), copied in beside the page.
+    #[arg(long, value_name = "DIR")]
+    pub wasm: Option<PathBuf>,
+    /// The page's view: `lodlab view`'s options (e.g. -- --scene forest --count 100); the
+    /// default scene without.
+    #[arg(last = true, value_name = "VIEW OPTIONS")]
+    pub view: Vec<String>,
 }
 
 #[derive(Args, Debug)]

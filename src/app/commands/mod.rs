@@ -15,6 +15,7 @@ pub mod soak;
 pub mod study;
 pub mod tree_report;
 pub mod view;
+pub mod web;
 
 use crate::app::cli::{Cli, Command};
 use std::process::ExitCode;
@@ -37,6 +38,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Study(a)) => study::command(a.command),
         Some(Command::View(a)) => view::command(a),
         Some(Command::Doctor(a)) => doctor::command(a),
+        Some(Command::Web(a)) => web::command(a),
         None => view::command(cli.view),
     }
 }

@@ -2,20 +2,14 @@
 
 use crate::app::cli::ViewArgs;
 use crate::app::viewer;
-use crate::scene::LodMethod;
 use std::process::ExitCode;
 
 /// `lodlab view` (and `lodlab` alone): the viewer.
 pub fn command(a: ViewArgs) -> anyhow::Result<ExitCode> {
-    let spec = a.scene.spec();
-    super::first_run::first_run_note(spec.cache_dir.as_deref(), a.screenshot.is_some());
-    viewer::run(viewer::ViewOptions {
-        spec,
-        width: a.size.0,
-        height: a.size.1,
-        samples: a.msaa,
-        screenshot: a.screenshot,
-        frames: a.frames,
-        lod: a.lod.shot_lod(LodMethod::AS_IS),
-    })
+    let options = viewer::ViewOptions::from_args(a);
+    super::first_run::first_run_note(
+        options.spec.cache_dir.as_deref(),
+        options.screenshot.is_some(),
+    );
+    viewer::run(options)
 }

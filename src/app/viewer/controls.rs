@@ -1,10 +1,11 @@
 //! Camera controls: orbit with the left mouse button, pan with the right (or middle), zoom with
-//! the wheel over the 3D view, fly with WASD (Q/E down/up, Shift faster); and the keys that act
-//! once (see [`KeyAction`]), F11, F12, Esc and Ctrl+Q among them.
+//! the wheel over the 3D view, fly with WASD (Q/E down/up, Shift faster); on a touch screen
+//! orbit with one finger, pinch to zoom and pan with two; and the keys that act once (see
+//! [`KeyAction`]), F11, F12, Esc and Ctrl+Q among them.
 
 use crate::scene::Camera;
-use std::collections::HashSet;
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use std::collections::{BTreeMap, HashSet};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, Touch, TouchPhase, WindowEvent};
 use winit::keyboard::{KeyCode, PhysicalKey};
 
 /// Radians of orbit per pixel dragged.
@@ -19,6 +20,8 @@ pub struct Controls {
     shift: bool,
     /// Where the left button went down over the view: a release near it is a click.
     pressed_at: Option<(f64, f64)>,
+    /// Fingers on the screen, by id, where each is.
+    touches: BTreeMap<u64, (f64, f64)>,
 }
 
 /// Pixels the cursor may move between press and release for a click (more is a drag).
@@ -186,6 +189,7 @@ impl Controls {
                 }
                 self.cursor = Some(now);
             }
+            WindowEvent::Touch(touch) => self.on_touch(touch, camera, view_height, pointer_free),
             WindowEvent::CursorLeft { .. } => self.cursor = None,
             WindowEvent::MouseWheel { delta, .. } if pointer_free => {
                 let steps = match delta {
@@ -197,6 +201,49 @@ impl Controls {
             _ => {}
         }
         None
+    }
+
+    /// One finger drags to orbit as the left button does; two pinch to zoom and move together
+    /// to pan. A finger landing on the panel is egui's.
+    fn on_touch(&mut self, t: &Touch, camera: &mut Camera, view_height: f32, pointer_free: bool) {
+        let at = (t.location.x, t.location.y);
+        match t.phase {
+            TouchPhase::Started if pointer_free => {
+                self.touches.insert(t.id, at);
+            }
+            TouchPhase::Moved => {
+                let before: Vec<(f64, f64)> = self.touches.values().copied().collect();
+                let Some(slot) = self.touches.get_mut(&t.id) else {
+                    return;
+                };
+                let prev = *slot;
+                *slot = at;
+                let after: Vec<(f64, f64)> = self.touches.values().copied().collect();
+                match (before.as_slice(), after.as_slice()) {
+                    ([_], [_]) => {
+                        let (dx, dy) = ((at.0 - prev.0) as f32, (at.1 - prev.1) as f32);
+                        camera.orbit(-dx * ORBIT_PER_PIXEL, dy * ORBIT_PER_PIXEL);
+                    }
+                    ([a0, b0], [a1, b1]) => {
+                        let spread = |a: &(f64, f64), b: &(f64, f64)| (a.0 - b.0).hypot(a.1 - b.1);
+                        let (s0, s1) = (spread(a0, b0), spread(a1, b1));
+                        if s0 > 1.0 && s1 > 1.0 {
+                            camera.zoom((s0 / s1) as f32);
+                        }
+                        let h = view_height.max(1.0);
+                        let mid =
+                            |a: &(f64, f64), b: &(f64, f64)| ((a.0 + b.0) / 2.0, (a.1 + b.1) / 2.0);
+                        let (m0, m1) = (mid(a0, b0), mid(a1, b1));
+                        camera.pan((m1.0 - m0.0) as f32 / h, (m1.1 - m0.1) as f32 / h);
+                    }
+                    _ => {}
+                }
+            }
+            TouchPhase::Ended | TouchPhase::Cancelled => {
+                self.touches.remove(&t.id);
+            }
+            TouchPhase::Started => {}
+        }
     }
 
     /// Where the cursor is in the window, physical pixels, if it is in it.
@@ -247,6 +294,53 @@ mod tests {
         assert_eq!(view_key(KeyCode::KeyQ), None);
         assert_eq!(view_key(KeyCode::Escape), Some(KeyAction::Quit));
         assert_eq!(view_key(KeyCode::Space), Some(KeyAction::TogglePlay));
+    }
+
+    fn touch(id: u64, phase: TouchPhase, x: f64, y: f64) -> WindowEvent {
+        WindowEvent::Touch(Touch {
+            device_id: winit::event::DeviceId::dummy(),
+            phase,
+            location: winit::dpi::PhysicalPosition::new(x, y),
+            force: None,
+            id,
+        })
+    }
+
+    #[test]
+    fn one_finger_orbits_and_two_pinch_to_zoom() {
+        let mut c = Controls::default();
+        let mut camera = Camera {
+            target: glam::Vec3::ZERO,
+            yaw: 0.0,
+            pitch: 0.3,
+            distance: 10.0,
+            fov_y: 1.0,
+        };
+        let start = camera;
+        for e in [
+            touch(1, TouchPhase::Started, 100.0, 100.0),
+            touch(1, TouchPhase::Moved, 160.0, 100.0),
+        ] {
+            c.on_event(&e, &mut camera, 720.0, true, true);
+        }
+        assert_ne!(camera.yaw, start.yaw, "one finger orbits");
+        assert_eq!(camera.distance, start.distance);
+        let orbited = camera;
+        for e in [
+            touch(2, TouchPhase::Started, 260.0, 100.0),
+            touch(2, TouchPhase::Moved, 360.0, 100.0),
+        ] {
+            c.on_event(&e, &mut camera, 720.0, true, true);
+        }
+        assert!(camera.distance < orbited.distance, "spreading zooms in");
+        assert_eq!(camera.yaw, orbited.yaw, "two fingers do not orbit");
+        for e in [
+            touch(1, TouchPhase::Ended, 160.0, 100.0),
+            touch(2, TouchPhase::Ended, 360.0, 100.0),
+        ] {
+            c.on_event(&e, &mut camera, 720.0, true, true);
+        }
+        assert!(c.touches.is_empty());
     }
 
     #[test]

@@ -6,7 +6,7 @@ use super::{Launch, ViewOptions, Viewer};
 use crate::runtime::spec::Loaded;
 use anyhow::{Context, Result};
 use std::process::ExitCode;
-use std::time::Instant;
+use web_time::Instant;
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};

@@ -4,6 +4,7 @@
 //! `--screenshot FILE --frames N` renders N frames of the real window, panel included, writes
 //! the last one to FILE and exits: how the window itself is tested under Xvfb.
 
+mod clipboard;
 mod controls;
 mod event_loop;
 mod figures;
@@ -11,11 +12,14 @@ mod foliage_panel;
 mod history;
 mod inspect;
 mod open;
+mod options;
 mod panel;
 mod panel_schedule;
 mod patches;
 mod select;
 mod selection;
+#[cfg(target_arch = "wasm32")]
+pub mod web;
 
 use super::panel_image::PanelImage;
 use super::window::{Began, PanelFrame, WindowGpu};
@@ -36,7 +40,7 @@ use history::FrameHistory;
 use panel::{Info, Settings};
 use panel_schedule::PanelSchedule;
 use std::path::PathBuf;
-use std::time::Instant;
+use web_time::Instant;
 use winit::event::WindowEvent;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
@@ -142,6 +146,16 @@ impl Viewer {
             .with_title("lodlab")
             .with_inner_size(winit::dpi::PhysicalSize::new(options.width, options.height));
         let win = WindowGpu::open(event_loop, attributes, true)?;
+        Self::with_window(win, options, loaded, launched)
+    }
+
+    /// The viewer in `win`, a window with its device (see [`Self::new`]).
+    fn with_window(
+        win: WindowGpu,
+        options: &ViewOptions,
+        loaded: Loaded,
+        launched: Launch,
+    ) -> Result<Viewer> {
         let (gpu, config) = (&win.gpu, &win.config);
         let samples = gpu.samples(options.samples);
         let mut world = World::new(gpu, loaded, config.format, samples)?;
@@ -277,6 +291,15 @@ impl Viewer {
             && self.bake_error.is_none()
             && self.foliage_changed.elapsed() >= SETTLE_BEFORE_BAKE
         {
+            // A page bakes nothing (its GPU read-backs cannot be waited for): it shows what
+            // `lodlab web` wrote for it.
+            if cfg!(target_arch = "wasm32") && !self.world.levels_cached() {
+                self.bake_error = Some(format!(
+                    "{method}: these levels are not in the page's data (write the page with \
+                     these settings: lodlab web)"
+                ));
+                return Ok(());
+            }
             self.bake = Some(BackgroundBake::start(
                 self.win.gpu.clone(),
                 self.world.sources.clone(),

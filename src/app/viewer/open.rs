@@ -6,7 +6,16 @@ use crate::runtime::spec::{Loaded, SceneSpec};
 use crate::runtime::world::World;
 
 impl Viewer {
+    /// "Open…" in the browser: the page has its built-in scenes only.
+    #[cfg(target_arch = "wasm32")]
+    pub(super) fn pick_and_open(&mut self) {
+        self.panel.touch();
+        self.notice =
+            Some("the web viewer shows its built-in scenes: open other models in lodlab".into());
+    }
+
     /// "Open…": the desktop's file dialog, then [`Self::open_model`] on the file picked.
+    #[cfg(not(target_arch = "wasm32"))]
     pub(super) fn pick_and_open(&mut self) {
         // The platform's file dialog (the XDG desktop portal, over the session's D-Bus);
         // none where there is no session bus to ask, and then the panel says so at once

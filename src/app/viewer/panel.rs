@@ -170,15 +170,27 @@ fn header(ui: &mut egui::Ui, info: &Info) -> bool {
     let mut open = false;
     ui.horizontal(|ui| {
         ui.heading("lodlab");
-        open = ui
-            .button("Open…")
-            .on_hover_text("Show a .glb or .gltf model instead of the scene's models, trees too (or drop one on the window)")
-            .clicked();
+        // A page shows the scenes it was written with (see `lodlab web`).
+        if cfg!(not(target_arch = "wasm32")) {
+            open = ui
+                .button("Open…")
+                .on_hover_text("Show a .glb or .gltf model instead of the scene's models, trees too (or drop one on the window)")
+                .clicked();
+        }
     });
-    ui.label(egui::RichText::new(format!("{} · {}", info.adapter, info.backend)).small());
+    let adapter = if info.adapter.is_empty() {
+        info.backend.to_string()
+    } else {
+        format!("{} · {}", info.adapter, info.backend)
+    };
+    ui.label(egui::RichText::new(adapter).small());
     // A notice takes the keys' line (one line either way, so that nothing below moves when
     // one comes); a longer one is cut, whole in its tooltip.
-    let keys = "F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit";
+    let keys = if cfg!(target_arch = "wasm32") {
+        "drag to orbit · wheel or pinch to zoom · M method · T transition"
+    } else {
+        "F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit"
+    };
     let line = match info.notice {
         Some(notice) => egui::RichText::new(notice).small().strong(),
         None => egui::RichText::new(keys).small(),

@@ -3,7 +3,8 @@
 //! drawn again from its last meshes, and its figures (frame times, triangles, GPU passes) are
 //! brought up to date a few times a second, as an engine's statistics overlay is.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// How often the panel's figures are brought up to date when nothing else asks for it: every
 /// quarter of a second, but no more often than every [`REFRESH_FRAMES`] frames, so that at a

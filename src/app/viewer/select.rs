@@ -162,8 +162,8 @@ impl Viewer {
             .selection
             .clipboard
             .take()
-            .or_else(|| arboard::Clipboard::new().ok())
-            .and_then(|mut c| c.set_text(line.clone()).ok().map(|_| c));
+            .or_else(super::clipboard::Clipboard::new)
+            .and_then(|mut c| c.set_text(&line).then_some(c));
         self.notice = Some(if copied.is_some() {
             "copied to the clipboard (and printed on stderr)".into()
         } else {

@@ -23,7 +23,7 @@ pub struct Selection {
     /// Models opened at run time, newest first (kept in the config folder between runs).
     pub recent: Vec<PathBuf>,
     /// The system clipboard, made on first use and kept (on X11 the text lives as long as it).
-    pub clipboard: Option<arboard::Clipboard>,
+    pub clipboard: Option<super::clipboard::Clipboard>,
 }
 
 /// `$XDG_CONFIG_HOME/lodlab/recent-files` (one path a line, newest first).

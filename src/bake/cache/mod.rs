@@ -13,6 +13,7 @@
 //! atlases are mostly empty texels).
 
 pub mod keys;
+pub mod memory;
 
 use crate::bake::character::lod::{LodOptions, SkinnedLods};
 use crate::bake::character::simplify::Method;
@@ -45,7 +46,14 @@ impl LodCache {
     pub fn new(dir: Option<PathBuf>) -> LodCache {
         let dir = dir.unwrap_or_else(|| {
             dirs::cache_dir()
-                .unwrap_or_else(std::env::temp_dir)
+                .unwrap_or_else(|| {
+                    // A page has no folders: its files are all preloaded (see `memory`).
+                    if cfg!(target_arch = "wasm32") {
+                        PathBuf::new()
+                    } else {
+                        std::env::temp_dir()
+                    }
+                })
                 .join("lodlab")
         });
         LodCache { dir }
@@ -80,8 +88,26 @@ impl LodCache {
         self.dir.join(format!("{name}-{kind}-{hex}.lods"))
     }
 
-    /// Reads a cached bake, checking its version, key and integrity.
+    /// Whether a file for the bake at `path` is there (preloaded, or on the disk); whether it
+    /// is good is found out when it is read.
+    pub fn has(&self, path: &Path) -> bool {
+        memory::preloaded(path).is_some() || path.is_file()
+    }
+
+    /// Reads a cached bake, checking its version, key and integrity: from memory where the
+    /// file was preloaded (see [`memory`]), else from the disk.
     pub fn load<T: DeserializeOwned>(&self, path: &Path, key: &[u8; 32]) -> Lookup<T> {
+        let found = match memory::preloaded(path) {
+            Some(bytes) => decode(&bytes, key),
+            None => self.load_file(path, key),
+        };
+        if matches!(found, Lookup::Hit(_)) {
+            memory::note_read(path);
+        }
+        found
+    }
+
+    fn load_file<T: DeserializeOwned>(&self, path: &Path, key: &[u8; 32]) -> Lookup<T> {
         // Only a regular file, and no more of it than a cache file can hold: a FIFO would
         // block the read for ever, a link to /dev/zero fill the memory.
         let meta = match std::fs::metadata(path) {
@@ -121,7 +147,9 @@ impl LodCache {
         let payload = postcard::to_stdvec(value)
             .map_err(|e| anyhow::anyhow!("{}: cannot encode: {e}", path.display()))?;
         let payload = lz4_flex::compress_prepend_size(&payload);
-        crate::atomic::write(path, &encode(key, &payload))
+        crate::atomic::write(path, &encode(key, &payload))?;
+        memory::note_read(path);
+        Ok(())
     }
 }
 
@@ -233,7 +261,7 @@ impl LodCache {
                 warning = Some(format!("{}: {why}; rebuilding it", path.display()));
             }
         }
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let value = build()?;
         log::debug!(
             "{}: built in {:.2} s; storing it",

@@ -174,7 +174,11 @@ impl AnimationSpaceMesh {
     /// [`Self::optimized_for_gpu`], also returning which old vertex each new one is.
     pub fn optimized_for_gpu_with_order(&self) -> (AnimationSpaceMesh, Vec<usize>) {
         let n = self.vertex_count();
+        // The web build has no meshoptimizer (C++): its triangles keep their order.
+        #[cfg(not(target_arch = "wasm32"))]
         let indices = meshopt::optimize_vertex_cache(&self.indices, n);
+        #[cfg(target_arch = "wasm32")]
+        let indices = self.indices.clone();
         let (remap, order) = fetch_order(&indices, n);
         let mut out = AnimationSpaceMesh {
             offsets: Vec::with_capacity(order.len() + 1),

@@ -358,6 +358,18 @@ pub fn drawn_for_impostor(model: &Model) -> std::borrow::Cow<'_, Model> {
     if model.mesh.triangle_count() <= IMPOSTOR_TRIANGLES {
         return std::borrow::Cow::Borrowed(model);
     }
+    simplified_for_impostor(model)
+}
+
+/// The web build has no meshoptimizer (C++) and bakes nothing: a model is drawn whole.
+#[cfg(target_arch = "wasm32")]
+fn simplified_for_impostor(model: &Model) -> std::borrow::Cow<'_, Model> {
+    std::borrow::Cow::Borrowed(model)
+}
+
+/// `model` simplified by meshoptimizer to [`IMPOSTOR_TRIANGLES`] (see [`drawn_for_impostor`]).
+#[cfg(not(target_arch = "wasm32"))]
+fn simplified_for_impostor(model: &Model) -> std::borrow::Cow<'_, Model> {
     let adapter =
         meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&model.mesh.positions), 12, 0)
             .expect("tightly packed positions");
@@ -590,7 +602,7 @@ pub fn load_or_bake_impostor(
     options: ImpostorOptions,
 ) -> Result<(AnimatedImpostor, crate::bake::cache::Origin)> {
     let build = || {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let impostor = bake_animated_impostor(raster, model, options)?;
         let e = impostor.error;
         log::info!(

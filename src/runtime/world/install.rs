@@ -391,10 +391,10 @@ impl World {
 struct BakeProgress<'a> {
     what: &'a str,
     names: &'a [&'a str],
-    start: std::time::Instant,
+    start: web_time::Instant,
     /// When the last line was said, and each model's share done (never going back: a model's
     /// impostor reports from 0 again after its levels).
-    state: std::sync::Mutex<(std::time::Instant, Vec<f32>)>,
+    state: std::sync::Mutex<(web_time::Instant, Vec<f32>)>,
 }
 
 impl<'a> BakeProgress<'a> {
@@ -403,7 +403,7 @@ impl<'a> BakeProgress<'a> {
 
     fn new(names: &'a [&'a str], skip: &[bool], what: &'a str) -> BakeProgress<'a> {
         let done = skip.iter().map(|&s| if s { 1.0 } else { 0.0 }).collect();
-        let now = std::time::Instant::now();
+        let now = web_time::Instant::now();
         BakeProgress {
             what,
             names,
@@ -424,7 +424,7 @@ impl<'a> BakeProgress<'a> {
         if last.elapsed().as_secs_f32() < Self::EVERY {
             return;
         }
-        *last = std::time::Instant::now();
+        *last = web_time::Instant::now();
         let open: Vec<String> = self
             .names
             .iter()

@@ -129,7 +129,7 @@ impl World {
         measure: &dyn MeasureColour,
         tolerance_px: f32,
     ) -> Result<ForestPatches> {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let views: Vec<Option<TreeViews>> = impostors
             .iter()
             .map(|l| l.and_then(TreeViews::of))

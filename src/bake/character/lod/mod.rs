@@ -44,7 +44,7 @@ pub fn progressive_mesh(
     progress: &(dyn Fn(f32) + Sync),
 ) -> (AnimationSpaceMesh, Sequence, f64) {
     let base = full_detail(model);
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let sequence =
         gathered(|feed| SharedBake::default().simplify(model, &base, method, progress, feed));
     let seconds = start.elapsed().as_secs_f64();
@@ -129,7 +129,7 @@ pub fn bake_lods(
     opts: &LodOptions,
     progress: &(dyn Fn(f32) + Sync),
 ) -> SkinnedLods {
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let base = full_detail(model);
     let shared = SharedBake::default();
     let mut lods = bake_lods_sharing(model, &base, &shared, method, opts, progress);
@@ -148,7 +148,7 @@ pub fn bake_lods_sharing<'a>(
     opts: &LodOptions,
     progress: &(dyn Fn(f32) + Sync),
 ) -> SkinnedLods {
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let (sequence, levels) = std::thread::scope(|scope| {
         // Made inside the scope, so that a panicking simplifier drops them and the cutter,
         // seeing the channel close, ends before the scope joins it.

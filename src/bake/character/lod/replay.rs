@@ -123,7 +123,7 @@ impl<'a> Replay<'a> {
     /// The current mesh's distance from full detail, exact above `resolution` (see
     /// [`SurfaceProbe::measure`]).
     pub(crate) fn measure(&self, probe: &SurfaceProbe, resolution: f32) -> f32 {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let tris: Vec<[u32; 3]> = self.triangles().collect();
         let follow = |r: u32| self.follow(r);
         let max = probe

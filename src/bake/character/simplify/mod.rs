@@ -172,7 +172,7 @@ pub fn simplify_prepared(
     // On a worker of rayon's pool, the candidates priced in parallel after each collapse
     // (see `evaluate_collapses`) cost a push onto the worker's own queue, which an idle
     // worker steals from; from any other thread, each would wake the pool and wait.
-    let clock = std::time::Instant::now();
+    let clock = web_time::Instant::now();
     let steps = rayon::scope(|_| s.run(start, progress, feed));
     log::debug!(
         "{method}: {steps} steps from {triangles} triangles in {:.2} s; {} vertices priced ({} \

@@ -50,7 +50,7 @@ impl Prepared {
         poses: &[Vec<Affine3A>],
         textured: &[bool],
     ) -> Prepared {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let n = am.vertex_count();
         let infl = influences64(am);
         let rest: Vec<DVec3> = infl.iter().map(|i| rest_position(rest_bones, i)).collect();

@@ -29,7 +29,7 @@ pub fn impostor_level(
     chain: &[TreeLevel],
     opts: &ChainOptions,
 ) -> Result<Option<(TreeLevel, usize)>> {
-    let start = std::time::Instant::now();
+    let start = web_time::Instant::now();
     let grid = ViewGrid {
         frames: octahedral::FRAMES,
         cell: octahedral::CELL,

@@ -331,7 +331,7 @@ pub fn tree_chain(
     let mut previous = usize::MAX;
     let mut previous_groups = usize::MAX;
     for _ in 0..40 {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let params = CloudParams {
             epsilon: eps,
             seed: opts.seed,
