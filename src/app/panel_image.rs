@@ -11,6 +11,9 @@ pub struct PanelImage {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     format: wgpu::TextureFormat,
+    /// Whether the device can view a texture in another format (WebGL2 cannot): else the image
+    /// is a plain texture and the copy decodes its sRGB in the shader.
+    view_formats: bool,
     /// The texture egui draws the panel into, the view egui draws through (without sRGB
     /// encoding: egui blends in gamma space), and the bind group that reads it (decoding sRGB,
     /// as the frame is linear); `None` before the first drawing.
@@ -23,8 +26,15 @@ pub struct PanelImage {
 }
 
 impl PanelImage {
-    /// A panel image for frames of `format` (the window's surface format).
-    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> PanelImage {
+    /// A panel image for frames of `format` (the window's surface format), on a device that
+    /// can or cannot view a texture in another format (`view_formats`).
+    pub fn new(
+        device: &wgpu::Device,
+        format: wgpu::TextureFormat,
+        view_formats: bool,
+    ) -> PanelImage {
+        // Where the image cannot be an sRGB texture read as one, the shader decodes.
+        let decode = format.is_srgb() && !view_formats;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("panel image"),
             entries: &[wgpu::BindGroupLayoutEntry {
@@ -55,7 +65,7 @@ impl PanelImage {
             },
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(if decode { "fs_decode" } else { "fs_main" }),
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
                     format,
@@ -73,6 +83,7 @@ impl PanelImage {
             pipeline,
             layout,
             format,
+            view_formats,
             image: None,
             rects: Vec::new(),
             fresh: false,
@@ -104,8 +115,15 @@ impl PanelImage {
         let [w, h] = screen.size_in_pixels;
         if self.image.as_ref().map(|(t, ..)| [t.width(), t.height()]) != Some([w, h]) {
             let plain = self.format.remove_srgb_suffix();
-            let views: Vec<wgpu::TextureFormat> =
-                self.format.is_srgb().then_some(plain).into_iter().collect();
+            let views: Vec<wgpu::TextureFormat> = (self.format.is_srgb() && self.view_formats)
+                .then_some(plain)
+                .into_iter()
+                .collect();
+            let format = if self.view_formats {
+                self.format
+            } else {
+                plain
+            };
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("panel image"),
                 size: wgpu::Extent3d {
@@ -116,7 +134,7 @@ impl PanelImage {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: self.format,
+                format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                     | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &views,

@@ -74,6 +74,10 @@ impl WindowGpu {
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
             .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
         let caps = surface.get_capabilities(&gpu.adapter);
+        // WebGL2's sRGB surface reached the page brighter than it was drawn (seen in Chromium):
+        // a browser's canvas takes the plain format, as WebGPU offers only that, and the scene
+        // encodes its colours itself then.
+        let srgb = srgb && !(cfg!(target_arch = "wasm32") && gpu.info.backend == wgpu::Backend::Gl);
         if let Some(format) = caps.formats.iter().copied().find(|f| f.is_srgb() == srgb) {
             config.format = format;
         }

@@ -161,7 +161,7 @@ pub(crate) fn material_texture(
             size: wgpu::Extent3d {
                 width: m.width,
                 height: m.height,
-                depth_or_array_layers: m.layer_count,
+                depth_or_array_layers: array_layers(gpu, m.layer_count),
             },
             mip_level_count: m.mips.len() as u32,
             sample_count: 1,
@@ -171,8 +171,25 @@ pub(crate) fn material_texture(
             view_formats: &[],
         },
         wgpu::util::TextureDataOrder::MipMajor,
-        &m.mips.concat(),
+        &array_data(gpu, m.layer_count, &m.mips),
     )
+}
+
+/// The layers an array texture of `layers` is made with: as many, except on wgpu's GL backend
+/// (WebGL2), which takes a texture of one layer for a plain 2D one and then cannot bind it as
+/// an array: there such a texture gets two, the second a copy of the first.
+fn array_layers(gpu: &Gpu, layers: u32) -> u32 {
+    if layers == 1 && gpu.info.backend == wgpu::Backend::Gl {
+        2
+    } else {
+        layers
+    }
+}
+
+/// `mips` (each one level of every layer) as the texture of [`array_layers`] takes them.
+fn array_data(gpu: &Gpu, layers: u32, mips: &[Vec<u8>]) -> Vec<u8> {
+    let copies = (array_layers(gpu, layers) / layers.max(1)) as usize;
+    mips.iter().flat_map(|m| m.repeat(copies)).collect()
 }
 
 /// A set's normal maps as a linear RGBA8 texture array with their mipmaps; one flat texel
@@ -182,10 +199,13 @@ fn normal_map_texture(
     maps: Option<&crate::bake::character::normal_map::NormalMaps>,
 ) -> wgpu::Texture {
     let (size, layers, mips, bytes) = match maps {
-        Some(n) if n.layer_count > 0 => {
-            (n.size, n.layer_count, n.mips.len() as u32, n.mips.concat())
-        }
-        _ => (1, 1, 1, vec![128, 128, 255, 0]),
+        Some(n) if n.layer_count > 0 => (
+            n.size,
+            n.layer_count,
+            n.mips.len() as u32,
+            array_data(gpu, n.layer_count, &n.mips),
+        ),
+        _ => (1, 1, 1, array_data(gpu, 1, &[vec![128, 128, 255, 0]])),
     };
     gpu.device.create_texture_with_data(
         &gpu.queue,
@@ -194,7 +214,7 @@ fn normal_map_texture(
             size: wgpu::Extent3d {
                 width: size,
                 height: size,
-                depth_or_array_layers: layers,
+                depth_or_array_layers: array_layers(gpu, layers),
             },
             mip_level_count: mips,
             sample_count: 1,
@@ -336,12 +356,25 @@ impl GpuCharacter {
         slot: usize,
         pack: &LodPack,
     ) {
+        // WebGL2 draws no base vertex: there each level's indices carry it instead.
+        let mut levels = pack.levels.clone();
+        let mut indices = std::borrow::Cow::Borrowed(&pack.indices[..]);
+        if !gpu.draws_base_vertex() {
+            let rebased = indices.to_mut();
+            for l in &mut levels {
+                let range = l.first_index as usize..(l.first_index + l.index_count) as usize;
+                for i in &mut rebased[range] {
+                    *i += l.base_vertex;
+                }
+                l.base_vertex = 0;
+            }
+        }
         let verts = data_texture(gpu, &format!("{} vertices", self.name), &pack.vertices.grid);
         let index_buffer = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("indices"),
-                contents: bytemuck::cast_slice(&pack.indices),
+                contents: bytemuck::cast_slice(&indices),
                 usage: wgpu::BufferUsages::INDEX,
             });
         let verts_view = verts.create_view(&Default::default());
@@ -407,7 +440,7 @@ impl GpuCharacter {
             self.sets.resize_with(slot + 1, || None);
         }
         self.sets[slot] = Some(GpuLodSet {
-            levels: pack.levels.clone(),
+            levels,
             index_buffer,
             vertex_count: pack.vertices.vertex_count,
             static_vertices,

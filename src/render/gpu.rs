@@ -244,6 +244,22 @@ impl Gpu {
         !self.is_cpu()
     }
 
+    /// Whether an indexed draw can start at a base vertex (not on WebGL2).
+    pub fn draws_base_vertex(&self) -> bool {
+        self.adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::BASE_VERTEX)
+    }
+
+    /// Whether a texture can be viewed in another format than its own (not on WebGL2).
+    pub fn views_formats(&self) -> bool {
+        self.adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::VIEW_FORMATS)
+    }
+
     pub fn backend_name(&self) -> String {
         format!("{:?}", self.info.backend)
     }

@@ -263,9 +263,10 @@ fn the_web_folder_holds_the_levels_its_scene_reads() {
     );
 }
 
-/// The web viewer in Chromium on WebGPU (SwiftShader): frames come, the screenshot shows the
-/// panel beside the scene, a mouse's drag and a finger's orbit the camera, and M (the next
-/// method) changes the triangles the page shows.
+/// The web viewer in Chromium on WebGPU, and on WebGL2 (both over SwiftShader): frames come,
+/// the console has no errors, the screenshot shows the panel beside the scene, a mouse's drag
+/// and a finger's orbit the camera, and M (the next method) changes the triangles the page
+/// shows.
 #[test]
 fn the_web_viewer_draws_and_switches_method_in_a_browser() {
     let (Some(tools), Some(pkg)) = (browser_tools(), web_package()) else {
@@ -290,56 +291,63 @@ fn the_web_viewer_draws_and_switches_method_in_a_browser() {
         "--count",
         "12",
     ]));
-    let out = tmp.path().join("browser");
-    let o = Command::new("node")
-        .arg(tools.join("viewer-check.mjs"))
-        .arg("--site")
-        .arg(&site)
-        .arg("--out")
-        .arg(&out)
-        .args(["--size", "800x450", "--frames", "3"])
-        .output()
-        .expect("node runs");
-    ok(&o);
-    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(report["errors"], serde_json::json!([]), "{report}");
-    assert!(
-        report["adapter"]
-            .as_str()
-            .unwrap()
-            .contains("BrowserWebGpu"),
-        "{report}"
-    );
-    let methods = report["methods"].as_array().unwrap();
-    assert_eq!(methods[0]["method"], "as+is", "{report}");
-    assert_eq!(
-        methods[1]["method"], "none",
-        "M goes to the next method: {report}"
-    );
-    let (simplified, full) = (
-        methods[0]["triangles"].as_u64().unwrap(),
-        methods[1]["triangles"].as_u64().unwrap(),
-    );
-    assert!(simplified > 0 && full > simplified, "{report}");
-    // Dragging right orbits one way, a finger dragging left the other.
-    let orbit = &report["orbit"];
-    assert!(
-        orbit["mouse"].as_f64().unwrap() * orbit["touch"].as_f64().unwrap() < 0.0,
-        "{report}"
-    );
-    // The picture: the panel (dark, with text) on the left, the scene (sky and ground,
-    // horses) on the right.
-    let shot = image::open(out.join("viewer.png")).unwrap().to_luma8();
-    let stats = |x0: u32, x1: u32| {
-        let v: Vec<f64> = (0..shot.height())
-            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
-            .map(|(x, y)| shot.get_pixel(x, y)[0] as f64 / 255.0)
-            .collect();
-        let mean = v.iter().sum::<f64>() / v.len() as f64;
-        let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
-        (mean, sd)
-    };
-    let (panel, scene) = (stats(0, 180), stats(400, 800));
-    assert!(panel.0 < 0.3 && panel.1 > 0.02, "the panel: {panel:?}");
-    assert!(scene.0 > 0.35 && scene.1 > 0.03, "the scene: {scene:?}");
+    // WebGPU, and WebGL2 where a browser has none (WebGPU left out of Chromium).
+    for (api, backend) in [("webgpu", "BrowserWebGpu"), ("webgl", "(Gl, ")] {
+        let out = tmp.path().join(api);
+        let o = Command::new("node")
+            .arg(tools.join("viewer-check.mjs"))
+            .arg("--site")
+            .arg(&site)
+            .arg("--out")
+            .arg(&out)
+            .args(["--size", "800x450", "--frames", "3"])
+            .args((api == "webgl").then_some("--webgl"))
+            .output()
+            .expect("node runs");
+        ok(&o);
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(report["errors"], serde_json::json!([]), "{report}");
+        assert!(
+            report["adapter"].as_str().unwrap().contains(backend),
+            "{report}"
+        );
+        let methods = report["methods"].as_array().unwrap();
+        assert_eq!(methods[0]["method"], "as+is", "{report}");
+        assert_eq!(
+            methods[1]["method"], "none",
+            "M goes to the next method: {report}"
+        );
+        let (simplified, full) = (
+            methods[0]["triangles"].as_u64().unwrap(),
+            methods[1]["triangles"].as_u64().unwrap(),
+        );
+        assert!(simplified > 0 && full > simplified, "{report}");
+        // Dragging right orbits one way, a finger dragging left the other.
+        let orbit = &report["orbit"];
+        assert!(
+            orbit["mouse"].as_f64().unwrap() * orbit["touch"].as_f64().unwrap() < 0.0,
+            "{report}"
+        );
+        // The picture: the panel (dark, with text) on the left, the scene (sky and ground,
+        // horses) on the right.
+        let shot = image::open(out.join("viewer.png")).unwrap().to_luma8();
+        let stats = |x0: u32, x1: u32| {
+            let v: Vec<f64> = (0..shot.height())
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .map(|(x, y)| shot.get_pixel(x, y)[0] as f64 / 255.0)
+                .collect();
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+            (mean, sd)
+        };
+        let (panel, scene) = (stats(0, 180), stats(400, 800));
+        assert!(
+            panel.0 < 0.3 && panel.1 > 0.02,
+            "{api}: the panel: {panel:?}"
+        );
+        assert!(
+            scene.0 > 0.35 && scene.1 > 0.03,
+            "{api}: the scene: {scene:?}"
+        );
+    }
 }

@@ -252,93 +252,97 @@ fn the_panel_image_matches_egui_drawing_the_panel_directly() {
         b: 0.7,
         a: 1.0,
     };
-    // egui straight onto a frame without sRGB encoding; the copy onto an sRGB frame. Both
-    // store the same gamma-encoded bytes, so they compare byte for byte.
-    let direct = Offscreen::with_format(gpu, w, h, 1, plain);
-    let copied = Offscreen::with_format(gpu, w, h, 1, format);
-    let mut image = PanelImage::new(&gpu.device, format);
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    let uploads =
-        renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
-    lodlab::app::window::draw_panel(
-        &renderer,
-        &mut encoder,
-        &direct.view,
-        &primitives,
-        &screen,
-        "direct",
-        Some(background),
-        None,
-    );
-    assert!(image.needs_refresh([w, h]));
-    image.refresh(
-        &gpu.device,
-        &renderer,
-        &mut encoder,
-        &primitives,
-        &screen,
-        None,
-    );
-    assert!(!image.needs_refresh([w, h]));
-    // The frame under the panel: the background colour (as linear values, which the sRGB
-    // frame stores as the gamma bytes the direct frame holds), then the image over it.
-    let linear = |c: f64| {
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
+    // With an sRGB view of the image (the desktop, WebGPU), and with a plain image the copy's
+    // shader decodes (WebGL2, which has no view formats): the same picture.
+    for view_formats in [true, false] {
+        // egui straight onto a frame without sRGB encoding; the copy onto an sRGB frame. Both
+        // store the same gamma-encoded bytes, so they compare byte for byte.
+        let direct = Offscreen::with_format(gpu, w, h, 1, plain);
+        let copied = Offscreen::with_format(gpu, w, h, 1, format);
+        let mut image = PanelImage::new(&gpu.device, format, view_formats);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let uploads =
+            renderer.update_buffers(&gpu.device, &gpu.queue, &mut encoder, &primitives, &screen);
+        lodlab::app::window::draw_panel(
+            &renderer,
+            &mut encoder,
+            &direct.view,
+            &primitives,
+            &screen,
+            "direct",
+            Some(background),
+            None,
+        );
+        assert!(image.needs_refresh([w, h]));
+        image.refresh(
+            &gpu.device,
+            &renderer,
+            &mut encoder,
+            &primitives,
+            &screen,
+            None,
+        );
+        assert!(!image.needs_refresh([w, h]));
+        // The frame under the panel: the background colour (as linear values, which the sRGB
+        // frame stores as the gamma bytes the direct frame holds), then the image over it.
+        let linear = |c: f64| {
+            if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("background"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &copied.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: linear(background.r),
+                        g: linear(background.g),
+                        b: linear(background.b),
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        image.draw(&mut encoder, &copied.view, None, true);
+        gpu.queue
+            .submit(uploads.into_iter().chain([encoder.finish()]));
+        let a = direct.read_rgba(gpu).unwrap();
+        let b = copied.read_rgba(gpu).unwrap();
+        // Worst difference inside the panel (120 px wide, opaque) and over the view.
+        let (mut panel, mut view) = (0u8, 0u8);
+        for ((x, _, p), q) in a.enumerate_pixels().zip(b.pixels()) {
+            let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap();
+            if x < 118 {
+                panel = panel.max(d);
+            } else {
+                view = view.max(d);
+            }
         }
-    };
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("background"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: &copied.view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color {
-                    r: linear(background.r),
-                    g: linear(background.g),
-                    b: linear(background.b),
-                    a: 1.0,
-                }),
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        ..Default::default()
-    });
-    image.draw(&mut encoder, &copied.view, None, true);
-    gpu.queue
-        .submit(uploads.into_iter().chain([encoder.finish()]));
-    let a = direct.read_rgba(gpu).unwrap();
-    let b = copied.read_rgba(gpu).unwrap();
-    // Worst difference inside the panel (120 px wide, opaque) and over the view.
-    let (mut panel, mut view) = (0u8, 0u8);
-    for ((x, _, p), q) in a.enumerate_pixels().zip(b.pixels()) {
-        let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap();
-        if x < 118 {
-            panel = panel.max(d);
-        } else {
-            view = view.max(d);
-        }
+        // Rounding only inside the panel; the label's soft edges over the view blend in linear
+        // space in the copy.
+        assert!(
+            panel <= 3,
+            "view formats {view_formats}: the copy differs from egui's drawing by {panel} of 255 in the panel"
+        );
+        assert!(
+            view <= 64,
+            "view formats {view_formats}: the copy differs from egui's drawing by {view} of 255 over the view"
+        );
+        // And the copy did draw: the panel's fill is not the background, the text over the view
+        // is there, and the view away from the panel is untouched.
+        let bg = b.get_pixel(200, 150).0;
+        assert_ne!(b.get_pixel(60, 190).0, bg, "the panel's fill");
+        assert!(
+            (230..270).any(|x| b.get_pixel(x, 30).0 != bg),
+            "the label over the view"
+        );
+        assert_eq!(a.get_pixel(200, 150).0, bg);
     }
-    // Rounding only inside the panel; the label's soft edges over the view blend in linear
-    // space in the copy.
-    assert!(
-        panel <= 3,
-        "the copy differs from egui's drawing by {panel} of 255 in the panel"
-    );
-    assert!(
-        view <= 64,
-        "the copy differs from egui's drawing by {view} of 255 over the view"
-    );
-    // And the copy did draw: the panel's fill is not the background, the text over the view
-    // is there, and the view away from the panel is untouched.
-    let bg = b.get_pixel(200, 150).0;
-    assert_ne!(b.get_pixel(60, 190).0, bg, "the panel's fill");
-    assert!(
-        (230..270).any(|x| b.get_pixel(x, 30).0 != bg),
-        "the label over the view"
-    );
-    assert_eq!(a.get_pixel(200, 150).0, bg);
 }

@@ -189,7 +189,7 @@ impl Viewer {
             samples,
         );
         let (egui, egui_renderer) = win.egui();
-        let panel_image = PanelImage::new(&gpu.device, config.format);
+        let panel_image = PanelImage::new(&gpu.device, config.format, gpu.views_formats());
         let timer = FrameTimer::new(gpu);
         let settings = Settings {
             count: world.spec.count,
@@ -418,7 +418,11 @@ impl Viewer {
         // A new egui context sends its whole font atlas again, to the new renderer.
         (self.egui, self.egui_renderer) = self.win.egui();
         self.win.panel.renderer_replaced();
-        self.panel_image = PanelImage::new(&self.win.gpu.device, self.win.config.format);
+        self.panel_image = PanelImage::new(
+            &self.win.gpu.device,
+            self.win.config.format,
+            self.win.gpu.views_formats(),
+        );
         self.timer = FrameTimer::new(&self.win.gpu);
         self.passes = None;
         self.panel.touch();
