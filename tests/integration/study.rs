@@ -501,6 +501,20 @@ fn a_study_is_made_in_shards_and_merged() {
             "cylinder-rest-pose-2px.mp4"
         ]
     );
+    // Nor does a shard made by another lodlab.
+    let record = dir.join("shards/2-of-2.json");
+    let text = std::fs::read_to_string(&record).unwrap();
+    let version = format!("\"version\": \"{}\"", env!("CARGO_PKG_VERSION"));
+    assert!(text.contains(&version), "{text}");
+    std::fs::write(
+        &record,
+        text.replace(&version, "\"version\": \"0.0.1-old\""),
+    )
+    .unwrap();
+    let o = make(&["--merge"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("made by lodlab 0.0.1-old"));
+    std::fs::write(&record, text).unwrap();
     let before: Vec<_> = clips()
         .iter()
         .map(|c| {

@@ -74,12 +74,21 @@ pub(super) fn read_record(path: &Path) -> Result<Option<ShardRecord>> {
         .map_err(|e| anyhow::anyhow!("{}: not a shard's record: {e}", path.display()))
 }
 
-/// A shard's clips join a study only if made from the same plan and with the same options.
+/// A shard's clips join a study only if made from the same plan, with the same options, by the
+/// same lodlab.
 pub(super) fn check_record(path: &Path, r: &ShardRecord, plan: &Plan, samples: u32) -> Result<()> {
     if r.plan != *plan {
         bail!(
             "{}: made from another plan; make the new study in another folder",
             path.display()
+        );
+    }
+    let version = env!("CARGO_PKG_VERSION");
+    if r.version != version {
+        bail!(
+            "{}: its clips were made by lodlab {}, this is {version}",
+            path.display(),
+            r.version
         );
     }
     if r.samples != samples {
