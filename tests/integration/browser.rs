@@ -127,8 +127,11 @@ fn an_online_study_runs_resumes_and_is_analysed() {
         report["posted"], true,
         "the POSTed answers are the download"
     );
-    // Each clip played at its size and is not black (the cylinders on the study's ground).
-    for f in report["frames"].as_array().unwrap() {
+    // Both clips of every trial played at their size and are not black (the cylinders on the
+    // study's ground).
+    let frames = report["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 2 * answers.len(), "{report}");
+    for f in frames {
         assert_eq!(
             (f["width"].as_u64(), f["height"].as_u64()),
             (Some(64), Some(48))
@@ -244,6 +247,15 @@ fn the_web_folder_holds_the_levels_its_scene_reads() {
             "--scene",
             "nowhere",
         ],
+        // The page reads no files: built-in models only.
+        vec![
+            "web",
+            "--out",
+            site.to_str().unwrap(),
+            "--",
+            "--model",
+            "mine.glb",
+        ],
         vec![
             "web",
             "--out",
@@ -261,6 +273,13 @@ fn the_web_folder_holds_the_levels_its_scene_reads() {
         std::fs::read_to_string(other.join("notes.txt")).unwrap(),
         "mine"
     );
+    // A run that stopped before its manifest left only its own files: the next one goes on.
+    let stopped = tmp.path().join("stopped");
+    std::fs::create_dir_all(stopped.join("levels")).unwrap();
+    let stopped_s = stopped.display().to_string();
+    args[2] = &stopped_s;
+    ok(&lodlab(&args));
+    assert!(stopped.join("lodlab-web.json").is_file());
 }
 
 /// The web viewer in Chromium on WebGPU, and on WebGL2 (both over SwiftShader): frames come,

@@ -492,7 +492,23 @@ fn a_study_is_made_in_shards_and_merged() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--msaa 1"));
-    ok(&make(&["--shard", "1/2"]));
+    let o = make(&["--shard", "1/2"]);
+    ok(&o);
+    // The merge line the shard prints: the same plan, folder, cache and --msaa.
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let merge: Vec<String> = stdout
+        .split("merge them with: ")
+        .nth(1)
+        .expect("the shard says how to merge")
+        .split_whitespace()
+        .map(|w| w.trim_matches('\'').to_string())
+        .collect();
+    assert_eq!(merge[..3], ["lodlab", "study", "make"]);
+    assert!(
+        merge.ends_with(&["--msaa".into(), "1".into(), "--merge".into()]),
+        "{merge:?}"
+    );
+    assert!(merge.contains(&cache), "{merge:?}");
     assert_eq!(
         clips(),
         [
@@ -524,7 +540,18 @@ fn a_study_is_made_in_shards_and_merged() {
                 .unwrap()
         })
         .collect();
-    let o = make(&["--merge"]);
+    // The merge with other options than the shards' is refused, naming a shard's record.
+    let o = lodlab(&[
+        "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--merge",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("1-of-2.json") && err.contains("--msaa 1"),
+        "{err}"
+    );
+    let words: Vec<&str> = merge[1..].iter().map(String::as_str).collect();
+    let o = lodlab(&words);
     ok(&o);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(err.matches("(there already)").count(), 3, "{err}");

@@ -9,6 +9,9 @@
 # wasm-bindgen crate in Cargo.lock (cargo install wasm-bindgen-cli --version VERSION).
 set -eu
 out="${1:?usage: tools/web/build-wasm.sh OUT_DIR [--dev]}"
+# OUT_DIR as given from where the script was run, before it moves to the repository.
+mkdir -p "$out"
+out=$(cd "$out" && pwd)
 profile=release
 if [ "${2:-}" = "--dev" ]; then profile=dev; fi
 cd "$(dirname "$0")/../.."

@@ -61,21 +61,25 @@ try {
   if (!(await text()).includes(`Participant ${o.participant}`)) throw new Error(`welcome: ${await text()}`);
   await page.keyboard.press("Space");
   for (let k = 0; k < answers.length; k++) {
-    // One frame of the clip as it plays: its size and how bright it is (a black or missing
+    // One frame of each clip as it plays: its size and how bright it is (a black or missing
     // video is caught here).
-    await waitStage("playing");
-    await page.waitForFunction(() => [...document.querySelectorAll("video.shown")].some((v) => v.currentTime > 0.05));
-    report.frames.push(await page.evaluate(() => {
-      const v = document.querySelector("video.shown");
-      const c = document.createElement("canvas");
-      [c.width, c.height] = [v.videoWidth, v.videoHeight];
-      const g = c.getContext("2d");
-      g.drawImage(v, 0, 0);
-      const px = g.getImageData(0, 0, c.width, c.height).data;
-      let sum = 0;
-      for (let i = 0; i < px.length; i += 4) sum += 0.299 * px[i] + 0.587 * px[i + 1] + 0.114 * px[i + 2];
-      return { width: v.videoWidth, height: v.videoHeight, mean_luma: sum / (px.length / 4) };
-    }));
+    for (const which of [1, 2]) {
+      await page.waitForFunction((w) => {
+        const v = document.querySelector("video.shown");
+        return v && v.id === `clip${w}` && v.currentTime > 0.05;
+      }, { timeout: 60000 }, which);
+      report.frames.push(await page.evaluate(() => {
+        const v = document.querySelector("video.shown");
+        const c = document.createElement("canvas");
+        [c.width, c.height] = [v.videoWidth, v.videoHeight];
+        const g = c.getContext("2d");
+        g.drawImage(v, 0, 0);
+        const px = g.getImageData(0, 0, c.width, c.height).data;
+        let sum = 0;
+        for (let i = 0; i < px.length; i += 4) sum += 0.299 * px[i] + 0.587 * px[i + 1] + 0.114 * px[i + 2];
+        return { clip: v.id, width: v.videoWidth, height: v.videoHeight, mean_luma: sum / (px.length / 4) };
+      }));
+    }
     await waitStage("ask");
     await page.keyboard.press(String(answers[k]));
     if (k + 1 === reloadAfter && k + 1 < answers.length) {

@@ -17,7 +17,10 @@
   const videos = [document.getElementById("clip1"), document.getElementById("clip2")];
   const params = new URLSearchParams(location.search);
   const participant = params.get("participant");
-  const trials = study && participant ? study.sessions[participant] : undefined;
+  const trials =
+    study && participant && Object.hasOwn(study.sessions, participant)
+      ? study.sessions[participant]
+      : undefined;
   const storageKey = study ? `lodlab-study/${study.study}/${participant}` : "";
   let answers = [];
   let stage = "loading";
@@ -75,8 +78,16 @@
     }
   }
 
+  // Where the browser keeps nothing (storage blocked or full) the session goes on: the answers
+  // are still downloaded and sent at the end, only a reload would lose them.
+  let unsaved = false;
   function save() {
-    localStorage.setItem(storageKey, JSON.stringify(answers));
+    try {
+      localStorage.setItem(storageKey, JSON.stringify(answers));
+    } catch (e) {
+      if (!unsaved) console.warn(`lodlab study: answers not kept in the browser (${e})`);
+      unsaved = true;
+    }
   }
 
   // One field of a CSV line, quoted where it must be (RFC 4180, as the csv crate writes).
@@ -125,6 +136,7 @@
   function gap(which) {
     setStage("gap", `Clip ${which}`);
     const v = videos[which - 1];
+    if (v.error) return fail(`${v.getAttribute("src")} could not be loaded`);
     const due = { which, timeUp: false, ready: v.readyState >= 4 };
     pending = due;
     setTimeout(() => {
@@ -142,7 +154,7 @@
   }
 
   function maybePlay(due) {
-    if (pending !== due || !due.timeUp || !due.ready) return;
+    if (stage === "error" || pending !== due || !due.timeUp || !due.ready) return;
     pending = null;
     const v = videos[due.which - 1];
     enter("playing");
@@ -152,6 +164,7 @@
     v.onended = () => {
       v.classList.remove("shown");
       v.onended = null;
+      if (stage === "error") return;
       if (due.which === 1) gap(2);
       else ask();
     };
@@ -198,11 +211,18 @@
     a.remove();
   }
 
-  function finish() {
+  function finish(retry = false) {
     const buttons = [["Download your answers", download]];
     if (!study.post_url) {
       setStage("done", `${study.texts.thanks}\n\nPlease download your answers and send the ` +
         `file to the researcher.`, buttons);
+      return;
+    }
+    // Sent once: a reload of a finished session offers the download and a resend only.
+    const sentKey = `${storageKey}/sent`;
+    if (!retry && localStorage.getItem(sentKey)) {
+      setStage("done", `${study.texts.thanks}\n\nYour answers were sent.`,
+        buttons.concat([["Send them again", () => finish(true)]]));
       return;
     }
     setStage("sending", `${study.texts.thanks}\n\nSending your answers…`);
@@ -213,16 +233,27 @@
     })
       .then((r) => {
         if (!r.ok) throw new Error(`the server answered ${r.status}`);
+        try {
+          localStorage.setItem(sentKey, "1");
+        } catch (e) {
+          // Not kept: a reload sends again.
+        }
         setStage("done", `${study.texts.thanks}\n\nYour answers were sent.`, buttons);
       })
       .catch((e) => {
         setStage("done", `${study.texts.thanks}\n\nYour answers could not be sent ` +
           `(${e.message}): please download them and send the file to the researcher.`,
-          buttons.concat([["Try sending again", finish]]));
+          buttons.concat([["Try sending again", () => finish(true)]]));
       });
   }
 
   function fail(why) {
+    pending = null;
+    for (const v of videos) {
+      v.onended = null;
+      v.pause();
+      v.classList.remove("shown");
+    }
     setStage("error", `Sorry: ${why}. Reload the page to go on; your answers are kept.`);
   }
 

@@ -74,16 +74,12 @@ fn make(
             made.record.clips.len(),
             made.total,
             made.rendered,
-            crate::app::cli::command_line::shell_line(&[
-                "lodlab".into(),
-                "study".into(),
-                "make".into(),
-                "--plan".into(),
-                plan.to_string_lossy().into_owned(),
-                "--out".into(),
-                out.to_string_lossy().into_owned(),
-                "--merge".into(),
-            ])
+            crate::app::cli::command_line::shell_line(&merge_command(
+                &plan,
+                &out,
+                options.cache_dir.as_deref(),
+                msaa
+            ))
         );
         return Ok(ExitCode::SUCCESS);
     }
@@ -167,4 +163,27 @@ fn run(
             height: size.1,
         },
     )
+}
+
+/// The `study make … --merge` that merges the shards a `--shard` run is one of: the same plan,
+/// folder, cache and `--msaa`.
+fn merge_command(
+    plan: &std::path::Path,
+    out: &std::path::Path,
+    cache: Option<&std::path::Path>,
+    msaa: u32,
+) -> Vec<String> {
+    let mut words: Vec<String> = ["lodlab", "study", "make", "--plan"]
+        .into_iter()
+        .map(String::from)
+        .collect();
+    words.push(plan.to_string_lossy().into_owned());
+    words.push("--out".into());
+    words.push(out.to_string_lossy().into_owned());
+    if let Some(cache) = cache {
+        words.push("--cache".into());
+        words.push(cache.to_string_lossy().into_owned());
+    }
+    words.extend(["--msaa".into(), msaa.to_string(), "--merge".into()]);
+    words
 }

@@ -18,6 +18,21 @@ pub const WASM_FILES: [&str; 2] = ["lodlab.js", "lodlab_bg.wasm"];
 
 pub fn command(a: WebArgs) -> Result<ExitCode> {
     let options = site::view_options(&a.view)?;
+    // The page has no files: it shows built-in models, as the browser build holds them.
+    if let Some(m) = options
+        .spec
+        .models
+        .iter()
+        .find(|m| crate::assets::builtin(m).is_none())
+    {
+        bail!("--model {m}: the web page shows built-in models only (it reads no files)");
+    }
+    if let Some(dir) = crate::assets::override_dir() {
+        bail!(
+            "LODLAB_ASSETS={}: the web page shows the built-in models as built in; unset it",
+            dir.display()
+        );
+    }
     check_folder(&a.out)?;
     if let Some(dir) = &a.wasm {
         for f in WASM_FILES {
@@ -109,14 +124,21 @@ pub fn command(a: WebArgs) -> Result<ExitCode> {
 }
 
 /// Writes only into a new or empty folder, or one `lodlab web` wrote (whose files it
-/// replaces): nothing else is overwritten.
+/// replaces; a run that stopped before its manifest left only its own files): nothing else is
+/// overwritten.
 fn check_folder(out: &Path) -> Result<()> {
+    let ours = |name: &std::ffi::OsStr| {
+        name == LEVELS
+            || name == MANIFEST
+            || name == "index.html"
+            || WASM_FILES.iter().any(|f| name == *f)
+    };
     if out.is_dir()
         && !out.join(MANIFEST).is_file()
         && std::fs::read_dir(out)
             .with_context(|| format!("{}: cannot read", out.display()))?
-            .next()
-            .is_some()
+            .filter_map(|e| e.ok())
+            .any(|e| !ours(&e.file_name()))
     {
         bail!(
             "{}: not empty and not a lodlab web folder; write the page into a new or empty one",

@@ -32,7 +32,10 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     let manifest_path = o.out.join(MANIFEST);
     let making_path = o.out.join(MAKING);
     let mut earlier = earlier_clips(o, &plan, &manifest_path, &making_path)?;
-    earlier.extend(recorded_clips(&o.out, &plan, o.samples)?);
+    // Shards count until they are merged; a finished study's clips are in its manifest.
+    if !manifest_path.exists() {
+        earlier.extend(recorded_clips(&o.out, &plan, o.samples)?);
+    }
     crate::atomic::make_folder(&o.out.join(CLIPS))?;
     let mut clips = plan.clips();
     if o.merge {
@@ -145,8 +148,12 @@ fn earlier_clips(
         && std::fs::read_dir(&o.out)
             .with_context(|| format!("{}: cannot read", o.out.display()))?
             .filter_map(|e| e.ok())
-            // Shards of the study (checked against the plan later) and their clips.
-            .any(|e| e.file_name() != CLIPS && e.file_name() != SHARDS)
+            // Shards of a study (checked against the plan later) and their clips; clips
+            // without the shards' records are not ours to overwrite.
+            .any(|e| {
+                !(e.file_name() == SHARDS
+                    || (e.file_name() == CLIPS && o.out.join(SHARDS).is_dir()))
+            })
     {
         bail!(
             "{}: not empty and not a study; make the study in a new or empty folder",

@@ -369,6 +369,10 @@ impl Viewer {
                             None => Some(winit::window::Fullscreen::Borderless(None)),
                         });
                     }
+                    // A page cannot wait for the read-back: the browser's own screenshot serves.
+                    Some(KeyAction::Screenshot) if cfg!(target_arch = "wasm32") => {
+                        self.notice = Some("no F12 screenshots in the browser".into());
+                    }
                     Some(KeyAction::Screenshot) => self.screenshot_requested = true,
                     Some(KeyAction::Pick) => self.pick_at_cursor(),
                     Some(KeyAction::Frame) => self.frame_selection(),
