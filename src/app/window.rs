@@ -12,6 +12,9 @@ pub struct WindowGpu {
     pub window: Arc<Window>,
     pub surface: wgpu::Surface<'static>,
     pub config: wgpu::SurfaceConfiguration,
+    /// The format frames are drawn in: the surface's own, or where the surface offers no sRGB
+    /// format (a browser's canvas) an sRGB view of it.
+    pub format: wgpu::TextureFormat,
     pub gpu: Gpu,
     /// The panel's meshes as egui last tessellated them.
     pub panel: PanelMeshes,
@@ -74,12 +77,15 @@ impl WindowGpu {
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
             .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
         let caps = surface.get_capabilities(&gpu.adapter);
-        // WebGL2's sRGB surface reached the page brighter than it was drawn (seen in Chromium):
-        // a browser's canvas takes the plain format, as WebGPU offers only that, and the scene
-        // encodes its colours itself then.
-        let srgb = srgb && !(cfg!(target_arch = "wasm32") && gpu.info.backend == wgpu::Backend::Gl);
-        if let Some(format) = caps.formats.iter().copied().find(|f| f.is_srgb() == srgb) {
-            config.format = format;
+        let mut format = config.format;
+        if let Some(f) = caps.formats.iter().copied().find(|f| f.is_srgb() == srgb) {
+            config.format = f;
+            format = f;
+        } else if srgb && gpu.views_formats() {
+            // WebGPU's canvas offers plain formats only: the scene, which writes linear
+            // colours, draws through an sRGB view of it.
+            format = config.format.add_srgb_suffix();
+            config.view_formats = vec![format];
         }
         config.present_mode = wgpu::PresentMode::AutoVsync;
         // The window is a picture, not a layer over the desktop.
@@ -91,6 +97,7 @@ impl WindowGpu {
             window,
             surface,
             config,
+            format,
             gpu,
             panel: PanelMeshes::default(),
         })
@@ -237,7 +244,10 @@ impl WindowGpu {
             );
             self.panel.uploaded = Some((size, ppp));
         }
-        let view = surface.texture.create_view(&Default::default());
+        let view = surface.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(self.format),
+            ..Default::default()
+        });
         Ok(Began::Frame(Box::new(PanelFrame {
             surface,
             view,
