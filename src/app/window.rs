@@ -12,9 +12,6 @@ pub struct WindowGpu {
     pub window: Arc<Window>,
     pub surface: wgpu::Surface<'static>,
     pub config: wgpu::SurfaceConfiguration,
-    /// The format frames are drawn in: the surface's own, or where the surface offers no sRGB
-    /// format (a browser's canvas) an sRGB view of it.
-    pub format: wgpu::TextureFormat,
     pub gpu: Gpu,
     /// The panel's meshes as egui last tessellated them.
     pub panel: PanelMeshes,
@@ -77,15 +74,12 @@ impl WindowGpu {
             .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
             .ok_or_else(|| anyhow!("the adapter cannot draw into this window"))?;
         let caps = surface.get_capabilities(&gpu.adapter);
-        let mut format = config.format;
         if let Some(f) = caps.formats.iter().copied().find(|f| f.is_srgb() == srgb) {
             config.format = f;
-            format = f;
         } else if srgb && gpu.views_formats() {
             // WebGPU's canvas offers plain formats only: the scene, which writes linear
-            // colours, draws through an sRGB view of it.
-            format = config.format.add_srgb_suffix();
-            config.view_formats = vec![format];
+            // colours, draws through an sRGB view of it (see `Self::format`).
+            config.view_formats = vec![config.format.add_srgb_suffix()];
         }
         config.present_mode = wgpu::PresentMode::AutoVsync;
         // The window is a picture, not a layer over the desktop.
@@ -97,10 +91,19 @@ impl WindowGpu {
             window,
             surface,
             config,
-            format,
             gpu,
             panel: PanelMeshes::default(),
         })
+    }
+
+    /// The format frames are drawn in: the surface's own, or the view format it was configured
+    /// with where the surface offers no sRGB format (a browser's canvas).
+    pub fn format(&self) -> wgpu::TextureFormat {
+        self.config
+            .view_formats
+            .first()
+            .copied()
+            .unwrap_or(self.config.format)
     }
 
     /// Opens a new device on the same adapter for this window's surface, after the old one
@@ -245,7 +248,7 @@ impl WindowGpu {
             self.panel.uploaded = Some((size, ppp));
         }
         let view = surface.texture.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(self.format),
+            format: Some(self.format()),
             ..Default::default()
         });
         Ok(Began::Frame(Box::new(PanelFrame {

@@ -4,27 +4,11 @@
 //! presses, reloaded halfway, its answers downloaded and POSTed, and analysed beside a desktop
 //! participant's. And `lodlab web` itself, without a browser.
 
-use crate::common::{browser_tools, shared_cache, web_package};
+use crate::common::{browser_tools, lodlab, ok, shared_cache, web_package};
 use lodlab::app::study::session::{Trial, read_answers_file};
 use lodlab::generate::cylinder::bent_cylinder;
 use lodlab::generate::glb::to_glb;
-use std::process::{Command, Output};
-
-fn lodlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodlab"))
-        .args(args)
-        .output()
-        .expect("lodlab runs")
-}
-
-fn ok(o: &Output) {
-    assert!(
-        o.status.success(),
-        "{}\n{}",
-        String::from_utf8_lossy(&o.stderr),
-        String::from_utf8_lossy(&o.stdout)
-    );
-}
+use std::process::Command;
 
 /// A port nothing listens on now (the page POSTs to the check's server there).
 fn free_port() -> u16 {

@@ -8,7 +8,7 @@ use lodlab::model::{Influence, Material, Model, SkinnedMesh};
 use serde_json::Value;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 
 /// A strip of four quads bent by two bones over one clip.
 pub fn tiny_model() -> Model {
@@ -280,4 +280,22 @@ pub fn web_package() -> Option<PathBuf> {
     );
     eprintln!("skipped: no web viewer built (tools/web/build-wasm.sh DIR; LODLAB_WEB_PKG=DIR)");
     None
+}
+
+/// Runs the lodlab binary with `args`.
+pub fn lodlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args(args)
+        .output()
+        .expect("lodlab runs")
+}
+
+/// Fails, with what lodlab printed, unless it succeeded.
+pub fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stderr),
+        String::from_utf8_lossy(&o.stdout)
+    );
 }

@@ -2,6 +2,7 @@
 //! sessions, answers that survive a killed process, a session resumed where it stopped, and the
 //! analysis of what was answered.
 
+use crate::common::{lodlab, ok};
 use lodlab::app::study::analyze::binomial_two_sided;
 use lodlab::app::study::session::{Trial, read_answers};
 use lodlab::app::video::probe;
@@ -9,24 +10,8 @@ use lodlab::generate::cylinder::bent_cylinder;
 use lodlab::generate::glb::to_glb;
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn lodlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodlab"))
-        .args(args)
-        .output()
-        .expect("lodlab runs")
-}
-
-fn ok(o: &Output) {
-    assert!(
-        o.status.success(),
-        "{}\n{}",
-        String::from_utf8_lossy(&o.stderr),
-        String::from_utf8_lossy(&o.stdout)
-    );
-}
 
 fn session(dir: &Path, id: &str) -> Vec<Trial> {
     let text = std::fs::read_to_string(dir.join("sessions").join(format!("{id}.json"))).unwrap();
@@ -531,15 +516,19 @@ fn a_study_is_made_in_shards_and_merged() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("made by lodlab 0.0.1-old"));
     std::fs::write(&record, text).unwrap();
-    let before: Vec<_> = clips()
-        .iter()
-        .map(|c| {
-            std::fs::metadata(dir.join("clips").join(c))
-                .unwrap()
-                .modified()
-                .unwrap()
-        })
-        .collect();
+    // When each clip file was last written.
+    let written = || -> Vec<_> {
+        clips()
+            .iter()
+            .map(|c| {
+                std::fs::metadata(dir.join("clips").join(c))
+                    .unwrap()
+                    .modified()
+                    .unwrap()
+            })
+            .collect()
+    };
+    let before = written();
     // The merge with other options than the shards' is refused, naming a shard's record.
     let o = lodlab(&[
         "study", "make", "--plan", &plan_s, "--out", &d, "--cache", &cache, "--merge",
@@ -555,15 +544,7 @@ fn a_study_is_made_in_shards_and_merged() {
     ok(&o);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(err.matches("(there already)").count(), 3, "{err}");
-    let after: Vec<_> = clips()
-        .iter()
-        .map(|c| {
-            std::fs::metadata(dir.join("clips").join(c))
-                .unwrap()
-                .modified()
-                .unwrap()
-        })
-        .collect();
+    let after = written();
     assert_eq!(before, after, "the merge rendered nothing again");
     let manifest = lodlab::app::study::plan::read_manifest(&dir).unwrap();
     assert!(manifest.clips.iter().all(|c| c.record.is_some()));

@@ -158,7 +158,7 @@ impl Viewer {
     ) -> Result<Viewer> {
         let (gpu, config) = (&win.gpu, &win.config);
         let samples = gpu.samples(options.samples);
-        let mut world = World::new(gpu, loaded, win.format, samples)?;
+        let mut world = World::new(gpu, loaded, win.format(), samples)?;
         world.lod.method = options.lod.method;
         world.lod.compare = options.lod.compare;
         world.lod.policy = options.lod.policy;
@@ -185,11 +185,11 @@ impl Viewer {
             &gpu.device,
             config.width,
             config.height,
-            win.format,
+            win.format(),
             samples,
         );
         let (egui, egui_renderer) = win.egui();
-        let panel_image = PanelImage::new(&gpu.device, win.format, gpu.views_formats());
+        let panel_image = PanelImage::new(&gpu.device, win.format(), gpu.views_formats());
         let timer = FrameTimer::new(gpu);
         let settings = Settings {
             count: world.spec.count,
@@ -403,7 +403,7 @@ impl Viewer {
             bakes: old.bakes.clone(),
             sources: old.sources.clone(),
         };
-        let mut world = World::new(gpu, loaded, self.win.format, self.targets.sample_count)?;
+        let mut world = World::new(gpu, loaded, self.win.format(), self.targets.sample_count)?;
         // The same walkers where they were, the camera where it was.
         world.camera = old.camera;
         world.crowd = old.crowd.clone();
@@ -419,7 +419,7 @@ impl Viewer {
         self.win.panel.renderer_replaced();
         self.panel_image = PanelImage::new(
             &self.win.gpu.device,
-            self.win.format,
+            self.win.format(),
             self.win.gpu.views_formats(),
         );
         self.timer = FrameTimer::new(&self.win.gpu);
@@ -441,7 +441,7 @@ impl Viewer {
             &self.win.gpu.device,
             self.win.config.width,
             self.win.config.height,
-            self.win.format,
+            self.win.format(),
             self.targets.sample_count,
         );
     }
@@ -511,7 +511,7 @@ impl Viewer {
                 w,
                 h,
                 self.targets.sample_count,
-                self.win.format,
+                self.win.format(),
             );
             let renderer = &self.world.renderer;
             renderer.encode(
@@ -740,7 +740,7 @@ impl Viewer {
         let (w, h) = (self.win.config.width, self.win.config.height);
         let mut bytes = shot.read_bytes(&self.win.gpu)?;
         if matches!(
-            self.win.format,
+            self.win.format(),
             wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
         ) {
             for px in bytes.chunks_exact_mut(4) {

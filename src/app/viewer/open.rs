@@ -54,7 +54,7 @@ impl Viewer {
             World::new(
                 &self.win.gpu,
                 loaded,
-                self.win.format,
+                self.win.format(),
                 self.targets.sample_count,
             )
         });
