@@ -1,5 +1,6 @@
 // Billboard textures: every leaf a billboard shows, drawn orthographically onto the billboard's
-// rectangle in the atlas (see src/bake/foliage/billboard/atlas.rs). Unlit base colour, blended over
+// rectangle in the atlas (see src/bake/foliage/billboard/atlas.rs), each textured by its own
+// material's layer (leaves, needles, flowers). Unlit base colour, blended over
 // what is there with the leaf texture's own (soft) alpha, so that the atlas keeps the leaf
 // contour to a fraction of a texel and the renderer's alpha test at one half finds it again.
 // The colour comes out multiplied by alpha; the caller divides it out.
@@ -14,7 +15,7 @@ struct Atlas {
 };
 
 @group(0) @binding(0) var<uniform> atlas: Atlas;
-@group(0) @binding(1) var leaf_tex: texture_2d<f32>;
+@group(0) @binding(1) var leaf_tex: texture_2d_array<f32>;
 @group(0) @binding(2) var leaf_sampler: sampler;
 
 struct VsOut {
@@ -22,6 +23,7 @@ struct VsOut {
     @location(0) uv: vec2<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) light: f32,
+    @location(3) @interpolate(flat) layer: u32,
 };
 
 @vertex
@@ -31,12 +33,14 @@ fn vs_main(
     @location(2) uv: vec2<f32>,
     @location(3) normal: vec3<f32>,
     @location(4) light: f32,
+    @location(5) layer: u32,
 ) -> VsOut {
     var out: VsOut;
     out.clip = vec4<f32>(pixel.x / atlas.size.x * 2.0 - 1.0, 1.0 - pixel.y / atlas.size.y * 2.0, depth, 1.0);
     out.uv = uv;
     out.normal = normal;
     out.light = light;
+    out.layer = layer;
     return out;
 }
 
@@ -47,7 +51,7 @@ struct Targets {
 
 @fragment
 fn fs_main(in: VsOut) -> Targets {
-    let texel = textureSample(leaf_tex, leaf_sampler, in.uv);
+    let texel = textureSample(leaf_tex, leaf_sampler, in.uv, in.layer);
     var out: Targets;
     out.colour = vec4<f32>(texel.rgb * in.light, texel.a);
     out.lighting = vec4<f32>(clamp(normalize(in.normal) * 0.5 + 0.5, vec3<f32>(0.0), vec3<f32>(1.0)), texel.a);

@@ -33,6 +33,11 @@ pub enum Kind {
     TestModel,
     /// Clips without a mesh, for `--clips` (`mocap-walk`: the walk of `mocap`).
     Clips,
+    /// A tree laid out as artists ship them, unrigged, for testing the billboard clouds
+    /// (`crate::generate::wild::cards`): `card-palm` (curved fronds), `card-bush` (leaf and
+    /// flower cards in two cut-out materials, no trunk), `card-oak` (crossed, normal-mapped
+    /// cards under a stretched root) and `card-pine` (155 triangles).
+    CardTree,
 }
 
 pub const BUILTINS: &[Builtin] = &[
@@ -113,6 +118,30 @@ pub const BUILTINS: &[Builtin] = &[
         file_name: "knight.glb",
         bytes: include_bytes!("../assets/knight.glb"),
         kind: Kind::TestModel,
+    },
+    Builtin {
+        name: "card-palm",
+        file_name: "card-palm.glb",
+        bytes: include_bytes!("../assets/card-palm.glb"),
+        kind: Kind::CardTree,
+    },
+    Builtin {
+        name: "card-bush",
+        file_name: "card-bush.glb",
+        bytes: include_bytes!("../assets/card-bush.glb"),
+        kind: Kind::CardTree,
+    },
+    Builtin {
+        name: "card-oak",
+        file_name: "card-oak.glb",
+        bytes: include_bytes!("../assets/card-oak.glb"),
+        kind: Kind::CardTree,
+    },
+    Builtin {
+        name: "card-pine",
+        file_name: "card-pine.glb",
+        bytes: include_bytes!("../assets/card-pine.glb"),
+        kind: Kind::CardTree,
     },
 ];
 

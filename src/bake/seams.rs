@@ -63,6 +63,9 @@ pub struct AtlasVertex {
     pub normal: [f32; 3],
     /// The light the crown leaves the leaf here, 1 − occlusion.
     pub light: f32,
+    /// The leaf's material: its layer of the tree's materials (each cut-out material with
+    /// its own texture, cutoff and colour).
+    pub layer: u32,
 }
 
 /// What an atlas's render gives: the colour darkened by the crown (sRGB, straight alpha) and
@@ -126,15 +129,15 @@ pub struct ViewImages {
 /// that the bake stays plain CPU code (`render::atlas` implements it; a test may rasterise on
 /// the CPU).
 pub trait RasterizeAtlas {
-    /// `vertices` (triangles in atlas pixels, see [`atlas_triangles`](crate::bake::foliage::billboard::atlas::atlas_triangles)) textured by layer 0 of
-    /// `leaf`, mipmapped, into two `layout`-sized images (see [`AtlasImages`]), straight (not
-    /// premultiplied) alpha, transparent where no leaf is; each leaf blended over what is
-    /// there by its texture's alpha in both.
+    /// `vertices` (triangles in atlas pixels, see [`atlas_triangles`](crate::bake::foliage::billboard::atlas::atlas_triangles)) each textured by its layer
+    /// of `leaves` (mipmapped), into two `layout`-sized images (see [`AtlasImages`]),
+    /// straight (not premultiplied) alpha, transparent where no leaf is; each leaf blended
+    /// over what is there by its texture's alpha in both.
     fn rasterize(
         &self,
         layout: &AtlasLayout,
         vertices: &[AtlasVertex],
-        leaf: &MaterialLayers,
+        leaves: &MaterialLayers,
     ) -> Result<AtlasImages>;
 
     /// The views of an octahedral impostor ([`view_request`](crate::bake::impostor::octahedral::view_request)): every

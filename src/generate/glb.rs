@@ -264,30 +264,7 @@ pub(crate) fn materials(b: &mut Builder, materials: &[Material], root: &mut gj::
             ..Default::default()
         };
         if let Some(t) = &m.texture {
-            if root.samplers.is_empty() {
-                // Linear filtering with trilinear mipmaps, repeat wrapping.
-                root.push(gj::texture::Sampler {
-                    mag_filter: Some(Valid(gj::texture::MagFilter::Linear)),
-                    min_filter: Some(Valid(gj::texture::MinFilter::LinearMipmapLinear)),
-                    ..Default::default()
-                });
-            }
-            let view = b.view(&png(t), None);
-            let image = root.push(gj::Image {
-                buffer_view: Some(view),
-                mime_type: Some(gj::image::MimeType("image/png".into())),
-                name: None,
-                uri: None,
-                extensions: None,
-                extras: None,
-            });
-            let texture = root.push(gj::Texture {
-                name: None,
-                sampler: Some(Index::new(0)),
-                source: image,
-                extensions: None,
-                extras: None,
-            });
+            let texture = embedded_texture(b, root, t);
             pbr.base_color_texture = Some(gj::texture::Info {
                 index: texture,
                 tex_coord: 0,
@@ -310,6 +287,38 @@ pub(crate) fn materials(b: &mut Builder, materials: &[Material], root: &mut gj::
             ..Default::default()
         });
     }
+}
+
+/// `image` embedded as a PNG in the binary chunk, as a texture with the file's one sampler
+/// (linear, trilinear mipmaps, repeat; added with the first texture).
+pub(crate) fn embedded_texture(
+    b: &mut Builder,
+    root: &mut gj::Root,
+    image: &crate::model::Rgba8Image,
+) -> Index<gj::Texture> {
+    if root.samplers.is_empty() {
+        root.push(gj::texture::Sampler {
+            mag_filter: Some(Valid(gj::texture::MagFilter::Linear)),
+            min_filter: Some(Valid(gj::texture::MinFilter::LinearMipmapLinear)),
+            ..Default::default()
+        });
+    }
+    let view = b.view(&png(image), None);
+    let image = root.push(gj::Image {
+        buffer_view: Some(view),
+        mime_type: Some(gj::image::MimeType("image/png".into())),
+        name: None,
+        uri: None,
+        extensions: None,
+        extras: None,
+    });
+    root.push(gj::Texture {
+        name: None,
+        sampler: Some(Index::new(0)),
+        source: image,
+        extensions: None,
+        extras: None,
+    })
 }
 
 /// The skeleton's nodes (rest transforms and children), a node for each of `meshes` meshes

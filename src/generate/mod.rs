@@ -43,6 +43,10 @@ pub fn file(name: &str) -> Option<Vec<u8>> {
         "mocap" => Some(wild::mocap::mocap().to_glb()),
         "mocap-walk" => Some(wild::mocap::mocap_walk().to_glb()),
         "knight" => Some(wild::knight::knight().to_glb()),
+        "card-palm" => Some(wild::cards::card_palm().to_glb()),
+        "card-bush" => Some(wild::cards::card_bush().to_glb()),
+        "card-oak" => Some(wild::cards::card_oak().to_glb()),
+        "card-pine" => Some(wild::cards::card_pine().to_glb()),
         _ => generate(name).map(|m| glb::to_glb(&m)),
     }
 }

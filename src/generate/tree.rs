@@ -550,7 +550,7 @@ fn wind(
 }
 
 /// Bark: vertical fissures over a brown ground.
-fn bark_texture() -> Rgba8Image {
+pub(crate) fn bark_texture() -> Rgba8Image {
     let size = TEXTURE_SIZE;
     let mut pixels = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
@@ -576,7 +576,7 @@ fn bark_texture() -> Rgba8Image {
     }
 }
 
-fn srgb(c: Vec3, a: f32) -> [u8; 4] {
+pub(crate) fn srgb(c: Vec3, a: f32) -> [u8; 4] {
     use crate::model::linear_to_srgb;
     [
         linear_to_srgb(c.x),
@@ -596,7 +596,7 @@ fn segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f32 {
 /// The foliage texture: a cluster of three leaves on short stalks (broadleaf), or a spray of
 /// needles along a twig (conifer), with the shape in the alpha channel. The quad's base edge is
 /// at the bottom of the texture (v = 1), where the cluster attaches.
-fn foliage_texture(conifer: bool) -> Rgba8Image {
+pub(crate) fn foliage_texture(conifer: bool) -> Rgba8Image {
     let size = TEXTURE_SIZE;
     let mut pixels = Vec::with_capacity((size * size * 4) as usize);
     let base = Vec2::new(0.5, 0.98);

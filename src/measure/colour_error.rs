@@ -20,8 +20,15 @@ pub const METRIC_FRAMES: usize = 5;
 /// The colour error of `lod` against `original` (thesis §5.1.3): binary masks of where the
 /// foliage (the original's leaves, the level's billboards; wood left out) covers the image, at
 /// `size`, from [`METRIC_VIEWS`] views round it at ground level and [`METRIC_FRAMES`] times of
-/// its loop; the share of the original's foliage pixels that the two masks disagree on, over
-/// all of them. 0 for identical trees.
+/// its loop; of the pixels either mask covers, the share on which they disagree, over all of
+/// them. 0 for identical trees, 1 for trees that cover no pixel in common.
+///
+/// The thesis divides the disagreeing pixels by the original's covered pixels alone
+/// (`E = Σ|o − s| / P_f`), which exceeds 1 wherever a level covers more than twice what the
+/// tree does (a palm's thin fronds drawn small, their cloud or impostor a solid blot), and
+/// drops such figures as "no fidelity". Dividing by the pixels either covers (the Jaccard
+/// distance of the two masks) bounds it by 1, and for a level close to the tree it is the
+/// thesis's figure to within the few pixels the level adds.
 pub fn colour_error(gpu: &Gpu, original: &Model, lod: &CloudLevel, size: [u32; 2]) -> Result<f32> {
     colour_error_over(gpu, original, lod, size, METRIC_FRAMES)
 }
@@ -358,8 +365,8 @@ fn metric_views(
     })
 }
 
-/// The share of `a`'s covered pixels that `b` disagrees on (see [`colour_error`]); `original`
-/// gives the loop's length. The camera stands `distance` tree heights off, its field of view
+/// Of the pixels `a` or `b` covers, the share on which they disagree (see [`colour_error`]);
+/// `original` gives the loop's length. The camera stands `distance` tree heights off, its field of view
 /// narrowed to frame the tree as from [`FRAMING`] heights.
 fn disagreement(
     gpu: &Gpu,
@@ -373,7 +380,7 @@ fn disagreement(
     let target = Offscreen::new(gpu, size[0], size[1], 1);
     let bounds = a.bakes[0].bounds;
     let duration = original.clips.first().map_or(1.0, |c| c.duration);
-    let (mut wrong, mut covered) = (0u64, 0u64);
+    let (mut wrong, mut either) = (0u64, 0u64);
     let shoot = |w: &mut World, camera, t, empty| picture(gpu, w, &target, camera, t, empty);
     for camera in metric_views(bounds, size, distance) {
         let background = shoot(a, camera, 0.0, true)?;
@@ -383,10 +390,10 @@ fn disagreement(
             let ib = shoot(b, camera, t, false)?;
             for ((p, q), bg) in ia.pixels().zip(ib.pixels()).zip(background.pixels()) {
                 let (ma, mb) = (covers(p, bg), covers(q, bg));
-                covered += ma as u64;
+                either += (ma || mb) as u64;
                 wrong += (ma != mb) as u64;
             }
         }
     }
-    Ok(wrong as f32 / covered.max(1) as f32)
+    Ok(wrong as f32 / either.max(1) as f32)
 }

@@ -1,5 +1,6 @@
 //! What lighting billboards through their atlases buys: each level of a tree drawn beside the
-//! full tree under two suns, its billboards lit by their planes (the thesis) and per texel by
+//! full tree under two suns, its billboards lit as one (each by its leaves' mean normal; the thesis
+//! lit each by its plane) and per texel by
 //! the leaves' normals (see `bake::billboard::atlas`); the crown's occlusion darkens both.
 //!
 //! Two numbers per picture pair, each a mean over the three channels in 0..1:

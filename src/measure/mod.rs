@@ -7,6 +7,7 @@
 //!   placement rule of [`crate::bake::impostor::placement`];
 //! - [`shading_error`]: a coarse level's shading against full detail's, normal maps on or off;
 //! - [`foliage_lighting`]: billboards lit through their atlas against the leaves they stand for;
+//! - [`material_share`]: each cut-out material's share of a tree level's foliage pixels;
 //! - [`ssim`]: the structural similarity of two pictures (the study's proxy);
 //! - [`coverage`]: the pixels each pass of a frame covers (`bench`'s fragments per covered
 //!   pixel);
@@ -18,6 +19,7 @@ pub mod colour_error;
 pub mod coverage;
 pub mod foliage_lighting;
 pub mod impostor_fit;
+pub mod material_share;
 pub mod shading_error;
 pub mod ssim;
 pub mod statistics;

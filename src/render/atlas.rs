@@ -35,13 +35,17 @@ pub struct AtlasRasterizer<'g> {
 impl<'g> AtlasRasterizer<'g> {
     pub fn new(gpu: &'g Gpu) -> AtlasRasterizer<'g> {
         let device = &gpu.device;
+        // Wrapping as the renderer's material sampler wraps: a leaf's texture coordinates may
+        // run past the texture (a strip repeating one leaflet along its length).
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
             mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
-        let bind_layout = bake_layout(device, "atlas", wgpu::TextureViewDimension::D2);
+        let bind_layout = bake_layout(device, "atlas", wgpu::TextureViewDimension::D2Array);
         let module = shaders::ATLAS_SHADER.create(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("atlas"),
@@ -49,7 +53,8 @@ impl<'g> AtlasRasterizer<'g> {
             immediate_size: 0,
         });
         let attributes = wgpu::vertex_attr_array![
-            0 => Float32x2, 1 => Float32, 2 => Float32x2, 3 => Float32x3, 4 => Float32
+            0 => Float32x2, 1 => Float32, 2 => Float32x2, 3 => Float32x3, 4 => Float32,
+            5 => Uint32
         ];
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("atlas"),
@@ -96,12 +101,12 @@ impl<'g> AtlasRasterizer<'g> {
 }
 
 impl RasterizeAtlas for AtlasRasterizer<'_> {
-    /// Layer 0 of `leaf` is mipmapped, so leaves shrunk onto few texels keep their coverage.
+    /// `leaves` are mipmapped, so leaves shrunk onto few texels keep their coverage.
     fn rasterize(
         &self,
         layout: &AtlasLayout,
         vertices: &[AtlasVertex],
-        leaf: &MaterialLayers,
+        leaves: &MaterialLayers,
     ) -> Result<AtlasImages> {
         let gpu = self.gpu;
         let device = &gpu.device;
@@ -118,34 +123,14 @@ impl RasterizeAtlas for AtlasRasterizer<'_> {
             size,
             wgpu::TextureFormat::Depth32Float,
         );
-        let leaf_tex = device.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("leaf"),
-                size: wgpu::Extent3d {
-                    width: leaf.width,
-                    height: leaf.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: leaf.mips.len() as u32,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::MipMajor,
-            &leaf
-                .mips
-                .iter()
-                .map(|m| &m[..(m.len() / leaf.layer_count as usize)])
-                .collect::<Vec<_>>()
-                .concat(),
-        );
+        let leaf_tex = super::character::material_texture(gpu, leaves);
         let bind = self.bind_group(
             &self.bind_layout,
             &[layout.width as f32, layout.height as f32, 0.0, 0.0],
-            &leaf_tex.create_view(&Default::default()),
+            &leaf_tex.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            }),
         );
         let mut enc = device.create_command_encoder(&Default::default());
         {

@@ -229,7 +229,7 @@ impl Gpu {
                 let (how, why, other) = if on {
                     ("per texel through their atlases", "a GPU", "flat")
                 } else {
-                    ("by their planes", "a CPU adapter", "atlas")
+                    ("one normal a billboard", "a CPU adapter", "atlas")
                 };
                 eprintln!(
                     "lodlab: billboards lit {how} (the default on {why}; --billboard-lighting {other} for the other)"

@@ -11,6 +11,7 @@ mod bad_input;
 mod bench;
 mod billboards;
 mod browser;
+mod card_trees;
 mod docs;
 mod export;
 mod field_models;

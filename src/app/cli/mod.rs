@@ -115,7 +115,8 @@ pub enum Command {
     Shot(ShotArgs),
     /// Write the built-in models afresh from their generators as .glb files: the demo models
     /// (horse, walker, broadleaf, conifer, sapling), the test models (split-tube, armour,
-    /// patchwork, lowpoly, robot, mocap, knight) and the clips of mocap-walk.
+    /// patchwork, lowpoly, robot, mocap, knight), the card trees (card-palm, card-bush,
+    /// card-oak, card-pine) and the clips of mocap-walk.
     GenAssets(GenAssetsArgs),
     /// Build the levels of detail of models (progressive meshes by rest-pose, AS, AS+IS; a
     /// tree's chain of billboard clouds), or fetch them from the cache, and print them as a
@@ -357,7 +358,8 @@ pub struct BenchArgs {
 #[derive(Args, Debug)]
 pub struct ReportArgs {
     /// A built-in asset name (horse, walker, broadleaf, conifer, sapling, split-tube, armour,
-    /// patchwork, lowpoly, robot, mocap, knight) or a glTF path; the same as --model.
+    /// patchwork, lowpoly, robot, mocap, knight, card-palm, card-bush, card-oak, card-pine)
+    /// or a glTF path; the same as --model.
     #[arg(value_name = "MODEL")]
     pub model: Option<String>,
     /// The model, as shot, bench and view take it.
@@ -382,7 +384,8 @@ pub enum Baseline {
 #[derive(Args, Debug)]
 pub struct BakeArgs {
     /// Models: built-in asset names (horse, walker, broadleaf, conifer, sapling, split-tube,
-    /// armour, patchwork, lowpoly, robot, mocap, knight) or glTF paths; the same as --model.
+    /// armour, patchwork, lowpoly, robot, mocap, knight, card-palm, card-bush, card-oak,
+    /// card-pine) or glTF paths; the same as --model.
     #[arg(value_name = "MODEL", required_unless_present = "model_flags")]
     pub models: Vec<String>,
     /// A model, as shot, bench and view take it. Repeat for several.

@@ -25,7 +25,8 @@ pub struct SceneArgs {
     #[arg(long, value_enum)]
     pub scene: Option<SceneKind>,
     /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling, split-tube,
-    /// armour, patchwork, lowpoly, robot, mocap, knight) or a glTF path. Repeat for several;
+    /// armour, patchwork, lowpoly, robot, mocap, knight, card-palm, card-bush, card-oak,
+    /// card-pine) or a glTF path. Repeat for several;
     /// the models replace the scene's own, trees included.
     #[arg(long = "model", value_name = "NAME|PATH")]
     pub models: Vec<String>,
@@ -184,7 +185,8 @@ pub struct FoliageArgs {
     #[arg(long)]
     pub foliage_tint: bool,
     /// How billboards are lit: atlas (per texel through their atlases, by each leaf's normal)
-    /// or flat (by their planes, as the thesis did); the crown's occlusion is in their colour
+    /// or flat (one normal a billboard, its leaves' mean; the thesis lit each by its plane); the
+    /// crown's occlusion is in their colour
     /// either way [default: flat on a CPU adapter such as lavapipe, else atlas].
     #[arg(long, value_enum)]
     pub billboard_lighting: Option<BillboardLighting>,

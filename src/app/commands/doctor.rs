@@ -86,7 +86,7 @@ fn adapter(lines: &mut Vec<Line>, problems: &mut Vec<String>) -> bool {
         format!("{} {}", info.driver, info.driver_info),
     ));
     let (samples, lighting) = if gpu.is_cpu() {
-        ("1×", "by their planes")
+        ("1×", "one normal a billboard")
     } else {
         ("4×", "per texel through their atlases")
     };

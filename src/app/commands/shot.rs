@@ -62,7 +62,7 @@ pub struct ShotReport {
     pub debug_view: String,
     /// What trees become under a simplified method (the foliage level policy).
     pub foliage: String,
-    /// How billboards are lit: "atlas" (per texel) or "flat" (by their planes).
+    /// How billboards are lit: "atlas" (per texel) or "flat" (one normal a billboard).
     pub billboard_lighting: String,
     /// Instances by level of detail, finest first (the last bin holds coarser ones too).
     pub levels: Vec<u32>,

@@ -52,6 +52,9 @@ pub struct Document {
     pub meshes: Vec<DocMesh>,
     pub skins: Vec<DocSkin>,
     pub materials: Vec<Material>,
+    /// Tangent-space normal maps (glTF's `normalTexture`), by material: lodlab's own
+    /// [`Material`] has none, as its renderer lights leaves and billboards without them.
+    pub normal_maps: Vec<(usize, crate::model::Rgba8Image)>,
     pub clips: Vec<Clip>,
 }
 
@@ -105,6 +108,16 @@ impl Document {
             });
         }
         glb::materials(&mut b, &self.materials, &mut root);
+        for (m, image) in &self.normal_maps {
+            let index = glb::embedded_texture(&mut b, &mut root, image);
+            root.materials[*m].normal_texture = Some(gj::material::NormalTexture {
+                index,
+                scale: 1.0,
+                tex_coord: 0,
+                extensions: None,
+                extras: None,
+            });
+        }
         let mut nodes: Vec<gj::Node> = self
             .nodes
             .iter()

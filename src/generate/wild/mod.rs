@@ -5,6 +5,7 @@
 //! written as a [`file::Document`], byte for byte the same on every run, and committed under
 //! `assets/` like the other models ([`super::file`]).
 
+pub mod cards;
 pub mod file;
 pub mod knight;
 pub mod mocap;

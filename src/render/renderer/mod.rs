@@ -124,7 +124,7 @@ pub struct SceneRenderer {
     /// while the characters keep their colours.
     pub foliage_tint: bool,
     /// Light billboard clouds per texel through their atlases (see `bake::billboard::atlas`);
-    /// off, by their planes' normals. By adapter at first (`Gpu::atlas_lighting`).
+    /// off, one normal a billboard (its leaves' mean). By adapter at first (`Gpu::atlas_lighting`).
     pub atlas_lighting: bool,
     /// Draw plain foliage's depth first, then its colour where the depth is equal (see
     /// `draw::FoliagePhase`); only without multisampling.

@@ -101,13 +101,17 @@ pub(crate) fn motion_plot(
                     .label_style(("sans-serif", 13))
                     .draw()
                     .map_err(plot_error)?;
-                for (points, colour, label) in curves {
+                // Widest first: where a billboard follows its leaf exactly the curves coincide,
+                // and each still shows as a band round the one drawn over it.
+                let widths = [2u32, 4, 6];
+                for (k, (points, colour, label)) in curves.into_iter().enumerate().rev() {
+                    let width = widths[k.min(2)];
                     chart
-                        .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+                        .draw_series(LineSeries::new(points, colour.stroke_width(width)))
                         .map_err(plot_error)?
                         .label(label)
                         .legend(move |(x, y)| {
-                            PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
+                            PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(width))
                         });
                 }
                 if i == 0 && axis == 0 {

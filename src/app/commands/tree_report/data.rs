@@ -83,10 +83,75 @@ pub struct TreeReport {
     /// The thesis's figures (§8.4.1) beside this tree's at the same billboard counts.
     pub against_thesis: Vec<ThesisRow>,
     /// Each cloud level's lighting against the full tree's under two suns, billboards lit
-    /// by their planes and through their atlases, the tree [`LIGHTING_PX`] pixels high.
+    /// as one (flat) and through their atlases, the tree [`LIGHTING_PX`] pixels high.
     pub lighting: Vec<crate::measure::foliage_lighting::LevelLighting>,
     /// The levels each switch size draws by ε and by error per cost.
     pub orders: super::orders::OrdersReport,
+    /// What wind the tree gets (see [`wind`]).
+    pub wind: String,
+    /// The colours its foliage is told apart by (its cut-out materials, alike ones as one),
+    /// and each cloud level's share of foliage pixels by them against the full tree's, the
+    /// foliage [`LIGHTING_PX`] pixels high (empty where there is only one colour).
+    pub materials: Vec<String>,
+    pub material_shares: Vec<crate::measure::material_share::LevelShares>,
+}
+
+/// What wind `tree` gets, in words: lodlab plays a tree's own first clip, looped, and rigs
+/// nothing; a tree without one (most files from public collections: a mesh and no skin)
+/// stands still.
+pub fn wind(tree: &crate::model::Model) -> String {
+    let moving = tree.clips.iter().find(|c| !c.channels.is_empty());
+    match moving {
+        Some(c) => format!(
+            "its own clip \"{}\" ({:.1} s, looped, on {} bone{}), its sway scaled by --wind",
+            c.name,
+            c.duration,
+            tree.skeleton.bone_count(),
+            if tree.skeleton.bone_count() == 1 {
+                ""
+            } else {
+                "s"
+            }
+        ),
+        None => "none: the file has no animation, and lodlab rigs no tree, so it stands still \
+                 (its animation error is then only how far its leaves were moved onto their \
+                 billboards)"
+            .into(),
+    }
+}
+
+/// `materials.md`: each cloud level's share of foliage pixels by material colour beside the
+/// full tree's.
+pub fn materials_table(report: &TreeReport) -> String {
+    let mut out = format!(
+        "# {}: foliage pixels by material\n\nEach cut-out material's share of the foliage's \
+         pixels (told apart by colour; alike materials as one), the foliage {LIGHTING_PX} px \
+         high from {} views round the tree. Worst: the largest relative difference of a \
+         share from the full tree's.\n\n| level |",
+        report.model,
+        crate::measure::colour_error::METRIC_VIEWS
+    );
+    for name in &report.materials {
+        out.push_str(&format!(" {name} |"));
+    }
+    out.push_str(" worst |\n|---|");
+    out.push_str(&"---:|".repeat(report.materials.len() + 1));
+    out.push('\n');
+    if let Some(first) = report.material_shares.first() {
+        out.push_str("| full tree |");
+        for s in &first.full {
+            out.push_str(&format!(" {:.1}% |", 100.0 * s));
+        }
+        out.push_str(" |\n");
+    }
+    for l in &report.material_shares {
+        out.push_str(&format!("| L{} |", l.level));
+        for s in &l.shares {
+            out.push_str(&format!(" {:.1}% |", 100.0 * s));
+        }
+        out.push_str(&format!(" {:.0}% |\n", 100.0 * l.worst()));
+    }
+    out
 }
 
 /// How high the lighting comparison draws the tree, pixels.
@@ -190,7 +255,7 @@ pub fn lighting_table(report: &TreeReport) -> String {
     use std::fmt::Write;
     let mut out = format!(
         "{}: each cloud level beside the full tree, {LIGHTING_PX:.0} px high, under two suns; \
-         billboards lit by their planes (flat, as the thesis did) and per texel through their \
+         billboards lit as one (flat, by their leaves' mean normal) and per texel through their \
          atlases by the leaves' normals (both darkened by the crown's occlusion). Shading: the mean colour difference \
          over the pixels both cover; tone: the difference of the mean colours. Both 0..1, \
          lower is closer.\n\n\
@@ -207,4 +272,23 @@ pub fn lighting_table(report: &TreeReport) -> String {
         );
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_report_says_what_wind_a_tree_gets() {
+        let mut tree = crate::generate::tree::sapling();
+        let w = wind(&tree);
+        assert!(w.starts_with("its own clip \"wind\""), "{w}");
+        // A file of a mesh and no animation (most trees from public collections).
+        for clip in &mut tree.clips {
+            clip.channels.clear();
+        }
+        assert!(wind(&tree).starts_with("none: the file has no animation"));
+        tree.clips.clear();
+        assert!(wind(&tree).starts_with("none"));
+    }
 }

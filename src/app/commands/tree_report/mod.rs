@@ -5,10 +5,12 @@
 //! against ε (`colour-error.png`), every level side by side from one view (`levels.png`), and a few
 //! leaves' trajectories against their billboards' (`motion.png`), and the thesis's figures
 //! beside this tree's at the same billboard counts (`against-thesis.md`), and how each level
-//! is lit beside the full tree under two suns, its billboards lit by their planes and per
+//! is lit beside the full tree under two suns, its billboards lit as one and per
 //! texel through their atlases (`lighting.md`), and the levels each size draws ordered by ε
 //! and by measured error per cost (`orders.md`, `error-per-cost.png`,
-//! `chains-error-per-cost.png`).
+//! `chains-error-per-cost.png`), and, for a tree of several cut-out materials told apart by
+//! colour (leaves and flowers), each level's share of foliage pixels by material
+//! (`materials.md`). `report.json` also says what wind the tree gets.
 //!
 //! Besides the chain (skeleton clouds, spectral ones, then clumps), the report measures the
 //! skeleton-only chain's coarse levels (`skeleton_levels`, for comparison at equal billboard
@@ -76,6 +78,21 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         .collect();
     let lighting =
         crate::measure::foliage_lighting::foliage_lighting(&gpu, tree, &clouds, LIGHTING_PX)?;
+    let colours = crate::measure::material_share::MaterialColours::of(tree);
+    let material_shares = if colours.len() >= 2 {
+        crate::measure::material_share::material_shares(&gpu, tree, &colours, &clouds, LIGHTING_PX)?
+    } else {
+        Vec::new()
+    };
+    for l in &material_shares {
+        eprintln!(
+            "lodlab: {} L{}: foliage pixels by material {} (full tree {})",
+            tree.name,
+            l.level,
+            percentages(&colours.names, &l.shares),
+            percentages(&colours.names, &l.full)
+        );
+    }
     let orders = orders::orders(
         &raster,
         &crate::measure::colour_error::GpuColourError::new(&gpu),
@@ -123,7 +140,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         levels,
         chain_seconds,
         metric: format!(
-            "binary coverage masks at {}x{}, {} views round the tree at ground level, {} times over the loop; share of the full tree's covered pixels that differ",
+            "binary coverage masks at {}x{}, {} views round the tree at ground level, {} times over the loop; of the pixels either covers, the share that differ (0 the same, 1 nothing in common)",
             METRIC_SIZE[0],
             METRIC_SIZE[1],
             crate::measure::colour_error::METRIC_VIEWS,
@@ -135,7 +152,11 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         against_thesis,
         lighting,
         orders,
+        wind: data::wind(tree),
+        materials: colours.names.clone(),
+        material_shares,
     };
+    eprintln!("lodlab: {}: wind: {}", tree.name, report.wind);
     write_files(&gpu, &report, &chain, &skeleton_chain, out)?;
     Ok(report)
 }
@@ -157,6 +178,12 @@ fn write_files(
         thesis_table(report).as_bytes(),
     )?;
     write_atomic(&out.join("lighting.md"), lighting_table(report).as_bytes())?;
+    if !report.material_shares.is_empty() {
+        write_atomic(
+            &out.join("materials.md"),
+            data::materials_table(report).as_bytes(),
+        )?;
+    }
     write_atomic(
         &out.join("orders.md"),
         orders::orders_table(&report.orders).as_bytes(),
@@ -180,6 +207,16 @@ fn write_files(
     });
     motion_plot(report, pair, &out.join("motion.png"))?;
     Ok(())
+}
+
+/// "leaf 84.0%, blossom 16.0%".
+fn percentages(names: &[String], shares: &[f32]) -> String {
+    names
+        .iter()
+        .zip(shares)
+        .map(|(n, s)| format!("{n} {:.1}%", 100.0 * s))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// A level of a chain with its colour error (said on stderr as it goes).

@@ -165,21 +165,66 @@ fn try_pack(sizes: &[[u32; 2]], width: u32, height: u32, gutter: u32) -> Option<
 }
 
 /// One corner of a leaf triangle as the atlas draws it: where it is, its leaf-texture
-/// coordinate, its normal and the crown's occlusion there.
+/// coordinate, its normal, the crown's occlusion there and its material (its index among
+/// the tree's materials, a layer of the atlas's leaf texture).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LeafCorner {
     pub position: Vec3,
     pub uv: Vec2,
     pub normal: Vec3,
     pub occlusion: f32,
+    pub layer: u32,
 }
 
-/// Every drawn leaf of every billboard as triangles in atlas pixels. `triangles_of(leaf)`
-/// gives the leaf's triangles.
+/// The normal each billboard is lit by where it is lit as one (`--billboard-lighting flat`),
+/// and whose frame its atlas keeps its texels' normals in: the mean of the normals its leaves
+/// are lit by, each seen from the billboard's front (see [`atlas_triangles`]), weighted by
+/// area. A clump's planes (those with a view window) keep their plane's normal, which their
+/// window is measured about.
+///
+/// The thesis lit a billboard by its plane. A leaf card is lit by its own vertex normals,
+/// which artists often bend out from the crown's centre so that the crown shades like one
+/// soft mass, or wind cards one way and point their normals the other: lit by their planes,
+/// the clouds of such trees came out darker and flatter than the tree. The normal may point
+/// behind the billboard's plane: the renderer lights a billboard's front face by it and its
+/// back face by its negation, as it lights the leaves. Where the leaves' normals cancel out,
+/// the plane's normal is kept.
+pub fn shading_normals(
+    billboards: &[Billboard],
+    triangles_of: impl Fn(u32) -> Vec<[LeafCorner; 3]>,
+) -> Vec<Vec3> {
+    billboards
+        .iter()
+        .map(|bb| {
+            let n = bb.plane.normal;
+            if bb.view_window != 0.0 {
+                return n;
+            }
+            let mut sum = Vec3::ZERO;
+            for &leaf in &bb.drawn {
+                for tri in triangles_of(leaf) {
+                    let geometric = (tri[1].position - tri[0].position)
+                        .cross(tri[2].position - tri[0].position);
+                    let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
+                    let area = geometric.length();
+                    for c in tri {
+                        sum += c.normal.normalize_or_zero() * (turn * area);
+                    }
+                }
+            }
+            sum.normalize_or(n)
+        })
+        .collect()
+}
+
+/// Every drawn leaf of every billboard as triangles in atlas pixels, each texel's normal in
+/// the frame of its billboard's `normals` entry (see [`shading_normals`]).
+/// `triangles_of(leaf)` gives the leaf's triangles.
 pub fn atlas_triangles(
     billboards: &[Billboard],
     layout: &AtlasLayout,
     epsilon: f32,
+    normals: &[Vec3],
     triangles_of: impl Fn(u32) -> Vec<[LeafCorner; 3]>,
 ) -> Vec<AtlasVertex> {
     let mut out = Vec::new();
@@ -191,33 +236,51 @@ pub fn atlas_triangles(
         let (lu, lv) = (eu.length().max(1e-9), ev.length().max(1e-9));
         let (eu, ev) = (eu / lu, ev / lv);
         let n = bb.plane.normal;
-        let (ft, fb) = billboard_frame(n);
-        for &leaf in &bb.drawn {
-            for tri in triangles_of(leaf) {
-                // Foliage is two-sided, each face lit by the normal on its side: the billboard's
-                // front shows the leaf's face turned towards it (found by the triangle's
-                // winding, as the renderer finds it, not by its vertex normals, which a model
-                // may point anywhere), and its back the other face, by the negated normal.
-                let geometric =
-                    (tri[1].position - tri[0].position).cross(tri[2].position - tri[0].position);
-                let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
-                for c in tri {
-                    let (p, uv) = (c.position, c.uv);
-                    let m = (c.normal * turn).normalize_or(n);
-                    let q = p - origin;
-                    // Corner 0 is at the bottom-left of the atlas rectangle (v grows up the
-                    // billboard, y grows down the atlas).
-                    let s = q.dot(eu) / lu;
-                    let t = q.dot(ev) / lv;
-                    let d = bb.plane.distance(p);
-                    out.push(AtlasVertex {
-                        pixel: [x as f32 + s * w as f32, y as f32 + (1.0 - t) * h as f32],
-                        depth: (0.5 - 0.49 * d / epsilon.max(1e-6)).clamp(0.0, 1.0),
-                        uv: uv.to_array(),
-                        normal: [m.dot(ft), m.dot(fb), m.dot(n)],
-                        light: 1.0 - c.occlusion.clamp(0.0, 1.0),
-                    });
-                }
+        let shading = normals.get(b).copied().unwrap_or(n);
+        let (ft, fb) = billboard_frame(shading);
+        // Back to front, as the billboard's front sees its leaves: the atlas blends each over
+        // what is there, so the leaf nearest the front is drawn last and shows (a clump's
+        // planes each hold all its leaves, one over another; drawn in the model's order, the
+        // last material's leaves, a bush's flowers, covered the rest from every side).
+        let mut tris: Vec<(f32, [LeafCorner; 3])> = bb
+            .drawn
+            .iter()
+            .flat_map(|&leaf| triangles_of(leaf))
+            .map(|tri| {
+                let d = tri
+                    .iter()
+                    .map(|c| bb.plane.distance(c.position))
+                    .sum::<f32>()
+                    / 3.0;
+                (d, tri)
+            })
+            .collect();
+        tris.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (_, tri) in tris {
+            // Foliage is two-sided, each face lit by the normal on its side: the billboard's
+            // front shows the leaf's face turned towards it (found by the triangle's
+            // winding, as the renderer finds it, not by its vertex normals, which a model
+            // may point anywhere), and its back the other face, by the negated normal.
+            let geometric =
+                (tri[1].position - tri[0].position).cross(tri[2].position - tri[0].position);
+            let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
+            for c in tri {
+                let (p, uv) = (c.position, c.uv);
+                let m = (c.normal * turn).normalize_or(n);
+                let q = p - origin;
+                // Corner 0 is at the bottom-left of the atlas rectangle (v grows up the
+                // billboard, y grows down the atlas).
+                let s = q.dot(eu) / lu;
+                let t = q.dot(ev) / lv;
+                let d = bb.plane.distance(p);
+                out.push(AtlasVertex {
+                    pixel: [x as f32 + s * w as f32, y as f32 + (1.0 - t) * h as f32],
+                    depth: (0.5 - 0.49 * d / epsilon.max(1e-6)).clamp(0.0, 1.0),
+                    uv: uv.to_array(),
+                    normal: [m.dot(ft), m.dot(fb), m.dot(shading)],
+                    light: 1.0 - c.occlusion.clamp(0.0, 1.0),
+                    layer: c.layer,
+                });
             }
         }
     }
@@ -292,23 +355,7 @@ mod tests {
 
     #[test]
     fn the_atlas_keeps_each_leaf_normal_in_the_billboard_frame_facing_its_front() {
-        let billboard = Billboard {
-            plane: crate::bake::foliage::billboard::cloud::Plane {
-                normal: Vec3::Z,
-                offset: 0.0,
-            },
-            corners: [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
-            leaves: vec![0, 1],
-            drawn: vec![0, 1],
-            view_window: 0.0,
-        };
-        let layout = AtlasLayout {
-            width: 64,
-            height: 64,
-            texels_per_unit: 32.0,
-            rects: vec![[2, 2, 32, 32]],
-            gutter: GUTTER,
-        };
+        let (billboard, layout) = unit_billboard();
         // Leaf 0 tilted 30° about x, towards +y, wound to face the billboard's front; leaf 1
         // wound the other way (the billboard's front sees its back face) with the same vertex
         // normal, in the crown's heart.
@@ -318,8 +365,9 @@ mod tests {
             uv: Vec2::ZERO,
             normal,
             occlusion,
+            layer: 0,
         };
-        let vertices = atlas_triangles(&[billboard], &layout, 0.1, |leaf| {
+        let vertices = atlas_triangles(&[billboard], &layout, 0.1, &[Vec3::Z], |leaf| {
             let o = if leaf == 0 { 0.0 } else { 0.5 };
             let a = corner(Vec3::new(0.2, 0.2, 0.0), tilted, o);
             let b = corner(Vec3::new(0.8, 0.2, 0.0), tilted, o);
@@ -341,6 +389,82 @@ mod tests {
         }
         // A corner at (0.5, 0.8) of a billboard 32 texels across at texel (2, 2).
         assert_eq!(vertices[2].pixel, [2.0 + 16.0, 2.0 + 0.2 * 32.0]);
+    }
+
+    /// A unit billboard on the z = 0 plane facing +z, drawing leaves 0 and 1, and its place
+    /// in a 64² atlas.
+    fn unit_billboard() -> (Billboard, AtlasLayout) {
+        let billboard = Billboard {
+            plane: crate::bake::foliage::billboard::cloud::Plane {
+                normal: Vec3::Z,
+                offset: 0.0,
+            },
+            corners: [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            leaves: vec![0, 1],
+            drawn: vec![0, 1],
+            view_window: 0.0,
+        };
+        let layout = AtlasLayout {
+            width: 64,
+            height: 64,
+            texels_per_unit: 32.0,
+            rects: vec![[2, 2, 32, 32]],
+            gutter: GUTTER,
+        };
+        (billboard, layout)
+    }
+
+    fn leaf(z: f32, normal: Vec3, layer: u32) -> Vec<[LeafCorner; 3]> {
+        let c = |x: f32, y: f32| LeafCorner {
+            position: Vec3::new(x, y, z),
+            uv: Vec2::ZERO,
+            normal,
+            occlusion: 0.0,
+            layer,
+        };
+        vec![[c(0.2, 0.2), c(0.8, 0.2), c(0.5, 0.8)]]
+    }
+
+    #[test]
+    fn the_leaf_nearest_the_billboards_front_is_drawn_last_whatever_its_material() {
+        let (billboard, layout) = unit_billboard();
+        let vertices = atlas_triangles(&[billboard], &layout, 0.1, &[Vec3::Z], |l| {
+            if l == 0 {
+                leaf(0.05, Vec3::Z, 1)
+            } else {
+                leaf(-0.05, Vec3::Z, 0)
+            }
+        });
+        // Leaf 1, behind, first; leaf 0, in front (a flower over the leaves), last.
+        assert_eq!(
+            vertices.iter().map(|v| v.layer).collect::<Vec<_>>(),
+            [0, 0, 0, 1, 1, 1]
+        );
+    }
+
+    #[test]
+    fn a_billboard_is_lit_by_its_leaves_normals_even_where_they_point_behind_it() {
+        let (billboard, _) = unit_billboard();
+        // Bent normals, tilted 60° off the plane towards +y: the mean is theirs.
+        let bent = Vec3::new(0.0, 0.75f32.sqrt(), 0.5);
+        let n = shading_normals(std::slice::from_ref(&billboard), |_| leaf(0.0, bent, 0));
+        assert!(n[0].distance(bent) < 1e-5, "{}", n[0]);
+        // Cards wound towards the billboard's front with normals pointing the other way (as
+        // exported): lit as the renderer lights them, by those normals.
+        let n = shading_normals(std::slice::from_ref(&billboard), |_| leaf(0.0, -Vec3::Z, 0));
+        assert!(n[0].distance(-Vec3::Z) < 1e-5, "{}", n[0]);
+        // Leaves whose normals cancel out: the plane's.
+        let n = shading_normals(std::slice::from_ref(&billboard), |l| {
+            leaf(0.0, if l == 0 { Vec3::X } else { -Vec3::X }, 0)
+        });
+        assert_eq!(n[0], Vec3::Z);
+        // A clump's plane keeps its own (its view window is measured about it).
+        let clump = Billboard {
+            view_window: 0.4,
+            ..billboard
+        };
+        let n = shading_normals(&[clump], |_| leaf(0.0, bent, 0));
+        assert_eq!(n[0], Vec3::Z);
     }
 
     #[test]

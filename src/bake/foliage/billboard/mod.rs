@@ -10,6 +10,7 @@
 //!   moves rigidly with its branch, exactly as its leaves did.
 
 pub mod atlas;
+pub mod bends;
 pub mod chain;
 pub mod cloud;
 pub mod clumps;
@@ -114,12 +115,18 @@ pub fn foliage(model: &Model) -> Result<Foliage, String> {
             .iter()
             .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
             .map_or(0, |e| e.0);
-        out.leaves.push(Leaf::new(
-            corners
-                .iter()
-                .map(|&v| mesh.positions[v as usize])
-                .collect(),
-        ));
+        // A quad or a triangle by its corners; a larger piece (a strip, a fold, crossed
+        // cards) by its triangles, whose corners in order of use do not go round it.
+        out.leaves.push(if piece.len() <= 2 {
+            Leaf::new(
+                corners
+                    .iter()
+                    .map(|&v| mesh.positions[v as usize])
+                    .collect(),
+            )
+        } else {
+            Leaf::of_mesh(&piece, mesh)
+        });
         out.bones.push(bone);
         out.triangles.push(piece);
     }
@@ -384,12 +391,15 @@ pub fn tree_height(model: &Model) -> f32 {
 
 /// The tree with its foliage replaced by a billboard cloud: the wood as it was, and every
 /// billboard a quad skinned with weight 1 to its bone, textured from `atlas` (a new material
-/// after the wood's). Materials that cut leaves out are dropped with the leaves.
+/// after the wood's), its vertices' normal its entry of `normals` (the normal it is lit by,
+/// see [`atlas::shading_normals`]; its plane's where there is none). Materials that cut leaves
+/// out are dropped with the leaves.
 pub fn cloud_model(
     tree: &Model,
     cloud: &SkeletonCloud,
     layout: &crate::bake::seams::AtlasLayout,
     atlas: crate::model::Rgba8Image,
+    normals: &[Vec3],
 ) -> Model {
     use crate::model::{Influence, Material, SkinnedMesh};
     let src = &tree.mesh;
@@ -425,7 +435,8 @@ pub fn cloud_model(
         let first = mesh.positions.len() as u32;
         for (p, uv) in bb.corners.iter().zip(uvs) {
             mesh.positions.push(*p);
-            mesh.normals.push(bb.plane.normal);
+            mesh.normals
+                .push(normals.get(b).copied().unwrap_or(bb.plane.normal));
             mesh.uvs.push(uv);
             mesh.materials.push(atlas_material);
             mesh.influences.push(Influence { bone, weight: 1.0 });

@@ -62,14 +62,18 @@ pub fn cost(fragments: Option<f64>, triangles: usize) -> f64 {
 }
 
 /// The choice for each stretch k ≥ 1 of the ε chain (level 0, the full tree, keeps the sizes
-/// above s_1). A stretch may draw candidate j when j is no finer than the ε chain's own level
-/// there (`reference[k]`) and its error is no worse than that level's; and the levels drawn
-/// never get finer as the tree gets smaller, so that a tree does not go from its impostor back
-/// to clumps further off (measured errors at a few pixels are noisy enough to suggest it).
-/// Of the sequences that keep both rules (the ε chain's own is one), the cheapest in all is
-/// chosen, by dynamic programming over (stretch, level drawn); of equal costs the finer.
+/// above s_1). A stretch may draw candidate j when j is the full tree or no finer than the ε
+/// chain's own level there (`reference[k]`), its error is no worse than that level's, and no
+/// finer candidate the stretch may draw costs less there: a level never costs more to draw
+/// than a finer one, and a tree lighter than its clouds (a few hundred triangles of cards,
+/// whose clouds hold as many billboards) keeps its full detail for as long as that is
+/// cheapest. And the levels drawn never get finer as the tree gets smaller, so that a tree
+/// does not go from its impostor back to clumps further off (measured errors at a few pixels
+/// are noisy enough to suggest it). Of the sequences that keep these rules (the ε chain's own
+/// is one, where its levels get cheaper as they coarsen), the cheapest in all is chosen, by
+/// dynamic programming over (stretch, level drawn); of equal costs the finer.
 /// `errors[j][k]` is candidate j's colour error at stretch k's switch size `switch_px[k]`,
-/// `costs[j][k]` its cost there (entries for j < `reference[k]` unused).
+/// `costs[j][k]` its cost there (entries for 0 < j < `reference[k]` unused).
 pub fn choose(
     switch_px: &[f32],
     reference: &[usize],
@@ -80,7 +84,12 @@ pub fn choose(
     if m < 2 {
         return Vec::new();
     }
-    let allowed = |j: usize, k: usize| j >= reference[k] && errors[j][k] <= errors[reference[k]][k];
+    let may_stand_in = |j: usize, k: usize| {
+        (j == 0 || j >= reference[k]) && errors[j][k] <= errors[reference[k]][k]
+    };
+    let allowed = |j: usize, k: usize| {
+        may_stand_in(j, k) && (0..j).all(|i| !may_stand_in(i, k) || costs[i][k] >= costs[j][k])
+    };
     // total[k][j]: the least cost of stretches 1..=k drawing j at k; from[k][j]: what k − 1 drew.
     let mut total = vec![vec![f64::INFINITY; n]; m];
     let mut from = vec![vec![0usize; n]; m];
@@ -148,7 +157,8 @@ pub struct CostTable {
 }
 
 /// Measures every candidate level of `chains` at the switch sizes of the ε chain's stretches
-/// it could stand in, and chooses each stretch's level (see [`choose`]). The tree is
+/// it could stand in (the full tree at all of them: its error is 0 by definition, its cost
+/// measured), and chooses each stretch's level (see [`choose`]). The tree is
 /// `height` high in scene units; `tolerance_px` sets the switch sizes.
 pub fn by_cost(
     measure: &dyn MeasureColour,
@@ -198,9 +208,12 @@ pub fn measure_costs(
         .collect();
     let mut errors = vec![vec![f32::INFINITY; m]; n];
     let mut costs = vec![vec![f64::INFINITY; m]; n];
-    for j in 1..n {
-        // The stretches candidate j can stand in: those whose own level is j or finer.
-        let stretches: Vec<usize> = (1..m).filter(|&k| chains.reference[k] <= j).collect();
+    for j in 0..n {
+        // The stretches candidate j can stand in: those whose own level is j or finer; the
+        // full tree, all.
+        let stretches: Vec<usize> = (1..m)
+            .filter(|&k| j == 0 || chains.reference[k] <= j)
+            .collect();
         if stretches.is_empty() {
             continue;
         }
@@ -210,7 +223,11 @@ pub fn measure_costs(
             .map_err(|e| anyhow!("{}: {e}", cloud.model.name))?;
         let triangles = bake.indices.len() / 3;
         let sizes: Vec<f32> = stretches.iter().map(|&k| switch_px[k]).collect();
-        let e = measure.colour_errors(tree, &cloud.model, bake.clone(), &sizes)?;
+        let e = if j == 0 {
+            vec![0.0; sizes.len()]
+        } else {
+            measure.colour_errors(tree, &cloud.model, bake.clone(), &sizes)?
+        };
         let f = measure.fragments(tree, &cloud.model, bake, &sizes)?;
         for (i, &k) in stretches.iter().enumerate() {
             errors[j][k] = e[i];
@@ -269,6 +286,40 @@ mod tests {
             assert!(c.drawn_error <= c.epsilon_error, "{c:?}");
             assert!(c.drawn_cost <= c.epsilon_cost, "{c:?}");
         }
+    }
+
+    #[test]
+    fn a_tree_lighter_than_its_clouds_keeps_its_full_detail_and_no_level_costs_more_than_a_finer_one()
+     {
+        let (px, reference, mut errors, mut costs) = figures();
+        // A tree of a few cards: the full tree (error 0 everywhere) costs less than cloud 1
+        // and clumps 3 at stretch 1, and less than every cloud at stretch 2; only the
+        // impostor is cheaper, at its own stretch.
+        errors[0] = vec![0.0; 4];
+        costs[0] = vec![0.0, 250.0, 120.0, 60.0];
+        let choices = choose(&px, &reference, &errors, &costs);
+        let drawn: Vec<usize> = choices.iter().map(|c| c.drawn_level).collect();
+        assert_eq!(drawn, [0, 0, 5]);
+        for (k, c) in choices.iter().enumerate() {
+            // Nothing finer that may stand in costs less than what is drawn.
+            for j in 0..c.drawn_level {
+                let may = j == 0 || j >= reference[k + 1];
+                assert!(
+                    !may || errors[j][k + 1] > c.epsilon_error || costs[j][k + 1] >= c.drawn_cost,
+                    "{c:?} against {j}"
+                );
+            }
+        }
+        // The chain drawn: the tree, then the impostor from its stretch.
+        assert_eq!(choices[2].drawn_error, 0.20);
+        // Where the full tree is dearer than clumps 3 (as on a tree of thousands of leaves),
+        // the clumps are drawn as before.
+        costs[0] = vec![0.0, 5000.0, 4000.0, 3000.0];
+        let drawn: Vec<usize> = choose(&px, &reference, &errors, &costs)
+            .iter()
+            .map(|c| c.drawn_level)
+            .collect();
+        assert_eq!(drawn, [3, 3, 5]);
     }
 
     #[test]
