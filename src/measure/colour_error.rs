@@ -3,7 +3,6 @@
 //! by drawing both in worlds of their own.
 
 use crate::bake::foliage::billboard::chain::CloudLevel;
-use crate::bake::foliage::billboard::wood::only_foliage;
 use crate::bake::gpu_data::drawable::CharacterBake;
 use crate::model::Model;
 use crate::render::Gpu;
@@ -93,20 +92,13 @@ fn foliage_disagreement(
     pictures: &[([u32; 2], f32)],
     frames: usize,
 ) -> Result<Vec<f32>> {
-    let (lod_foliage, lod_motion) = lod.foliage();
     // Masks only: the original's leaves are baked without the crown's occlusion, which would
     // darken them and cost a crown's worth of rays a measurement.
-    let leaves = only_foliage(original);
-    let bake = crate::bake::gpu_data::drawable::CharacterBake::tree_level(&leaves, None, &[], &[])
-        .map_err(|e| anyhow::anyhow!("{}: {e}", leaves.name))?;
+    let (leaves, bake) = CloudLevel::full(original)
+        .foliage_bake()
+        .map_err(anyhow::Error::msg)?;
     let mut a = metric_world(gpu, Loaded::forest_of_bake(&leaves, bake, 1))?;
-    let lod_bake = crate::bake::gpu_data::drawable::CharacterBake::tree_level(
-        &lod_foliage,
-        lod_motion.as_ref(),
-        &[],
-        &lod.vertex_windows(&lod_foliage),
-    )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", lod_foliage.name))?;
+    let (lod_foliage, lod_bake) = lod.foliage_bake().map_err(anyhow::Error::msg)?;
     let mut b = metric_world(gpu, Loaded::forest_of_bake(&lod_foliage, lod_bake, 1))?;
     pictures
         .iter()

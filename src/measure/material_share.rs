@@ -17,7 +17,6 @@
 use super::colour_error::{METRIC_VIEWS, covers, framing, metric_camera, metric_world, picture};
 use crate::bake::foliage::billboard::chain::CloudLevel;
 use crate::bake::foliage::billboard::is_cut_out;
-use crate::bake::foliage::billboard::wood::only_foliage;
 use crate::model::{Material, Model, srgb_to_linear};
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;
@@ -154,9 +153,9 @@ pub fn material_shares(
     if levels.is_empty() || colours.is_empty() {
         return Ok(Vec::new());
     }
-    let leaves = only_foliage(tree);
-    let bake = crate::bake::gpu_data::drawable::CharacterBake::tree_level(&leaves, None, &[], &[])
-        .map_err(|e| anyhow::anyhow!("{}: {e}", leaves.name))?;
+    let (leaves, bake) = CloudLevel::full(tree)
+        .foliage_bake()
+        .map_err(anyhow::Error::msg)?;
     let mut full = metric_world(gpu, Loaded::forest_of_bake(&leaves, bake, 1))?;
     let (size, distance) = framing(px);
     let target = Offscreen::new(gpu, size[0], size[1], 1);
@@ -183,26 +182,14 @@ pub fn material_shares(
         }
         backgrounds.push(background);
     }
-    let level_bake =
-        |level: &CloudLevel| -> Result<(Model, crate::bake::gpu_data::drawable::CharacterBake)> {
-            let (foliage, motion) = level.foliage();
-            let bake = crate::bake::gpu_data::drawable::CharacterBake::tree_level(
-                &foliage,
-                motion.as_ref(),
-                &[],
-                &level.vertex_windows(&foliage),
-            )
-            .map_err(|e| anyhow::anyhow!("{}: {e}", foliage.name))?;
-            Ok((foliage, bake))
-        };
     // One world for the levels, its tree replaced level by level (a world builds every
     // pipeline).
-    let (first, first_bake) = level_bake(levels[0].1)?;
+    let (first, first_bake) = levels[0].1.foliage_bake().map_err(anyhow::Error::msg)?;
     let mut world = metric_world(gpu, Loaded::forest_of_bake(&first, first_bake, 1))?;
     let mut out = Vec::with_capacity(levels.len());
     for (i, &(k, level)) in levels.iter().enumerate() {
         if i > 0 {
-            let (_, bake) = level_bake(level)?;
+            let (_, bake) = level.foliage_bake().map_err(anyhow::Error::msg)?;
             world.renderer.replace_character(gpu, 0, &bake)?;
             world.bakes[0] = bake;
         }

@@ -176,11 +176,20 @@ pub struct LeafCorner {
     pub layer: u32,
 }
 
-/// The normal each billboard is lit by where it is lit as one (`--billboard-lighting flat`),
-/// and whose frame its atlas keeps its texels' normals in: the mean of the normals its leaves
-/// are lit by, each seen from the billboard's front (see [`atlas_triangles`]), weighted by
-/// area. A clump's planes (those with a view window) keep their plane's normal, which their
-/// window is measured about.
+/// Which face of a leaf triangle a billboard of normal `n` shows (+1 its front, by the
+/// triangle's winding, as the renderer finds it, not by its vertex normals, which a model may
+/// point anywhere; −1 its back), and twice its area.
+fn facing(tri: &[LeafCorner; 3], n: Vec3) -> (f32, f32) {
+    let geometric = (tri[1].position - tri[0].position).cross(tri[2].position - tri[0].position);
+    let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
+    (turn, geometric.length())
+}
+
+/// The normal billboard `bb` is lit by where it is lit as one (`--billboard-lighting flat`),
+/// and whose frame its atlas keeps its texels' normals in: the mean of the normals its leaves'
+/// triangles `tris` are lit by, each seen from the billboard's front (see [`facing`]),
+/// weighted by area. A clump's planes (those with a view window) keep their plane's normal,
+/// which their window is measured about.
 ///
 /// The thesis lit a billboard by its plane. A leaf card is lit by its own vertex normals,
 /// which artists often bend out from the crown's centre so that the crown shades like one
@@ -189,45 +198,39 @@ pub struct LeafCorner {
 /// behind the billboard's plane: the renderer lights a billboard's front face by it and its
 /// back face by its negation, as it lights the leaves. Where the leaves' normals cancel out,
 /// the plane's normal is kept.
-pub fn shading_normals(
-    billboards: &[Billboard],
-    triangles_of: impl Fn(u32) -> Vec<[LeafCorner; 3]>,
-) -> Vec<Vec3> {
-    billboards
-        .iter()
-        .map(|bb| {
-            let n = bb.plane.normal;
-            if bb.view_window != 0.0 {
-                return n;
-            }
-            let mut sum = Vec3::ZERO;
-            for &leaf in &bb.drawn {
-                for tri in triangles_of(leaf) {
-                    let geometric = (tri[1].position - tri[0].position)
-                        .cross(tri[2].position - tri[0].position);
-                    let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
-                    let area = geometric.length();
-                    for c in tri {
-                        sum += c.normal.normalize_or_zero() * (turn * area);
-                    }
-                }
-            }
-            sum.normalize_or(n)
-        })
-        .collect()
+fn shading_normal<'a>(bb: &Billboard, tris: impl Iterator<Item = &'a [LeafCorner; 3]>) -> Vec3 {
+    let n = bb.plane.normal;
+    if bb.view_window != 0.0 {
+        return n;
+    }
+    let mut sum = Vec3::ZERO;
+    for tri in tris {
+        let (turn, area) = facing(tri, n);
+        for c in tri {
+            sum += c.normal.normalize_or_zero() * (turn * area);
+        }
+    }
+    sum.normalize_or(n)
+}
+
+/// What the atlas draws: every drawn leaf of every billboard as triangles in atlas pixels,
+/// and the normal each billboard is lit by (see [`shading_normal`]).
+pub struct AtlasTriangles {
+    pub vertices: Vec<AtlasVertex>,
+    pub normals: Vec<Vec3>,
 }
 
 /// Every drawn leaf of every billboard as triangles in atlas pixels, each texel's normal in
-/// the frame of its billboard's `normals` entry (see [`shading_normals`]).
-/// `triangles_of(leaf)` gives the leaf's triangles.
+/// the frame of its billboard's shading normal. `triangles_of(leaf)` gives the leaf's
+/// triangles.
 pub fn atlas_triangles(
     billboards: &[Billboard],
     layout: &AtlasLayout,
     epsilon: f32,
-    normals: &[Vec3],
     triangles_of: impl Fn(u32) -> Vec<[LeafCorner; 3]>,
-) -> Vec<AtlasVertex> {
+) -> AtlasTriangles {
     let mut out = Vec::new();
+    let mut normals = Vec::with_capacity(billboards.len());
     for (b, bb) in billboards.iter().enumerate() {
         let [x, y, w, h] = layout.rects[b];
         let origin = bb.corners[0];
@@ -236,8 +239,6 @@ pub fn atlas_triangles(
         let (lu, lv) = (eu.length().max(1e-9), ev.length().max(1e-9));
         let (eu, ev) = (eu / lu, ev / lv);
         let n = bb.plane.normal;
-        let shading = normals.get(b).copied().unwrap_or(n);
-        let (ft, fb) = billboard_frame(shading);
         // Back to front, as the billboard's front sees its leaves: the atlas blends each over
         // what is there, so the leaf nearest the front is drawn last and shows (a clump's
         // planes each hold all its leaves, one over another; drawn in the model's order, the
@@ -256,14 +257,14 @@ pub fn atlas_triangles(
             })
             .collect();
         tris.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let shading = shading_normal(bb, tris.iter().map(|(_, t)| t));
+        normals.push(shading);
+        let (ft, fb) = billboard_frame(shading);
         for (_, tri) in tris {
             // Foliage is two-sided, each face lit by the normal on its side: the billboard's
-            // front shows the leaf's face turned towards it (found by the triangle's
-            // winding, as the renderer finds it, not by its vertex normals, which a model
-            // may point anywhere), and its back the other face, by the negated normal.
-            let geometric =
-                (tri[1].position - tri[0].position).cross(tri[2].position - tri[0].position);
-            let turn = if geometric.dot(n) < 0.0 { -1.0 } else { 1.0 };
+            // front shows the leaf's face turned towards it, and its back the other face, by
+            // the negated normal.
+            let (turn, _) = facing(&tri, n);
             for c in tri {
                 let (p, uv) = (c.position, c.uv);
                 let m = (c.normal * turn).normalize_or(n);
@@ -284,7 +285,10 @@ pub fn atlas_triangles(
             }
         }
     }
-    out
+    AtlasTriangles {
+        vertices: out,
+        normals,
+    }
 }
 
 /// The lighting image as the material after the atlas stores it: sRGB-encoded (the renderer
@@ -367,13 +371,14 @@ mod tests {
             occlusion,
             layer: 0,
         };
-        let vertices = atlas_triangles(&[billboard], &layout, 0.1, &[Vec3::Z], |leaf| {
+        let vertices = atlas_triangles(&[billboard], &layout, 0.1, |leaf| {
             let o = if leaf == 0 { 0.0 } else { 0.5 };
             let a = corner(Vec3::new(0.2, 0.2, 0.0), tilted, o);
             let b = corner(Vec3::new(0.8, 0.2, 0.0), tilted, o);
             let c = corner(Vec3::new(0.5, 0.8, 0.0), tilted, o);
             vec![if leaf == 0 { [a, b, c] } else { [b, a, c] }]
-        });
+        })
+        .vertices;
         assert_eq!(vertices.len(), 6);
         let (t, b) = billboard_frame(Vec3::Z);
         for (i, v) in vertices.iter().enumerate() {
@@ -428,13 +433,14 @@ mod tests {
     #[test]
     fn the_leaf_nearest_the_billboards_front_is_drawn_last_whatever_its_material() {
         let (billboard, layout) = unit_billboard();
-        let vertices = atlas_triangles(&[billboard], &layout, 0.1, &[Vec3::Z], |l| {
+        let vertices = atlas_triangles(&[billboard], &layout, 0.1, |l| {
             if l == 0 {
                 leaf(0.05, Vec3::Z, 1)
             } else {
                 leaf(-0.05, Vec3::Z, 0)
             }
-        });
+        })
+        .vertices;
         // Leaf 1, behind, first; leaf 0, in front (a flower over the leaves), last.
         assert_eq!(
             vertices.iter().map(|v| v.layer).collect::<Vec<_>>(),
@@ -447,24 +453,21 @@ mod tests {
         let (billboard, _) = unit_billboard();
         // Bent normals, tilted 60° off the plane towards +y: the mean is theirs.
         let bent = Vec3::new(0.0, 0.75f32.sqrt(), 0.5);
-        let n = shading_normals(std::slice::from_ref(&billboard), |_| leaf(0.0, bent, 0));
-        assert!(n[0].distance(bent) < 1e-5, "{}", n[0]);
+        let n = shading_normal(&billboard, leaf(0.0, bent, 0).iter());
+        assert!(n.distance(bent) < 1e-5, "{n}");
         // Cards wound towards the billboard's front with normals pointing the other way (as
         // exported): lit as the renderer lights them, by those normals.
-        let n = shading_normals(std::slice::from_ref(&billboard), |_| leaf(0.0, -Vec3::Z, 0));
-        assert!(n[0].distance(-Vec3::Z) < 1e-5, "{}", n[0]);
+        let n = shading_normal(&billboard, leaf(0.0, -Vec3::Z, 0).iter());
+        assert!(n.distance(-Vec3::Z) < 1e-5, "{n}");
         // Leaves whose normals cancel out: the plane's.
-        let n = shading_normals(std::slice::from_ref(&billboard), |l| {
-            leaf(0.0, if l == 0 { Vec3::X } else { -Vec3::X }, 0)
-        });
-        assert_eq!(n[0], Vec3::Z);
+        let both = [leaf(0.0, Vec3::X, 0), leaf(0.0, -Vec3::X, 0)].concat();
+        assert_eq!(shading_normal(&billboard, both.iter()), Vec3::Z);
         // A clump's plane keeps its own (its view window is measured about it).
         let clump = Billboard {
             view_window: 0.4,
             ..billboard
         };
-        let n = shading_normals(&[clump], |_| leaf(0.0, bent, 0));
-        assert_eq!(n[0], Vec3::Z);
+        assert_eq!(shading_normal(&clump, leaf(0.0, bent, 0).iter()), Vec3::Z);
     }
 
     #[test]

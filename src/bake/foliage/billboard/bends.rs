@@ -30,31 +30,34 @@ pub fn split_at_bends<'a>(
     mesh: &SkinnedMesh,
     epsilon: f32,
 ) -> Cow<'a, Foliage> {
-    let bent: Vec<usize> = (0..foliage.leaves.len())
-        .filter(|&i| !flat_within(&foliage.leaves[i], epsilon))
+    let bent: Vec<bool> = foliage
+        .leaves
+        .iter()
+        .map(|l| !flat_within(l, epsilon))
         .collect();
-    if bent.is_empty() {
+    if !bent.contains(&true) {
         return Cow::Borrowed(foliage);
     }
     let mut out = Foliage {
-        leaves: Vec::with_capacity(foliage.leaves.len() + bent.len()),
-        bones: Vec::with_capacity(foliage.leaves.len() + bent.len()),
-        triangles: Vec::with_capacity(foliage.leaves.len() + bent.len()),
+        leaves: Vec::with_capacity(foliage.leaves.len()),
+        bones: Vec::with_capacity(foliage.leaves.len()),
+        triangles: Vec::with_capacity(foliage.leaves.len()),
         rebound: foliage.rebound,
     };
-    let mut next_bent = bent.iter().peekable();
-    for i in 0..foliage.leaves.len() {
-        if next_bent.peek() == Some(&&i) {
-            next_bent.next();
-            for piece in flat_pieces(&foliage.triangles[i], mesh, epsilon) {
-                out.leaves.push(Leaf::of_mesh(&piece, mesh));
-                out.bones.push(foliage.bones[i]);
-                out.triangles.push(piece);
-            }
+    for (i, &bent) in bent.iter().enumerate() {
+        let pieces = if bent {
+            flat_pieces(&foliage.triangles[i], mesh, epsilon)
         } else {
-            out.leaves.push(foliage.leaves[i].clone());
+            vec![foliage.triangles[i].clone()]
+        };
+        for piece in pieces {
+            out.leaves.push(if bent {
+                Leaf::of_mesh(&piece, mesh)
+            } else {
+                foliage.leaves[i].clone()
+            });
             out.bones.push(foliage.bones[i]);
-            out.triangles.push(foliage.triangles[i].clone());
+            out.triangles.push(piece);
         }
     }
     Cow::Owned(out)
@@ -110,8 +113,8 @@ fn flat_pieces(triangles: &[u32], mesh: &SkinnedMesh, epsilon: f32) -> Vec<Vec<u
         let mut facing = Facing::default();
         facing.add(face(triangles[seed]));
         let mut queue = std::collections::VecDeque::from([seed]);
-        // Triangles tried and refused for this region: each is tried once from every
-        // triangle of the region it touches, at most.
+        // A triangle refused is tried again from each triangle of the region it touches, as
+        // the region (and the way it faces) has grown since.
         while let Some(k) = queue.pop_front() {
             for v in corners(triangles[k]) {
                 for &n in &by_vertex[&v] {

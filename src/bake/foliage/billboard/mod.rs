@@ -392,7 +392,7 @@ pub fn tree_height(model: &Model) -> f32 {
 /// The tree with its foliage replaced by a billboard cloud: the wood as it was, and every
 /// billboard a quad skinned with weight 1 to its bone, textured from `atlas` (a new material
 /// after the wood's), its vertices' normal its entry of `normals` (the normal it is lit by,
-/// see [`atlas::shading_normals`]; its plane's where there is none). Materials that cut leaves
+/// see [`atlas::AtlasTriangles`]; its plane's where there is none). Materials that cut leaves
 /// out are dropped with the leaves.
 pub fn cloud_model(
     tree: &Model,

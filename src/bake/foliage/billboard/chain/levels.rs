@@ -249,6 +249,17 @@ impl CloudLevel {
         (model, motion)
     }
 
+    /// Its foliage alone ([`Self::foliage`]) baked for the GPU as the colour measures draw
+    /// it: with its motion and view windows, and no crown occlusion (masks and colours
+    /// compared alike, and a crown's worth of rays saved a measurement).
+    pub fn foliage_bake(&self) -> Result<(Model, CharacterBake), String> {
+        let (model, motion) = self.foliage();
+        let bake =
+            CharacterBake::tree_level(&model, motion.as_ref(), &[], &self.vertex_windows(&model))
+                .map_err(|e| format!("{}: {e}", model.name))?;
+        Ok((model, bake))
+    }
+
     /// An octahedral impostor's card (`model`, framed by `frame`) as a level standing for
     /// `groups` trees: one billboard, its texture bytes counted from the model's materials.
     pub fn impostor(model: Model, frame: ImpostorFrame, groups: usize) -> CloudLevel {

@@ -10,9 +10,7 @@ pub mod order;
 pub use impostor::impostor_level;
 pub use levels::{ChainOptions, ChainStyle, CloudKind, CloudLevel, TreeLevel};
 
-use super::atlas::{
-    AtlasDensity, LeafCorner, atlas_triangles, layout, lighting_material, shading_normals,
-};
+use super::atlas::{AtlasDensity, LeafCorner, atlas_triangles, layout, lighting_material};
 use super::cloud::CloudParams;
 use super::occlusion::CrownDensity;
 use super::siblings::merge_siblings;
@@ -235,7 +233,7 @@ fn draw_atlas(
         return Err(anyhow!("{}: no foliage material", tree.name));
     }
     let layer_of = |v: usize| mesh.materials[v] as u32;
-    let leaf_triangles = |leaf: u32| {
+    let drawn = atlas_triangles(&cloud.billboards, &atlas_layout, depth, |leaf| {
         let occlusion = leaf_occlusion[leaf as usize];
         foliage.triangles[leaf as usize]
             .iter()
@@ -254,18 +252,10 @@ fn draw_atlas(
                     }
                 })
             })
-            .collect::<Vec<_>>()
-    };
-    let normals = shading_normals(&cloud.billboards, leaf_triangles);
-    let triangles = atlas_triangles(
-        &cloud.billboards,
-        &atlas_layout,
-        depth,
-        &normals,
-        leaf_triangles,
-    );
+            .collect()
+    });
     let leaf = MaterialLayers::bake(&tree.materials);
-    let images = raster.rasterize(&atlas_layout, &triangles, &leaf)?;
+    let images = raster.rasterize(&atlas_layout, &drawn.vertices, &leaf)?;
     let (mut atlas, mut lighting) = (images.colour, images.lighting);
     dilate(&mut atlas.pixels, atlas.width, atlas.height, DILATE_RINGS);
     dilate(
@@ -278,12 +268,13 @@ fn draw_atlas(
         layout: atlas_layout,
         colour: atlas,
         lighting,
-        normals,
+        normals: drawn.normals,
     })
 }
 
 /// A cloud's atlas as [`draw_atlas`] draws it: where each billboard lies in it, its colour
-/// and lighting images, and the normal each billboard is lit by (see [`shading_normals`]).
+/// and lighting images, and the normal each billboard is lit by (see
+/// [`super::atlas::AtlasTriangles`]).
 struct DrawnAtlas {
     layout: AtlasLayout,
     colour: Rgba8Image,
