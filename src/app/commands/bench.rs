@@ -133,6 +133,10 @@ pub struct MethodFigures {
     /// path, interleaved with the other methods').
     #[serde(default)]
     pub frame_ms: Vec<f64>,
+    /// Median CPU milliseconds a frame takes to select every instance's level and to encode
+    /// and upload the instances (wall time on the submitting thread).
+    #[serde(default)]
+    pub cpu_ms: f64,
     /// Each pass's fragments against the pixels it covers, by pass name, where the adapter
     /// counts fragments.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -185,6 +189,8 @@ fn over_views(views: &[[Option<[f64; 3]>; Pass::COUNT]], i: usize) -> Option<Pas
 #[derive(Default)]
 struct Samples {
     skinned: Vec<f64>,
+    /// CPU milliseconds of each frame's selection and upload.
+    cpu: Vec<f64>,
     /// The skinned frames' passes, where timed.
     passes: Vec<PassTimes>,
     plain: Vec<f64>,
@@ -214,18 +220,24 @@ struct Bench {
 }
 
 impl Bench {
-    /// Shows path time `t` as a 60 Hz viewer of `method` would, from a clean state.
-    fn show(&mut self, method: LodMethod, t: f32) -> FrameStats {
+    /// Shows path time `t` as a 60 Hz viewer of `method` would, from a clean state; with
+    /// the CPU milliseconds the frame itself took to select every instance's level and to
+    /// encode and upload the instances (its last selection step and the upload).
+    fn show(&mut self, method: LodMethod, t: f32) -> (FrameStats, f64) {
         let world = &mut self.world;
         world.lod.method = method;
         world.lod.reset();
         let dt = 1.0 / 60.0;
-        for k in (0..=SETTLE_STEPS).rev() {
+        for k in (1..=SETTLE_STEPS).rev() {
             let tk = t - k as f32 * dt;
             world.camera = self.path.at(tk, self.fov_y);
             world.select(self.size[1], tk, dt);
         }
-        world.upload(&self.gpu, self.size[0] as f32 / self.size[1] as f32, t)
+        world.camera = self.path.at(t, self.fov_y);
+        let start = Instant::now();
+        world.select(self.size[1], t, dt);
+        let stats = world.upload(&self.gpu, self.size[0] as f32 / self.size[1] as f32, t);
+        (stats, start.elapsed().as_secs_f64() * 1e3)
     }
 
     /// Renders what is shown with `shader` and returns the frame's time in milliseconds, and
@@ -416,9 +428,10 @@ fn measure(
         for (s, &m) in samples.iter_mut().zip(order) {
             bar.set_stage(m.name());
             for i in start..(start + block).min(n) {
-                let stats = bench.show(m, path_time(&path, i, n));
+                let (stats, cpu_ms) = bench.show(m, path_time(&path, i, n));
                 let (ms, passes) = bench.time(CharacterShader::Skinned)?;
                 s.skinned.push(ms);
+                s.cpu.push(cpu_ms);
                 if let Some(p) = passes {
                     s.passes.push(p);
                 }
@@ -537,6 +550,7 @@ fn figures(s: &Samples, n: usize, width: u32, height: u32) -> MethodFigures {
         passes: pass_medians(&s.passes),
         overdraw: overdraw_median(&s.passes, width, height),
         frame_ms: s.skinned.clone(),
+        cpu_ms: percentile(&s.cpu, 0.5),
         fragments_by_pass: Pass::ALL
             .into_iter()
             .filter_map(|p| {
@@ -618,6 +632,16 @@ pub fn markdown(r: &BenchReport) -> String {
             levels.join(" / ")
         );
     }
+    let cpu: Vec<String> = r
+        .order
+        .iter()
+        .filter_map(|name| Some(format!("{name} {:.2} ms", r.methods.get(name)?.cpu_ms)))
+        .collect();
+    let _ = writeln!(
+        out,
+        "\nCPU per frame, selecting levels and encoding and uploading instances (median): {}.",
+        cpu.join(", ")
+    );
     out.push_str(&pass_table(r));
     out.push_str(&fragment_table(r));
     out.push_str(&kind_table(r));

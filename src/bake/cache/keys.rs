@@ -12,7 +12,7 @@ use serde::Serialize;
 pub const FORMAT_VERSION: u32 = 10;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
-pub const CHAIN_VERSION: u32 = 26;
+pub const CHAIN_VERSION: u32 = 27;
 /// Which of a tree's levels each size draws when ordered by cost
 /// (`bake::foliage::billboard::chain::order`).
 pub const ORDER_VERSION: u32 = 2;

@@ -19,6 +19,8 @@ pub struct LevelReport {
     pub triangles: usize,
     /// Total billboard area, m².
     pub area: f32,
+    /// The area the billboards are drawn with, trimmed round their leaves, m².
+    pub drawn_area: f32,
     pub texture_bytes: usize,
     pub colour_error: f32,
     /// The tree's height on screen where the level comes in (ε projects to the chain's

@@ -239,10 +239,18 @@ fn measure_level(
     };
     let anim = &l.cloud.animation;
     eprintln!(
-        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards, colour error {:.3} ({:.3} from the switch distance, {:.3} at {:.0} px), animation error {:.4} h / {:.3}",
+        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards{}, colour error {:.3} ({:.3} from the switch distance, {:.3} at {:.0} px), animation error {:.4} h / {:.3}",
         tree.name,
         l.epsilon / h,
         l.cloud.billboards,
+        if l.cloud.drawn_area > 0.0 && l.cloud.area > 0.0 {
+            format!(
+                " ({:.0}% of their area drawn)",
+                100.0 * l.cloud.drawn_area / l.cloud.area
+            )
+        } else {
+            String::new()
+        },
         error,
         from_switch,
         at_switch,
@@ -258,6 +266,7 @@ fn measure_level(
         drawn_billboards: l.cloud.drawn_billboards(),
         triangles: l.cloud.model.mesh.triangle_count(),
         area: l.cloud.area,
+        drawn_area: l.cloud.drawn_area,
         texture_bytes: l.cloud.texture_bytes,
         colour_error: error,
         switch_px,

@@ -17,6 +17,7 @@ pub mod clumps;
 pub mod occlusion;
 pub mod rect;
 pub mod siblings;
+pub mod trim;
 pub mod wood;
 
 use crate::model::Model;
@@ -390,16 +391,19 @@ pub fn tree_height(model: &Model) -> f32 {
 }
 
 /// The tree with its foliage replaced by a billboard cloud: the wood as it was, and every
-/// billboard a quad skinned with weight 1 to its bone, textured from `atlas` (a new material
-/// after the wood's), its vertices' normal its entry of `normals` (the normal it is lit by,
-/// see [`atlas::AtlasTriangles`]; its plane's where there is none). Materials that cut leaves
-/// out are dropped with the leaves.
+/// billboard a polygon skinned with weight 1 to its bone (its entry of `outlines`, trimmed
+/// round its leaves by [`trim::outline`]; the whole rectangle where there is none), textured
+/// from `atlas` (a new material after the wood's), its vertices' normal its entry of
+/// `normals` (the normal it is lit by, see [`atlas::AtlasTriangles`]; its plane's where there
+/// is none). The billboards' vertices come last, billboard after billboard. Materials that
+/// cut leaves out are dropped with the leaves.
 pub fn cloud_model(
     tree: &Model,
     cloud: &SkeletonCloud,
     layout: &crate::bake::seams::AtlasLayout,
     atlas: crate::model::Rgba8Image,
     normals: &[Vec3],
+    outlines: &[trim::Outline],
 ) -> Model {
     use crate::model::{Influence, Material, SkinnedMesh};
     let src = &tree.mesh;
@@ -430,20 +434,30 @@ pub fn cloud_model(
     for m in &mut mesh.materials {
         *m = material_map[*m as usize];
     }
+    let whole = trim::whole();
     for (b, (bb, &bone)) in cloud.billboards.iter().zip(&cloud.bones).enumerate() {
         let uvs = layout.corner_uvs(b);
         let first = mesh.positions.len() as u32;
-        for (p, uv) in bb.corners.iter().zip(uvs) {
-            mesh.positions.push(*p);
+        // The billboard is a rectangle: a point of its outline at (s, t) is the affine
+        // blend of its corners 0, 1 and 3, in space and in the atlas alike.
+        let c = &bb.corners;
+        let outline = outlines.get(b).unwrap_or(&whole);
+        for st in outline {
+            mesh.positions
+                .push(c[0] + (c[1] - c[0]) * st.x + (c[3] - c[0]) * st.y);
             mesh.normals
                 .push(normals.get(b).copied().unwrap_or(bb.plane.normal));
-            mesh.uvs.push(uv);
+            mesh.uvs
+                .push(uvs[0] + (uvs[1] - uvs[0]) * st.x + (uvs[3] - uvs[0]) * st.y);
             mesh.materials.push(atlas_material);
             mesh.influences.push(Influence { bone, weight: 1.0 });
             mesh.influence_offsets.push(mesh.influences.len() as u32);
         }
-        mesh.indices
-            .extend_from_slice(&[first, first + 1, first + 2, first, first + 2, first + 3]);
+        // A fan: the outline is convex.
+        for k in 1..outline.len().saturating_sub(1) as u32 {
+            mesh.indices
+                .extend_from_slice(&[first, first + k, first + k + 1]);
+        }
     }
     Model {
         name: tree.name.clone(),

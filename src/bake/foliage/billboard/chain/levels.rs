@@ -87,8 +87,13 @@ pub struct CloudLevel {
     /// How far its billboards' motion strays from the leaves' (0 for the full tree).
     pub animation: AnimationError,
     pub billboards: usize,
-    /// Total billboard area, scene units².
+    /// Total billboard area, scene units²: their rectangles'.
     pub area: f32,
+    /// The area its billboards are drawn with, scene units²: their outlines', trimmed round
+    /// their leaves ([`crate::bake::foliage::billboard::trim`]); 0 in old caches and for
+    /// levels without billboards.
+    #[serde(default)]
+    pub drawn_area: f32,
     /// Bytes of its atlas and its lighting (RGBA8 each, base level).
     pub texture_bytes: usize,
     /// An impostor's frame: how its quad is placed and its views are laid out (None for
@@ -107,6 +112,11 @@ pub struct CloudLevel {
     /// clouds, whose every billboard is drawn).
     #[serde(default)]
     pub views: usize,
+    /// The vertices of each billboard, in billboard order (its outline's corners: 4 for the
+    /// whole rectangle, up to [`crate::bake::foliage::billboard::trim::MAX_CORNERS`] where
+    /// trimmed); empty for levels without billboards.
+    #[serde(default)]
+    pub corners: Vec<u32>,
 }
 
 crate::choice! {
@@ -276,11 +286,13 @@ impl CloudLevel {
             animation: AnimationError::default(),
             billboards: 1,
             area: 4.0 * frame.radius * frame.radius,
+            drawn_area: 4.0 * frame.radius * frame.radius,
             texture_bytes,
             impostor: Some(frame),
             occlusion: Vec::new(),
             view_windows: Vec::new(),
             views: 1,
+            corners: Vec::new(),
         }
     }
 
@@ -293,11 +305,13 @@ impl CloudLevel {
             animation: AnimationError::default(),
             billboards: 0,
             area: 0.0,
+            drawn_area: 0.0,
             texture_bytes: 0,
             impostor: None,
             occlusion: Vec::new(),
             view_windows: Vec::new(),
             views: 1,
+            corners: Vec::new(),
         }
     }
 
@@ -307,15 +321,19 @@ impl CloudLevel {
     }
 
     /// Its view windows per vertex of `model` (the level's model, or its foliage alone): the
-    /// billboards' corners are the last vertices, four to a billboard in order. Empty where
-    /// the level has none.
+    /// billboards' corners are the last vertices, [`Self::corners`] to a billboard in order
+    /// (four where it has none). Empty where the level has none.
     pub fn vertex_windows(&self, model: &Model) -> Vec<f32> {
         if self.view_windows.iter().all(|&w| w == 0.0) {
             return Vec::new();
         }
+        let corners = |b: usize| self.corners.get(b).map_or(4, |&c| c as usize);
+        let billboard_vertices: usize = (0..self.view_windows.len()).map(corners).sum();
         let n = model.mesh.vertex_count();
-        let mut out = vec![0.0; n.saturating_sub(4 * self.view_windows.len())];
-        out.extend(self.view_windows.iter().flat_map(|&w| [w; 4]));
+        let mut out = vec![0.0; n.saturating_sub(billboard_vertices)];
+        for (b, &w) in self.view_windows.iter().enumerate() {
+            out.extend(std::iter::repeat_n(w, corners(b)));
+        }
         out.truncate(n);
         out
     }

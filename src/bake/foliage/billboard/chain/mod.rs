@@ -174,11 +174,37 @@ fn level_of_cloud(
         &skinning_over_loop(tree, crate::bake::foliage::spectral::DEFAULT_SAMPLES),
         &traced_leaves(&own),
     );
-    let mut model = cloud_model(wood, &cloud, &drawn.layout, drawn.colour, &drawn.normals);
+    // Each billboard trimmed to its leaves where that pays (see [`super::trim`]): the
+    // gutter is the texels a screen pixel holds where the level comes in, and how far a
+    // coarser mip level spreads a leaf's alpha there.
+    let gutter = drawn.layout.gutter as f32;
+    let outlines: Vec<super::trim::Outline> = drawn
+        .layout
+        .rects
+        .iter()
+        .map(|&rect| {
+            super::trim::outline(
+                &drawn.colour.pixels,
+                drawn.colour.width,
+                rect,
+                gutter,
+                gutter,
+            )
+        })
+        .collect();
+    let corners: Vec<u32> = outlines.iter().map(|o| o.len() as u32).collect();
+    let mut model = cloud_model(
+        wood,
+        &cloud,
+        &drawn.layout,
+        drawn.colour,
+        &drawn.normals,
+        &outlines,
+    );
     model.materials.push(lighting_material(drawn.lighting));
     let occlusion = wood_occlusion(&model, crown);
     let motion = match lines {
-        Some((lines, bins)) => Some(spectral_motion(&model, &lines, bins)?),
+        Some((lines, bins)) => Some(spectral_motion(&model, &lines, bins, &corners)?),
         None => None,
     };
     Ok(CloudLevel {
@@ -187,6 +213,12 @@ fn level_of_cloud(
         groups,
         animation,
         area: cloud.total_area(),
+        drawn_area: cloud
+            .billboards
+            .iter()
+            .zip(&outlines)
+            .map(|(b, o)| b.area() * super::trim::share(o))
+            .sum(),
         texture_bytes,
         model,
         motion,
@@ -197,6 +229,7 @@ fn level_of_cloud(
             Vec::new()
         },
         views,
+        corners,
     })
 }
 
@@ -300,16 +333,22 @@ fn wood_occlusion(model: &Model, crown: Option<&CrownDensity>) -> Vec<f32> {
 
 /// A spectral cloud's motion: its billboards' `lines` (`bins` a billboard and axis) as the
 /// spectra texture, and each vertex of `model` pointed at its billboard's row. The
-/// billboards' corners are the model's last vertices, four per billboard in order.
+/// billboards' corners are the model's last vertices, `corners` of each billboard in order.
 fn spectral_motion(
     model: &Model,
     lines: &[[Vec<crate::bake::gpu_data::spectra::Line>; 3]],
     bins: usize,
+    corners: &[u32],
 ) -> Result<SpectralMotion> {
     let spectra = SpectraTexture::new(lines, bins).map_err(|e| anyhow!(e))?;
-    let wood_vertices = model.mesh.vertex_count() - 4 * lines.len();
-    let mut vertex_rows = vec![NO_ROW; wood_vertices];
-    vertex_rows.extend((0..lines.len() as u32).flat_map(|b| [b; 4]));
+    let billboard_vertices: usize = corners.iter().map(|&c| c as usize).sum();
+    if corners.len() != lines.len() || billboard_vertices > model.mesh.vertex_count() {
+        return Err(anyhow!("spectral lines do not fit the cloud's billboards"));
+    }
+    let mut vertex_rows = vec![NO_ROW; model.mesh.vertex_count() - billboard_vertices];
+    for (b, &c) in corners.iter().enumerate() {
+        vertex_rows.extend(std::iter::repeat_n(b as u32, c as usize));
+    }
     Ok(SpectralMotion {
         spectra,
         vertex_rows,
