@@ -316,6 +316,56 @@ fn fs_impostor_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
     return vec4<f32>(impostor_lit(in, normals, texel), a);
 }
 
+// A tree impostor far enough off that the view its blend weighs most, alone, is within the
+// screen tolerance (`shows_nearest_view` in src/render/renderer/keys.rs): that view's colour
+// and normal, one read each, no parallax probe, instead of the blend's seven reads. On a
+// software rasteriser the impostors of a 10,000-tree forest spent most of their time in those
+// reads.
+struct NearestTexel {
+    colour: vec4<f32>,
+    normal: vec4<f32>,
+};
+
+fn impostor_nearest(in: ImpostorOut) -> NearestTexel {
+    let w = in.weights.xyz;
+    let one = w.y > w.x && w.y >= w.z;
+    let two = w.z > w.x && w.z > w.y;
+    let cell = select(select(in.cells01.xy, in.cells01.zw, one), in.cell2.xy, two);
+    let st = select(select(in.st01.xy, in.st01.zw, one), in.st2.xy, two);
+    let gx = dpdx(in.st01.xy) / in.cell2.z;
+    let gy = dpdy(in.st01.xy) / in.cell2.z;
+    let uv = impostor_uv(in, cell, st);
+    return NearestTexel(
+        textureSampleGrad(material_tex, material_sampler, uv, 0, gx, gy),
+        textureSampleGrad(material_tex, material_sampler, uv, 1, gx, gy),
+    );
+}
+
+fn impostor_nearest_lit(in: ImpostorOut, t: NearestTexel) -> vec3<f32> {
+    let rows = mat3x3<f32>(in.row0, in.row1, in.row2);
+    let m = t.normal.rgb * 2.0 - vec3<f32>(1.0);
+    return impostor_light(t.colour.rgb, in.tint, in.debug, m * rows, in.to_eye);
+}
+
+@fragment
+fn fs_impostor_nearest(in: ImpostorOut) -> @location(0) vec4<f32> {
+    let t = impostor_nearest(in);
+    if (t.colour.a < 0.5 || impostor_dissolved(in)) {
+        discard;
+    }
+    return vec4<f32>(impostor_nearest_lit(in, t), 1.0);
+}
+
+@fragment
+fn fs_impostor_nearest_coverage(in: ImpostorOut) -> @location(0) vec4<f32> {
+    let t = impostor_nearest(in);
+    let a = clamp((t.colour.a - 0.5) / max(fwidth(t.colour.a), 1e-4) + 0.5, 0.0, 1.0);
+    if (impostor_dissolved(in)) {
+        discard;
+    }
+    return vec4<f32>(impostor_nearest_lit(in, t), a);
+}
+
 // Animated impostors (src/bake/impostor/animated.rs): a character's last level, one quad that shows
 // the view of the grid nearest the line of sight (the heaviest of the three a tree blends,
 // mirror of `nearest_view`) at the two baked frames round the instance's time, cross-faded. The

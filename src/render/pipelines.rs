@@ -149,6 +149,9 @@ pub enum Stage {
     PrepassDepth,
     /// Foliage's colour after its pre-pass: where the depth is equal, no alpha test.
     PrepassColour,
+    /// A tree impostor far enough off that the view its blend weighs most, alone, is within
+    /// the tolerance: one colour and one normal read a pixel instead of seven.
+    NearestView,
 }
 
 /// How a character pipeline paints.
@@ -217,6 +220,10 @@ impl PipelineKey {
         }
         keys.push(Self::own(DrawClass::AtlasLitFoliage, false));
         keys.push(Self::own(DrawClass::TreeImpostor, false));
+        keys.push(PipelineKey {
+            stage: NearestView,
+            ..Self::own(DrawClass::TreeImpostor, false)
+        });
         keys.push(Self::own(DrawClass::CharacterImpostor, false));
         keys
     }
@@ -242,6 +249,10 @@ impl PipelineKey {
             DrawClass::AtlasLitFoliage => (
                 "vs_foliage_lit",
                 cut("fs_foliage_lit", "fs_foliage_lit_coverage"),
+            ),
+            DrawClass::TreeImpostor if self.stage == Stage::NearestView => (
+                "vs_impostor",
+                cut("fs_impostor_nearest", "fs_impostor_nearest_coverage"),
             ),
             DrawClass::TreeImpostor => ("vs_impostor", cut("fs_impostor", "fs_impostor_coverage")),
             DrawClass::CharacterImpostor => (
@@ -307,8 +318,13 @@ impl PipelineKey {
             ..base
         };
         match self.stage {
-            // (The pre-pass stages are foliage's only; a mesh never has them.)
-            Stage::Opaque | Stage::Dither | Stage::PrepassDepth | Stage::PrepassColour => mesh,
+            // (The pre-pass stages are foliage's only, the nearest view an impostor's; a mesh
+            // never has them.)
+            Stage::Opaque
+            | Stage::Dither
+            | Stage::PrepassDepth
+            | Stage::PrepassColour
+            | Stage::NearestView => mesh,
             Stage::FadeDepth => PipelineSpec {
                 depth_only: true,
                 ..mesh

@@ -247,11 +247,14 @@ impl SceneRenderer {
                 class => class,
             };
             let phase = foliage.unwrap_or(FoliagePhase::Single);
-            let Some(pipeline) =
+            let Some(mut pipeline) =
                 opaque_pipeline(class, key.pass(), wire, phase, || self.look(&key))
             else {
                 continue;
             };
+            if class == DrawClass::TreeImpostor && key.variant() == 1 {
+                pipeline.stage = Stage::NearestView;
+            }
             if current != Some(pipeline) {
                 current = Some(pipeline);
                 pass.set_pipeline(self.pipelines.get(pipeline));

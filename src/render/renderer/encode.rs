@@ -56,7 +56,9 @@ impl SceneRenderer {
         let last = set.levels.len() - 1;
         let mut g = gpu_instance(c, inst, self.wind);
         let key = |pass, level: usize, hops: usize| {
-            DrawKey::new(pass, at.side, inst.model, slot, level as u8, hops as u8).0
+            DrawKey::new(pass, at.side, inst.model, slot, level as u8, hops as u8)
+                .with_variant(at.nearest_view as u32)
+                .0
         };
         let near = at.near;
         // The outgoing half of a dissolve is the same instance as its incoming half, which

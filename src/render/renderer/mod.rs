@@ -132,6 +132,10 @@ pub struct SceneRenderer {
     /// A measurement's filter: the opaque passes draw only instances whose level is of this
     /// kind (`None`: every instance). See `bench`'s cost by level kind.
     pub only_kind: Option<crate::bake::gpu_data::drawable::LevelKind>,
+    /// The screen tolerance as a share of half the view's height (0: off): a tree impostor
+    /// whose nearest view alone projects within it draws that view alone, one colour and one
+    /// normal read a pixel instead of seven (see [`Self::set_tolerance`]).
+    pub nearest_view_tolerance: f32,
     /// Samples per pixel of the targets this renderer's pipelines draw into.
     sample_count: u32,
     frame_buffer: wgpu::Buffer,
@@ -213,6 +217,7 @@ impl SceneRenderer {
             atlas_lighting: gpu.lights_atlases(),
             foliage_prepass: false,
             only_kind: None,
+            nearest_view_tolerance: 0.0,
             sample_count,
             frame_buffer,
             frame_bind_group,
@@ -355,6 +360,16 @@ impl SceneRenderer {
         self.pipelines.has_wireframe()
     }
 
+    /// The screen tolerance, `pixels` of a view `height` pixels high, that decides where a
+    /// tree impostor shows its nearest view alone (0: never).
+    pub fn set_tolerance(&mut self, pixels: f32, height: u32) {
+        self.nearest_view_tolerance = if height > 0 {
+            (pixels / (0.5 * height as f32)).max(0.0)
+        } else {
+            0.0
+        };
+    }
+
     /// Uploads the frame's uniforms and instances (one buffer write each) and plans the draws:
     /// one per (side, model, level, transition state). Each side's instances are culled
     /// against its part of the frustum ([`cull`]), encoded by what they draw ([`encode`]),
@@ -392,11 +407,20 @@ impl SceneRenderer {
                     continue;
                 }
                 let draw = side.draws.get(i).copied().unwrap_or(LodDraw::Level(0));
-                let near = ((centre - view.eye).length() - radius).max(0.0).to_bits();
+                let distance = (centre - view.eye).length();
+                let near = (distance - radius).max(0.0).to_bits();
                 let at = keys::DrawAt {
                     side: side_index,
                     method: side.method,
                     near,
+                    nearest_view: keys::shows_nearest_view(
+                        c.nearest_view_error,
+                        inst.transform.matrix3.x_axis.length(),
+                        radius,
+                        distance,
+                        view.proj.y_axis.y,
+                        self.nearest_view_tolerance,
+                    ),
                 };
                 self.encode_instance(inst, draw, at, &mut stats);
             }

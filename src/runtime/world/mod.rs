@@ -248,6 +248,8 @@ impl World {
             height as f32,
             self.camera.near_far().0,
         );
+        self.renderer
+            .set_tolerance(self.lod.policy.tolerance_px, height);
         // The trackers and draws step out while selection reads the rest of the view.
         let mut trackers = std::mem::take(&mut self.lod.trackers);
         let mut draws = std::mem::take(&mut self.lod.draws);
