@@ -153,6 +153,52 @@ impl<'g> GpuColourError<'g> {
 }
 
 impl GpuColourError<'_> {
+    /// How many times over `level` (drawn as `bake`, `height_px` high, from the metric's
+    /// views) shades the pixels it covers: its foliage pass's fragments over the pixels that
+    /// pass covers drawn alone, summed over the views. None where the adapter cannot count
+    /// fragments.
+    pub fn fragments_per_covered_pixel(
+        &self,
+        tree: &Model,
+        level: &Model,
+        bake: CharacterBake,
+        height_px: f32,
+    ) -> Result<Option<f64>> {
+        use crate::render::timer::{FrameTimer, Pass};
+        let gpu = self.gpu;
+        let Some(mut timer) = FrameTimer::new(gpu) else {
+            return Ok(None);
+        };
+        let mut worlds = self.worlds(tree, level, bake)?;
+        let m = worlds.as_mut().expect("just made");
+        let bounds = m.original.bakes[0].bounds;
+        let (size, distance) = framing(height_px);
+        let target = Offscreen::new(gpu, size[0], size[1], 1);
+        let (mut fragments, mut covered) = (0u64, 0u64);
+        for camera in metric_views(bounds, size, distance) {
+            m.level.camera = camera;
+            m.level.prepare(gpu, size, 0.0, 0.0);
+            m.level
+                .renderer
+                .render_timed(gpu, &target.targets, &target.view, Some(&mut timer))?;
+            let times = timer.read(gpu)?;
+            if times.ms[Pass::Foliage as usize].is_none() {
+                continue;
+            }
+            let Some(f) = times.fragments[Pass::Foliage as usize] else {
+                return Ok(None);
+            };
+            fragments += f;
+            covered += crate::measure::coverage::covered_pixels(
+                gpu,
+                &m.level.renderer,
+                &target,
+                Pass::Foliage,
+            )?;
+        }
+        Ok((covered > 0).then(|| fragments as f64 / covered as f64))
+    }
+
     /// The worlds of `tree` with `level` (drawn as `bake`) in the level's: made for a new
     /// tree, the level's character replaced for the same tree.
     fn worlds(

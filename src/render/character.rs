@@ -31,7 +31,7 @@ pub struct GpuCharacter {
     /// How it is drawn (see [`DrawKind`](crate::bake::gpu_data::drawable::DrawKind)).
     pub class: DrawClass,
     /// A tree impostor's error, model units, where it shows its nearest view alone (see
-    /// [`ImpostorFrame::nearest_view_error`](crate::bake::impostor::octahedral::ImpostorFrame::nearest_view_error));
+    /// [`nearest_view_error`](crate::bake::impostor::nearest_view::nearest_view_error));
     /// 0 for everything else.
     pub nearest_view_error: f32,
     /// What an instance drawn with it shows, for the frame's figures.
@@ -323,7 +323,8 @@ impl GpuCharacter {
             name: bake.name.clone(),
             sphere: (bake.bounds.center(), bake.bounds.diagonal() * 0.5),
             class: bake.kind.class(),
-            nearest_view_error: frame.map_or(0.0, |f| f.nearest_view_error()),
+            nearest_view_error: frame
+                .map_or(0.0, crate::bake::impostor::nearest_view::nearest_view_error),
             level_kind: bake.level_kind(),
             clip_rows: (0..bake.animation.clips.len())
                 .map(|c| bake.animation.clip_rows(c))

@@ -67,6 +67,7 @@ fn bench_writes_json_and_a_table_of_every_method() {
     assert!(r["measured_seconds"].as_f64().unwrap() > 0.0);
     assert!(r["warmup_seconds"].as_f64().unwrap() >= 0.0);
     assert!(stdout.contains("measured for"), "{stdout}");
+    assert!(stdout.contains("CPU per frame"), "{stdout}");
     assert!(r["calibration"]["triangles_per_second"].as_f64().unwrap() > 0.0);
     assert_eq!(r["calibration"]["method"], "none");
     let methods = r["methods"].as_object().unwrap();
@@ -92,6 +93,13 @@ fn bench_writes_json_and_a_table_of_every_method() {
         assert_eq!(frames.len(), 3, "{name}");
         assert!(frames.contains(&f("median_ms")), "{name}: {frames:?}");
         assert!(f("efficiency") > 0.0 && f("calibration_ms") > 0.0, "{name}");
+        // The CPU's share of a frame: selection and upload take some time, and far less than
+        // a second for a dozen instances.
+        assert!(
+            f("cpu_ms") > 0.0 && f("cpu_ms") < 1000.0,
+            "{name}: {}",
+            f("cpu_ms")
+        );
         let triangles = m["triangles"].as_u64().unwrap();
         assert!(
             triangles > 0 && triangles <= 12 * full,

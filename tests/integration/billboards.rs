@@ -335,9 +335,10 @@ fn the_chain_falls_to_a_handful_of_billboards() {
         // Its view windows reach the GPU on the billboards' corners.
         let bake = l.cloud.bake().unwrap();
         let windows = &bake.animation_space.view_windows;
+        let corners: u32 = l.cloud.corners.iter().sum();
         assert_eq!(
             windows.iter().filter(|&&w| w != 0.0).count(),
-            4 * l.cloud.billboards
+            corners as usize
         );
     }
     for l in &chain[1..] {
@@ -355,12 +356,12 @@ fn the_chain_falls_to_a_handful_of_billboards() {
             l.cloud.texture_bytes,
             (2 * atlas.width * atlas.height * 4) as usize
         );
-        // The foliage is billboards, two triangles each; the wood is simplified, never grown.
+        // The foliage is billboards, each a fan of its outline's corners less two triangles
+        // (two for a whole rectangle); the wood is simplified, never grown.
         let w = wood(&l.cloud.model);
-        assert_eq!(
-            l.cloud.model.mesh.triangle_count(),
-            w + 2 * l.cloud.billboards
-        );
+        assert_eq!(l.cloud.corners.len(), l.cloud.billboards);
+        let fans: u32 = l.cloud.corners.iter().map(|&c| c - 2).sum();
+        assert_eq!(l.cloud.model.mesh.triangle_count(), w + fans as usize);
         assert!(w <= wood(&tree));
         // Its atlas is as sharp as docs/trees.md says: about two texels a pixel where the level
         // comes in (at least 8 a metre, at most 800 across the tree), and a clump level's never fewer than 256
@@ -674,7 +675,7 @@ fn billboard_outlines_are_the_four_sides_of_every_billboard() {
         height: layout.height,
         pixels: vec![200; (4 * layout.width * layout.height) as usize],
     };
-    let level = cloud_model(&m, &c, &layout, image, &[]);
+    let level = cloud_model(&m, &c, &layout, image, &[], &[]);
     let bake = CharacterBake::new(&level).unwrap();
     let lines = &bake.outlines;
     assert_eq!(lines.len(), 8 * c.billboards.len());

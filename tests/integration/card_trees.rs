@@ -111,7 +111,9 @@ fn the_finest_cloud_of_each_card_tree_is_close_to_it() {
         let e =
             lodlab::measure::colour_error::colour_error(gpu, &b.tree, finest, [800, 600]).unwrap();
         assert!(e <= most, "{name}: colour error {e:.3} at the finest cloud");
-        // The crown keeps its reach: the billboards span what the leaves span.
+        // The crown keeps its reach: the billboards span what the leaves span, to within the
+        // transparent margins of the leaf cards, which trimmed outlines leave out (the bush's
+        // finest cloud spans 94–96% of its cards' extent, its colour error unchanged).
         let (foliage, _) = finest.foliage();
         let leaves = lodlab::bake::foliage::billboard::wood::only_foliage(&b.tree);
         let span = |m: &Model| {
@@ -121,9 +123,47 @@ fn the_finest_cloud_of_each_card_tree_is_close_to_it() {
         };
         let (cloud, tree) = (span(&foliage), span(&leaves));
         assert!(
-            cloud.cmpge(tree * 0.97).all(),
+            cloud.cmpge(tree * 0.92).all(),
             "{name}: the cloud spans {cloud}, the leaves {tree}"
         );
+    }
+}
+
+/// The bush's billboards hold one or a few cards each, at an angle to their planes: drawn as
+/// outlines trimmed round their leaves, the finest clouds cover well under their rectangles,
+/// and every billboard's vertices are its outline's corners (at most eight).
+#[test]
+fn the_bushs_billboards_are_trimmed_round_their_leaves() {
+    use lodlab::bake::foliage::billboard::trim::MAX_CORNERS;
+    let b = baked("card-bush");
+    let levels = cloud_levels(b);
+    let (_, finest) = levels[0];
+    let share = finest.drawn_area / finest.area;
+    assert!(
+        share < 0.85,
+        "the finest cloud draws {share:.2} of its area"
+    );
+    assert_eq!(finest.corners.len(), finest.billboards);
+    assert!(
+        finest
+            .corners
+            .iter()
+            .all(|&c| (3..=MAX_CORNERS as u32).contains(&c))
+    );
+    assert!(
+        finest.corners.iter().any(|&c| c > 4),
+        "some outlines beyond a quad"
+    );
+    let (foliage, _) = finest.foliage();
+    let corners: u32 = finest.corners.iter().sum();
+    assert_eq!(foliage.mesh.vertex_count() as u32, corners);
+    // A fan a billboard: corners − 2 triangles each.
+    assert_eq!(
+        foliage.mesh.triangle_count() as u32,
+        corners - 2 * finest.billboards as u32
+    );
+    for (_, l) in &levels {
+        assert!(l.drawn_area <= l.area * 1.0001 && l.drawn_area > 0.0);
     }
 }
 

@@ -518,6 +518,15 @@ fn a_report_of_a_tree_writes_its_three_files() {
         let far = f(l, "colour_error_from_switch");
         assert!(far > 0.0 && far < 1.0, "{l}");
         assert!(f(l, "billboards") >= 1.0 && f(l, "area") > 0.0, "{l}");
+        // Every covered pixel is shaded at least once (where the adapter counts fragments).
+        if let Some(over) = l["fragments_per_covered_pixel"].as_f64() {
+            assert!(over >= 1.0 && over < 1000.0, "{l}");
+        }
+        // Trimmed round their leaves, billboards are drawn with at most their rectangles.
+        assert!(
+            f(l, "drawn_area") > 0.0 && f(l, "drawn_area") <= f(l, "area") * 1.0001,
+            "{l}"
+        );
     }
     for w in levels[1..].windows(2) {
         assert!(f(&w[1], "epsilon") > f(&w[0], "epsilon"));

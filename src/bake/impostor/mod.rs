@@ -2,5 +2,6 @@
 //! ([`octahedral`]), characters animated ones ([`animated`]): views by frames on a sheet.
 
 pub mod animated;
+pub mod nearest_view;
 pub mod octahedral;
 pub mod placement;

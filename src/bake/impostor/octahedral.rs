@@ -82,28 +82,6 @@ impl ViewGrid {
         }
     }
 
-    /// The largest angle (radians) between a line of sight and the view a blend weighs most
-    /// (the heaviest of [`Self::blend`]'s three, the one an impostor far off shows alone):
-    /// found over a fine grid of directions on the hemisphere, as the shader picks it.
-    pub fn nearest_view_angle(&self) -> f32 {
-        const SAMPLES: u32 = 96;
-        let mut worst = 0.0f32;
-        for j in 0..=SAMPLES {
-            for i in 0..=SAMPLES {
-                let s = Vec2::new(i as f32, j as f32) / SAMPLES as f32 * 2.0 - Vec2::ONE;
-                let d = hemi_oct_decode(s);
-                let ((vi, vj), _) = self
-                    .blend(d)
-                    .into_iter()
-                    .max_by(|a, b| a.1.total_cmp(&b.1))
-                    .unwrap_or(((0, 0), 1.0));
-                let angle = d.dot(self.direction(vi, vj)).clamp(-1.0, 1.0).acos();
-                worst = worst.max(angle);
-            }
-        }
-        worst
-    }
-
     /// The side of the square atlas that holds every view.
     pub fn atlas_size(&self) -> u32 {
         self.frames * self.cell
@@ -151,22 +129,6 @@ pub struct ImpostorFrame {
     /// The tree's bounds at rest, model space: what culling and the blob shadow use (the
     /// quad's own mesh is only as wide as a card).
     pub bounds: [[f32; 3]; 2],
-}
-
-impl ImpostorFrame {
-    /// How far, in model units, a point of the tree can stand from where it should when
-    /// the impostor shows the view its blend weighs most, alone ([`ViewGrid::nearest_view_angle`]):
-    /// the chord a point on its sphere moves through that angle. Where this projects within
-    /// the screen tolerance, one view is as good as the blend of three, for a third of the
-    /// texture reads.
-    pub fn nearest_view_error(&self) -> f32 {
-        let angle = ViewGrid {
-            frames: self.frames,
-            cell: 1,
-        }
-        .nearest_view_angle();
-        2.0 * self.radius * (0.5 * angle).sin()
-    }
 }
 
 /// The view bake's input for `tree` at rest seen from every view of `grid`, each drawn
@@ -538,31 +500,6 @@ pub fn bake_impostor(
 
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn the_heaviest_view_is_within_the_grid_spacing_of_any_line_of_sight() {
-        let angle = |frames| {
-            ViewGrid { frames, cell: 1 }
-                .nearest_view_angle()
-                .to_degrees()
-        };
-        let (eight, sixteen) = (angle(8), angle(16));
-        // 8 × 8 views: within 22° of any direction (see FRAMES), the heaviest of three
-        // within about that too; twice the views, about half the angle.
-        assert!(eight > 5.0 && eight < 25.0, "8 views: {eight}°");
-        assert!(sixteen < 0.65 * eight, "16 views: {sixteen}°, 8: {eight}°");
-        let frame = ImpostorFrame {
-            frames: 8,
-            centre: [0.0; 3],
-            radius: 2.0,
-            base: 0.0,
-            height: 4.0,
-            rows: 4,
-            bounds: [[-1.0; 3], [1.0; 3]],
-        };
-        let e = frame.nearest_view_error();
-        assert!((e - 2.0 * 2.0 * (0.5 * eight.to_radians()).sin()).abs() < 1e-4);
-    }
-
     use super::*;
 
     #[test]

@@ -247,14 +247,14 @@ impl SceneRenderer {
                 class => class,
             };
             let phase = foliage.unwrap_or(FoliagePhase::Single);
-            let Some(mut pipeline) =
-                opaque_pipeline(class, key.pass(), wire, phase, || self.look(&key))
+            let nearest_view = key.variant() == 1;
+            let Some(pipeline) =
+                opaque_pipeline(class, key.pass(), wire, phase, nearest_view, || {
+                    self.look(&key)
+                })
             else {
                 continue;
             };
-            if class == DrawClass::TreeImpostor && key.variant() == 1 {
-                pipeline.stage = Stage::NearestView;
-            }
             if current != Some(pipeline) {
                 current = Some(pipeline);
                 pass.set_pipeline(self.pipelines.get(pipeline));
@@ -266,14 +266,16 @@ impl SceneRenderer {
 }
 
 /// The pipeline of an opaque-pass draw of a `class` drawable in `pass` (one of the
-/// `PASS_*` keys), `wire` when the frame is drawn as lines; `look` tells how a mesh is
-/// painted. None: not drawn in the opaque passes (a faded level, which the transitions pass
-/// draws; an impostor's faded half).
+/// `PASS_*` keys), `wire` when the frame is drawn as lines, `nearest_view` for a tree
+/// impostor far enough off to show one view; `look` tells how a mesh is painted. None: not
+/// drawn in the opaque passes (a faded level, which the transitions pass draws; an
+/// impostor's faded half).
 fn opaque_pipeline(
     class: DrawClass,
     pass: u64,
     wire: bool,
     phase: FoliagePhase,
+    nearest_view: bool,
     look: impl FnOnce() -> Look,
 ) -> Option<PipelineKey> {
     let morph = pass == PASS_MORPH;
@@ -291,6 +293,10 @@ fn opaque_pipeline(
         _ if phase == FoliagePhase::Depth => return None,
         // An impostor's mesh is only where its rows sway (or, animated, four corners): it is
         // always drawn as the quad its shader makes, in wireframe too.
+        DrawClass::TreeImpostor if nearest_view => PipelineKey {
+            stage: Stage::NearestView,
+            ..PipelineKey::own(class, false)
+        },
         DrawClass::TreeImpostor | DrawClass::CharacterImpostor => PipelineKey::own(class, false),
         _ if wire => PipelineKey::mesh(morph, Stage::Wireframe, Look::Debug),
         DrawClass::AtlasLitFoliage if morph => PipelineKey::own(DrawClass::Foliage, true),
@@ -448,8 +454,12 @@ mod tests {
                             // The renderer draws no pre-pass in wireframe.
                             continue;
                         }
-                        for look in [Look::Shaded, Look::Debug, Look::Mapped] {
-                            let Some(key) = opaque_pipeline(class, pass, wire, phase, || look)
+                        for (look, nearest) in [Look::Shaded, Look::Debug, Look::Mapped]
+                            .into_iter()
+                            .flat_map(|l| [(l, false), (l, true)])
+                        {
+                            let Some(key) =
+                                opaque_pipeline(class, pass, wire, phase, nearest, || look)
                             else {
                                 assert!(
                                     (pass == PASS_FADE && !wire)
@@ -461,7 +471,9 @@ mod tests {
                             };
                             assert!(built.contains(&key), "{key:?} is not built");
                             chosen.insert(key);
-                            if class.faces_eye() {
+                            if class == DrawClass::TreeImpostor && nearest {
+                                assert_eq!(key.stage, Stage::NearestView);
+                            } else if class.faces_eye() {
                                 assert_eq!(key, PipelineKey::own(class, false));
                             } else if wire {
                                 assert_eq!(key.stage, Stage::Wireframe);

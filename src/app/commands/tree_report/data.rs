@@ -6,6 +6,10 @@ use serde::Serialize;
 /// The colour metric's image size (thesis §5.1.3).
 pub const METRIC_SIZE: [u32; 2] = [800, 600];
 
+/// The height, pixels, the full tree is drawn at for its fragments per covered pixel (it has
+/// no switch size of its own): about as high as the metric's pictures show it.
+pub const FULL_TREE_PX: f32 = 400.0;
+
 #[derive(Clone, Debug, Serialize)]
 pub struct LevelReport {
     /// ε as a fraction of the tree's height.
@@ -21,6 +25,10 @@ pub struct LevelReport {
     pub area: f32,
     /// The area the billboards are drawn with, trimmed round their leaves, m².
     pub drawn_area: f32,
+    /// Fragments the level shades per pixel it covers, drawn as high as where it comes in
+    /// (the full tree: [`FULL_TREE_PX`] high), over the metric's views; None where the
+    /// adapter cannot count fragments.
+    pub fragments_per_covered_pixel: Option<f32>,
     pub texture_bytes: usize,
     pub colour_error: f32,
     /// The tree's height on screen where the level comes in (ε projects to the chain's

@@ -23,8 +23,8 @@ pub mod orders;
 
 use crate::app::commands::tree_report::charts::{contact_sheet, motion_plot, plot};
 use crate::app::commands::tree_report::data::{
-    AtCount, DescriptionReport, LIGHTING_PX, LevelReport, METRIC_SIZE, StaticCloudReport, THESIS,
-    ThesisRow, TreeReport, at_billboards, lighting_table, thesis_table,
+    AtCount, DescriptionReport, FULL_TREE_PX, LIGHTING_PX, LevelReport, METRIC_SIZE,
+    StaticCloudReport, THESIS, ThesisRow, TreeReport, at_billboards, lighting_table, thesis_table,
 };
 use crate::atomic::write as write_atomic;
 use crate::bake::foliage::billboard::chain::{
@@ -51,23 +51,14 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let opts = ChainOptions::default();
     let chain = tree_chain(&raster, tree, &f, &opts, &|_| {})?;
     let chain_seconds = start.elapsed().as_secs_f64();
+    // One measuring world for the tree, its levels swapped in one by one.
+    let overdraw = crate::measure::colour_error::GpuColourError::new(&gpu);
     let mut levels = Vec::new();
     for (k, l) in chain.iter().enumerate() {
-        levels.push(measure_level(&gpu, tree, k, l, "")?);
+        levels.push(measure_level(&gpu, &overdraw, tree, k, l, "")?);
     }
-    // The skeleton-only chain, where it parts from this one.
-    let skeleton_opts = ChainOptions {
-        style: ChainStyle::Skeleton,
-        ..opts
-    };
-    let skeleton_chain = tree_chain(&raster, tree, &f, &skeleton_opts, &|_| {})?;
-    let mut skeleton_levels = Vec::new();
-    for (k, l) in skeleton_chain.iter().enumerate() {
-        if chain.get(k).is_some_and(|c| c.kind == l.kind) {
-            continue;
-        }
-        skeleton_levels.push(measure_level(&gpu, tree, k, l, "skeleton-only ")?);
-    }
+    let (skeleton_chain, skeleton_levels) =
+        skeleton_chain(&gpu, &overdraw, &raster, tree, &f, &chain, &opts)?;
     let description_types = description_types(&raster, tree, &f, &chain, &opts)?;
     let static_clouds = static_clouds(&gpu, &raster, tree, &f, &chain)?;
     let clouds: Vec<(usize, &crate::bake::foliage::billboard::chain::CloudLevel)> = chain
@@ -93,13 +84,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             percentages(&colours.names, &l.full)
         );
     }
-    let orders = orders::orders(
-        &raster,
-        &crate::measure::colour_error::GpuColourError::new(&gpu),
-        tree,
-        &chain,
-        &opts,
-    )?;
+    let orders = orders::orders(&raster, &overdraw, tree, &chain, &opts)?;
     let points = |f: &dyn Fn(&LevelReport) -> f32| -> Vec<(usize, f32)> {
         levels[1..]
             .iter()
@@ -209,6 +194,31 @@ fn write_files(
     Ok(())
 }
 
+/// The skeleton-only chain of `tree`, and its levels measured where it parts from `chain`.
+fn skeleton_chain(
+    gpu: &Gpu,
+    overdraw: &crate::measure::colour_error::GpuColourError<'_>,
+    raster: &crate::render::atlas::AtlasRasterizer,
+    tree: &Model,
+    f: &Foliage,
+    chain: &[TreeLevel],
+    opts: &ChainOptions,
+) -> Result<(Vec<TreeLevel>, Vec<LevelReport>)> {
+    let skeleton_opts = ChainOptions {
+        style: ChainStyle::Skeleton,
+        ..*opts
+    };
+    let skeleton_chain = tree_chain(raster, tree, f, &skeleton_opts, &|_| {})?;
+    let mut levels = Vec::new();
+    for (k, l) in skeleton_chain.iter().enumerate() {
+        if chain.get(k).is_some_and(|c| c.kind == l.kind) {
+            continue;
+        }
+        levels.push(measure_level(gpu, overdraw, tree, k, l, "skeleton-only ")?);
+    }
+    Ok((skeleton_chain, levels))
+}
+
 /// "leaf 84.0%, blossom 16.0%".
 fn percentages(names: &[String], shares: &[f32]) -> String {
     names
@@ -219,9 +229,11 @@ fn percentages(names: &[String], shares: &[f32]) -> String {
         .join(", ")
 }
 
-/// A level of a chain with its colour error (said on stderr as it goes).
+/// A level of a chain with its colour error and its fragments per covered pixel (measured
+/// through `overdraw`), said on stderr as it goes.
 fn measure_level(
     gpu: &Gpu,
+    overdraw: &crate::measure::colour_error::GpuColourError<'_>,
     tree: &Model,
     k: usize,
     l: &TreeLevel,
@@ -238,8 +250,24 @@ fn measure_level(
         (close, 0.0, 0.0, 0.0)
     };
     let anim = &l.cloud.animation;
+    let bake = l
+        .cloud
+        .bake()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", tree.name))?;
+    let overdraw = overdraw
+        .fragments_per_covered_pixel(
+            tree,
+            &l.cloud.model,
+            bake,
+            if switch_px > 0.0 {
+                switch_px
+            } else {
+                FULL_TREE_PX
+            },
+        )?
+        .map(|f| f as f32);
     eprintln!(
-        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards{}, colour error {:.3} ({:.3} from the switch distance, {:.3} at {:.0} px), animation error {:.4} h / {:.3}",
+        "lodlab: {} {what}L{k}: ε {:.4} h, {} billboards{}, colour error {:.3} ({:.3} from the switch distance, {:.3} at {:.0} px), animation error {:.4} h / {:.3}, {} fragments per pixel it covers",
         tree.name,
         l.epsilon / h,
         l.cloud.billboards,
@@ -256,7 +284,8 @@ fn measure_level(
         at_switch,
         switch_px,
         anim.rms,
-        anim.spectral
+        anim.spectral,
+        overdraw.map_or("?".into(), |f| format!("{f:.1}"))
     );
     Ok(LevelReport {
         epsilon: l.epsilon / h,
@@ -267,6 +296,7 @@ fn measure_level(
         triangles: l.cloud.model.mesh.triangle_count(),
         area: l.cloud.area,
         drawn_area: l.cloud.drawn_area,
+        fragments_per_covered_pixel: overdraw,
         texture_bytes: l.cloud.texture_bytes,
         colour_error: error,
         switch_px,

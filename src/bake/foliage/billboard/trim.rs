@@ -34,12 +34,12 @@ pub const MAX_CORNERS: usize = 8;
 /// The least share of its rectangle a trimmed outline must cut.
 pub const MIN_SAVED_SHARE: f32 = 0.15;
 /// Screen pixels (where the level comes in) an outline must save for each corner it adds.
-/// Each corner beyond four adds a vertex and a triangle, which on lavapipe cost about what
-/// [`TRIANGLE_FRAGMENTS`](super::chain::order::TRIANGLE_FRAGMENTS) fragments do, and a level
-/// is drawn from where it comes in to about twice as far (ε doubles level by level), where
-/// its pixels are a quarter: a pixel saved where it comes in is about half a pixel saved over
-/// its range.
-pub const PIXELS_PER_EXTRA_CORNER: f32 = 4.0 * super::chain::order::TRIANGLE_FRAGMENTS as f32;
+/// Each corner beyond four adds a vertex and a triangle, which on lavapipe cost about what 9
+/// fragments do (the cost order's `TRIANGLE_FRAGMENTS`), and a level is drawn from where it
+/// comes in to about twice as far (ε doubles level by level), where its pixels are a
+/// quarter: a pixel saved where it comes in is about half a pixel saved over its range. So
+/// four times 9.
+pub const PIXELS_PER_EXTRA_CORNER: f32 = 36.0;
 
 /// A billboard's outline in its rectangle's own coordinates: s along its first side (corner
 /// 0 to 1), t along its second (corner 0 to 3), both 0..1, counter-clockwise as its corners
