@@ -63,6 +63,9 @@ pub struct GpuCharacter {
 pub struct GpuLodSet {
     pub levels: Vec<PackedLevel>,
     pub index_buffer: wgpu::Buffer,
+    /// A clump level's triangles by view sector: each sector's range (first index, count)
+    /// in the index buffer ([`LodPack::view_subsets`]); empty for everything else.
+    pub view_subsets: Vec<[u32; 2]>,
     /// The number of vertices the vertex texture holds, over all levels.
     pub vertex_count: u32,
     /// The same vertices in one fixed pose, for the plain calibration shader (it draws the
@@ -374,6 +377,13 @@ impl GpuCharacter {
                 }
                 l.base_vertex = 0;
             }
+            // The sectors' triangles are level 0's, with its base vertex.
+            let base = pack.levels.first().map_or(0, |l| l.base_vertex);
+            for &[first, count] in &pack.view_subsets {
+                for i in &mut rebased[first as usize..(first + count) as usize] {
+                    *i += base;
+                }
+            }
         }
         let verts = data_texture(gpu, &format!("{} vertices", self.name), &pack.vertices.grid);
         let index_buffer = gpu
@@ -448,6 +458,7 @@ impl GpuCharacter {
         self.sets[slot] = Some(GpuLodSet {
             levels,
             index_buffer,
+            view_subsets: pack.view_subsets.clone(),
             vertex_count: pack.vertices.vertex_count,
             static_vertices,
             bind_group,

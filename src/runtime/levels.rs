@@ -91,7 +91,7 @@ pub const DEFAULT_FIRST_ERROR_PX: f32 = 0.5;
 pub enum Levels {
     /// A character's progressive-mesh levels by one method, and its animated impostor where
     /// it has one (the same for every method, placed in each method's chain).
-    Pack(LodPack, Option<ImpostorLevel>),
+    Pack(Box<LodPack>, Option<ImpostorLevel>),
     /// A character's impostor placed in one method's chain, handed over after its levels
     /// (by [`BackgroundBake`]: its first bake takes longer than the levels); `None` where it
     /// could not be made.
@@ -196,7 +196,7 @@ pub fn bake_each(
                 progress(i, IMPOSTOR_PENDING);
                 deliver(
                     i,
-                    Some(pack(&s.model, &lods).map(|p| Levels::Pack(p, None))),
+                    Some(pack(&s.model, &lods).map(|p| Levels::Pack(Box::new(p), None))),
                 );
                 if let Ok(mut later) = later.lock() {
                     later.push((i, lods));
@@ -204,7 +204,7 @@ pub fn bake_each(
                 return;
             }
             (
-                pack(&s.model, &lods).map(|p| Levels::Pack(p, None)),
+                pack(&s.model, &lods).map(|p| Levels::Pack(Box::new(p), None)),
                 Origin::Cache,
             )
         };

@@ -520,7 +520,7 @@ fn a_report_of_a_tree_writes_its_three_files() {
         assert!(f(l, "billboards") >= 1.0 && f(l, "area") > 0.0, "{l}");
         // Every covered pixel is shaded at least once (where the adapter counts fragments).
         if let Some(over) = l["fragments_per_covered_pixel"].as_f64() {
-            assert!(over >= 1.0 && over < 1000.0, "{l}");
+            assert!((1.0..1000.0).contains(&over), "{l}");
         }
         // Trimmed round their leaves, billboards are drawn with at most their rectangles.
         assert!(

@@ -41,6 +41,10 @@ pub struct LodPack {
     pub levels: Vec<PackedLevel>,
     /// The coarse levels' normal maps, where baked.
     pub normal_maps: Option<NormalMaps>,
+    /// A clump level's triangles by view sector (see [`super::view_subsets`]): each sector's
+    /// range (first index, count) in `indices`, after the level's own; empty for everything
+    /// else.
+    pub view_subsets: Vec<[u32; 2]>,
 }
 
 impl LodPack {
@@ -86,14 +90,27 @@ impl LodPack {
         ))
     }
 
-    /// The full-detail mesh of a character as a pack of one level (the `none` method).
+    /// The full-detail mesh of a character as a pack of one level (the `none` method). A
+    /// clump level's also holds its triangles by view sector ([`super::view_subsets`]).
     pub fn full_detail(bake: &CharacterBake) -> LodPack {
-        Self::assemble(
+        let mut pack = Self::assemble(
             bake.vertices.clone(),
             &[&bake.animation_space],
             &[0.0],
             None,
-        )
+        );
+        let am = &bake.animation_space;
+        if !am.view_windows.is_empty() {
+            let (_, normals) = bake.evaluate(0, 0.0, 0.0);
+            if let Some((subsets, ranges)) =
+                super::view_subsets::view_subsets(&am.indices, &am.view_windows, &normals)
+            {
+                let base = pack.indices.len() as u32;
+                pack.indices.extend_from_slice(&subsets);
+                pack.view_subsets = ranges.iter().map(|&[f, c]| [base + f, c]).collect();
+            }
+        }
+        pack
     }
 
     fn assemble(
@@ -121,6 +138,7 @@ impl LodPack {
             indices,
             levels,
             normal_maps,
+            view_subsets: Vec::new(),
         }
     }
 

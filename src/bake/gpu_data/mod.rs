@@ -9,3 +9,4 @@ pub mod materials;
 pub mod spectra;
 pub mod texels;
 pub mod vertex_texture;
+pub mod view_subsets;

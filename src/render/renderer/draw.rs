@@ -201,7 +201,14 @@ impl SceneRenderer {
         let level = &set.levels[key.level().min(set.levels.len() - 1)];
         pass.set_bind_group(1, &set.bind_group, &[]);
         pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-        let indices = level.first_index..level.first_index + level.index_count;
+        // A clump level seen from one view sector: only the planes that sector can show.
+        let sector = (key.variant() as usize)
+            .checked_sub(1)
+            .and_then(|s| set.view_subsets.get(s));
+        let indices = match sector {
+            Some(&[first, count]) => first..first + count,
+            None => level.first_index..level.first_index + level.index_count,
+        };
         pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
     }
 

@@ -57,7 +57,10 @@ impl SceneRenderer {
         let mut g = gpu_instance(c, inst, self.wind);
         let key = |pass, level: usize, hops: usize| {
             DrawKey::new(pass, at.side, inst.model, slot, level as u8, hops as u8)
-                .with_variant(at.nearest_view as u32)
+                .with_variant(match at.sector {
+                    Some(s) => s + 1,
+                    None => at.nearest_view as u32,
+                })
                 .0
         };
         let near = at.near;

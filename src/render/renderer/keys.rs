@@ -70,8 +70,10 @@ impl DrawKey {
     pub(super) fn model(self) -> usize {
         (self.0 >> 32 & 0xffff) as usize
     }
-    /// How the group is drawn where a drawable has more than one way: 1 for a tree impostor
-    /// far enough off to show its nearest view alone ([`DrawAt::nearest_view`]), else 0.
+    /// How the group is drawn where a drawable has more than one way: for a tree impostor, 1
+    /// where it is far enough off to show its nearest view alone ([`DrawAt::nearest_view`]);
+    /// for a clump level, 1 + the view sector whose planes it draws ([`DrawAt::sector`]);
+    /// else 0.
     pub(super) fn with_variant(self, variant: u32) -> DrawKey {
         DrawKey(self.0 & !(0xff << 24) | (variant as u64 & 0xff) << 24)
     }
@@ -120,6 +122,8 @@ pub(super) struct DrawAt {
     pub method: usize,
     pub near: u32,
     pub nearest_view: bool,
+    /// A clump level's view sector of the eye ([`crate::bake::gpu_data::view_subsets`]).
+    pub sector: Option<u32>,
 }
 
 /// Whether an impostor whose nearest view alone is off by `error` model units, scaled by

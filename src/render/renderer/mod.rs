@@ -408,6 +408,13 @@ impl SceneRenderer {
                 }
                 let draw = side.draws.get(i).copied().unwrap_or(LodDraw::Level(0));
                 let distance = (centre - view.eye).length();
+                // A clump level draws only the planes of the sector the eye is in.
+                let sector = if c.full().view_subsets.is_empty() {
+                    None
+                } else {
+                    let eye = inst.transform.inverse().transform_point3(view.eye);
+                    crate::bake::gpu_data::view_subsets::sector_of(eye)
+                };
                 let near = (distance - radius).max(0.0).to_bits();
                 let at = keys::DrawAt {
                     side: side_index,
@@ -421,6 +428,7 @@ impl SceneRenderer {
                         view.proj.y_axis.y,
                         self.nearest_view_tolerance,
                     ),
+                    sector,
                 };
                 self.encode_instance(inst, draw, at, &mut stats);
             }
