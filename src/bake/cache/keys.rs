@@ -12,12 +12,12 @@ use serde::Serialize;
 pub const FORMAT_VERSION: u32 = 10;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
-pub const CHAIN_VERSION: u32 = 27;
+pub const CHAIN_VERSION: u32 = 28;
 /// Which of a tree's levels each size draws when ordered by cost
 /// (`bake::foliage::billboard::chain::order`).
-pub const ORDER_VERSION: u32 = 2;
+pub const ORDER_VERSION: u32 = 3;
 /// A layout's forest patches (`bake::foliage::patch`).
-pub const PATCH_VERSION: u32 = 3;
+pub const PATCH_VERSION: u32 = 4;
 /// A character's animated impostor (`bake::impostor::animated`).
 pub const IMPOSTOR_VERSION: u32 = 5;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the

@@ -45,6 +45,11 @@ pub struct LodPack {
     /// range (first index, count) in `indices`, after the level's own; empty for everything
     /// else.
     pub view_subsets: Vec<[u32; 2]>,
+    /// How far (radians, horizontally) its planes' normals turn from rest over its clip at
+    /// wind strength 1 ([`super::view_subsets::sway`]): where the instance's wind turns them
+    /// past [`super::view_subsets::SWAY_MARGIN`], the sectors do not hold and it is drawn
+    /// whole.
+    pub view_subset_sway: f32,
 }
 
 impl LodPack {
@@ -108,6 +113,7 @@ impl LodPack {
                 let base = pack.indices.len() as u32;
                 pack.indices.extend_from_slice(&subsets);
                 pack.view_subsets = ranges.iter().map(|&[f, c]| [base + f, c]).collect();
+                pack.view_subset_sway = super::view_subsets::sway(bake, &normals);
             }
         }
         pack
@@ -139,6 +145,7 @@ impl LodPack {
             levels,
             normal_maps,
             view_subsets: Vec::new(),
+            view_subset_sway: 0.0,
         }
     }
 

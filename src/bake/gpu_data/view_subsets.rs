@@ -18,9 +18,49 @@ pub const SECTORS: usize = 16;
 /// The share of a half window its cross-fade band reaches either side of its edge
 /// (`VIEW_FADE` in `shaders/character.wgsl`).
 pub const VIEW_FADE: f32 = 0.25;
-/// Radians a plane's normal may turn with its branch's sway beyond its rest direction: a
-/// generous bound on the crown's sway about the vertical (a few degrees).
+/// Radians a plane's normal may turn horizontally with its branch's sway beyond its rest
+/// direction and still be drawn from the sectors it was filed under: about 6°. An instance
+/// whose wind turns its planes further ([`sway`] times its wind strength) is drawn whole.
 pub const SWAY_MARGIN: f32 = 0.1;
+
+/// The triangles a view of `bake` draws on average over the sectors: all of them for a
+/// level without view windows.
+pub fn mean_triangles(bake: &crate::bake::gpu_data::drawable::CharacterBake) -> f64 {
+    let am = &bake.animation_space;
+    let all = am.indices.len() as f64 / 3.0;
+    if am.view_windows.is_empty() {
+        return all;
+    }
+    let (_, normals) = bake.evaluate(0, 0.0, 0.0);
+    match view_subsets(&am.indices, &am.view_windows, &normals) {
+        Some((subsets, _)) => subsets.len() as f64 / 3.0 / SECTORS as f64,
+        None => all,
+    }
+}
+
+/// Times over its first clip at which [`sway`] poses a level.
+const SWAY_SAMPLES: usize = 16;
+
+/// The most any windowed vertex's normal of `bake` turns horizontally (radians, as a line)
+/// from its rest direction `rest` (per vertex) over its first clip at wind strength 1.
+pub fn sway(bake: &crate::bake::gpu_data::drawable::CharacterBake, rest: &[Vec3]) -> f32 {
+    let windows = &bake.animation_space.view_windows;
+    let duration = bake.animation.clips.first().map_or(0.0, |c| c.duration);
+    let azimuth = |n: Vec3| n.z.atan2(n.x);
+    let mut most = 0.0f32;
+    for k in 0..SWAY_SAMPLES {
+        let t = duration * k as f32 / SWAY_SAMPLES as f32;
+        let (_, normals) = bake.evaluate(0, t, 1.0);
+        for ((&w, &n), &r) in windows.iter().zip(&normals).zip(rest) {
+            if w == 0.0 || glam::Vec2::new(n.x, n.z).length_squared() < 1e-8 {
+                continue;
+            }
+            let d = (azimuth(n) - azimuth(r)).rem_euclid(std::f32::consts::PI);
+            most = most.max(d.min(std::f32::consts::PI - d));
+        }
+    }
+    most
+}
 
 /// The sector of the eye at `eye` (model space, y up, seen from the model's origin), or None
 /// looking from (nearly) straight above the origin, where every plane may be drawn.

@@ -201,15 +201,11 @@ impl SceneRenderer {
         let level = &set.levels[key.level().min(set.levels.len() - 1)];
         pass.set_bind_group(1, &set.bind_group, &[]);
         pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-        // A clump level seen from one view sector: only the planes that sector can show.
-        let sector = (key.variant() as usize)
-            .checked_sub(1)
-            .and_then(|s| set.view_subsets.get(s));
-        let indices = match sector {
-            Some(&[first, count]) => first..first + count,
-            None => level.first_index..level.first_index + level.index_count,
-        };
-        pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
+        pass.draw_indexed(
+            drawn_indices(set, level, key),
+            level.base_vertex as i32,
+            range.clone(),
+        );
     }
 
     /// The opaque draws of the characters (`foliage` None) or of the trees in one of their
@@ -234,8 +230,11 @@ impl SceneRenderer {
                 pass.set_bind_group(1, &set.bind_group, &[]);
                 pass.set_vertex_buffer(0, set.static_vertices.slice(..));
                 pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                let indices = level.first_index..level.first_index + level.index_count;
-                pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
+                pass.draw_indexed(
+                    drawn_indices(set, level, &key),
+                    level.base_vertex as i32,
+                    range.clone(),
+                );
             }
             pass.set_vertex_buffer(0, self.instance_buffer.slice(..));
             return;
@@ -269,6 +268,23 @@ impl SceneRenderer {
             scissor.side(pass, key.side());
             self.draw_group(pass, &key, range);
         }
+    }
+}
+
+/// The indices a group of `key` draws of `level` of `set`: a clump level seen from one view
+/// sector only the planes that sector can show (the key's variant, 1 + the sector), else
+/// the whole level.
+pub(super) fn drawn_indices(
+    set: &crate::render::character::GpuLodSet,
+    level: &crate::bake::gpu_data::lod_pack::PackedLevel,
+    key: &DrawKey,
+) -> Range<u32> {
+    let sector = (key.variant() as usize)
+        .checked_sub(1)
+        .and_then(|s| set.view_subsets.get(s));
+    match sector {
+        Some(&[first, count]) => first..first + count,
+        None => level.first_index..level.first_index + level.index_count,
     }
 }
 

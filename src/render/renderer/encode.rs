@@ -81,9 +81,14 @@ impl SceneRenderer {
             stats.in_transition += draw.in_transition() as u64;
             stats.kinds[c.level_kind as usize] += 1;
         }
+        // A clump level seen from one sector draws that sector's triangles.
+        let sector_triangles = at
+            .sector
+            .and_then(|s| set.view_subsets.get(s as usize))
+            .map(|&[_, count]| count as u64 / 3);
         let mut count = |k: usize, extra_influences: u32| {
             let l = &set.levels[k];
-            stats.triangles += l.triangles() as u64;
+            stats.triangles += sector_triangles.unwrap_or(l.triangles() as u64);
             stats.vertices += l.vertices as u64;
             stats.influences += (l.influences + extra_influences) as u64;
         };

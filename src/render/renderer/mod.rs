@@ -45,6 +45,7 @@ mod draw;
 mod encode;
 mod keys;
 
+use crate::bake::gpu_data::view_subsets::SWAY_MARGIN;
 pub use cull::Region;
 pub use keys::FrameStats;
 use keys::{DrawKey, Keyed};
@@ -408,8 +409,11 @@ impl SceneRenderer {
                 }
                 let draw = side.draws.get(i).copied().unwrap_or(LodDraw::Level(0));
                 let distance = (centre - view.eye).length();
-                // A clump level draws only the planes of the sector the eye is in.
-                let sector = if c.full().view_subsets.is_empty() {
+                // A clump level draws only the planes of the sector the eye is in, where its
+                // wind does not turn them out of their sectors.
+                let set = c.full();
+                let sway = set.view_subset_sway * (inst.wind * self.wind).abs();
+                let sector = if set.view_subsets.is_empty() || sway.is_nan() || sway > SWAY_MARGIN {
                     None
                 } else {
                     let eye = inst.transform.inverse().transform_point3(view.eye);

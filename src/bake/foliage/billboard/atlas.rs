@@ -32,6 +32,9 @@ pub struct AtlasDensity {
     pub texels_per_unit: f32,
     /// Texels of gutter round every billboard's rectangle.
     pub gutter: u32,
+    /// Atlas texels a screen pixel holds where the level comes in (as asked: the layout may
+    /// shrink the atlas to fit).
+    pub texels_per_pixel: f32,
 }
 
 /// A bare density gets the least gutter.
@@ -40,6 +43,7 @@ impl From<f32> for AtlasDensity {
         AtlasDensity {
             texels_per_unit,
             gutter: GUTTER,
+            texels_per_pixel: GUTTER as f32,
         }
     }
 }
@@ -64,6 +68,7 @@ impl AtlasDensity {
         AtlasDensity {
             texels_per_unit,
             gutter,
+            texels_per_pixel: per_pixel.max(0.0),
         }
     }
 }
@@ -531,6 +536,7 @@ mod tests {
             let density = AtlasDensity {
                 texels_per_unit: 40.0,
                 gutter,
+                texels_per_pixel: 2.0,
             };
             let l = layout(&cloud, density).unwrap();
             assert_eq!(l.rects.len(), cloud.len());

@@ -9,9 +9,9 @@
 //! share of the area trimmed ("Particle Trimming", Intel, 2013). Here:
 //!
 //! 1. the convex hull of the billboard's covered texels, each taken as its square grown by
-//!    `margin` texels (a coarser mip level spreads a leaf's alpha that far: see
-//!    [`super::atlas::AtlasDensity::for_level`], whose gutter is the texels a screen pixel
-//!    holds where the level comes in), clipped to the rectangle;
+//!    `margin` texels (as far as the mip level read where the level comes in spreads a
+//!    leaf's alpha: the texels a screen pixel holds there, see
+//!    [`super::atlas::AtlasDensity::for_level`]), clipped to the rectangle;
 //! 2. reduced to [`MAX_CORNERS`] corners the way Persson's trimmer does: the edge whose two
 //!    neighbours, extended until they meet, add the least area goes, until few enough are
 //!    left (the polygon only grows, so it still covers every texel);
@@ -100,9 +100,15 @@ pub fn outline(
         return whole();
     }
     let size = Vec2::new(w as f32, h as f32);
-    let hull = clip_to_box(&convex_hull(points), size);
-    let reduced = reduce(hull, MAX_CORNERS);
-    let poly = clip_to_box(&reduced, size);
+    // Growing corners out to where neighbouring edges meet can push them past the
+    // rectangle, and clipping them back adds corners: reduce and clip again, a few times.
+    let mut poly = clip_to_box(&convex_hull(points), size);
+    for _ in 0..4 {
+        if poly.len() <= MAX_CORNERS {
+            break;
+        }
+        poly = clip_to_box(&reduce(poly, MAX_CORNERS), size);
+    }
     if poly.len() < 3 || poly.len() > MAX_CORNERS {
         return whole();
     }

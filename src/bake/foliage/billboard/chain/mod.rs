@@ -174,10 +174,13 @@ fn level_of_cloud(
         &skinning_over_loop(tree, crate::bake::foliage::spectral::DEFAULT_SAMPLES),
         &traced_leaves(&own),
     );
-    // Each billboard trimmed to its leaves where that pays (see [`super::trim`]): the
-    // gutter is the texels a screen pixel holds where the level comes in, and how far a
-    // coarser mip level spreads a leaf's alpha there.
-    let gutter = drawn.layout.gutter as f32;
+    // Each billboard trimmed to its leaves where that pays (see [`super::trim`]), at the
+    // texels a screen pixel holds where the level comes in (in the atlas as laid out, which
+    // may be smaller than asked); its outline grown by as many, or by the gutter where that
+    // is more: how far the mip level read there spreads a leaf's alpha.
+    let per_pixel = density.texels_per_pixel * drawn.layout.texels_per_unit
+        / density.texels_per_unit.max(1e-12);
+    let margin = per_pixel.max(drawn.layout.gutter as f32);
     let outlines: Vec<super::trim::Outline> = drawn
         .layout
         .rects
@@ -187,8 +190,8 @@ fn level_of_cloud(
                 &drawn.colour.pixels,
                 drawn.colour.width,
                 rect,
-                gutter,
-                gutter,
+                margin,
+                per_pixel,
             )
         })
         .collect();

@@ -221,7 +221,8 @@ pub fn measure_costs(
         let bake = cloud
             .bake()
             .map_err(|e| anyhow!("{}: {e}", cloud.model.name))?;
-        let triangles = bake.indices.len() / 3;
+        // A clump level draws, from each view, only its sector's planes.
+        let triangles = crate::bake::gpu_data::view_subsets::mean_triangles(&bake).round() as usize;
         let sizes: Vec<f32> = stretches.iter().map(|&k| switch_px[k]).collect();
         let e = if j == 0 {
             vec![0.0; sizes.len()]
