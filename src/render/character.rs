@@ -66,8 +66,10 @@ pub struct GpuLodSet {
     /// A clump level's triangles by view sector: each sector's range (first index, count)
     /// in the index buffer ([`LodPack::view_subsets`]); empty for everything else.
     pub view_subsets: Vec<[u32; 2]>,
-    /// How far its planes turn at wind strength 1 ([`LodPack::view_subset_sway`]).
+    /// How far its planes turn at wind strength 1, and the margin they were filed into
+    /// sectors with ([`LodPack::view_subset_sway`]).
     pub view_subset_sway: f32,
+    pub view_subset_margin: f32,
     /// The number of vertices the vertex texture holds, over all levels.
     pub vertex_count: u32,
     /// The same vertices in one fixed pose, for the plain calibration shader (it draws the
@@ -462,6 +464,7 @@ impl GpuCharacter {
             index_buffer,
             view_subsets: pack.view_subsets.clone(),
             view_subset_sway: pack.view_subset_sway,
+            view_subset_margin: pack.view_subset_margin,
             vertex_count: pack.vertices.vertex_count,
             static_vertices,
             bind_group,

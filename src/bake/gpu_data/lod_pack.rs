@@ -46,10 +46,11 @@ pub struct LodPack {
     /// else.
     pub view_subsets: Vec<[u32; 2]>,
     /// How far (radians, horizontally) its planes' normals turn from rest over its clip at
-    /// wind strength 1 ([`super::view_subsets::sway`]): where the instance's wind turns them
-    /// past [`super::view_subsets::SWAY_MARGIN`], the sectors do not hold and it is drawn
-    /// whole.
+    /// wind strength 1 ([`super::view_subsets::sway`]), and the margin they were filed into
+    /// sectors with ([`super::view_subsets::margin`]): where an instance's wind turns them
+    /// past the margin, the sectors do not hold and it is drawn whole.
     pub view_subset_sway: f32,
+    pub view_subset_margin: f32,
 }
 
 impl LodPack {
@@ -107,13 +108,16 @@ impl LodPack {
         let am = &bake.animation_space;
         if !am.view_windows.is_empty() {
             let (_, normals) = bake.evaluate(0, 0.0, 0.0);
+            let sway = super::view_subsets::sway(bake, &normals);
+            let margin = super::view_subsets::margin(sway);
             if let Some((subsets, ranges)) =
-                super::view_subsets::view_subsets(&am.indices, &am.view_windows, &normals)
+                super::view_subsets::view_subsets(&am.indices, &am.view_windows, &normals, margin)
             {
                 let base = pack.indices.len() as u32;
                 pack.indices.extend_from_slice(&subsets);
                 pack.view_subsets = ranges.iter().map(|&[f, c]| [base + f, c]).collect();
-                pack.view_subset_sway = super::view_subsets::sway(bake, &normals);
+                pack.view_subset_sway = sway;
+                pack.view_subset_margin = margin;
             }
         }
         pack
@@ -146,6 +150,7 @@ impl LodPack {
             normal_maps,
             view_subsets: Vec::new(),
             view_subset_sway: 0.0,
+            view_subset_margin: 0.0,
         }
     }
 

@@ -18,10 +18,18 @@ pub const SECTORS: usize = 16;
 /// The share of a half window its cross-fade band reaches either side of its edge
 /// (`VIEW_FADE` in `shaders/character.wgsl`).
 pub const VIEW_FADE: f32 = 0.25;
-/// Radians a plane's normal may turn horizontally with its branch's sway beyond its rest
-/// direction and still be drawn from the sectors it was filed under: about 6°. An instance
-/// whose wind turns its planes further ([`sway`] times its wind strength) is drawn whole.
+/// The least margin, radians, a plane's window is widened by for its branch's sway: about 6°.
 pub const SWAY_MARGIN: f32 = 0.1;
+/// The wind strength the margin covers: a tree's own wind goes up to 1.4 of the scene's
+/// (`Agent::wind`), and the scene's is 1 unless the viewer turns it up. An instance whose
+/// wind turns its planes further than the margin is drawn whole.
+pub const WIND_COVERED: f32 = 1.5;
+
+/// The margin, radians, a level's planes are filed into sectors with, where they turn by
+/// `sway` radians over their clip at wind strength 1 ([`sway`]).
+pub fn margin(sway: f32) -> f32 {
+    SWAY_MARGIN.max(WIND_COVERED * sway)
+}
 
 /// The triangles a view of `bake` draws on average over the sectors: all of them for a
 /// level without view windows.
@@ -32,7 +40,8 @@ pub fn mean_triangles(bake: &crate::bake::gpu_data::drawable::CharacterBake) -> 
         return all;
     }
     let (_, normals) = bake.evaluate(0, 0.0, 0.0);
-    match view_subsets(&am.indices, &am.view_windows, &normals) {
+    let m = margin(sway(bake, &normals));
+    match view_subsets(&am.indices, &am.view_windows, &normals, m) {
         Some((subsets, _)) => subsets.len() as f64 / 3.0 / SECTORS as f64,
         None => all,
     }
@@ -82,6 +91,7 @@ pub fn view_subsets(
     indices: &[u32],
     windows: &[f32],
     normals: &[Vec3],
+    margin: f32,
 ) -> Option<(Vec<u32>, Vec<[u32; 2]>)> {
     if windows.iter().all(|&w| w == 0.0) {
         return None;
@@ -98,7 +108,7 @@ pub fn view_subsets(
             let w = windows.get(v).copied().unwrap_or(0.0).abs();
             let n = normals.get(v).copied().unwrap_or(Vec3::ZERO);
             let shown = w == 0.0 || {
-                let reach = w * (1.0 + VIEW_FADE) + SWAY_MARGIN;
+                let reach = w * (1.0 + VIEW_FADE) + margin;
                 let horizontal = glam::Vec2::new(n.x, n.z);
                 // A plane lying flat faces every view alike: always drawn.
                 horizontal.length_squared() < 1e-8 || {
@@ -169,7 +179,7 @@ mod tests {
         windows.extend([0.0; 3]);
         normals.extend([Vec3::Y; 3]);
         indices.extend([wood, wood + 1, wood + 2]);
-        let (subsets, ranges) = view_subsets(&indices, &windows, &normals).unwrap();
+        let (subsets, ranges) = view_subsets(&indices, &windows, &normals, SWAY_MARGIN).unwrap();
         assert_eq!(ranges.len(), SECTORS);
         let mut drawn = 0usize;
         for view_step in 0..720 {
@@ -193,6 +203,11 @@ mod tests {
         assert!(mean < 0.6, "{mean:.2} of the triangles a view");
         // From straight above: no sector (all drawn).
         assert_eq!(sector_of(Vec3::new(0.0, 5.0, 0.0)), None);
-        assert_eq!(view_subsets(&indices[..6], &[0.0; 4], &normals[..4]), None);
+        assert_eq!(
+            view_subsets(&indices[..6], &[0.0; 4], &normals[..4], SWAY_MARGIN),
+            None
+        );
+        assert_eq!(margin(0.0), SWAY_MARGIN);
+        assert_eq!(margin(0.2), WIND_COVERED * 0.2);
     }
 }

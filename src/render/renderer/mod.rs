@@ -45,7 +45,6 @@ mod draw;
 mod encode;
 mod keys;
 
-use crate::bake::gpu_data::view_subsets::SWAY_MARGIN;
 pub use cull::Region;
 pub use keys::FrameStats;
 use keys::{DrawKey, Keyed};
@@ -413,7 +412,10 @@ impl SceneRenderer {
                 // wind does not turn them out of their sectors.
                 let set = c.full();
                 let sway = set.view_subset_sway * (inst.wind * self.wind).abs();
-                let sector = if set.view_subsets.is_empty() || sway.is_nan() || sway > SWAY_MARGIN {
+                let sector = if set.view_subsets.is_empty()
+                    || sway.is_nan()
+                    || sway > set.view_subset_margin
+                {
                     None
                 } else {
                     let eye = inst.transform.inverse().transform_point3(view.eye);
