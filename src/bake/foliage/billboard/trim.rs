@@ -26,6 +26,7 @@
 //! has billboards of one or a few cards at an angle: the bush's finest clouds are drawn with
 //! 61–78% of their area.
 
+use super::rect::convex_hull;
 use glam::Vec2;
 
 /// The most corners a trimmed billboard gets (Persson and three.js's diet-sprite find 4–8
@@ -102,7 +103,7 @@ pub fn outline(
     let size = Vec2::new(w as f32, h as f32);
     // Growing corners out to where neighbouring edges meet can push them past the
     // rectangle, and clipping them back adds corners: reduce and clip again, a few times.
-    let mut poly = clip_to_box(&convex_hull(points), size);
+    let mut poly = clip_to_box(&convex_hull(&points), size);
     for _ in 0..4 {
         if poly.len() <= MAX_CORNERS {
             break;
@@ -125,35 +126,6 @@ pub fn outline(
 /// The share of the rectangle an outline covers.
 pub fn share(outline: &[Vec2]) -> f32 {
     area(outline)
-}
-
-/// Convex hull, counter-clockwise, no collinear points (Andrew's monotone chain).
-fn convex_hull(mut points: Vec<Vec2>) -> Vec<Vec2> {
-    points.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    points.dedup();
-    if points.len() < 3 {
-        return points;
-    }
-    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
-    let mut hull: Vec<Vec2> = Vec::with_capacity(2 * points.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vec2>> = if pass == 0 {
-            Box::new(points.iter())
-        } else {
-            Box::new(points.iter().rev())
-        };
-        for &p in iter {
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(p);
-        }
-        hull.pop();
-    }
-    hull
 }
 
 /// Twice the signed area over two: the area of a counter-clockwise polygon.
