@@ -8,7 +8,7 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use lodlab::bake::character::lod::bake_lods;
 use lodlab::bake::character::lod::lod_options;
 use lodlab::bake::character::simplify::Method;
-use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::drawable::Drawable;
 use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::render::targets::{OFFSCREEN_FORMAT, Offscreen};
 use lodlab::render::{FrameView, Gpu, Region, SceneRenderer, Side};
@@ -25,7 +25,7 @@ fn main() -> Result<()> {
     let lods = bake_lods(&model, method, &lod_options(&model, 0.5, None), &|_| {});
     let gpu = Gpu::headless()?;
     let mut renderer = SceneRenderer::new(&gpu, OFFSCREEN_FORMAT, 4);
-    let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!(e))?;
+    let bake = Drawable::new(&model).map_err(|e| anyhow::anyhow!(e))?;
     renderer.add_character(&gpu, &bake)?;
     let slot = LodMethod::Simplified(method).index();
     let pack = LodPack::from_levels(&lods.levels).map_err(|e| anyhow::anyhow!(e))?;

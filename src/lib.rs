@@ -8,7 +8,7 @@
 //!    [`model::Model`];
 //! 3. [`bake`]: pure CPU code, sorted by subject (character levels, foliage, impostors), to
 //!    plain data the GPU uploads ([`bake::gpu_data`]), cached by [`bake::cache`]; what it
-//!    needs drawn it asks for through the traits of [`bake::seams`];
+//!    needs drawn it asks for through the traits of [`bake::gpu_products`];
 //! 4. [`scene`]: instances, cameras, paths, level selection;
 //! 5. [`render`]: everything wgpu;
 //! 6. [`runtime`]: what runs a scene (its spec loaded, the world drawn each frame, levels

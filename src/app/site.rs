@@ -54,8 +54,9 @@ pub fn view_options(words: &[String]) -> Result<ViewOptions> {
             text.lines().next().unwrap_or_default()
         )
     })?;
+    let inputs = cli.bake_inputs();
     match cli.command {
-        Some(Command::View(args)) => Ok(ViewOptions::from_args(args)),
+        Some(Command::View(args)) => Ok(ViewOptions::from_args(args, &inputs)),
         _ => bail!("the view's options {words:?} are not lodlab view's"),
     }
 }

@@ -8,8 +8,8 @@
 //! - [`impostor`]: the last levels of both, a picture of the model: octahedral impostors of
 //!   trees and animated impostors of characters;
 //! - [`gpu_data`]: the plain data all of them hand the renderer (animation, vertex and
-//!   material textures, level packs, [`gpu_data::drawable::CharacterBake`]);
-//! - [`seams`]: the traits through which the bake asks the GPU for pictures, which the
+//!   material textures, level packs, [`gpu_data::drawable::Drawable`]);
+//! - [`gpu_products`]: the traits through which the bake asks the GPU for pictures, which the
 //!   renderer implements;
 //! - [`cache`]: the versioned, content-keyed cache of bake products.
 //!
@@ -19,5 +19,5 @@ pub mod cache;
 pub mod character;
 pub mod foliage;
 pub mod gpu_data;
+pub mod gpu_products;
 pub mod impostor;
-pub mod seams;

@@ -20,51 +20,75 @@ use crate::model::{Bounds, Model, Node, Rgba8Image, Skeleton, Trs};
 use glam::{Affine3A, Mat4};
 use std::path::Path;
 
-/// Loads a skinned model from a `.glb` or `.gltf` file.
+/// A model read from a file, and a digest of everything it was made from.
+pub struct Read {
+    pub model: Model,
+    /// A hash of the bytes the import read: the file, every buffer (external ones included)
+    /// and every image a material uses, decoded. What a bake of the model is cached under.
+    pub digest: [u8; 32],
+}
+
+/// Loads a skinned model from a `.glb` or `.gltf` file within the default limits.
 pub fn load(path: &Path) -> Result<Model, InputError> {
+    read(path, &validate::Limits::default()).map(|r| r.model)
+}
+
+/// Reads a skinned model from a `.glb` or `.gltf` file, within `limits`.
+pub fn read(path: &Path, limits: &validate::Limits) -> Result<Read, InputError> {
     let fail = |p: String| InputError::new(path, p);
-    let limits = validate::limits();
     let meta = std::fs::metadata(path).map_err(|e| fail(io_problem(&e)))?;
-    validate::check_file(&meta, &limits).map_err(fail)?;
+    validate::check_file(&meta, limits).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "model".into());
-    let (model, warnings) = from_bytes(&name, read, base, &limits).map_err(fail)?;
+    let (read, warnings) = read_model(&name, read, base, limits).map_err(fail)?;
     for w in warnings {
         log::warn!("{}: {w}", path.display());
     }
-    Ok(model)
+    Ok(read)
 }
 
-/// Loads a built-in model from the copy built into the binary.
-pub fn load_builtin(asset: &crate::assets::Builtin) -> Result<Model, InputError> {
-    let (model, warnings) = from_bytes(
-        asset.name,
-        asset.bytes.to_vec(),
-        Path::new("."),
-        &validate::limits(),
-    )
-    .map_err(|p| InputError::new(asset.label(), p))?;
+/// Reads a built-in model from the copy built into the binary, within `limits`.
+pub fn read_builtin(
+    asset: &crate::assets::Builtin,
+    limits: &validate::Limits,
+) -> Result<Read, InputError> {
+    let (read, warnings) = read_model(asset.name, asset.bytes.to_vec(), Path::new("."), limits)
+        .map_err(|p| InputError::new(asset.label(), p))?;
     for w in warnings {
         log::warn!("{}: {w}", asset.label().display());
     }
-    Ok(model)
+    Ok(read)
 }
 
 /// A model from the bytes of a `.glb` or `.gltf` whose external files lie in `base`, and the
-/// warnings to show with it; the error is the problem, without the file's name. What [`load`]
-/// runs once it has read the file, and what the fuzzer feeds (see `fuzz/`).
+/// warnings to show with it; the error is the problem, without the file's name. What the
+/// fuzzer feeds (see `fuzz/`).
 pub fn from_bytes(
     name: &str,
     read: Vec<u8>,
     base: &Path,
     limits: &validate::Limits,
 ) -> Result<(Model, Vec<String>), String> {
+    read_model(name, read, base, limits).map(|(r, w)| (r.model, w))
+}
+
+/// [`from_bytes`] with the digest of what it read.
+fn read_model(
+    name: &str,
+    read: Vec<u8>,
+    base: &Path,
+    limits: &validate::Limits,
+) -> Result<(Read, Vec<String>), String> {
+    let mut digest = blake3::Hasher::new();
+    digest.update(b"lodlab model");
+    digest.update(&read);
     let (doc, buffers) = read_document(read, base, limits)?;
     let images = super::sources::read_images(&doc, base, &buffers, limits)?;
+    digest_inputs(&mut digest, &buffers, &images);
     let mut warnings = Vec::new();
     let mut model = build(name, &doc, &buffers, &images, &mut warnings)?;
     // The skins' joints were counted before reading; an unskinned part riding on a node of
@@ -84,7 +108,34 @@ pub fn from_bytes(
     if packed > 0 {
         log::info!("{packed} plain-coloured materials share one palette texture");
     }
-    Ok((model, warnings))
+    let digest = *digest.finalize().as_bytes();
+    Ok((Read { model, digest }, warnings))
+}
+
+/// Adds to `digest` what a file's own bytes do not hold: its buffers (a `.gltf`'s external
+/// ones) and the images its materials use, decoded (external ones too).
+fn digest_inputs(
+    digest: &mut blake3::Hasher,
+    buffers: &[gltf::buffer::Data],
+    images: &[Option<Rgba8Image>],
+) {
+    for b in buffers {
+        digest.update(&(b.len() as u64).to_le_bytes());
+        digest.update(b);
+    }
+    for image in images {
+        match image {
+            Some(i) => {
+                digest.update(&[1]);
+                digest.update(&i.width.to_le_bytes());
+                digest.update(&i.height.to_le_bytes());
+                digest.update(&i.pixels);
+            }
+            None => {
+                digest.update(&[0]);
+            }
+        }
+    }
 }
 
 /// The document in the bytes of a `.glb` or `.gltf` and its buffers, every check of
@@ -111,26 +162,31 @@ fn read_document(
 /// Adds the clips of the glTF file `path` to `model`, bound by joint name: what a service
 /// that sends a character and its animations as separate files on one skeleton sends (Mixamo
 /// does). Every node the file animates must be a node of the model's skeleton of the same
-/// name; the error names those that are not. Returns how many clips came.
-pub fn add_clips(model: &mut Model, path: &Path) -> Result<usize, InputError> {
+/// name; the error names those that are not. Returns how many clips came, and a digest of
+/// the bytes read (the file and its buffers).
+pub fn add_clips(
+    model: &mut Model,
+    path: &Path,
+    limits: &validate::Limits,
+) -> Result<(usize, [u8; 32]), InputError> {
     let fail = |p: String| InputError::new(path, p);
-    let limits = validate::limits();
     let meta = std::fs::metadata(path).map_err(|e| fail(io_problem(&e)))?;
-    validate::check_file(&meta, &limits).map_err(fail)?;
+    validate::check_file(&meta, limits).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
-    clips_into(model, read, base, &limits).map_err(fail)
+    clips_into(model, read, base, limits).map_err(fail)
 }
 
 /// [`add_clips`] from a model named on the command line: a built-in (`mocap-walk`) or a file.
 pub fn add_clips_from(
     model: &mut Model,
     from: &crate::import::source::Source,
-) -> Result<usize, InputError> {
+    limits: &validate::Limits,
+) -> Result<(usize, [u8; 32]), InputError> {
     match from {
-        crate::import::source::Source::File(path) => add_clips(model, path),
+        crate::import::source::Source::File(path) => add_clips(model, path, limits),
         crate::import::source::Source::Builtin(b) => {
-            clips_into(model, b.bytes.to_vec(), Path::new("."), &validate::limits())
+            clips_into(model, b.bytes.to_vec(), Path::new("."), limits)
                 .map_err(|p| InputError::new(b.label(), p))
         }
     }
@@ -143,8 +199,12 @@ fn clips_into(
     read: Vec<u8>,
     base: &Path,
     limits: &validate::Limits,
-) -> Result<usize, String> {
+) -> Result<(usize, [u8; 32]), String> {
+    let mut digest = blake3::Hasher::new();
+    digest.update(b"lodlab clips");
+    digest.update(&read);
     let (doc, buffers) = read_document(read, base, limits)?;
+    digest_inputs(&mut digest, &buffers, &[]);
     let skeleton = &model.skeleton;
     let mut remap = vec![u32::MAX; doc.nodes().len()];
     for n in doc.nodes() {
@@ -219,7 +279,7 @@ fn clips_into(
     }
     let count = clips.len();
     model.clips.extend(clips);
-    Ok(count)
+    Ok((count, *digest.finalize().as_bytes()))
 }
 
 /// `path` rewritten by [`super::gltfpack::unpack`] where it uses `EXT_meshopt_compression` or

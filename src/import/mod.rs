@@ -14,53 +14,72 @@ pub mod validate;
 use crate::error::InputError;
 use crate::model::Model;
 use std::path::{Path, PathBuf};
-use std::sync::RwLock;
 
 pub use source::{Source, source};
 
-/// Files whose clips every model loaded by [`load_model`] gets (the command line's
-/// `--clips`), in order.
-static EXTRA_CLIPS: RwLock<Vec<PathBuf>> = RwLock::new(Vec::new());
-
-/// Sets the files of clips [`load_model`] adds to every model, for the rest of the process.
-pub fn set_extra_clips(files: Vec<PathBuf>) {
-    *EXTRA_CLIPS.write().unwrap_or_else(|e| e.into_inner()) = files;
+/// What an import is told, from the command line down: the bounds a file may expand to, and
+/// the files whose clips every model gets. Plain values: two imports in one process may ask
+/// for different ones.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImportOptions {
+    /// What one file may expand to (`--limit`, `--allow-outside-files`).
+    pub limits: validate::Limits,
+    /// Files whose clips are added to every model, bound by joint name (`--clips`), in order:
+    /// built-in names (`mocap-walk`) or paths.
+    pub extra_clips: Vec<PathBuf>,
 }
 
-/// The files of clips [`load_model`] adds to every model (a bake's cache key holds them).
-pub fn extra_clips() -> Vec<PathBuf> {
-    EXTRA_CLIPS
-        .read()
-        .unwrap_or_else(|e| e.into_inner())
-        .clone()
+/// A model as [`import`] made it, and the key its bakes are cached under.
+#[derive(Clone, Debug)]
+pub struct Imported {
+    pub model: Model,
+    /// A hash of every byte the import read: the file, its external buffers and images, and
+    /// the files its extra clips came from. The same bytes give the same hash; nothing is read
+    /// twice for it.
+    pub source_hash: [u8; 32],
 }
 
-/// Loads a model given on the command line: the name of a built-in asset (`horse`, `walker`)
-/// or a path to a glTF file, with the clips of [`extra_clips`] added by joint name.
-pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
-    let mut model = load_file(name_or_path)?;
-    for file in extra_clips() {
+/// Imports a model given on the command line: the name of a built-in asset (`horse`,
+/// `walker`) or a path to a glTF file, with the clips of `options.extra_clips` added by joint
+/// name.
+pub fn import(name_or_path: &str, options: &ImportOptions) -> Result<Imported, InputError> {
+    let read = load_file(name_or_path, &options.limits)?;
+    let mut model = read.model;
+    let mut hash = blake3::Hasher::new();
+    hash.update(&read.digest);
+    for file in &options.extra_clips {
         // A built-in's name (`mocap-walk`) or a path.
         let from = source(&file.to_string_lossy());
-        let added = gltf::add_clips_from(&mut model, &from)?;
+        let (added, digest) = gltf::add_clips_from(&mut model, &from, &options.limits)?;
+        // Clips added from other files change what the metric is estimated from.
+        hash.update(b"clips");
+        hash.update(&digest);
         log::info!(
             "{}: {added} clip(s) added to {}",
             from.label().display(),
             model.name
         );
     }
-    Ok(model)
+    Ok(Imported {
+        model,
+        source_hash: *hash.finalize().as_bytes(),
+    })
 }
 
-/// [`load_model`] without the extra clips.
-fn load_file(name_or_path: &str) -> Result<Model, InputError> {
+/// The model of [`import`] with the default options (the default limits, no extra clips).
+pub fn load_model(name_or_path: &str) -> Result<Model, InputError> {
+    import(name_or_path, &ImportOptions::default()).map(|i| i.model)
+}
+
+/// [`import`] without the extra clips.
+fn load_file(name_or_path: &str, limits: &validate::Limits) -> Result<gltf::Read, InputError> {
     if let Some(asset) = crate::assets::builtin(name_or_path) {
-        let mut model = match source(name_or_path) {
-            Source::File(path) => gltf::load(&path)?,
-            Source::Builtin(b) => gltf::load_builtin(b)?,
+        let mut read = match source(name_or_path) {
+            Source::File(path) => gltf::read(&path, limits)?,
+            Source::Builtin(b) => gltf::read_builtin(b, limits)?,
         };
-        model.name = asset.name.to_string();
-        return Ok(model);
+        read.model.name = asset.name.to_string();
+        return Ok(read);
     }
     let path = Path::new(name_or_path);
     // A bare name that is neither a file nor a built-in: most likely a misspelt built-in, so
@@ -76,5 +95,5 @@ fn load_file(name_or_path: &str) -> Result<Model, InputError> {
             ),
         ));
     }
-    gltf::load(path)
+    gltf::read(path, limits)
 }

@@ -7,8 +7,6 @@
 //! the size of what a 3 KB file claims. Everything here runs in time linear in the file, before
 //! the importer reads any attribute, so that each problem is one line naming what is wrong.
 
-use std::sync::RwLock;
-
 /// What one model may ask for. Each bound keeps a small hostile file from taking the machine's
 /// memory or minutes of baking; a real model past one can raise it (`--limit NAME=VALUE`).
 ///
@@ -163,18 +161,6 @@ impl Default for Limits {
     fn default() -> Self {
         Limits::DEFAULT
     }
-}
-
-static LIMITS: RwLock<Limits> = RwLock::new(Limits::DEFAULT);
-
-/// The limits every import checks (the defaults, or what `--limit` set).
-pub fn limits() -> Limits {
-    *LIMITS.read().unwrap_or_else(|e| e.into_inner())
-}
-
-/// Sets the limits for the rest of the process (the command line's `--limit`).
-pub fn set_limits(limits: Limits) {
-    *LIMITS.write().unwrap_or_else(|e| e.into_inner()) = limits;
 }
 
 /// "…; the limit is N (--limit NAME=M raises it)".

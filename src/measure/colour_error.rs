@@ -3,7 +3,7 @@
 //! by drawing both in worlds of their own.
 
 use crate::bake::foliage::billboard::chain::CloudLevel;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::{OFFSCREEN_FORMAT, Offscreen};
@@ -117,7 +117,7 @@ pub fn whole_tree_error(
     level: &CloudLevel,
     height_px: f32,
 ) -> Result<f32> {
-    use crate::bake::seams::MeasureColour;
+    use crate::bake::gpu_products::MeasureColour;
     let bake = level
         .bake()
         .map_err(|e| anyhow::anyhow!("{}: {e}", level.model.name))?;
@@ -161,7 +161,7 @@ impl GpuColourError<'_> {
         &self,
         tree: &Model,
         level: &Model,
-        bake: CharacterBake,
+        bake: Drawable,
         height_px: f32,
     ) -> Result<Option<f64>> {
         use crate::render::timer::{FrameTimer, Pass};
@@ -205,7 +205,7 @@ impl GpuColourError<'_> {
         &self,
         tree: &Model,
         level: &Model,
-        bake: CharacterBake,
+        bake: Drawable,
     ) -> Result<std::sync::MutexGuard<'_, Option<Measuring>>> {
         let gpu = self.gpu;
         let mut worlds = self
@@ -229,12 +229,12 @@ impl GpuColourError<'_> {
     }
 }
 
-impl crate::bake::seams::MeasureColour for GpuColourError<'_> {
+impl crate::bake::gpu_products::MeasureColour for GpuColourError<'_> {
     fn fragments(
         &self,
         tree: &Model,
         level: &Model,
-        bake: CharacterBake,
+        bake: Drawable,
         heights_px: &[f32],
     ) -> Result<Option<Vec<f64>>> {
         let gpu = self.gpu;
@@ -281,7 +281,7 @@ impl crate::bake::seams::MeasureColour for GpuColourError<'_> {
         &self,
         tree: &Model,
         level: &Model,
-        bake: CharacterBake,
+        bake: Drawable,
         heights_px: &[f32],
     ) -> Result<Vec<f32>> {
         let gpu = self.gpu;

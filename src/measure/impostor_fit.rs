@@ -12,9 +12,9 @@ use super::colour_error::{
     METRIC_FRAMES, METRIC_VIEWS, framing, metric_camera, metric_world, picture,
 };
 use crate::bake::character::lod::LodLevel;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
+use crate::bake::gpu_products::MeasureImpostor;
 use crate::bake::impostor::animated::AnimatedImpostor;
-use crate::bake::seams::MeasureImpostor;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;
@@ -47,7 +47,7 @@ impl<'a> ImpostorFit<'a> {
     pub fn new(
         gpu: &'a Gpu,
         model: &'a Model,
-        full: &CharacterBake,
+        full: &Drawable,
         levels: &'a [LodLevel],
         impostor: &AnimatedImpostor,
     ) -> Result<Self> {
@@ -150,7 +150,7 @@ impl MeasureImpostor for ImpostorFit<'_> {
 pub fn impostor_error(
     gpu: &Gpu,
     model: &Model,
-    full: &CharacterBake,
+    full: &Drawable,
     impostor: &AnimatedImpostor,
     px: f32,
     lag: f32,

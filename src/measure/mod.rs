@@ -25,9 +25,9 @@ pub mod ssim;
 pub mod statistics;
 
 use crate::bake::character::lod::LodLevel;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
+use crate::bake::gpu_products::{MeasureColour, MeasureImpostor};
 use crate::bake::impostor::animated::AnimatedImpostor;
-use crate::bake::seams::{MeasureColour, MeasureImpostor};
 use crate::model::Model;
 use crate::render::Gpu;
 use anyhow::Result;
@@ -44,7 +44,7 @@ impl crate::runtime::levels::Measurer for GpuMeasurer {
         &self,
         gpu: &'a Gpu,
         model: &'a Model,
-        full: &'a CharacterBake,
+        full: &'a Drawable,
         levels: &'a [LodLevel],
         impostor: &'a AnimatedImpostor,
     ) -> Result<Box<dyn MeasureImpostor + 'a>> {

@@ -23,7 +23,7 @@ use super::colour_error::{
 };
 use super::impostor_fit::{PITCH_DEG, colour_off};
 use crate::bake::character::lod::LodLevel;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::targets::Offscreen;
@@ -144,7 +144,7 @@ fn terms(
 pub fn shading_errors(
     gpu: &Gpu,
     model: &Model,
-    full: &CharacterBake,
+    full: &Drawable,
     chain: &[LodLevel],
     which: &[usize],
     px: f32,
@@ -157,7 +157,7 @@ pub fn shading_errors(
 pub fn shading_errors_at(
     gpu: &Gpu,
     model: &Model,
-    full: &CharacterBake,
+    full: &Drawable,
     chain: &[LodLevel],
     at: &[(usize, f32)],
 ) -> Result<Vec<LevelShading>> {

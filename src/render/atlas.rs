@@ -9,7 +9,7 @@ use super::gpu::Gpu;
 use super::shaders;
 use super::targets::read_texture;
 use crate::bake::gpu_data::materials::MaterialLayers;
-use crate::bake::seams::{
+use crate::bake::gpu_products::{
     AtlasImages, AtlasLayout, AtlasVertex, RasterizeAtlas, ViewCamera, ViewImages, ViewRequest,
     ViewVertex,
 };

@@ -3,7 +3,7 @@
 
 use super::gpu::Gpu;
 use super::memory::GpuMemory;
-use crate::bake::gpu_data::drawable::{CharacterBake, DrawClass, LevelKind};
+use crate::bake::gpu_data::drawable::{DrawClass, Drawable, LevelKind};
 use crate::bake::gpu_data::lod_pack::{LodPack, PackedLevel};
 use crate::bake::gpu_data::texels::TexelGrid;
 use wgpu::util::DeviceExt;
@@ -245,7 +245,7 @@ impl GpuCharacter {
         gpu: &Gpu,
         layout: &wgpu::BindGroupLayout,
         sampler: &wgpu::Sampler,
-        bake: &CharacterBake,
+        bake: &Drawable,
     ) -> GpuCharacter {
         let anim = data_texture(
             gpu,

@@ -66,7 +66,17 @@ impl Headless {
         samples: Option<u32>,
         measure: &'static dyn Measurer,
     ) -> Result<Headless> {
-        let loaded = Loaded::new(spec.clone())?;
+        Self::of(Loaded::new(spec.clone())?, width, height, samples, measure)
+    }
+
+    /// [`Self::new`] of a scene already loaded (over a cache of the caller's, say).
+    pub fn of(
+        loaded: Loaded,
+        width: u32,
+        height: u32,
+        samples: Option<u32>,
+        measure: &'static dyn Measurer,
+    ) -> Result<Headless> {
         let gpu = Gpu::headless()?;
         // Said once a process: bench, soak and study proxy make several scenes.
         static SAID: std::sync::Once = std::sync::Once::new();

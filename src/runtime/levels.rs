@@ -3,6 +3,7 @@
 //! (the panel shows the progress). Characters get progressive-mesh levels by a method; trees
 //! get their billboard-cloud chain, the same for every method, built with the first one.
 
+use crate::bake::cache::keys::CacheKind;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::character::lod::LodLevel;
 use crate::bake::character::lod::SkinnedLods;
@@ -11,11 +12,11 @@ use crate::bake::foliage::billboard::chain::{
     ChainOptions, chain_file, load_or_build_chain, order_file,
 };
 use crate::bake::foliage::billboard::is_tree;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::bake::gpu_data::lod_pack::LodPack;
+use crate::bake::gpu_products::{MeasureColour, MeasureImpostor};
 use crate::bake::impostor::animated::{AnimatedImpostor, ImpostorOptions, load_or_bake_impostor};
 use crate::bake::impostor::placement::{self, Placement};
-use crate::bake::seams::{MeasureColour, MeasureImpostor};
 use crate::model::Model;
 use crate::render::Gpu;
 use crate::render::atlas::AtlasRasterizer;
@@ -37,7 +38,7 @@ pub trait Measurer: Sync {
         &self,
         gpu: &'a Gpu,
         model: &'a Model,
-        full: &'a CharacterBake,
+        full: &'a Drawable,
         levels: &'a [LodLevel],
         impostor: &'a AnimatedImpostor,
     ) -> anyhow::Result<Box<dyn MeasureImpostor + 'a>>;
@@ -52,36 +53,26 @@ pub struct LevelSource {
     /// How a character's animated impostor is baked with its levels (`None`: it gets none;
     /// trees ignore it).
     pub impostor: Option<ImpostorOptions>,
+    /// Triangle budgets its levels are cut by (`None`: by error; see [`runtime_options`]).
+    pub budgets: Option<Vec<u32>>,
+}
+
+impl LevelSource {
+    /// The options its levels are baked with ([`runtime_options`]).
+    pub fn lod_options(&self) -> crate::bake::character::lod::LodOptions {
+        runtime_options(&self.model, self.budgets.as_deref())
+    }
 }
 
 /// The level options the front ends bake with: the defaults of `lodlab bake`, so that a
 /// `lodlab bake MODEL` beforehand fills the same cache entries; or, where the command line
-/// asked for levels by triangle count (`--levels triangles:N,N,…`, see [`set_level_budgets`]),
-/// those of `lodlab bake MODEL --triangles N,N,…`, whose cached cut they then read.
-pub fn runtime_options(model: &Model) -> crate::bake::character::lod::LodOptions {
-    crate::bake::character::lod::lod_options(
-        model,
-        DEFAULT_FIRST_ERROR_PX,
-        level_budgets().as_deref(),
-    )
-}
-
-/// The triangle budgets levels are cut by (see [`set_level_budgets`]); `None`: by error.
-pub fn level_budgets() -> Option<Vec<u32>> {
-    LEVEL_BUDGETS
-        .read()
-        .unwrap_or_else(|e| e.into_inner())
-        .clone()
-}
-
-/// Triangle budgets every character's levels are cut by (`None`: by error), for the rest of
-/// the process.
-static LEVEL_BUDGETS: std::sync::RwLock<Option<Vec<u32>>> = std::sync::RwLock::new(None);
-
-/// Cuts every character's levels by these triangle budgets from now on (`None`: by error, the
-/// default).
-pub fn set_level_budgets(budgets: Option<Vec<u32>>) {
-    *LEVEL_BUDGETS.write().unwrap_or_else(|e| e.into_inner()) = budgets;
+/// asked for levels by triangle count (`--levels triangles:N,N,…`: `budgets`), those of
+/// `lodlab bake MODEL --triangles N,N,…`, whose cached cut they then read.
+pub fn runtime_options(
+    model: &Model,
+    budgets: Option<&[u32]>,
+) -> crate::bake::character::lod::LodOptions {
+    crate::bake::character::lod::lod_options(model, DEFAULT_FIRST_ERROR_PX, budgets)
 }
 
 /// `lodlab bake --first-error` default: e₁, the error bound of LOD 1 in pixels.
@@ -100,7 +91,7 @@ pub enum Levels {
     /// the GPU (on the baking thread: their atlases' mipmaps take a while).
     Tree {
         chain: Vec<crate::bake::foliage::billboard::chain::TreeLevel>,
-        bakes: Vec<CharacterBake>,
+        bakes: Vec<Drawable>,
     },
 }
 
@@ -114,18 +105,25 @@ pub struct ImpostorLevel {
 /// what it needs).
 pub type Baked = Option<Result<Levels, String>>;
 
-/// The levels of every model, in model order, from the cache or baked now: characters' by
-/// `method`, trees' chains cut by `chain`; models whose `skip` is set are left out.
-/// `progress(i, f)` reports model i's fraction done. Cache warnings go to `warn`.
-#[allow(clippy::too_many_arguments)]
+/// What one call bakes every model's levels with: the device its pictures are drawn on and
+/// how they are measured, the cache they are kept in, the method characters' levels are made
+/// by and how trees' chains are cut.
+#[derive(Clone, Copy)]
+pub struct BakeJob<'a> {
+    pub gpu: &'a Gpu,
+    pub measure: &'a dyn Measurer,
+    pub cache: &'a LodCache,
+    pub method: Method,
+    pub chain: &'a ChainOptions,
+}
+
+/// The levels of every model, in model order, from the cache or baked now as `job` says;
+/// models whose `skip` is set are left out. `progress(i, f)` reports model i's fraction done.
+/// Cache warnings go to `warn`.
 pub fn bake_all(
-    gpu: &Gpu,
-    measure: &dyn Measurer,
+    job: &BakeJob,
     sources: &[LevelSource],
     skip: &[bool],
-    method: Method,
-    chain: &ChainOptions,
-    cache: &LodCache,
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
 ) -> Vec<Baked> {
@@ -144,9 +142,7 @@ pub fn bake_all(
             }
         }
     };
-    bake_each(
-        gpu, measure, sources, skip, method, chain, cache, progress, warn, &deliver,
-    );
+    bake_each(job, sources, skip, progress, warn, &deliver);
     done.into_inner().unwrap_or_default()
 }
 
@@ -156,19 +152,15 @@ pub fn bake_all(
 /// ([`Levels::Impostor`], one for every character that asks for one; the mesh levels stand
 /// without it where it fails) after every model's levels, so that its first bake holds back
 /// neither its own levels nor the trees' chains.
-#[allow(clippy::too_many_arguments)]
 pub fn bake_each(
-    gpu: &Gpu,
-    measure: &dyn Measurer,
+    job: &BakeJob,
     sources: &[LevelSource],
     skip: &[bool],
-    method: Method,
-    chain: &ChainOptions,
-    cache: &LodCache,
     progress: &(dyn Fn(usize, f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
     deliver: &(dyn Fn(usize, Baked) + Sync),
 ) {
+    let (cache, method) = (job.cache, job.method);
     let mut order: Vec<usize> = (0..sources.len()).collect();
     order.sort_by_key(|&i| is_tree(&sources[i].model));
     // The characters' levels whose impostors are still to come.
@@ -181,14 +173,20 @@ pub fn bake_each(
             return;
         }
         let (levels, origin) = if is_tree(&s.model) {
-            match tree_levels(gpu, measure, cache, s, chain, &|f| progress(i, f)) {
+            match tree_levels(job, s, &|f| progress(i, f)) {
                 Ok((levels, origin)) => (Ok(levels), origin),
                 Err(e) => (Err(format!("{}: {e:#}", s.model.name)), Origin::Cache),
             }
         } else {
-            let options = runtime_options(&s.model);
-            let (lods, origin) =
-                cache.load_or_bake(&s.model, &s.hash, method, &options, &|f| progress(i, f));
+            let options = s.lod_options();
+            let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
+                cache,
+                &s.model,
+                &s.hash,
+                method,
+                &options,
+                &|f| progress(i, f),
+            );
             if let Origin::Baked { warning: Some(w) } = &origin {
                 warn(w.clone());
             }
@@ -220,7 +218,7 @@ pub fn bake_each(
     later.par_iter().with_max_len(1).for_each(|(i, lods)| {
         let s = &sources[*i];
         let level = s.impostor.and_then(|options| {
-            impostor_level(gpu, measure, cache, s, lods, &options, warn)
+            impostor_level(job, s, lods, &options, warn)
                 .map_err(|e| warn(format!("{}: no impostor: {e:#}", s.model.name)))
                 .ok()
         });
@@ -235,14 +233,13 @@ const IMPOSTOR_PENDING: f32 = 0.9;
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
 fn impostor_level(
-    gpu: &Gpu,
-    measure: &dyn Measurer,
-    cache: &LodCache,
+    job: &BakeJob,
     s: &LevelSource,
     lods: &SkinnedLods,
     options: &ImpostorOptions,
     warn: &(dyn Fn(String) + Sync),
 ) -> anyhow::Result<ImpostorLevel> {
+    let (gpu, measure, cache) = (job.gpu, job.measure, job.cache);
     let raster = AtlasRasterizer::new(gpu);
     let (impostor, origin) = load_or_bake_impostor(&raster, cache, &s.model, &s.hash, *options)?;
     if let Origin::Baked { warning: Some(w) } = origin {
@@ -251,7 +248,7 @@ fn impostor_level(
     let tolerance = crate::scene::LodPolicy::default().tolerance_px;
     let place = || -> anyhow::Result<Placement> {
         let start = web_time::Instant::now();
-        let full = CharacterBake::new(&s.model).map_err(anyhow::Error::msg)?;
+        let full = Drawable::new(&s.model).map_err(anyhow::Error::msg)?;
         let errors: Vec<f32> = lods.levels.iter().map(|l| l.error).collect();
         let height = full.bounds.size().y.max(1e-3);
         let placement = if errors.len() < 2 {
@@ -273,13 +270,19 @@ fn impostor_level(
     let placement = if s.hash == [0; 32] {
         place()?
     } else {
-        let (_, levels_key) = cache.levels_file(&s.model.name, &s.hash, lods.method, &lods.options);
+        let (_, levels_key) = crate::bake::character::lod::cached::levels_file(
+            cache,
+            &s.model.name,
+            &s.hash,
+            lods.method,
+            &lods.options,
+        );
         let key = crate::bake::cache::keys::placement_key(
             &levels_key,
             &crate::bake::impostor::animated::impostor_key(&s.hash, options),
             tolerance,
         );
-        let path = cache.file(&s.model.name, "placement", &key);
+        let path = cache.file(&s.model.name, CacheKind::Placement, &key);
         let (placement, origin) = cache.load_or_build(&path, &key, place)?;
         if let Origin::Baked { warning: Some(w) } = origin {
             warn(w);
@@ -331,26 +334,29 @@ pub fn cached(cache: &LodCache, s: &LevelSource, method: Method, chain: &ChainOp
             _ => return false,
         }
     } else {
-        cache
-            .levels_file(name, &s.hash, method, &runtime_options(&s.model))
-            .0
+        crate::bake::character::lod::cached::levels_file(
+            cache,
+            name,
+            &s.hash,
+            method,
+            &s.lod_options(),
+        )
+        .0
     };
     cache.has(&path)
 }
 
 /// A tree's chain from the cache or built now, its levels 1… baked for the GPU.
 fn tree_levels(
-    gpu: &Gpu,
-    measure: &dyn Measurer,
-    cache: &LodCache,
+    job: &BakeJob,
     s: &LevelSource,
-    opts: &ChainOptions,
     progress: &(dyn Fn(f32) + Sync),
 ) -> anyhow::Result<(Levels, Origin)> {
+    let (gpu, opts) = (job.gpu, job.chain);
     let (chain, origin) = load_or_build_chain(
         &AtlasRasterizer::new(gpu),
-        &*measure.colour(gpu),
-        cache,
+        &*job.measure.colour(gpu),
+        job.cache,
         &s.model,
         &s.hash,
         opts,
@@ -466,9 +472,14 @@ impl BackgroundBake {
                     let _ = tx.send((i, baked));
                 }
             };
-            bake_each(
-                &gpu, measure, &sources, &skip, method, &chain, &cache, &report, &warn, &deliver,
-            );
+            let job = BakeJob {
+                gpu: &gpu,
+                measure,
+                cache: &cache,
+                method,
+                chain: &chain,
+            };
+            bake_each(&job, &sources, &skip, &report, &warn, &deliver);
         };
         #[cfg(not(target_arch = "wasm32"))]
         std::thread::spawn(work);

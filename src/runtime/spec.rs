@@ -3,11 +3,9 @@
 //! the tests, so they all show the same thing.
 
 use super::levels::LevelSource;
-use crate::bake::cache::keys::source_hash_of;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::bake::impostor::animated::ImpostorOptions;
-use crate::error::InputError;
-use crate::import::{load_model, source};
+use crate::import::{Imported, import};
 use crate::model::Model;
 use crate::scene::kind::DEFAULT_MIXED_TREES;
 use crate::scene::{Camera, Crowd, CrowdConfig, CrowdModel, SceneKind};
@@ -35,6 +33,20 @@ pub struct SceneSpec {
     /// How characters' animated impostors are baked (`None`, the default here: characters
     /// get none; the front ends bake them unless told `--impostors off`).
     pub impostors: Option<ImpostorOptions>,
+    /// How its models are read and their levels cut (the command line's global options).
+    pub inputs: BakeInputs,
+}
+
+/// What the command line says, for every command, about reading models and cutting their
+/// levels: the import's limits and extra clips, and the triangle budgets of characters'
+/// levels. Plain values handed down from the command line: two scenes or bakes in one process
+/// may ask for different ones.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BakeInputs {
+    pub import: crate::import::ImportOptions,
+    /// Triangle budgets characters' levels are cut by (`--levels triangles:N,N,…`, the levels
+    /// `lodlab bake MODEL --triangles N,N,…` made); `None`: by error, the default.
+    pub level_budgets: Option<Vec<u32>>,
 }
 
 impl Default for SceneSpec {
@@ -49,18 +61,19 @@ impl Default for SceneSpec {
             cross_fade: 0.0,
             cache_dir: None,
             impostors: None,
+            inputs: BakeInputs::default(),
         }
     }
 }
 
 /// Loads and bakes the models a spec names, in order.
-pub fn load_characters(spec: &SceneSpec) -> Result<Vec<CharacterBake>> {
+pub fn load_characters(spec: &SceneSpec) -> Result<Vec<Drawable>> {
     Ok(load_sources(spec)?.into_iter().map(|(b, _)| b).collect())
 }
 
 /// Loads the models a spec names, in order: their full-detail bakes, and what baking their
 /// levels of detail later needs.
-fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
+fn load_sources(spec: &SceneSpec) -> Result<Vec<(Drawable, LevelSource)>> {
     if spec.scene == SceneKind::Study && spec.models.len() > 1 {
         bail!(
             "the study scene shows copies of one model, not {} (--model once)",
@@ -76,17 +89,15 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
     names
         .iter()
         .map(|name| {
-            let model = load_model(name)?;
-            let bake = CharacterBake::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-            let from = source(name);
-            let hash =
-                source_hash_of(&from).map_err(|e| InputError::new(from.label(), e.to_string()))?;
+            let Imported { model, source_hash } = import(name, &spec.inputs.import)?;
+            let bake = Drawable::new(&model).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
             Ok((
                 bake,
                 LevelSource {
                     model,
-                    hash,
+                    hash: source_hash,
                     impostor: spec.impostors,
+                    budgets: spec.inputs.level_budgets.clone(),
                 },
             ))
         })
@@ -95,7 +106,7 @@ fn load_sources(spec: &SceneSpec) -> Result<Vec<(CharacterBake, LevelSource)>> {
 
 /// The crowd for a spec over already-loaded characters: all of them, or only character
 /// `only`. Agents refer to characters by their index in `bakes`.
-pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usize>) -> Crowd {
+pub fn layout_crowd(spec: &SceneSpec, bakes: &[Drawable], only: Option<usize>) -> Crowd {
     let chosen: Vec<usize> = match only {
         Some(m) if m < bakes.len() => vec![m],
         _ => (0..bakes.len()).collect(),
@@ -149,7 +160,7 @@ pub fn layout_crowd(spec: &SceneSpec, bakes: &[CharacterBake], only: Option<usiz
 /// The mixed scene: the crowd of the characters among `bakes` walking in a clearing, and
 /// `spec.trees` trees of the rest round it, their trunks clear of the outermost lane and their
 /// crowns over it.
-fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
+fn mixed_crowd(spec: &SceneSpec, bakes: &[Drawable]) -> Crowd {
     let (trees, characters): (Vec<usize>, Vec<usize>) =
         (0..bakes.len()).partition(|&m| bakes[m].kind.is_tree());
     let part = |scene: SceneKind, models: &[usize], count: usize| {
@@ -199,7 +210,7 @@ fn mixed_crowd(spec: &SceneSpec, bakes: &[CharacterBake]) -> Crowd {
 }
 
 /// Checks that a requested clip exists on at least one model.
-pub fn check_clip(spec: &SceneSpec, bakes: &[CharacterBake]) -> Result<()> {
+pub fn check_clip(spec: &SceneSpec, bakes: &[Drawable]) -> Result<()> {
     if let Some(wanted) = &spec.clip {
         let found = bakes.iter().any(|b| {
             b.animation
@@ -227,7 +238,7 @@ pub fn check_clip(spec: &SceneSpec, bakes: &[CharacterBake]) -> Result<()> {
 
 /// A camera that shows the crowd: standing a little above head height at its south-east edge
 /// and looking across it, so that characters are seen at every distance from near to far.
-pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
+pub fn default_camera(crowd: &Crowd, characters: &[Drawable]) -> Camera {
     let height = characters
         .iter()
         .map(|b| b.bounds.size().y)
@@ -244,8 +255,11 @@ pub fn default_camera(crowd: &Crowd, characters: &[CharacterBake]) -> Camera {
 #[derive(Clone)]
 pub struct Loaded {
     pub spec: SceneSpec,
-    pub bakes: Vec<CharacterBake>,
+    pub bakes: Vec<Drawable>,
     pub sources: Vec<LevelSource>,
+    /// Where its levels are cached: the spec's folder, with files held in memory where a
+    /// front end put them there ([`Loaded::with_cache`]).
+    pub cache: crate::bake::cache::LodCache,
 }
 
 impl Loaded {
@@ -257,14 +271,15 @@ impl Loaded {
         motion: Option<&crate::bake::gpu_data::spectra::SpectralMotion>,
         count: usize,
     ) -> Result<Loaded> {
-        let bake = CharacterBake::with_motion(model, motion)
+        let bake = Drawable::with_motion(model, motion)
             .map_err(|e| anyhow::anyhow!("{}: {e}", model.name))?;
         Ok(Self::forest_of_bake(model, bake, count))
     }
 
     /// [`Self::forest_of`] with the model already baked.
-    pub fn forest_of_bake(model: &Model, bake: CharacterBake, count: usize) -> Loaded {
+    pub fn forest_of_bake(model: &Model, bake: Drawable, count: usize) -> Loaded {
         Loaded {
+            cache: crate::bake::cache::LodCache::new(None),
             spec: SceneSpec {
                 scene: SceneKind::Forest,
                 count,
@@ -275,14 +290,21 @@ impl Loaded {
                 model: model.clone(),
                 hash: [0; 32],
                 impostor: None,
+                budgets: None,
             }],
         }
+    }
+
+    /// The same scene over `cache` (a cache with files preloaded, or recording its reads).
+    pub fn with_cache(self, cache: crate::bake::cache::LodCache) -> Loaded {
+        Loaded { cache, ..self }
     }
 
     pub fn new(spec: SceneSpec) -> Result<Loaded> {
         let (bakes, sources): (Vec<_>, Vec<_>) = load_sources(&spec)?.into_iter().unzip();
         check_clip(&spec, &bakes)?;
         Ok(Loaded {
+            cache: crate::bake::cache::LodCache::new(spec.cache_dir.clone()),
             spec,
             bakes,
             sources,

@@ -109,17 +109,22 @@ pub struct LodPolicy {
     pub force_level: Option<u8>,
 }
 
+impl LodPolicy {
+    /// The defaults, written once: the command line's (`cli::scene_args`) come from here.
+    pub const DEFAULT: LodPolicy = LodPolicy {
+        tolerance_px: 1.5,
+        hysteresis: 0.2,
+        transition: Transition::Morph,
+        drive: Drive::Time,
+        duration: 0.5,
+        zone_width: 0.25,
+        force_level: None,
+    };
+}
+
 impl Default for LodPolicy {
     fn default() -> Self {
-        LodPolicy {
-            tolerance_px: 1.5,
-            hysteresis: 0.2,
-            transition: Transition::Morph,
-            drive: Drive::Time,
-            duration: 0.5,
-            zone_width: 0.25,
-            force_level: None,
-        }
+        LodPolicy::DEFAULT
     }
 }
 

@@ -558,14 +558,16 @@ fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
 /// chains baked) started last ran alone at the end while the other thread idled.
 #[test]
 fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
-    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash_of};
+    use lodlab::bake::cache::{LodCache, Origin};
     use lodlab::bake::foliage::billboard::chain::{ChainOptions, load_or_build_chain};
     let gpu = crate::common::gpu().clone();
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let tree_and_hash = |name: &str| {
         let tree = load_model(name).unwrap();
-        let hash = source_hash_of(&lodlab::import::source(name)).unwrap();
+        let hash = lodlab::import::import(name, &Default::default())
+            .unwrap()
+            .source_hash;
         (tree, hash)
     };
     // The broadleaf's chain ends in its impostor, which is to be cached too; the sapling's
@@ -666,7 +668,7 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
 #[test]
 fn billboard_outlines_are_the_four_sides_of_every_billboard() {
     use lodlab::bake::foliage::billboard::{atlas, cloud_model};
-    use lodlab::bake::gpu_data::drawable::CharacterBake;
+    use lodlab::bake::gpu_data::drawable::Drawable;
     let m = load_model("sapling").unwrap();
     let c = cloud(&m, 0.08, 1);
     let layout = atlas::layout(&c.billboards, 64.0).unwrap();
@@ -676,7 +678,7 @@ fn billboard_outlines_are_the_four_sides_of_every_billboard() {
         pixels: vec![200; (4 * layout.width * layout.height) as usize],
     };
     let level = cloud_model(&m, &c, &layout, image, &[], &[]);
-    let bake = CharacterBake::new(&level).unwrap();
+    let bake = Drawable::new(&level).unwrap();
     let lines = &bake.outlines;
     assert_eq!(lines.len(), 8 * c.billboards.len());
     let mut degree = std::collections::HashMap::<u32, usize>::new();
@@ -721,7 +723,7 @@ fn billboard_outlines_are_the_four_sides_of_every_billboard() {
         let d = pos[l[0] as usize].distance(pos[l[1] as usize]);
         assert!(d <= longest_side * 1.001 + 1e-4, "a line of {d} is no side");
     }
-    assert!(CharacterBake::new(&m).unwrap().outlines.is_empty());
+    assert!(Drawable::new(&m).unwrap().outlines.is_empty());
 }
 
 /// An octahedral impostor (issue 19) shows the tree it was baked from: its atlas holds every
@@ -840,7 +842,7 @@ fn an_impostor_stands_where_its_tree_is_drawn() {
 fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
     use lodlab::bake::foliage::billboard::chain::{CloudKind, cloud_level};
     use lodlab::bake::foliage::billboard::occlusion::CrownDensity;
-    use lodlab::bake::gpu_data::drawable::CharacterBake;
+    use lodlab::bake::gpu_data::drawable::Drawable;
     use lodlab::bake::gpu_data::materials::{BILLBOARD_LIGHTING, lit_atlas_material};
     use lodlab::measure::foliage_lighting::foliage_lighting;
     let gpu = crate::common::gpu().clone();
@@ -876,7 +878,7 @@ fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
     .unwrap();
     let atlas = lit_atlas_material(&level.model.materials).expect("a lit atlas");
     assert_eq!(
-        CharacterBake::tree_level(&level.model, None, &level.occlusion, &[])
+        Drawable::tree_level(&level.model, None, &level.occlusion, &[])
             .unwrap()
             .kind,
         lodlab::bake::gpu_data::drawable::DrawKind::Foliage { atlas_lit: true }
@@ -935,8 +937,8 @@ fn billboards_lit_through_their_atlas_shade_like_the_tree_under_two_suns() {
 /// The full tree is darkened inside its crown by the same term, per vertex; characters are not.
 #[test]
 fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
-    use lodlab::bake::gpu_data::drawable::CharacterBake;
-    let tree = CharacterBake::new(&load_model("broadleaf").unwrap()).unwrap();
+    use lodlab::bake::gpu_data::drawable::Drawable;
+    let tree = Drawable::new(&load_model("broadleaf").unwrap()).unwrap();
     let o = &tree.animation_space.crown_occlusion;
     assert_eq!(o.len(), tree.animation_space.vertex_count());
     let most = o.iter().copied().fold(0.0f32, f32::max);
@@ -947,7 +949,7 @@ fn a_tree_is_darker_inside_its_crown_and_a_character_is_not() {
         "{open} of {} vertices in the open",
         o.len()
     );
-    let walker = CharacterBake::new(&load_model("walker").unwrap()).unwrap();
+    let walker = Drawable::new(&load_model("walker").unwrap()).unwrap();
     assert!(walker.animation_space.crown_occlusion.is_empty());
 }
 

@@ -4,7 +4,7 @@
 //! normals under a stretched root, and a pine of 155 triangles: each must keep its look in its
 //! clouds, and no level may cost more to draw than a finer one.
 
-use lodlab::bake::cache::{LodCache, keys::source_hash_of};
+use lodlab::bake::cache::LodCache;
 use lodlab::bake::foliage::billboard::chain::{
     ChainOptions, CloudKind, load_or_build_chains, load_or_choose, order,
 };
@@ -31,7 +31,9 @@ fn baked(name: &str) -> &'static Baked {
         let measure = lodlab::measure::colour_error::GpuColourError::new(gpu);
         let opts = ChainOptions::default();
         let tree = lodlab::import::load_model(name).unwrap();
-        let source = source_hash_of(&lodlab::import::source(name)).unwrap();
+        let source = lodlab::import::import(name, &Default::default())
+            .unwrap()
+            .source_hash;
         let (chains, _) =
             load_or_build_chains(&raster, &measure, &cache, &tree, &source, &opts, &|_| {})
                 .unwrap();

@@ -268,8 +268,8 @@ fn files_gltfpack_simplified_and_quantised_load_and_bake() {
 /// back with the triangles it draws (`seed` names the model in failures): the levels' meshes by
 /// method.
 fn levels_read_back(model: &Model, seed: u64, dir: &Path) -> Vec<(Method, Vec<SkinnedMesh>)> {
-    let limits = lodlab::import::validate::limits();
-    let opts = lodlab::runtime::levels::runtime_options(model);
+    let limits = lodlab::import::validate::Limits::default();
+    let opts = lodlab::runtime::levels::runtime_options(model, None);
     Method::ALL
         .into_iter()
         .map(|method| {
@@ -307,7 +307,7 @@ fn random_meshes_load_bake_and_export() {
         let mut rng = fastrand::Rng::with_seed(seed);
         let bytes: Vec<u8> = (0..rng.usize(20..900)).map(|_| rng.u8(..)).collect();
         let file = wild::random::random_file(&bytes);
-        let limits = lodlab::import::validate::limits();
+        let limits = lodlab::import::validate::Limits::default();
         let model = match lodlab::import::gltf::from_bytes("random", file, dir.path(), &limits) {
             Ok((m, _)) => m,
             Err(e) => {
@@ -353,7 +353,7 @@ fn random_structures_load_bake_and_export() {
     let mut sources = Vec::new();
     let mut written = Vec::new();
     let mut loaded = 0;
-    let limits = lodlab::import::validate::limits();
+    let limits = lodlab::import::validate::Limits::default();
     for seed in 0..100u64 {
         let mut rng = fastrand::Rng::with_seed(1000 + seed);
         let bytes: Vec<u8> = (0..rng.usize(50..1200)).map(|_| rng.u8(..)).collect();
@@ -406,7 +406,7 @@ fn a_mesh_of_triangles_with_two_corners_at_one_point_is_refused_in_one_line() {
         55, 0, 0, 0, 37, 0, 0, 71, 1, 0, 115,
     ];
     let dir = tempfile::tempdir().unwrap();
-    let limits = lodlab::import::validate::limits();
+    let limits = lodlab::import::validate::Limits::default();
     let file = wild::random::random_file(&bytes);
     match lodlab::import::gltf::from_bytes("random", file, dir.path(), &limits) {
         Ok((m, _)) => panic!("loaded {} triangles", m.mesh.triangle_count()),
@@ -480,7 +480,9 @@ fn clips_come_from_another_file_by_joint_name() {
     let mut m = load_model("mocap").unwrap();
     let walk = lodlab::import::source("mocap-walk");
     assert_eq!(
-        lodlab::import::gltf::add_clips_from(&mut m, &walk).unwrap(),
+        lodlab::import::gltf::add_clips_from(&mut m, &walk, &Default::default())
+            .unwrap()
+            .0,
         1
     );
     assert_eq!(m.clips.len(), 2);
@@ -507,8 +509,8 @@ fn shading_at_switch(
     levels: std::ops::Range<usize>,
 ) -> Vec<lodlab::measure::shading_error::LevelShading> {
     let gpu = crate::common::gpu().clone();
-    let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(model).unwrap();
-    let opts = lodlab::runtime::levels::runtime_options(model);
+    let full = lodlab::bake::gpu_data::drawable::Drawable::new(model).unwrap();
+    let opts = lodlab::runtime::levels::runtime_options(model, None);
     let lods = bake_lods(model, method, &opts, &|_| {});
     let height = lodlab::bake::character::lod::model_height(model);
     let at: Vec<(usize, f32)> = levels
@@ -532,8 +534,8 @@ fn influence_simplification_keeps_a_faceted_models_shading() {
     let model = load_model("lowpoly").unwrap();
     let at = |method| {
         let gpu = crate::common::gpu().clone();
-        let full = lodlab::bake::gpu_data::drawable::CharacterBake::new(&model).unwrap();
-        let opts = lodlab::runtime::levels::runtime_options(&model);
+        let full = lodlab::bake::gpu_data::drawable::Drawable::new(&model).unwrap();
+        let opts = lodlab::runtime::levels::runtime_options(&model, None);
         let lods = bake_lods(&model, method, &opts, &|_| {});
         lodlab::measure::shading_error::shading_errors(
             &gpu,
@@ -588,7 +590,7 @@ fn a_model_coloured_by_materials_keeps_its_colours_at_every_level() {
 fn normal_maps_do_not_make_the_worst_tile_worse() {
     let mut model = load_model("mocap").unwrap();
     let walk = lodlab::import::source("mocap-walk");
-    lodlab::import::gltf::add_clips_from(&mut model, &walk).unwrap();
+    lodlab::import::gltf::add_clips_from(&mut model, &walk, &Default::default()).unwrap();
     model.clips.reverse();
     for s in shading_at_switch(&model, Method::InfluenceSimplification, 1.5, 300.0, 1..7) {
         assert!(
@@ -658,7 +660,7 @@ fn joint_limit_counts_the_bones_a_file_makes() {
     ];
     let dir = tempfile::tempdir().unwrap();
     let file = wild::structure::structure_file(bytes);
-    let limits = lodlab::import::validate::limits();
+    let limits = lodlab::import::validate::Limits::default();
     let (model, _) =
         lodlab::import::gltf::from_bytes("structure", file.clone(), dir.path(), &limits)
             .expect("loads under the default limits");
@@ -685,7 +687,7 @@ fn joint_limit_counts_the_bones_a_file_makes() {
 
 fn levels_by_budget_read_back(bytes: &[u8]) {
     let dir = tempfile::tempdir().unwrap();
-    let limits = lodlab::import::validate::limits();
+    let limits = lodlab::import::validate::Limits::default();
     let file = wild::structure::structure_file(bytes);
     let (model, _) =
         lodlab::import::gltf::from_bytes("structure", file, dir.path(), &limits).expect("loads");

@@ -318,7 +318,7 @@ fn an_unskinned_mesh_loads_as_a_one_bone_prop() {
     let lods = lodlab::bake::character::lod::bake_lods(
         &prop,
         lodlab::bake::character::simplify::Method::AnimationSpace,
-        &lodlab::runtime::levels::runtime_options(&prop),
+        &lodlab::runtime::levels::runtime_options(&prop, None),
         &|_| {},
     );
     assert!(!lods.levels.is_empty());

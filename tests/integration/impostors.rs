@@ -3,7 +3,7 @@
 //! their impostors under selection, and stop when the panel turns them off.
 
 use lodlab::bake::character::simplify::Method;
-use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::drawable::Drawable;
 use lodlab::bake::impostor::animated::{
     AnimatedImpostor, ImpostorOptions, bake_animated_impostor, sheet_layout,
 };
@@ -85,7 +85,7 @@ fn the_bake_lays_every_frame_of_every_clip_in_two_sheets() {
         }
     }
     // The frame's sphere holds every vertex of every pose.
-    let bake = CharacterBake::new(&walker).unwrap();
+    let bake = Drawable::new(&walker).unwrap();
     let centre = glam::Vec3::from(imp.frame.centre);
     for c in 0..bake.animation.clips.len() {
         for k in 0..4 {
@@ -111,7 +111,7 @@ fn the_bake_lays_every_frame_of_every_clip_in_two_sheets() {
 fn an_impostor_plays_its_characters_clip_where_it_stands() {
     let _serial = serial();
     let walker = load_model("walker").unwrap();
-    let full = CharacterBake::new(&walker).unwrap();
+    let full = Drawable::new(&walker).unwrap();
     let imp = walker_impostor();
     let stride = walker.clips[0].duration;
     let in_step = impostor_error(gpu(), &walker, &full, imp, 48.0, 0.0).unwrap();
@@ -225,14 +225,17 @@ fn a_bad_impostor_option_is_one_line() {
 #[test]
 fn the_background_bake_hands_over_levels_then_the_impostor() {
     let _serial = serial();
-    use lodlab::bake::cache::{LodCache, keys::source_hash_of};
+    use lodlab::bake::cache::LodCache;
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Poll};
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
     let source = LevelSource {
         model: load_model("walker").unwrap(),
-        hash: source_hash_of(&lodlab::import::source("walker")).unwrap(),
+        hash: lodlab::import::import("walker", &Default::default())
+            .unwrap()
+            .source_hash,
         impostor: Some(OPTIONS.parse().unwrap()),
+        budgets: None,
     };
     let run = || {
         let mut job = BackgroundBake::start(

@@ -2,7 +2,7 @@
 //! → scene → render (wgpu) → runtime (worlds, level installation) → measure (measurements that
 //! draw worlds) → app (front ends). A module may use its own layer and those before it, never
 //! one after: no import cycles between layers, none between the files of a layer either, and
-//! the bake never reaches the GPU except through the traits of `bake::seams`, which render and
+//! the bake never reaches the GPU except through the traits of `bake::gpu_products`, which render and
 //! measure implement. Test modules (`#[cfg(test)]`, at the end of a file) may use anything.
 
 use std::collections::BTreeMap;
@@ -174,7 +174,8 @@ fn file_of(src: &Path, segments: &[String]) -> Option<PathBuf> {
 /// (`pub mod x;`, `pub use x::Y;`) are not uses: they are how Rust spells a folder.
 fn file_uses(src: &Path, file: &Path) -> Vec<PathBuf> {
     let text = std::fs::read_to_string(file).unwrap();
-    let code = text.split("#[cfg(test)]").next().unwrap_or("");
+    let code = ungroup_uses(text.split("#[cfg(test)]").next().unwrap_or(""));
+    let code = code.as_str();
     let own = module_path(src, file);
     let children: Vec<String> = code
         .lines()
@@ -241,27 +242,87 @@ fn file_uses(src: &Path, file: &Path) -> Vec<PathBuf> {
     out
 }
 
-/// No two files of the crate use each other, however indirectly: each file can be read
-/// knowing only the files it uses, and the layers' order holds inside a layer too.
-#[test]
-fn no_file_imports_round_a_circle() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+/// `code` (comments dropped) with every grouped import, `use a::{b, c::{d, e}};` over one line
+/// or several, written out as one `use` a path (`use a::b;`, `use a::c::d;`, …), so that every
+/// file it names is seen, not only `a`.
+fn ungroup_uses(code: &str) -> String {
+    let mut out = String::new();
+    let mut statement = String::new();
+    for line in code.lines() {
+        let line = line.split("//").next().unwrap_or("");
+        let trimmed = line.trim_start();
+        let starts = ["use ", "pub use ", "pub(crate) use ", "pub(super) use "]
+            .iter()
+            .any(|p| trimmed.starts_with(p));
+        if statement.is_empty() && !(starts && line.contains('{')) {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        statement.push_str(trimmed);
+        statement.push(' ');
+        if !line.contains(';') {
+            continue;
+        }
+        let (head, tree) = statement.split_once("use ").unwrap();
+        for path in expand_use_tree(tree.trim().trim_end_matches(';')) {
+            out.push_str(&format!("{head}use {path};\n"));
+        }
+        statement.clear();
+    }
+    out
+}
+
+/// The paths of a use tree: `a::{b, c::{d, self}}` gives `a::b`, `a::c::d` and `a::c`.
+fn expand_use_tree(tree: &str) -> Vec<String> {
+    let tree = tree.trim();
+    let Some(open) = tree.find('{') else {
+        let path = tree.split(" as ").next().unwrap_or("").trim();
+        return vec![path.to_string()];
+    };
+    let prefix = &tree[..open];
+    let inner = &tree[open + 1..tree.rfind('}').unwrap_or(tree.len())];
+    let (mut parts, mut depth, mut start) = (Vec::new(), 0, 0);
+    for (i, c) in inner.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                parts.push(&inner[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    parts.push(&inner[start..]);
+    parts
+        .into_iter()
+        .filter(|p| !p.trim().is_empty())
+        .flat_map(expand_use_tree)
+        .map(|p| match p.as_str() {
+            "self" => prefix.trim_end_matches("::").to_string(),
+            _ => format!("{prefix}{p}"),
+        })
+        .collect()
+}
+
+/// Every circle of uses among the files of `src` (but `lib.rs` and `main.rs`), each as the
+/// files it goes round.
+fn import_circles(src: &Path) -> Vec<String> {
     let mut files = Vec::new();
-    rust_files(&src, &mut files);
+    rust_files(src, &mut files);
     files.sort();
     let uses: BTreeMap<PathBuf, Vec<PathBuf>> = files
         .iter()
         .filter(|f| {
-            let name = f.strip_prefix(&src).unwrap();
+            let name = f.strip_prefix(src).unwrap();
             name != Path::new("lib.rs") && name != Path::new("main.rs")
         })
-        .map(|f| (f.clone(), file_uses(&src, f)))
+        .map(|f| (f.clone(), file_uses(src, f)))
         .collect();
-    let edges: usize = uses.values().map(Vec::len).sum();
-    assert!(edges > 300, "only {edges} uses between files found");
     // A depth-first search from every file: a file met again on the current path closes a
     // circle.
-    let show = |p: &Path| p.strip_prefix(&src).unwrap().display().to_string();
+    let show = |p: &Path| p.strip_prefix(src).unwrap().display().to_string();
     let mut circles = Vec::new();
     let mut done = std::collections::BTreeSet::new();
     for start in uses.keys() {
@@ -285,6 +346,49 @@ fn no_file_imports_round_a_circle() {
     }
     circles.sort();
     circles.dedup();
+    circles
+}
+
+/// The circle finder reads grouped imports, over one line or several: a circle closed only
+/// through `use crate::{a::A, b::B};` is found.
+#[test]
+fn grouped_imports_close_circles_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    let write = |name: &str, text: &str| std::fs::write(src.join(name), text).unwrap();
+    write("lib.rs", "pub mod a;\npub mod b;\npub mod c;\npub mod d;\n");
+    write(
+        "a.rs",
+        "use crate::{\n    c::C,\n    b::{self, B as Bee},\n};\npub struct A;\n",
+    );
+    write("b.rs", "use crate::{d::{D}, c::C};\npub struct B;\n");
+    write("c.rs", "pub struct C;\n");
+    write(
+        "d.rs",
+        "use crate::{a::A}; // closes a -> b -> d -> a\npub struct D;\n",
+    );
+    let used = file_uses(src, &src.join("a.rs"));
+    assert_eq!(used, vec![src.join("b.rs"), src.join("c.rs")]);
+    assert_eq!(
+        import_circles(src),
+        vec!["a.rs -> b.rs -> d.rs -> a.rs".to_string()]
+    );
+    assert_eq!(
+        expand_use_tree("x::{y, z::{self, w as v}}"),
+        ["x::y", "x::z", "x::z::w"]
+    );
+}
+
+/// No two files of the crate use each other, however indirectly: each file can be read
+/// knowing only the files it uses, and the layers' order holds inside a layer too.
+#[test]
+fn no_file_imports_round_a_circle() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let edges: usize = files.iter().map(|f| file_uses(&src, f).len()).sum();
+    assert!(edges > 300, "only {edges} uses between files found");
+    let circles = import_circles(&src);
     assert!(
         circles.is_empty(),
         "import circles:\n{}",

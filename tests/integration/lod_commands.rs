@@ -1,8 +1,8 @@
 //! `lodlab bake` and `lodlab report` as a user runs them, and the on-disk cache behind them.
 
-use lodlab::bake::cache::keys::{levels_key, source_hash};
 use lodlab::bake::cache::{LodCache, Origin};
 use lodlab::bake::character::lod::LodOptions;
+use lodlab::bake::character::lod::cached::{levels_key, levels_path, load_or_bake};
 use lodlab::bake::character::simplify::Method;
 use lodlab::generate::cylinder::bent_cylinder;
 use lodlab::generate::glb::to_glb;
@@ -36,15 +36,28 @@ fn cache_hits_and_rebuilds_what_it_cannot_trust() {
     let cache = LodCache::new(Some(dir.path().join("cache")));
     let model = bent_cylinder(8, 8);
     let source = [7u8; 32];
-    let (first, origin) =
-        cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+    let (first, origin) = load_or_bake(
+        &cache,
+        &model,
+        &source,
+        Method::AnimationSpace,
+        &options(),
+        &|_| {},
+    );
     assert_eq!(origin, Origin::Baked { warning: None });
-    let (again, origin) =
-        cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+    let (again, origin) = load_or_bake(
+        &cache,
+        &model,
+        &source,
+        Method::AnimationSpace,
+        &options(),
+        &|_| {},
+    );
     assert_eq!(origin, Origin::Cache);
     assert_eq!(again, first);
 
-    let path = cache.path(
+    let path = levels_path(
+        &cache,
         &model.name,
         Method::AnimationSpace,
         &levels_key(&source, Method::AnimationSpace, &options()),
@@ -67,8 +80,14 @@ fn cache_hits_and_rebuilds_what_it_cannot_trust() {
     ];
     for (why, bytes) in damaged {
         std::fs::write(&path, &bytes).unwrap();
-        let (lods, origin) =
-            cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+        let (lods, origin) = load_or_bake(
+            &cache,
+            &model,
+            &source,
+            Method::AnimationSpace,
+            &options(),
+            &|_| {},
+        );
         match origin {
             Origin::Baked { warning: Some(w) } => {
                 assert!(w.contains(why), "expected '{why}' in: {w}");
@@ -79,8 +98,14 @@ fn cache_hits_and_rebuilds_what_it_cannot_trust() {
         }
         assert_eq!(lods.levels, first.levels);
         // Rebuilt and rewritten: the next lookup hits.
-        let (_, origin) =
-            cache.load_or_bake(&model, &source, Method::AnimationSpace, &options(), &|_| {});
+        let (_, origin) = load_or_bake(
+            &cache,
+            &model,
+            &source,
+            Method::AnimationSpace,
+            &options(),
+            &|_| {},
+        );
         assert_eq!(origin, Origin::Cache, "{why}");
     }
     // Other parameters, another source or another method: another file.
@@ -104,10 +129,15 @@ fn cache_hits_and_rebuilds_what_it_cannot_trust() {
 fn source_hash_follows_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let p = cylinder_glb(dir.path());
-    let a = source_hash(&p).unwrap();
-    assert_eq!(a, source_hash(&p).unwrap());
+    let source_hash = |p: &std::path::Path| {
+        lodlab::import::import(p.to_str().unwrap(), &Default::default())
+            .unwrap()
+            .source_hash
+    };
+    let a = source_hash(&p);
+    assert_eq!(a, source_hash(&p));
     std::fs::write(&p, to_glb(&bent_cylinder(12, 11))).unwrap();
-    assert_ne!(a, source_hash(&p).unwrap());
+    assert_ne!(a, source_hash(&p));
 }
 
 #[test]
@@ -549,4 +579,77 @@ fn levels_cut_by_triangles_can_be_shown() {
     ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("'x' is not a positive whole number"));
+}
+
+/// Options travel as values: two imports and two bakes in one process, at the same time, each
+/// with its own limits, extra clips and level budgets, and neither sees the other's.
+#[test]
+fn two_models_bake_with_their_own_inputs_in_one_process() {
+    use lodlab::import::{ImportOptions, import, validate::Limits};
+    let plain = ImportOptions::default();
+    let with_clips = ImportOptions {
+        extra_clips: vec!["mocap-walk".into()],
+        ..Default::default()
+    };
+    let mut few = Limits::default();
+    few.set("triangles=100").unwrap();
+    let tight = ImportOptions {
+        limits: few,
+        ..Default::default()
+    };
+    let (clipped, bare, refused) = std::thread::scope(|s| {
+        let clipped = s.spawn(|| import("mocap", &with_clips));
+        let bare = s.spawn(|| import("mocap", &plain));
+        let refused = s.spawn(|| import("mocap", &tight));
+        (
+            clipped.join().unwrap().unwrap(),
+            bare.join().unwrap().unwrap(),
+            refused.join().unwrap(),
+        )
+    });
+    assert!(clipped.model.clips.len() > bare.model.clips.len());
+    assert_ne!(
+        clipped.source_hash, bare.source_hash,
+        "the clips are in the key"
+    );
+    let e = refused.unwrap_err().to_string();
+    assert!(e.contains("--limit triangles="), "{e}");
+    // The same inputs give the same key.
+    assert_eq!(
+        import("mocap", &with_clips).unwrap().source_hash,
+        clipped.source_hash
+    );
+    assert_eq!(
+        import("mocap", &plain).unwrap().source_hash,
+        bare.source_hash
+    );
+
+    // Levels cut by error and by triangle budgets, baked side by side into one cache.
+    let dir = tempfile::tempdir().unwrap();
+    let path = cylinder_glb(dir.path());
+    let cylinder = import(path.to_str().unwrap(), &plain).unwrap();
+    let cache = LodCache::new(Some(dir.path().join("cache")));
+    let bake = |budgets: Option<&[u32]>| {
+        let options = lodlab::runtime::levels::runtime_options(&cylinder.model, budgets);
+        let (lods, _) = load_or_bake(
+            &cache,
+            &cylinder.model,
+            &cylinder.source_hash,
+            Method::AnimationSpace,
+            &options,
+            &|_| {},
+        );
+        lods.levels
+            .iter()
+            .map(|l| l.mesh.triangle_count())
+            .collect::<Vec<_>>()
+    };
+    let (by_error, by_budget) = std::thread::scope(|s| {
+        let a = s.spawn(|| bake(None));
+        let b = s.spawn(|| bake(Some(&[160, 120])));
+        (a.join().unwrap(), b.join().unwrap())
+    });
+    assert_ne!(by_error, by_budget);
+    assert_eq!(by_budget.len(), 3, "{by_budget:?}");
+    assert!(by_budget[1] <= 160 && by_budget[2] <= 120, "{by_budget:?}");
 }

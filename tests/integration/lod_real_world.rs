@@ -40,7 +40,7 @@ fn check(name: &str) {
     let model = load_model(name).unwrap();
     let source = model.mesh.triangle_count();
     let poses = pose_samples(&model, 2);
-    let opts = runtime_options(&model);
+    let opts = runtime_options(&model, None);
     for method in Method::ALL {
         let lods = bake_lods(&model, method, &opts, &|_| {});
         let levels = &lods.levels;
@@ -151,7 +151,7 @@ fn the_models_have_the_properties_they_stand_for() {
 
     // armour: dozens of separate parts, no texture coordinates at all.
     let armour = load_model("armour").unwrap();
-    let pieces = lodlab::bake::foliage::billboard::connected_pieces(
+    let pieces = lodlab::geometry::connected_pieces(
         armour.mesh.vertex_count(),
         armour.mesh.indices.chunks_exact(3),
     );
@@ -162,7 +162,7 @@ fn the_models_have_the_properties_they_stand_for() {
     // patchwork: a texture in many charts, most positions on a chart outline.
     let patchwork = load_model("patchwork").unwrap();
     assert!(patchwork.materials[0].texture.is_some());
-    let charts = lodlab::bake::foliage::billboard::connected_pieces(
+    let charts = lodlab::geometry::connected_pieces(
         patchwork.mesh.vertex_count(),
         patchwork.mesh.indices.chunks_exact(3),
     );

@@ -3,7 +3,7 @@
 use glam::{Affine3A, Vec3, Vec4};
 use lodlab::bake::character::lod::bake_lods;
 use lodlab::bake::character::simplify::Method;
-use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::drawable::Drawable;
 use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::import::load_model;
 use lodlab::runtime::levels::runtime_options;
@@ -19,11 +19,11 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
     let (width, height) = (1280u32, 720u32);
     for name in ["horse", "walker"] {
         let model = load_model(name).unwrap();
-        let bake = CharacterBake::new(&model).unwrap();
+        let bake = Drawable::new(&model).unwrap();
         let lods = bake_lods(
             &model,
             Method::InfluenceSimplification,
-            &runtime_options(&model),
+            &runtime_options(&model, None),
             &|_| {},
         );
         let pack = LodPack::from_levels(&lods.levels).unwrap();
@@ -139,15 +139,18 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
 /// billboard-cloud chain per tree, and a second bake of the same method comes from the cache.
 #[test]
 fn background_bakes_finish_and_fill_the_cache() {
-    use lodlab::bake::cache::{LodCache, keys::source_hash_of};
+    use lodlab::bake::cache::LodCache;
     use lodlab::runtime::levels::{BackgroundBake, LevelSource, Levels, Poll};
     let dir = tempfile::tempdir().unwrap();
     let sources: Vec<LevelSource> = ["walker", "sapling"]
         .iter()
         .map(|name| LevelSource {
             model: load_model(name).unwrap(),
-            hash: source_hash_of(&lodlab::import::source(name)).unwrap(),
+            hash: lodlab::import::import(name, &Default::default())
+                .unwrap()
+                .source_hash,
             impostor: None,
+            budgets: None,
         })
         .collect();
     // Each model's levels come as soon as they are ready; the status names what is baking.
@@ -253,7 +256,12 @@ fn background_bakes_finish_and_fill_the_cache() {
 #[test]
 fn packed_levels_address_their_own_vertices() {
     let model = load_model("horse").unwrap();
-    let lods = bake_lods(&model, Method::RestPose, &runtime_options(&model), &|_| {});
+    let lods = bake_lods(
+        &model,
+        Method::RestPose,
+        &runtime_options(&model, None),
+        &|_| {},
+    );
     let pack = LodPack::from_levels(&lods.levels).unwrap();
     assert_eq!(pack.levels.len(), lods.levels.len());
     for (k, l) in pack.levels.iter().enumerate() {

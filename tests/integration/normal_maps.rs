@@ -5,7 +5,7 @@
 use lodlab::bake::character::lod::{SkinnedLods, bake_lods};
 use lodlab::bake::character::normal_map::{NORMAL_MAP_SIZE, UvProblem};
 use lodlab::bake::character::simplify::{Method, SimplifyInput};
-use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::drawable::Drawable;
 use lodlab::bake::gpu_data::lod_pack::LodPack;
 use lodlab::import::load_model;
 use lodlab::measure::shading_error::shading_errors;
@@ -33,7 +33,7 @@ fn levels(model: &Model) -> SkinnedLods {
     bake_lods(
         model,
         Method::InfluenceSimplification,
-        &runtime_options(model),
+        &runtime_options(model, None),
         &|_| {},
     )
 }
@@ -43,7 +43,7 @@ fn coarse_levels_are_lit_closer_to_full_detail_through_their_maps() {
     let _serial = serial();
     let walker = load_model("walker").unwrap();
     let lods = levels(&walker);
-    let full = CharacterBake::new(&walker).unwrap();
+    let full = Drawable::new(&walker).unwrap();
     let n = lods.levels.len();
     assert!(n >= 4, "{n} levels");
     let which = [n - 3, n - 2, n - 1];
@@ -85,7 +85,7 @@ fn a_model_without_texture_coordinates_keeps_its_vertex_normals() {
     assert_eq!(maps.layer_count, 0);
     assert!(pack.levels.iter().all(|l| !l.normal_mapped));
     // Drawn with maps on, it is lit exactly as with them off.
-    let full = CharacterBake::new(&walker).unwrap();
+    let full = Drawable::new(&walker).unwrap();
     let last = lods.levels.len() - 1;
     let e = shading_errors(gpu(), &walker, &full, &lods.levels, &[last], 120.0).unwrap();
     assert!(!e[0].mapped);

@@ -6,7 +6,7 @@ use lodlab::bake::foliage::billboard::chain::{CloudKind, CloudLevel, cloud_level
 use lodlab::bake::foliage::billboard::cloud::CloudParams;
 use lodlab::bake::foliage::billboard::{foliage, tree_height};
 use lodlab::bake::foliage::spectral::cloud::SpectralParams;
-use lodlab::bake::gpu_data::drawable::CharacterBake;
+use lodlab::bake::gpu_data::drawable::Drawable;
 use lodlab::bake::gpu_data::spectra::NO_ROW;
 use lodlab::render::Gpu;
 use lodlab::render::atlas::AtlasRasterizer;
@@ -43,7 +43,7 @@ fn spectral_level(gpu: &Gpu) -> CloudLevel {
 
 /// GPU = CPU for the spectral offset: every vertex the vertex shader skins, billboards moved by
 /// their spectra and the wood by its bones, at several times and wind strengths, matches
-/// `CharacterBake::evaluate`. The offsets are not nothing: without them the billboards would
+/// `Drawable::evaluate`. The offsets are not nothing: without them the billboards would
 /// be elsewhere, and a weaker wind moves them less.
 #[test]
 fn gpu_spectral_offsets_match_the_cpu_reference() {
@@ -59,7 +59,7 @@ fn gpu_spectral_offsets_match_the_cpu_reference() {
     )
     .unwrap();
     let bake = &world.bakes[0];
-    let bones_only = CharacterBake::new(&level.model).unwrap();
+    let bones_only = Drawable::new(&level.model).unwrap();
     let size = bake.bounds.diagonal();
     let place =
         Affine3A::from_rotation_translation(Quat::from_rotation_y(0.4), Vec3::new(2.0, 0.0, 1.0));

@@ -747,7 +747,11 @@ fn the_foliage_policy_decides_what_trees_become() {
         let chains = world.shown_chains();
         assert_eq!(chains.len(), 1);
         assert!(chains[0].1, "the chain shown is the one asked for");
-        chains[0].2.iter().map(|l| l.kind).collect()
+        chains[0]
+            .2
+            .iter()
+            .map(|l| lodlab::bake::foliage::billboard::chain::CloudKind::word(l.kind.as_ref()))
+            .collect()
     };
     // Clouds of one kind after the full tree, the last level maybe the impostor.
     let clouds_of = |k: &[&str], kind: &str| {
@@ -848,7 +852,7 @@ fn the_foliage_policy_decides_what_trees_become() {
 /// behind the impostor stand in for a cloud somewhere: the point of ordering by cost.
 #[test]
 fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
-    use lodlab::bake::cache::{LodCache, Origin, keys::source_hash_of};
+    use lodlab::bake::cache::{LodCache, Origin};
     use lodlab::bake::foliage::billboard::chain::levels::FoliageOrder;
     use lodlab::bake::foliage::billboard::chain::{
         ChainOptions, CloudKind, load_or_build_chain, load_or_build_chains, load_or_choose, order,
@@ -862,7 +866,9 @@ fn the_cost_order_draws_no_worse_than_the_epsilon_chain_at_every_switch_size() {
     let mut clumps_for_clouds = 0;
     for name in ["broadleaf", "conifer", "sapling"] {
         let tree = lodlab::import::load_model(name).unwrap();
-        let source = source_hash_of(&lodlab::import::source(name)).unwrap();
+        let source = lodlab::import::import(name, &Default::default())
+            .unwrap()
+            .source_hash;
         let (shown, _) =
             load_or_build_chain(&raster, &measure, &cache, &tree, &source, &opts, &|_| {}).unwrap();
         let (chains, origin) =

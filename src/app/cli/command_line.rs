@@ -4,8 +4,9 @@
 //! defaults is written.
 
 use super::{Cli, Command, ShotArgs};
+use crate::import::validate::Limits;
 use crate::runtime::headless::ShotLod;
-use crate::runtime::spec::SceneSpec;
+use crate::runtime::spec::{BakeInputs, SceneSpec};
 use crate::scene::{Camera, SceneKind};
 use clap::{Parser, ValueEnum};
 
@@ -76,6 +77,7 @@ pub fn shot_command(view: &ViewState) -> Vec<String> {
     if let Some(cache) = &spec.cache_dir {
         push("cache", Some(cache.display().to_string()));
     }
+    input_words(&spec.inputs, &mut push);
     match lod.compare {
         Some(right) => push(
             "compare",
@@ -121,6 +123,29 @@ pub fn shot_command(view: &ViewState) -> Vec<String> {
     push("msaa", Some(view.samples.to_string()));
     push("camera", Some(camera_value(view.camera)));
     w
+}
+
+/// The global options that made `inputs`: extra clips, level budgets, import limits.
+fn input_words(inputs: &BakeInputs, push: &mut impl FnMut(&str, Option<String>)) {
+    for file in &inputs.import.extra_clips {
+        push("clips", Some(file.display().to_string()));
+    }
+    if let Some(budgets) = &inputs.level_budgets {
+        let list: Vec<String> = budgets.iter().map(u32::to_string).collect();
+        push("levels", Some(format!("triangles:{}", list.join(","))));
+    }
+    let (limits, plain) = (&inputs.import.limits, Limits::default());
+    for (limit, _) in Limits::NAMES {
+        if let Some(v) = limits
+            .value(limit)
+            .filter(|v| Some(v) != plain.value(limit).as_ref())
+        {
+            push("limit", Some(format!("{limit}={v}")));
+        }
+    }
+    if limits.outside_files {
+        push("allow-outside-files", None);
+    }
 }
 
 /// A camera as `--camera` takes it: `YAW,PITCH,DIST,X,Y,Z` (degrees, metres).
@@ -222,6 +247,18 @@ mod tests {
             cross_fade: 0.75,
             cache_dir: Some("/tmp/cache dir".into()),
             impostors: None,
+            inputs: BakeInputs {
+                import: crate::import::ImportOptions {
+                    limits: {
+                        let mut l = Limits::default();
+                        l.set("triangles=5000").unwrap();
+                        l.outside_files = true;
+                        l
+                    },
+                    extra_clips: vec!["mocap-walk".into(), "/tmp/my clips.glb".into()],
+                },
+                level_budgets: Some(vec![900, 300]),
+            },
         };
         let mut lod = ShotLod {
             method: LodMethod::AS_IS,
@@ -259,10 +296,12 @@ mod tests {
         });
         let line = shell_line(&words);
         assert!(line.contains("'/tmp/my model.glb'"), "{line}");
-        let Some(Command::Shot(a)) = Cli::try_parse_from(&words).unwrap().command else {
+        let cli = Cli::try_parse_from(&words).unwrap();
+        let inputs = cli.bake_inputs();
+        let Some(Command::Shot(a)) = cli.command else {
             panic!("not a shot: {line}");
         };
-        assert_eq!(a.scene.spec(), spec, "{line}");
+        assert_eq!(a.scene.spec(&inputs), spec, "{line}");
         let back = a.lod.shot_lod(LodMethod::None);
         assert_eq!(back, lod, "{line}");
         assert_eq!((a.size, a.time, a.msaa), ((1010, 720), 4.25, Some(1)));
@@ -271,7 +310,7 @@ mod tests {
         assert!(c.target.distance(camera.target) < 1e-5 && (c.distance - 41.0).abs() < 1e-5);
         // The defaults are left out.
         let plain = shot_command(&ViewState {
-            spec: &defaults().scene.spec(),
+            spec: &defaults().scene.spec(&Default::default()),
             lod: &ShotLod::default(),
             camera: &camera,
             size: (1280, 720),

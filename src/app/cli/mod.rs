@@ -96,6 +96,18 @@ fn parse_levels(s: &str) -> Result<LevelCut, String> {
 }
 
 impl Cli {
+    /// What the global options say about reading models and cutting their levels, handed to
+    /// every command.
+    pub fn bake_inputs(&self) -> crate::runtime::spec::BakeInputs {
+        crate::runtime::spec::BakeInputs {
+            import: crate::import::ImportOptions {
+                limits: self.import_limits(),
+                extra_clips: self.clips.clone(),
+            },
+            level_budgets: self.levels.as_ref().and_then(|l| l.budgets()),
+        }
+    }
+
     /// The import limits the command line asks for.
     pub fn import_limits(&self) -> crate::import::validate::Limits {
         let mut limits = crate::import::validate::Limits::default();

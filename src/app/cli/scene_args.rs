@@ -9,7 +9,7 @@ use crate::bake::foliage::billboard::chain::ChainOptions;
 use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::render::DebugView;
 use crate::runtime::headless::ShotLod;
-use crate::runtime::spec::SceneSpec;
+use crate::runtime::spec::{BakeInputs, SceneSpec};
 use crate::scene::SceneKind;
 use crate::scene::foliage::{FoliagePolicy, FoliageView};
 use crate::scene::{Drive, LodMethod, LodPolicy, Transition};
@@ -59,12 +59,13 @@ pub struct SceneArgs {
 }
 
 impl SceneArgs {
-    pub fn spec(&self) -> SceneSpec {
-        self.spec_or(SceneKind::Mixed)
+    /// The scene asked for, its models read and their levels cut as `inputs` says.
+    pub fn spec(&self, inputs: &BakeInputs) -> SceneSpec {
+        self.spec_or(SceneKind::Mixed, inputs)
     }
 
     /// The scene asked for, `default` where none is.
-    pub fn spec_or(&self, default: SceneKind) -> SceneSpec {
+    pub fn spec_or(&self, default: SceneKind, inputs: &BakeInputs) -> SceneSpec {
         let scene = self.scene.unwrap_or(default);
         SceneSpec {
             count: self.count.unwrap_or_else(|| scene.default_count()),
@@ -76,6 +77,7 @@ impl SceneArgs {
             cross_fade: self.cross_fade,
             impostors: self.impostors.0,
             cache_dir: self.cache.clone(),
+            inputs: inputs.clone(),
         }
     }
 }
@@ -108,23 +110,23 @@ pub struct LodArgs {
 pub struct PolicyArgs {
     /// Transition between levels: pop, alpha (blend), morph (geomorph), dither (screen-door
     /// cross-fade).
-    #[arg(long, default_value = "morph", value_enum)]
+    #[arg(long, default_value_t = LodPolicy::DEFAULT.transition, value_enum)]
     pub transition: Transition,
     /// What drives alpha, morph and dither: time (over --duration) or zone (morph zones over
     /// distance).
-    #[arg(long, value_enum, default_value = "time")]
+    #[arg(long, value_enum, default_value_t = LodPolicy::DEFAULT.drive)]
     pub drive: Drive,
     /// Seconds a time-driven transition takes.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_seconds)]
+    #[arg(long, default_value_t = LodPolicy::DEFAULT.duration, value_parser = parse_seconds)]
     pub duration: f32,
     /// Width of a morph zone, as a fraction of its threshold distance.
-    #[arg(long, default_value_t = 0.25, value_parser = parse_non_negative)]
+    #[arg(long, default_value_t = LodPolicy::DEFAULT.zone_width, value_parser = parse_non_negative)]
     pub zone_width: f32,
     /// Largest projected error allowed, in pixels (0.25 to 16).
-    #[arg(long, default_value_t = 1.5, value_parser = parse_tolerance)]
+    #[arg(long, default_value_t = LodPolicy::DEFAULT.tolerance_px, value_parser = parse_tolerance)]
     pub tolerance: f32,
     /// Hysteresis: the fraction of the tolerance a coarser level must undercut (0 to 0.9).
-    #[arg(long, default_value_t = 0.2, value_parser = parse_hysteresis)]
+    #[arg(long, default_value_t = LodPolicy::DEFAULT.hysteresis, value_parser = parse_hysteresis)]
     pub hysteresis: f32,
     /// Show level N of every character (its coarsest if it has fewer), whatever the distance.
     #[arg(long, value_name = "N")]

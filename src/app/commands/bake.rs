@@ -5,15 +5,14 @@
 use crate::app::cli::BakeArgs;
 use std::process::ExitCode;
 
-use crate::bake::cache::{LodCache, Origin, keys::source_hash_of};
+use crate::bake::cache::{LodCache, Origin};
 use crate::bake::character::lod::{
     SharedBake, SkinnedLods, bake_lods_sharing, full_detail, lod_options,
 };
 use crate::bake::character::simplify::Method;
 use crate::bake::foliage::billboard::is_tree;
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
-use crate::error::InputError;
-use crate::import::{load_model, source};
+use crate::import::{Imported, import};
 use crate::render::atlas::AtlasRasterizer;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -74,7 +73,7 @@ struct Bakery<'a> {
 /// Loads every model `a` names (failing on the first bad one before any work), then bakes
 /// every (model, method) pair of the characters and the chain of every tree, in parallel,
 /// with one progress bar each.
-pub fn run(a: &BakeArgs) -> anyhow::Result<BakeResults> {
+pub fn run(a: &BakeArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::Result<BakeResults> {
     if !(a.first_error.is_finite() && a.first_error > 0.0) {
         anyhow::bail!("--first-error must be a positive number of pixels");
     }
@@ -92,11 +91,8 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<BakeResults> {
     }
     let mut models = Vec::new();
     for name in &names {
-        let model = load_model(name)?;
-        let from = source(name);
-        let hash =
-            source_hash_of(&from).map_err(|e| InputError::new(from.label(), e.to_string()))?;
-        models.push((model, hash));
+        let Imported { model, source_hash } = import(name, &inputs.import)?;
+        models.push((model, source_hash));
     }
     // Tree chains render their atlases on the GPU.
     let gpu = if models.iter().any(|(m, _)| is_tree(m)) {
@@ -114,10 +110,7 @@ pub fn run(a: &BakeArgs) -> anyhow::Result<BakeResults> {
         cache: LodCache::new(a.cache.clone()),
         tolerance_px: a.first_error,
         // `--triangles`, or the budgets `--levels triangles:…` gave every command.
-        budgets: a
-            .triangles
-            .clone()
-            .or_else(crate::runtime::levels::level_budgets),
+        budgets: a.triangles.clone().or_else(|| inputs.level_budgets.clone()),
         bars: &bars,
         lines: &lines,
     };
@@ -271,7 +264,13 @@ impl Bakery<'_> {
     ) -> Baked {
         let (model, hash) = &self.models[i];
         let options = lod_options(model, self.tolerance_px, self.budgets.as_deref());
-        let (path, key) = self.cache.levels_file(&model.name, hash, method, &options);
+        let (path, key) = crate::bake::character::lod::cached::levels_file(
+            &self.cache,
+            &model.name,
+            hash,
+            method,
+            &options,
+        );
         let Ok((lods, origin)) = self.cache.load_or_build(&path, &key, || {
             let base = self.bases[i].get_or_init(|| full_detail(model));
             Ok::<_, std::convert::Infallible>(bake_lods_sharing(
@@ -611,8 +610,8 @@ fn character_table(results: &[Baked]) -> String {
 }
 
 /// `lodlab bake`: levels of detail baked or fetched from the cache, as a table.
-pub fn command(a: BakeArgs) -> anyhow::Result<ExitCode> {
-    let results = run(&a)?;
+pub fn command(a: BakeArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::Result<ExitCode> {
+    let results = run(&a, inputs)?;
     for warning in budget_warnings(&results) {
         eprintln!("warning: {warning}");
     }

@@ -26,7 +26,7 @@ struct Line(&'static str, String);
 
 /// `lodlab doctor`: prints the findings, then the problems with their remedies. Exits with 1
 /// where no adapter could be had (nothing but `gen-assets` runs then), else 0.
-pub fn command(a: DoctorArgs) -> anyhow::Result<ExitCode> {
+pub fn command(a: DoctorArgs, current: &Limits) -> anyhow::Result<ExitCode> {
     let mut lines = Vec::new();
     let mut problems = Vec::new();
     lines.push(Line(
@@ -45,7 +45,7 @@ pub fn command(a: DoctorArgs) -> anyhow::Result<ExitCode> {
     lines.push(Line("cache", cache(a.cache.clone())));
     lines.push(Line("shared models", shared_models()));
     lines.push(Line("checkers", checkers()));
-    lines.push(Line("limits", limits()));
+    lines.push(Line("limits", limits(current)));
     let width = lines.iter().map(|l| l.0.len()).max().unwrap_or(0);
     for Line(what, text) in &lines {
         println!("{what:width$}  {text}");
@@ -238,8 +238,7 @@ fn checkers() -> String {
 }
 
 /// The import limits in force, as `--limit NAME=VALUE` sets them.
-fn limits() -> String {
-    let current = crate::import::validate::limits();
+fn limits(current: &Limits) -> String {
     Limits::NAMES
         .iter()
         .filter_map(|(name, _)| current.value(name).map(|v| format!("{name}={v}")))

@@ -13,11 +13,10 @@
 use crate::app::cli::ExportArgs;
 use std::process::ExitCode;
 
-use crate::bake::cache::{LodCache, Origin, keys::source_hash_of};
+use crate::bake::cache::{LodCache, Origin};
 use crate::bake::character::lod::{SkinnedLods, model_height};
-use crate::error::InputError;
 use crate::generate::glb::{to_glb, to_lod_glb};
-use crate::import::{load_model, source};
+use crate::import::{Imported, import};
 use crate::model::{Model, SkinnedMesh};
 use anyhow::Result;
 use serde::Serialize;
@@ -125,23 +124,29 @@ pub fn level_meshes(model: &Model, lods: &SkinnedLods) -> Vec<SkinnedMesh> {
 }
 
 /// Writes the levels `lodlab export` is asked for by `opts`.
-pub fn run(opts: &ExportArgs) -> Result<Exported> {
+pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<Exported> {
     let Some(name) = opts.model.as_deref().or(opts.model_flag.as_deref()) else {
         anyhow::bail!("export needs a model: lodlab export --model NAME|PATH --out DIR");
     };
-    let model = load_model(name)?;
+    let Imported { model, source_hash } = import(name, &inputs.import)?;
     if crate::bake::foliage::billboard::is_tree(&model) {
         anyhow::bail!(
             "{}: a tree; export writes a character's levels (a tree's are billboard clouds)",
             name
         );
     }
-    let from = source(name);
-    let hash = source_hash_of(&from).map_err(|e| InputError::new(from.label(), e.to_string()))?;
+    let hash = source_hash;
     crate::atomic::make_folder(&opts.out)?;
     let cache = LodCache::new(opts.cache.clone());
-    let options = crate::runtime::levels::runtime_options(&model);
-    let (lods, origin) = cache.load_or_bake(&model, &hash, opts.method, &options, &|_| {});
+    let options = crate::runtime::levels::runtime_options(&model, inputs.level_budgets.as_deref());
+    let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
+        &cache,
+        &model,
+        &hash,
+        opts.method,
+        &options,
+        &|_| {},
+    );
     if let Origin::Baked { warning: Some(w) } = &origin {
         log::warn!("{w}");
     }
@@ -262,8 +267,11 @@ pub fn table(e: &Exported) -> String {
 }
 
 /// `lodlab export`: a character's levels as glTF files.
-pub fn command(a: ExportArgs) -> anyhow::Result<ExitCode> {
-    let exported = run(&a)?;
+pub fn command(
+    a: ExportArgs,
+    inputs: &crate::runtime::spec::BakeInputs,
+) -> anyhow::Result<ExitCode> {
+    let exported = run(&a, inputs)?;
     if a.json {
         println!("{}", crate::app::json::pretty(&exported)?);
     } else {

@@ -21,7 +21,11 @@ pub struct Written {
 }
 
 /// Generates the named assets (all if `only` is empty) into `dir`.
-pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
+pub fn run(
+    dir: &Path,
+    only: &[String],
+    limits: &crate::import::validate::Limits,
+) -> Result<Vec<Written>> {
     for name in only {
         if !BUILTINS.iter().any(|b| b.name == name) {
             let names: Vec<&str> = BUILTINS.iter().map(|b| b.name).collect();
@@ -41,14 +45,9 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
         let path = dir.join(b.file_name);
         crate::atomic::write(&path, &bytes)?;
         // What the file holds, as lodlab reads it (a file of clips alone has no model).
-        let read = crate::import::gltf::from_bytes(
-            b.name,
-            bytes.clone(),
-            dir,
-            &crate::import::validate::limits(),
-        )
-        .ok()
-        .map(|(m, _)| m);
+        let read = crate::import::gltf::from_bytes(b.name, bytes.clone(), dir, limits)
+            .ok()
+            .map(|(m, _)| m);
         written.push(Written {
             name: b.name.to_string(),
             path: path.display().to_string(),
@@ -65,8 +64,11 @@ pub fn run(dir: &Path, only: &[String]) -> Result<Vec<Written>> {
 }
 
 /// `lodlab gen-assets`: the built-in models as .glb files.
-pub fn command(a: GenAssetsArgs) -> anyhow::Result<ExitCode> {
-    for w in run(&a.out, &a.only)? {
+pub fn command(
+    a: GenAssetsArgs,
+    limits: &crate::import::validate::Limits,
+) -> anyhow::Result<ExitCode> {
+    for w in run(&a.out, &a.only, limits)? {
         println!("{}", serde_json::to_string(&w)?);
     }
     Ok(ExitCode::SUCCESS)

@@ -20,25 +20,23 @@ pub mod web;
 use crate::app::cli::{Cli, Command};
 use std::process::ExitCode;
 
-/// Runs the command `cli` names (the viewer where it names none), after setting what the
-/// global options set for every command: the import's limits, extra clips, level budgets.
+/// Runs the command `cli` names (the viewer where it names none), handing it what the global
+/// options say for every command: the import's limits and extra clips, the level budgets.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
-    crate::import::validate::set_limits(cli.import_limits());
-    crate::import::set_extra_clips(cli.clips.clone());
-    crate::runtime::levels::set_level_budgets(cli.levels.as_ref().and_then(|l| l.budgets()));
+    let inputs = cli.bake_inputs();
     match cli.command {
-        Some(Command::Shot(a)) => shot::command(a),
-        Some(Command::GenAssets(a)) => gen_assets::command(a),
-        Some(Command::Bake(a)) => bake::command(a),
-        Some(Command::Report(a)) => report::command(a),
-        Some(Command::Export(a)) => export::command(a),
-        Some(Command::Bench(a)) => bench::command(a),
-        Some(Command::Record(a)) => record::command(a),
-        Some(Command::Soak(a)) => soak::command(a),
-        Some(Command::Study(a)) => study::command(a.command),
-        Some(Command::View(a)) => view::command(a),
-        Some(Command::Doctor(a)) => doctor::command(a),
-        Some(Command::Web(a)) => web::command(a),
-        None => view::command(cli.view),
+        Some(Command::Shot(a)) => shot::command(a, &inputs),
+        Some(Command::GenAssets(a)) => gen_assets::command(a, &inputs.import.limits),
+        Some(Command::Bake(a)) => bake::command(a, &inputs),
+        Some(Command::Report(a)) => report::command(a, &inputs),
+        Some(Command::Export(a)) => export::command(a, &inputs),
+        Some(Command::Bench(a)) => bench::command(a, &inputs),
+        Some(Command::Record(a)) => record::command(a, &inputs),
+        Some(Command::Soak(a)) => soak::command(a, &inputs),
+        Some(Command::Study(a)) => study::command(a.command, &inputs),
+        Some(Command::View(a)) => view::command(a, &inputs),
+        Some(Command::Doctor(a)) => doctor::command(a, &inputs.import.limits),
+        Some(Command::Web(a)) => web::command(a, &inputs),
+        None => view::command(cli.view, &inputs),
     }
 }

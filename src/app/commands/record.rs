@@ -220,9 +220,12 @@ pub fn frame_file(k: u32) -> String {
 }
 
 /// `lodlab record`: a study clip as MP4.
-pub fn command(a: RecordArgs) -> anyhow::Result<ExitCode> {
+pub fn command(
+    a: RecordArgs,
+    inputs: &crate::runtime::spec::BakeInputs,
+) -> anyhow::Result<ExitCode> {
     let report = run(&RecordOptions {
-        spec: a.scene.spec_or(SceneKind::Study),
+        spec: a.scene.spec_or(SceneKind::Study, inputs),
         lod: ShotLod {
             method: a.method,
             policy: a.policy.policy(),

@@ -219,8 +219,8 @@ fn draw_divider(image: &mut image::RgbaImage) {
 }
 
 /// `lodlab shot`: one PNG and a JSON line of figures.
-pub fn command(a: ShotArgs) -> anyhow::Result<ExitCode> {
-    let spec = a.scene.spec();
+pub fn command(a: ShotArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::Result<ExitCode> {
+    let spec = a.scene.spec(inputs);
     let lod = a.lod.shot_lod(LodMethod::None);
     if lod.method != LodMethod::None {
         super::first_run::first_run_note(spec.cache_dir.as_deref(), true);

@@ -100,7 +100,7 @@ pub struct SoakReport {
 }
 
 /// Runs `lodlab soak` as its arguments `o` ask.
-pub fn run(o: &SoakArgs) -> Result<SoakReport> {
+pub fn run(o: &SoakArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<SoakReport> {
     if o.phase_frames == 0 || o.every == 0 {
         bail!("--phase-frames and --every must be at least 1");
     }
@@ -112,7 +112,7 @@ pub fn run(o: &SoakArgs) -> Result<SoakReport> {
         None => None,
     };
     let started = Instant::now();
-    let spec = o.scene.spec();
+    let spec = o.scene.spec(inputs);
     let (width, height) = o.size;
     let mut h = Headless::new(&spec, width, height, o.msaa, &crate::measure::GpuMeasurer)?;
     let mut lod = ShotLod {
@@ -217,8 +217,8 @@ pub fn run(o: &SoakArgs) -> Result<SoakReport> {
 }
 
 /// `lodlab soak`: frames through every setting, memory read as they go; exit 1 on growth.
-pub fn command(a: SoakArgs) -> anyhow::Result<ExitCode> {
-    let r = run(&a)?;
+pub fn command(a: SoakArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::Result<ExitCode> {
+    let r = run(&a, inputs)?;
     let max_growth_mb = a.max_growth_mb as f64;
     let growth = r.growth_mb.map_or(
         "not measured (fewer than two readings after the first cycle)".into(),

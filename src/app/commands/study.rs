@@ -6,7 +6,10 @@ use crate::app::study;
 use std::process::ExitCode;
 
 /// `lodlab study make|web|run|proxy|analyze`.
-pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
+pub fn command(
+    command: StudyCommand,
+    inputs: &crate::runtime::spec::BakeInputs,
+) -> anyhow::Result<ExitCode> {
     match command {
         StudyCommand::Make {
             plan,
@@ -15,14 +18,14 @@ pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
             msaa,
             shard,
             merge,
-        } => make(plan, out, cache, msaa, shard, merge),
+        } => make(plan, out, cache, msaa, shard, merge, inputs),
         StudyCommand::Web {
             plan,
             out,
             cache,
             msaa,
             post,
-        } => web(plan, out, cache, msaa, post),
+        } => web(plan, out, cache, msaa, post, inputs),
         StudyCommand::Run {
             dir,
             participant,
@@ -36,6 +39,7 @@ pub fn command(command: StudyCommand) -> anyhow::Result<ExitCode> {
                 cache_dir: cache,
                 samples: msaa,
                 progress: true,
+                inputs: inputs.clone(),
             })?;
             print!("{}", study::proxy::markdown(&p));
             Ok(ExitCode::SUCCESS)
@@ -56,6 +60,7 @@ fn make(
     msaa: u32,
     shard: Option<crate::app::shard::Shard>,
     merge: bool,
+    inputs: &crate::runtime::spec::BakeInputs,
 ) -> anyhow::Result<ExitCode> {
     let options = study::MakeOptions {
         plan: plan.clone(),
@@ -63,6 +68,7 @@ fn make(
         cache_dir: cache,
         samples: msaa,
         progress: true,
+        inputs: inputs.clone(),
         merge,
     };
     if let Some(shard) = shard {
@@ -102,6 +108,7 @@ fn web(
     cache: Option<std::path::PathBuf>,
     msaa: u32,
     post: Option<String>,
+    inputs: &crate::runtime::spec::BakeInputs,
 ) -> anyhow::Result<ExitCode> {
     study::web::check_post_url(post.as_deref())?;
     let m = study::make(&study::MakeOptions {
@@ -110,6 +117,7 @@ fn web(
         cache_dir: cache,
         samples: msaa,
         progress: true,
+        inputs: inputs.clone(),
         merge: false,
     })?;
     study::web::write_site(&out, &m, post.as_deref())?;

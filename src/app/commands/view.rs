@@ -5,8 +5,8 @@ use crate::app::viewer;
 use std::process::ExitCode;
 
 /// `lodlab view` (and `lodlab` alone): the viewer.
-pub fn command(a: ViewArgs) -> anyhow::Result<ExitCode> {
-    let options = viewer::ViewOptions::from_args(a);
+pub fn command(a: ViewArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::Result<ExitCode> {
+    let options = viewer::ViewOptions::from_args(a, inputs);
     super::first_run::first_run_note(
         options.spec.cache_dir.as_deref(),
         options.screenshot.is_some(),

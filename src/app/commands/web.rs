@@ -5,7 +5,6 @@
 
 use crate::app::cli::WebArgs;
 use crate::app::site::{self, LEVELS, MANIFEST, SiteFile, SiteManifest};
-use crate::bake::cache::memory;
 use crate::bake::character::simplify::Method;
 use crate::runtime::headless::Headless;
 use crate::scene::LodMethod;
@@ -16,7 +15,15 @@ use std::process::ExitCode;
 /// The files wasm-bindgen writes for the viewer (`--target web`).
 pub const WASM_FILES: [&str; 2] = ["lodlab.js", "lodlab_bg.wasm"];
 
-pub fn command(a: WebArgs) -> Result<ExitCode> {
+/// `lodlab web`: the page, its scene's levels and the viewer beside it. The page reads no
+/// files, so the global options' clips and budgets (`inputs`) must be in its view words.
+pub fn command(a: WebArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<ExitCode> {
+    if !inputs.import.extra_clips.is_empty() || inputs.level_budgets.is_some() {
+        bail!(
+            "--clips and --levels go among the page's view options (lodlab web --out DIR -- --clips NAME), \
+             which the page reads too"
+        );
+    }
     let options = site::view_options(&a.view)?;
     // The page has no files: it shows built-in models, as the browser build holds them.
     if let Some(m) = options
@@ -50,8 +57,10 @@ pub fn command(a: WebArgs) -> Result<ExitCode> {
         spec.cache_dir = a.cache.clone();
     }
     // The scene under every simplified method, as the page's panel and its M key offer them.
-    memory::record_reads();
-    let mut scene = Headless::new(&spec, 64, 64, Some(1), &crate::measure::GpuMeasurer)?;
+    let cache = crate::bake::cache::LodCache::new(spec.cache_dir.clone());
+    cache.memory.record_reads();
+    let loaded = crate::runtime::spec::Loaded::new(spec)?.with_cache(cache.clone());
+    let mut scene = Headless::of(loaded, 64, 64, Some(1), &crate::measure::GpuMeasurer)?;
     for method in Method::ALL {
         let mut lod = options.lod;
         lod.method = LodMethod::Simplified(method);
@@ -59,7 +68,7 @@ pub fn command(a: WebArgs) -> Result<ExitCode> {
         eprintln!("levels by {method}");
         scene.show(&lod)?;
     }
-    let reads = memory::take_reads();
+    let reads = cache.memory.take_reads();
     let levels = a.out.join(LEVELS);
     crate::atomic::make_folder(&levels)?;
     let mut files = Vec::new();

@@ -20,6 +20,8 @@ pub struct MakeOptions {
     pub cache_dir: Option<PathBuf>,
     pub samples: u32,
     pub progress: bool,
+    /// How the clips' models are read and their levels cut (the global options).
+    pub inputs: crate::runtime::spec::BakeInputs,
     /// Merge only: every clip must be there already (made by the shards); fail naming the
     /// missing ones instead of rendering them.
     pub merge: bool,
@@ -202,6 +204,7 @@ fn record_clips(
             o.cache_dir.clone(),
             o.samples,
             o.progress,
+            &o.inputs,
         )?)?;
         clip.record = Some(report);
         note(clip)?;
@@ -315,6 +318,7 @@ pub fn clip_options(
     cache_dir: Option<PathBuf>,
     samples: u32,
     progress: bool,
+    inputs: &crate::runtime::spec::BakeInputs,
 ) -> Result<RecordOptions> {
     let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
     Ok(RecordOptions {
@@ -323,6 +327,7 @@ pub fn clip_options(
             models: vec![model.to_string()],
             count: plan.count,
             cache_dir,
+            inputs: inputs.clone(),
             ..Default::default()
         },
         lod: ShotLod {

@@ -114,6 +114,8 @@ pub struct ProxyOptions {
     /// Multisampling of the reference clips (the study's clips' own, to compare like with like).
     pub samples: u32,
     pub progress: bool,
+    /// How the clips' models are read and their levels cut (the global options).
+    pub inputs: crate::runtime::spec::BakeInputs,
 }
 
 /// `clips/horse-reference.mp4`: the full-detail clip of a model.
@@ -175,6 +177,7 @@ fn score(o: &ProxyOptions, manifest: &Manifest) -> Result<Proxy> {
             o.cache_dir.clone(),
             o.samples,
             o.progress,
+            &o.inputs,
         )?;
         let (ssim, flip) = score_rendered(&options, &o.dir.join(reference_frames(&clip.model)))?;
         let mean_of = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
@@ -261,6 +264,7 @@ fn record_reference(o: &ProxyOptions, manifest: &Manifest, model: &str, frames: 
         o.cache_dir.clone(),
         o.samples,
         o.progress,
+        &o.inputs,
     )?;
     options.frames_dir = Some(frames_dir);
     record::run(&options)?;

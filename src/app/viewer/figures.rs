@@ -2,6 +2,7 @@
 //! by kind, and a tree chain's levels as a table.
 
 use crate::app::viewer::history::FrameHistory;
+use crate::bake::foliage::billboard::chain::CloudKind;
 use crate::render::FrameStats;
 use crate::render::timer::{Pass, PassTimes};
 use crate::runtime::world::LevelSummary;
@@ -158,7 +159,7 @@ pub(crate) fn chain_table(ui: &mut egui::Ui, name: &str, levels: &[LevelSummary]
             for (k, l) in levels.iter().enumerate() {
                 ui.colored_label(level_color(k), format!("L{k}"));
                 ui.label(format!("{:.3}", l.epsilon));
-                ui.label(l.kind);
+                ui.label(CloudKind::word(l.kind.as_ref()));
                 ui.label(thousands(l.billboards as u64))
                     .on_hover_text(format!(
                         "{} triangles with the wood",

@@ -402,6 +402,7 @@ impl Viewer {
             spec: old.spec.clone(),
             bakes: old.bakes.clone(),
             sources: old.sources.clone(),
+            cache: old.cache(),
         };
         let mut world = World::new(gpu, loaded, self.win.format(), self.targets.sample_count)?;
         // The same walkers where they were, the camera where it was.

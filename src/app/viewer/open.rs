@@ -50,10 +50,11 @@ impl Viewer {
             models: vec![path.to_string_lossy().into_owned()],
             ..self.world.spec.clone()
         };
+        let cache = self.world.cache();
         let opened = Loaded::new(spec).and_then(|loaded| {
             World::new(
                 &self.win.gpu,
-                loaded,
+                loaded.with_cache(cache),
                 self.win.format(),
                 self.targets.sample_count,
             )

@@ -7,9 +7,12 @@ use crate::scene::LodMethod;
 impl ViewOptions {
     /// What `lodlab view` with these options opens (also the web page's view, from its
     /// manifest).
-    pub fn from_args(a: crate::app::cli::ViewArgs) -> ViewOptions {
+    pub fn from_args(
+        a: crate::app::cli::ViewArgs,
+        inputs: &crate::runtime::spec::BakeInputs,
+    ) -> ViewOptions {
         ViewOptions {
-            spec: a.scene.spec(),
+            spec: a.scene.spec(inputs),
             width: a.size.0,
             height: a.size.1,
             samples: a.msaa,

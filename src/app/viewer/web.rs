@@ -50,9 +50,10 @@ async fn run() -> Result<()> {
             env!("CARGO_PKG_VERSION")
         );
     }
-    fetch_levels(&manifest).await?;
     let options = crate::app::site::view_options(&manifest.view)?;
-    let loaded = Loaded::new(options.spec.clone())?;
+    let cache = crate::bake::cache::LodCache::new(options.spec.cache_dir.clone());
+    fetch_levels(&manifest, &cache).await?;
+    let loaded = Loaded::new(options.spec.clone())?.with_cache(cache);
     let models_seconds = launched.elapsed().as_secs_f32();
     status("Opening the GPU…", false);
     let event_loop = EventLoop::<Ready>::with_user_event()
@@ -77,7 +78,7 @@ async fn run() -> Result<()> {
 
 /// Every file the manifest lists, fetched at once (the browser runs the requests together),
 /// into the cache's memory, with the bytes so far on the page.
-async fn fetch_levels(manifest: &SiteManifest) -> Result<()> {
+async fn fetch_levels(manifest: &SiteManifest, cache: &crate::bake::cache::LodCache) -> Result<()> {
     let total = manifest.total_bytes().max(1) as f64;
     let pending: Vec<(String, JsFuture)> = manifest
         .files
@@ -96,7 +97,7 @@ async fn fetch_levels(manifest: &SiteManifest) -> Result<()> {
             ),
             false,
         );
-        crate::bake::cache::memory::preload(&name, bytes);
+        cache.memory.preload(&name, bytes);
     }
     Ok(())
 }

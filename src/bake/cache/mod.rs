@@ -1,7 +1,8 @@
 //! The on-disk cache of level-of-detail bakes, so the viewer starts fast.
 //!
-//! One file per (model, method, parameters): progressive-mesh levels ([`SkinnedLods`]), or a
-//! tree's chain of billboard-cloud levels (see `crate::bake::foliage::billboard::chain`). Its name carries a key: a hash of the source
+//! A store: one file per bake (a character's progressive-mesh levels, a tree's chain of
+//! billboard-cloud levels, an impostor, …). The cache knows no bake; each subject asks it for
+//! its entry and bakes on a miss itself ([`LodCache::load_or_build`]). Its name carries a key: a hash of the source
 //! file's bytes (and of the external buffers a `.gltf` names), the bake parameters and
 //! [`FORMAT_VERSION`]. A changed model or parameter therefore looks for another file. Inside,
 //! a header repeats the version and the key and holds a hash of the payload, so a file from
@@ -15,8 +16,6 @@
 pub mod keys;
 pub mod memory;
 
-use crate::bake::character::lod::{LodOptions, SkinnedLods};
-use crate::bake::character::simplify::Method;
 use keys::FORMAT_VERSION;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -25,15 +24,17 @@ use std::path::{Path, PathBuf};
 const MAGIC: &[u8; 8] = b"LODLABLC";
 const HEADER: usize = 8 + 4 + 32 + 32 + 8;
 
-/// Where cached bakes live.
+/// Where cached bakes live: a folder, and the files held in memory before it (see
+/// [`memory`]; shared by a cache's clones).
 #[derive(Clone, Debug)]
 pub struct LodCache {
     pub dir: PathBuf,
+    pub memory: std::sync::Arc<memory::MemoryFiles>,
 }
 
 /// What looking a bake up found.
 #[derive(Debug)]
-pub enum Lookup<T = SkinnedLods> {
+pub enum Lookup<T> {
     Hit(Box<T>),
     Miss,
     /// A file was there but cannot be used; the reason is one line.
@@ -56,29 +57,15 @@ impl LodCache {
                 })
                 .join("lodlab")
         });
-        LodCache { dir }
+        LodCache {
+            dir,
+            memory: Default::default(),
+        }
     }
 
-    /// The cache file for a bake.
-    pub fn path(&self, model: &str, method: Method, key: &[u8; 32]) -> PathBuf {
-        self.file(model, &keys::file_kind(method), key)
-    }
-
-    /// The cache file of `model`'s levels by `method` with `options` (its source hashing to
-    /// `source`), and the key inside it.
-    pub fn levels_file(
-        &self,
-        model: &str,
-        source: &[u8; 32],
-        method: Method,
-        options: &LodOptions,
-    ) -> (PathBuf, [u8; 32]) {
-        let key = keys::levels_key(source, method, options);
-        (self.path(model, method, &key), key)
-    }
-
-    /// The cache file for a bake of `kind` (a method, or `clouds`) of a model.
-    pub fn file(&self, model: &str, kind: &str, key: &[u8; 32]) -> PathBuf {
+    /// The cache file for a bake of `kind` of a model, under `key`.
+    pub fn file(&self, model: &str, kind: keys::CacheKind, key: &[u8; 32]) -> PathBuf {
+        let kind = kind.name();
         let name: String = model
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
@@ -91,18 +78,18 @@ impl LodCache {
     /// Whether a file for the bake at `path` is there (preloaded, or on the disk); whether it
     /// is good is found out when it is read.
     pub fn has(&self, path: &Path) -> bool {
-        memory::preloaded(path).is_some() || path.is_file()
+        self.memory.preloaded(path).is_some() || path.is_file()
     }
 
     /// Reads a cached bake, checking its version, key and integrity: from memory where the
     /// file was preloaded (see [`memory`]), else from the disk.
     pub fn load<T: DeserializeOwned>(&self, path: &Path, key: &[u8; 32]) -> Lookup<T> {
-        let found = match memory::preloaded(path) {
+        let found = match self.memory.preloaded(path) {
             Some(bytes) => decode(&bytes, key),
             None => self.load_file(path, key),
         };
         if matches!(found, Lookup::Hit(_)) {
-            memory::note_read(path);
+            self.memory.note_read(path);
         }
         found
     }
@@ -148,7 +135,7 @@ impl LodCache {
             .map_err(|e| anyhow::anyhow!("{}: cannot encode: {e}", path.display()))?;
         let payload = lz4_flex::compress_prepend_size(&payload);
         crate::atomic::write(path, &encode(key, &payload))?;
-        memory::note_read(path);
+        self.memory.note_read(path);
         Ok(())
     }
 }
@@ -223,24 +210,6 @@ pub enum Origin {
 }
 
 impl LodCache {
-    /// The bake from the cache if a good one is there, else baked now and stored.
-    pub fn load_or_bake(
-        &self,
-        model: &crate::model::Model,
-        source: &[u8; 32],
-        method: Method,
-        options: &LodOptions,
-        progress: &(dyn Fn(f32) + Sync),
-    ) -> (SkinnedLods, Origin) {
-        let (path, key) = self.levels_file(&model.name, source, method, options);
-        let Ok(found) = self.load_or_build(&path, &key, || {
-            Ok::<_, std::convert::Infallible>(crate::bake::character::lod::bake_lods(
-                model, method, options, progress,
-            ))
-        });
-        found
-    }
-
     /// What the file at `path` holds under `key` if it is good, else `build()`'s result,
     /// stored there. A file that cannot be used or written is a warning, never an error.
     pub fn load_or_build<T: Serialize + DeserializeOwned, E>(

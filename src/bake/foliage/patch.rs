@@ -21,10 +21,10 @@
 //!   each tree, and the patches come in at the first size where the patch is no worse.
 
 use crate::bake::foliage::billboard::chain::levels::CloudLevel;
+use crate::bake::gpu_products::{MeasureColour, ViewImages};
 use crate::bake::impostor::octahedral::{
     self, ImpostorFrame, ROWS, ViewGrid, encode_height, finish_views,
 };
-use crate::bake::seams::{MeasureColour, ViewImages};
 use crate::model::{
     Bounds, Influence, Model, Node, Rgba8Image, Skeleton, SkinnedMesh, Trs, linear_to_srgb,
     srgb_to_linear,

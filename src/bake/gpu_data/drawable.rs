@@ -2,17 +2,18 @@
 
 use super::anim_texture::{self, AnimationTexture};
 use super::animation_space::AnimationSpaceMesh;
+use super::impostor_frames::{AnimatedFrame, ImpostorFrame};
 use super::materials::{MaterialLayers, billboard_atlas, lit_atlas_material};
 use super::vertex_texture::VertexTexture;
 use crate::bake::foliage::billboard::occlusion::CrownDensity;
 use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
-use crate::bake::impostor::{animated, octahedral};
 use crate::model::{Bounds, Material, Model};
 use glam::Vec3;
 
-/// Everything the renderer needs to draw one skinned character.
+/// Everything the renderer needs to draw one model at one level: a character's mesh, a tree,
+/// a billboard cloud or an impostor (all skinned meshes in animation space).
 #[derive(Clone, Debug)]
-pub struct CharacterBake {
+pub struct Drawable {
     pub name: String,
     pub animation: AnimationTexture,
     pub vertices: VertexTexture,
@@ -31,7 +32,7 @@ pub struct CharacterBake {
     pub outlines: Vec<u32>,
 }
 
-/// How the renderer draws a [`CharacterBake`]: which pass it belongs to and which family of
+/// How the renderer draws a [`Drawable`]: which pass it belongs to and which family of
 /// shaders draws it. Every drawable is a skinned mesh in animation space; what differs is
 /// its material (opaque or cut out) and whether its mesh is a card that faces the eye.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,11 +48,11 @@ pub enum DrawKind {
     /// where atlas lighting is on.
     Foliage { atlas_lit: bool },
     /// A tree's octahedral impostor, drawn as one quad facing the eye, cut out like foliage
-    /// (see [`octahedral`]).
-    TreeImpostor(octahedral::ImpostorFrame),
+    /// (see [`crate::bake::impostor::octahedral`]).
+    TreeImpostor(ImpostorFrame),
     /// A character's animated impostor (its last level), drawn as one quad facing the eye in
-    /// the characters' pass, showing the view and frames it stands in (see [`animated`]).
-    CharacterImpostor(animated::AnimatedFrame),
+    /// the characters' pass, showing the view and frames it stands in (see [`crate::bake::impostor::animated`]).
+    CharacterImpostor(AnimatedFrame),
 }
 
 crate::choice! {
@@ -108,14 +109,14 @@ impl DrawKind {
         self.class().is_tree()
     }
 
-    pub fn tree_impostor(&self) -> Option<&octahedral::ImpostorFrame> {
+    pub fn tree_impostor(&self) -> Option<&ImpostorFrame> {
         match self {
             DrawKind::TreeImpostor(f) => Some(f),
             _ => None,
         }
     }
 
-    pub fn character_impostor(&self) -> Option<&animated::AnimatedFrame> {
+    pub fn character_impostor(&self) -> Option<&AnimatedFrame> {
         match self {
             DrawKind::CharacterImpostor(f) => Some(f),
             _ => None,
@@ -140,7 +141,7 @@ impl DrawClass {
     }
 }
 
-impl CharacterBake {
+impl Drawable {
     /// What it shows: a billboard cloud is foliage with billboard outlines, a clump level one
     /// whose billboards have view windows.
     pub fn level_kind(&self) -> LevelKind {
@@ -268,7 +269,7 @@ impl CharacterBake {
         }
         let bounds = Bounds::of(points).ok_or("model has no vertices")?;
 
-        Ok(CharacterBake {
+        Ok(Drawable {
             name: model.name.clone(),
             animation,
             vertices,

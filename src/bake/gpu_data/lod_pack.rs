@@ -10,7 +10,7 @@ use super::animation_space::AnimationSpaceMesh;
 use super::vertex_texture::VertexTexture;
 use crate::bake::character::lod::LodLevel;
 use crate::bake::character::normal_map::NormalMaps;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 
 /// Where one level lives in a [`LodPack`] and what drawing it costs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,7 +98,7 @@ impl LodPack {
 
     /// The full-detail mesh of a character as a pack of one level (the `none` method). A
     /// clump level's also holds its triangles by view sector ([`super::view_subsets`]).
-    pub fn full_detail(bake: &CharacterBake) -> LodPack {
+    pub fn full_detail(bake: &Drawable) -> LodPack {
         let mut pack = Self::assemble(
             bake.vertices.clone(),
             &[&bake.animation_space],

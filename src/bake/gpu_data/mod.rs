@@ -4,6 +4,7 @@
 pub mod anim_texture;
 pub mod animation_space;
 pub mod drawable;
+pub mod impostor_frames;
 pub mod lod_pack;
 pub mod materials;
 pub mod spectra;

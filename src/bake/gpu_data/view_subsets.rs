@@ -33,7 +33,7 @@ pub fn margin(sway: f32) -> f32 {
 
 /// The triangles a view of `bake` draws on average over the sectors: all of them for a
 /// level without view windows.
-pub fn mean_triangles(bake: &crate::bake::gpu_data::drawable::CharacterBake) -> f64 {
+pub fn mean_triangles(bake: &crate::bake::gpu_data::drawable::Drawable) -> f64 {
     let am = &bake.animation_space;
     let all = am.indices.len() as f64 / 3.0;
     if am.view_windows.is_empty() {
@@ -52,7 +52,7 @@ const SWAY_SAMPLES: usize = 16;
 
 /// The most any windowed vertex's normal of `bake` turns horizontally (radians, as a line)
 /// from its rest direction `rest` (per vertex) over its first clip at wind strength 1.
-pub fn sway(bake: &crate::bake::gpu_data::drawable::CharacterBake, rest: &[Vec3]) -> f32 {
+pub fn sway(bake: &crate::bake::gpu_data::drawable::Drawable, rest: &[Vec3]) -> f32 {
     let windows = &bake.animation_space.view_windows;
     let duration = bake.animation.clips.first().map_or(0.0, |c| c.duration);
     let azimuth = |n: Vec3| n.z.atan2(n.x);

@@ -32,11 +32,11 @@
 
 use crate::bake::gpu_data::anim_texture::AnimationTexture;
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate, preserve_coverage};
+use crate::bake::gpu_products::{RasterizeAtlas, ViewImages};
 use crate::bake::impostor::octahedral::{
     SUPERSAMPLE, ViewGrid, average_down, dilate_cells, encode_height, posed, view_sphere,
     views_about,
 };
-use crate::bake::seams::{RasterizeAtlas, ViewImages};
 use crate::model::{Influence, Material, Model, Rgba8Image, SkinnedMesh};
 use anyhow::{Result, anyhow};
 use glam::{Vec2, Vec3};
@@ -158,27 +158,7 @@ impl ImpostorOptions {
     }
 }
 
-/// Where an animated impostor's views lie: what the renderer's uniform carries (mirror of
-/// `ImpostorFrame` in `shaders/impostor.wgsl`, read by `vs_animated_impostor`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct AnimatedFrame {
-    /// Views on a side of the grid.
-    pub views: u32,
-    /// Texels on a side of a view's cell.
-    pub cell: u32,
-    /// Pages on a row of the sheets, and rows of pages: frame f's page is at column
-    /// f mod `columns`, row f / `columns`.
-    pub columns: u32,
-    pub rows: u32,
-    /// The sphere every view is framed on (model space), over every frame of every clip.
-    pub centre: [f32; 3],
-    pub radius: f32,
-    /// Per view (row by row), the part of its cell any frame covers: s0, t0, s1, t1 in 0..1
-    /// of the cell, a texel wider all round. The renderer's quad spans only that: a walker
-    /// covers a fifth of its view sphere's square, and on a software rasteriser every
-    /// fragment of the quad costs, kept or cut out.
-    pub rects: Vec<[f32; 4]>,
-}
+pub use crate::bake::gpu_data::impostor_frames::AnimatedFrame;
 
 /// The part of each view's cell that any page covers (see [`AnimatedFrame::rects`]), from the
 /// colour sheet of `pages` pages laid out `columns` a row.
@@ -281,8 +261,8 @@ impl AnimatedImpostor {
     pub fn bake(
         &self,
         bounds: crate::model::Bounds,
-    ) -> Result<crate::bake::gpu_data::drawable::CharacterBake, String> {
-        let mut bake = crate::bake::gpu_data::drawable::CharacterBake::in_order(&self.model)?;
+    ) -> Result<crate::bake::gpu_data::drawable::Drawable, String> {
+        let mut bake = crate::bake::gpu_data::drawable::Drawable::in_order(&self.model)?;
         bake.animation = AnimationTexture::bake_frames(&self.model, self.options.frames);
         bake.bounds = bounds;
         // Its pages' alpha is coverage, not a cut-out material: it is a character, drawn in
@@ -627,7 +607,11 @@ pub fn load_or_bake_impostor(
         ));
     }
     let key = impostor_key(source, &options);
-    let path = cache.file(&model.name, "impostor", &key);
+    let path = cache.file(
+        &model.name,
+        crate::bake::cache::keys::CacheKind::Impostor,
+        &key,
+    );
     cache.load_or_build(&path, &key, build)
 }
 

@@ -19,13 +19,12 @@
 //! [`ViewGrid::blend`] and [`ViewGrid::view_axes`].
 
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate, preserve_coverage};
-use crate::bake::seams::{RasterizeAtlas, ViewCamera, ViewImages, ViewRequest, ViewVertex};
+use crate::bake::gpu_products::{RasterizeAtlas, ViewCamera, ViewImages, ViewRequest, ViewVertex};
 use crate::model::{
     Bounds, Influence, Material, Model, Rgba8Image, SkinnedMesh, linear_to_srgb, srgb_to_linear,
 };
 use anyhow::{Result, anyhow};
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
 /// The point of the square [−1, 1]² where the hemi-octahedral map puts direction `d`
 /// (y up; a direction below the horizon is taken as its mirror above it).
@@ -111,25 +110,7 @@ pub const ROWS: u32 = 4;
 /// Texels of dilated colour round the tree in every view.
 const DILATE_RINGS: u32 = 4;
 
-/// Where an impostor's views lie and how its quad is placed: what the renderer reads (the
-/// character's uniform, `shaders/impostor.wgsl`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ImpostorFrame {
-    /// Views on a side of the atlas's grid.
-    pub frames: u32,
-    /// The centre of the sphere the views were drawn round, model space, and its radius: a
-    /// view's cell shows the square [−radius, radius]² about the centre.
-    pub centre: [f32; 3],
-    pub radius: f32,
-    /// The heights of the quad's lowest and highest rows, model space.
-    pub base: f32,
-    pub height: f32,
-    /// Rows of the quad (its vertices are `rows + 1` pairs, bottom up).
-    pub rows: u32,
-    /// The tree's bounds at rest, model space: what culling and the blob shadow use (the
-    /// quad's own mesh is only as wide as a card).
-    pub bounds: [[f32; 3]; 2],
-}
+pub use crate::bake::gpu_data::impostor_frames::ImpostorFrame;
 
 /// The view bake's input for `tree` at rest seen from every view of `grid`, each drawn
 /// `supersample` times larger than its cell; and the sphere the views are framed on.
@@ -704,7 +685,7 @@ mod tests {
         // The renderer finds the rows by vertex index (the bake keeps them in order), and at
         // rest (no wind) its skinning puts them on the quad: the conifer's rest pose stands
         // away from its bind pose, so this fails if the rows were stored in the wrong one.
-        let bake = crate::bake::gpu_data::drawable::CharacterBake::in_order(&model).unwrap();
+        let bake = crate::bake::gpu_data::drawable::Drawable::in_order(&model).unwrap();
         let (rest, _) = bake.evaluate(0, 0.0, 0.0);
         for r in 0..=ROWS as usize {
             let (l, rt) = (2 * r, 2 * r + 1);

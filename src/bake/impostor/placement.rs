@@ -16,7 +16,7 @@
 //! of §5.1.3 drawn whole (wood and all); for a character, the mean colour difference over
 //! five views round it (see `measure::impostor_fit`).
 
-use crate::bake::seams::MeasureImpostor;
+use crate::bake::gpu_products::MeasureImpostor;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 

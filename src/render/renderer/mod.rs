@@ -35,7 +35,7 @@ use super::character::{self, GpuCharacter};
 use super::gpu::Gpu;
 use super::pipelines::Pipelines;
 use super::uniforms::{FrameUniforms, FrameView, GpuInstance, Lighting};
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::bake::gpu_data::lod_pack::LodPack;
 use crate::scene::{Instance, LodDraw};
 use anyhow::{Result, bail};
@@ -257,7 +257,7 @@ impl SceneRenderer {
     }
 
     /// Uploads a baked character at full detail; returns its index for [`Instance::model`].
-    pub fn add_character(&mut self, gpu: &Gpu, bake: &CharacterBake) -> Result<usize> {
+    pub fn add_character(&mut self, gpu: &Gpu, bake: &Drawable) -> Result<usize> {
         let name = &bake.name;
         let grid = |what: &str, g: &crate::bake::gpu_data::texels::TexelGrid| {
             gpu.texture_fits(&format!("{name}: {what}"), g.width, g.height, 1)
@@ -292,12 +292,7 @@ impl SceneRenderer {
 
     /// Uploads `bake` in place of character `index` (one no instance draws any more), freeing
     /// what that one held; returns `index`.
-    pub fn replace_character(
-        &mut self,
-        gpu: &Gpu,
-        index: usize,
-        bake: &CharacterBake,
-    ) -> Result<usize> {
+    pub fn replace_character(&mut self, gpu: &Gpu, index: usize, bake: &Drawable) -> Result<usize> {
         if index >= self.characters.len() {
             bail!("no character {index}");
         }

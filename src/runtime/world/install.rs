@@ -8,7 +8,7 @@ use super::{
 };
 use crate::bake::character::simplify::Method;
 use crate::bake::foliage::billboard::chain::{ChainOptions, TreeLevel};
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::render::Gpu;
 use crate::runtime::levels::{Baked, Levels, Measurer, bake_all};
 use crate::scene::foliage::{FoliagePolicy, FoliageView};
@@ -265,14 +265,17 @@ impl World {
             let names: Vec<&str> = self.sources.iter().map(|s| s.model.name.as_str()).collect();
             let what = format!("{m} levels");
             let progress = BakeProgress::new(&names, &skip, &what);
-            let packs = bake_all(
+            let job = crate::runtime::levels::BakeJob {
                 gpu,
                 measure,
+                cache: &cache,
+                method: m,
+                chain: &chain,
+            };
+            let packs = bake_all(
+                &job,
                 &self.sources,
                 &skip,
-                m,
-                &chain,
-                &cache,
                 &|i, f| progress.report(i, f),
                 &warn,
             );
@@ -297,7 +300,7 @@ impl World {
         m: usize,
         opts: &ChainOptions,
         chain: &[TreeLevel],
-        bakes: &[CharacterBake],
+        bakes: &[Drawable],
     ) -> Result<()> {
         let mut characters = vec![m];
         for bake in bakes {

@@ -5,7 +5,7 @@ use super::levels::LevelSource;
 use super::spec::{Loaded, SceneSpec, default_camera, layout_crowd};
 use crate::bake::cache::LodCache;
 use crate::bake::foliage::billboard::chain::{ChainOptions, CloudKind, TreeLevel};
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::bake::gpu_data::lod_pack::LodPack;
 use crate::render::{FrameStats, FrameView, Gpu, Region, SceneRenderer, Side};
 use crate::scene::foliage::FoliagePolicy;
@@ -27,8 +27,10 @@ pub use view::{LodView, with_impostor};
 /// detail with their run-time choices.
 pub struct World {
     pub spec: SceneSpec,
-    pub bakes: Vec<CharacterBake>,
+    pub bakes: Vec<Drawable>,
     pub sources: Vec<LevelSource>,
+    /// Where its levels are cached (see [`Loaded::cache`]).
+    cache: LodCache,
     pub crowd: Crowd,
     pub camera: Camera,
     pub renderer: SceneRenderer,
@@ -97,8 +99,8 @@ struct InstalledChain {
 pub struct LevelSummary {
     /// ε in scene units (0: the full tree).
     pub epsilon: f32,
-    /// What it is, in a word: full, skeleton or spectral.
-    pub kind: &'static str,
+    /// What it is (None: the full tree).
+    pub kind: Option<CloudKind>,
     pub billboards: usize,
     pub triangles: usize,
     /// RMS animation error, in tree heights.
@@ -109,13 +111,7 @@ impl LevelSummary {
     fn of(level: &TreeLevel) -> LevelSummary {
         LevelSummary {
             epsilon: level.epsilon,
-            kind: match level.kind {
-                None => "full",
-                Some(CloudKind::Skeleton(_)) => "skeleton",
-                Some(CloudKind::Spectral(_)) => "spectral",
-                Some(CloudKind::Clumps { .. }) => "clumps",
-                Some(CloudKind::Impostor { .. }) => "impostor",
-            },
+            kind: level.kind,
             billboards: level.cloud.billboards,
             triangles: level.cloud.model.mesh.triangle_count(),
             anim_rms: level.cloud.animation.rms,
@@ -139,6 +135,7 @@ impl World {
             spec,
             bakes,
             sources,
+            cache,
         } = loaded;
         check_instance_count(gpu, &spec)?;
         let mut renderer = SceneRenderer::new(gpu, color_format, sample_count);
@@ -174,6 +171,7 @@ impl World {
             spec,
             bakes,
             sources,
+            cache,
             crowd,
             camera,
             renderer,
@@ -192,7 +190,7 @@ impl World {
 
     /// The level-of-detail cache this world bakes into.
     pub fn cache(&self) -> LodCache {
-        LodCache::new(self.spec.cache_dir.clone())
+        self.cache.clone()
     }
 
     /// Where memory goes, in bytes by kind: on the GPU (see [`GpuMemory`](crate::render::memory::GpuMemory)), the frame's
@@ -208,7 +206,7 @@ impl World {
         ));
         rows.push((
             "bakes (CPU)",
-            self.bakes.iter().map(CharacterBake::heap_bytes).sum(),
+            self.bakes.iter().map(Drawable::heap_bytes).sum(),
         ));
         if let Some(rss) = crate::render::memory::resident_bytes() {
             rows.push(("resident (process)", rss));
@@ -283,96 +281,14 @@ impl World {
     /// Uploads everything for a frame (after [`World::select`]) and returns what it will draw.
     pub fn upload(&mut self, gpu: &Gpu, aspect: f32, time: f32) -> FrameStats {
         let view = FrameView::from_camera(&self.camera, aspect, time);
-        let lod = &self.lod;
-        // Trees draw their level's own character (a billboard cloud) at full detail; between
-        // two levels (an alpha or a morph transition) they cross-dissolve, the two levels'
-        // characters drawn as two instances. Without tree levels the crowd goes to the
-        // renderer as it is.
-        // Far characters likewise draw their impostor's character: an instance at the
-        // impostor's level is one instance of it; one changing between its coarsest mesh and
-        // its impostor dissolves from one to the other on complementary pixels.
-        let has_impostors = lod.impostors && self.impostors.iter().any(Option::is_some);
-        let remap = self.tree_levels.iter().any(Option::is_some) || has_impostors;
-        for (i, method) in lod.methods().enumerate().filter(|_| remap) {
-            // Per model: its impostor's level under this side's method and its character.
-            let slot = method.index();
-            let far: Vec<Option<(u8, usize)>> = (0..self.impostors.len())
-                .map(|m| {
-                    let character = self.impostors[m].as_ref()?.character;
-                    Some((lod.impostor_level(m, slot)?, character))
-                })
-                .collect();
-            // Per agent: how far its forest patch has come in on this side.
-            let fades = match &self.patches {
-                Some(p) if self.shows_patches(method) => p.fades(),
-                _ => Vec::new(),
-            };
-            let (instances, draws) = &mut self.drawn[i];
-            instances.clear();
-            draws.clear();
-            for (a, (inst, d)) in self.instances.iter().zip(&lod.draws[i]).enumerate() {
-                let fade = fades.get(a).copied().unwrap_or(0.0);
-                if fade >= 1.0 {
-                    continue;
-                }
-                let Some(levels) = self.tree_levels.get(inst.model).and_then(Option::as_ref) else {
-                    match far.get(inst.model).copied().flatten() {
-                        Some((far, character)) => {
-                            let shown = Instance {
-                                model: character,
-                                ..*inst
-                            };
-                            impostor_draws(inst, &shown, *d, far, instances, draws);
-                        }
-                        None => {
-                            instances.push(*inst);
-                            draws.push(*d);
-                        }
-                    }
-                    continue;
-                };
-                let at = |k: u8| Instance {
-                    model: levels[(k as usize).min(levels.len() - 1)],
-                    ..*inst
-                };
-                if fade > 0.0 {
-                    // Its patch is coming in: the tree's outgoing half of the dissolve.
-                    let level = d.nearest_level();
-                    instances.push(at(level));
-                    draws.push(LodDraw::Dissolve {
-                        level,
-                        p: fade,
-                        incoming: false,
-                    });
-                    continue;
-                }
-                match *d {
-                    LodDraw::Level(k) | LodDraw::Dissolve { level: k, .. } => {
-                        instances.push(at(k));
-                        draws.push(LodDraw::Level(k));
-                    }
-                    LodDraw::Alpha { from, to, p }
-                    | LodDraw::Dither { from, to, p }
-                    | LodDraw::Morph {
-                        fine: from,
-                        coarse: to,
-                        t: p,
-                    } => {
-                        for (level, incoming) in [(from, false), (to, true)] {
-                            instances.push(at(level));
-                            draws.push(LodDraw::Dissolve { level, p, incoming });
-                        }
-                    }
-                }
-            }
-            if !fades.is_empty()
-                && let Some(p) = &self.patches
-            {
-                p.draws(instances, draws);
+        let remap = self.remaps();
+        if remap {
+            let methods: Vec<LodMethod> = self.lod.methods().collect();
+            for (i, method) in methods.into_iter().enumerate() {
+                self.remap_side(i, method);
             }
         }
-        let drawn = &self.drawn;
-        let instances = &self.instances;
+        let (lod, drawn, instances) = (&self.lod, &self.drawn, &self.instances);
         let side = |i: usize, m: LodMethod, region| Side {
             method: if lod.has(m) { m.index() } else { 0 },
             instances: if remap { &drawn[i].0 } else { instances },
@@ -394,6 +310,65 @@ impl World {
         }
     }
 
+    /// Whether instances reach the renderer through their models' levels: trees draw their
+    /// level's own character (a billboard cloud, an impostor), far characters their
+    /// impostor's. Without either the crowd goes to the renderer as it is.
+    fn remaps(&self) -> bool {
+        let has_impostors = self.lod.impostors && self.impostors.iter().any(Option::is_some);
+        self.tree_levels.iter().any(Option::is_some) || has_impostors
+    }
+
+    /// Side `i`'s instances (drawn by `method`) as the renderer draws them, into
+    /// `self.drawn[i]`: trees through their chains ([`tree_draws`]), characters at their
+    /// impostor's level through its character ([`impostor_draws`]), trees whose forest patch
+    /// has come in left to the patch.
+    fn remap_side(&mut self, i: usize, method: LodMethod) {
+        let lod = &self.lod;
+        // Per model: its impostor's level under this side's method and its character.
+        let slot = method.index();
+        let far: Vec<Option<(u8, usize)>> = (0..self.impostors.len())
+            .map(|m| {
+                let character = self.impostors[m].as_ref()?.character;
+                Some((lod.impostor_level(m, slot)?, character))
+            })
+            .collect();
+        // Per agent: how far its forest patch has come in on this side.
+        let fades = match &self.patches {
+            Some(p) if self.shows_patches(method) => p.fades(),
+            _ => Vec::new(),
+        };
+        let (instances, draws) = &mut self.drawn[i];
+        instances.clear();
+        draws.clear();
+        for (a, (inst, d)) in self.instances.iter().zip(&lod.draws[i]).enumerate() {
+            let fade = fades.get(a).copied().unwrap_or(0.0);
+            if fade >= 1.0 {
+                continue;
+            }
+            match self.tree_levels.get(inst.model).and_then(Option::as_ref) {
+                Some(levels) => tree_draws(levels, inst, *d, fade, instances, draws),
+                None => match far.get(inst.model).copied().flatten() {
+                    Some((far, character)) => {
+                        let shown = Instance {
+                            model: character,
+                            ..*inst
+                        };
+                        impostor_draws(inst, &shown, *d, far, instances, draws);
+                    }
+                    None => {
+                        instances.push(*inst);
+                        draws.push(*d);
+                    }
+                },
+            }
+        }
+        if !fades.is_empty()
+            && let Some(p) = &self.patches
+        {
+            p.draws(instances, draws);
+        }
+    }
+
     /// Selection and upload for a frame `width`×`height` pixels, `dt` seconds after the last.
     pub fn prepare(&mut self, gpu: &Gpu, size: [u32; 2], time: f32, dt: f32) -> FrameStats {
         self.select(size[1], time, dt);
@@ -401,8 +376,54 @@ impl World {
     }
 }
 
+/// Tree instance `inst` drawn through its chain (`levels`: the renderer's character of each
+/// level) for its selection `d`: its level's own character; between two levels (an alpha,
+/// dither or morph transition) the two levels' characters cross-dissolving as two instances;
+/// where its forest patch is coming in (`fade` > 0), the tree's outgoing half of that dissolve.
+fn tree_draws(
+    levels: &[usize],
+    inst: &Instance,
+    d: LodDraw,
+    fade: f32,
+    instances: &mut Vec<Instance>,
+    draws: &mut Vec<LodDraw>,
+) {
+    let at = |k: u8| Instance {
+        model: levels[(k as usize).min(levels.len() - 1)],
+        ..*inst
+    };
+    if fade > 0.0 {
+        let level = d.nearest_level();
+        instances.push(at(level));
+        draws.push(LodDraw::Dissolve {
+            level,
+            p: fade,
+            incoming: false,
+        });
+        return;
+    }
+    match d {
+        LodDraw::Level(k) | LodDraw::Dissolve { level: k, .. } => {
+            instances.push(at(k));
+            draws.push(LodDraw::Level(k));
+        }
+        LodDraw::Alpha { from, to, p }
+        | LodDraw::Dither { from, to, p }
+        | LodDraw::Morph {
+            fine: from,
+            coarse: to,
+            t: p,
+        } => {
+            for (level, incoming) in [(from, false), (to, true)] {
+                instances.push(at(level));
+                draws.push(LodDraw::Dissolve { level, p, incoming });
+            }
+        }
+    }
+}
+
 /// What selection needs to know about a character's levels.
-fn lod_model(bake: &CharacterBake, pack: &LodPack) -> LodModel {
+fn lod_model(bake: &Drawable, pack: &LodPack) -> LodModel {
     LodModel {
         errors: pack.errors(),
         center: bake.bounds.center(),

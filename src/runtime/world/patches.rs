@@ -7,12 +7,12 @@
 
 use super::World;
 use super::patch_state::{InstalledPatches, PatchState};
-use crate::bake::foliage::billboard::chain::CloudLevel;
+use crate::bake::foliage::billboard::chain::{CloudKind, CloudLevel};
 use crate::bake::foliage::patch::{
     self, CELL_TREES, ForestPatches, PATCH_GRID, PatchTree, PlacementInputs, TreeViews,
 };
 use crate::bake::gpu_data::drawable::LevelKind;
-use crate::bake::seams::MeasureColour;
+use crate::bake::gpu_products::MeasureColour;
 use crate::render::Gpu;
 use crate::scene::{Instance, LodMethod, ScreenProjection};
 use anyhow::{Result, anyhow};
@@ -107,7 +107,11 @@ impl World {
         let key = crate::bake::cache::keys::patch_key(&chains, &layout, tolerance)
             .map_err(|e| anyhow!(e))?;
         let cache = self.cache();
-        let path = cache.file(&format!("{}-trees", trees.len()), "patches", &key);
+        let path = cache.file(
+            &format!("{}-trees", trees.len()),
+            crate::bake::cache::keys::CacheKind::Patches,
+            &key,
+        );
         let (baked, origin) = cache.load_or_build(&path, &key, || {
             self.bake_patches(trees, impostors, measure, tolerance)
         })?;
@@ -218,7 +222,7 @@ impl World {
             .shown(m)?
             .levels
             .last()
-            .filter(|l| l.kind == "impostor")?;
+            .filter(|l| matches!(l.kind, Some(CloudKind::Impostor { .. })))?;
         let height = self.bakes[m].bounds.size().y;
         Some(tolerance_px * height / last.epsilon.max(1e-6))
     }

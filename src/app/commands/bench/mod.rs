@@ -273,12 +273,12 @@ fn path_time(path: &CameraPath, i: usize, n: usize) -> f32 {
     path.duration() * (i as f32 + 0.5) / n as f32
 }
 
-pub fn run(o: &BenchArgs) -> Result<BenchReport> {
+pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<BenchReport> {
     // Measured in the order given, each once, interleaved.
     let order = crate::app::cli::values::dedup(o.methods.clone());
     let (policy, foliage, normal_maps) = (o.policy.policy(), o.foliage.view(), !o.no_normal_maps);
     let (width, height) = o.size;
-    let spec = o.scene.spec();
+    let spec = o.scene.spec(inputs);
     check_inputs(o, &order)?;
     let (mut bench, msaa) = set_up(o, &spec, &order, policy, foliage, normal_maps)?;
     let path = bench.path;
@@ -581,9 +581,12 @@ pub fn check_outputs(paths: &[&Option<PathBuf>]) -> Result<()> {
 }
 
 /// `lodlab bench`: frame times of the methods, as a Markdown table (and JSON).
-pub fn command(a: BenchArgs) -> anyhow::Result<ExitCode> {
+pub fn command(
+    a: BenchArgs,
+    inputs: &crate::runtime::spec::BakeInputs,
+) -> anyhow::Result<ExitCode> {
     check_outputs(&[&a.json, &a.markdown])?;
-    let report = run(&a)?;
+    let report = run(&a, inputs)?;
     let table = markdown(&report);
     print!("{table}");
     if let Some(p) = &a.json {

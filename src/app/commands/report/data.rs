@@ -21,7 +21,10 @@ pub(crate) const SILHOUETTE_POSES: usize = 3;
 
 #[derive(Clone, Debug)]
 pub struct ReportOptions {
-    pub model: String,
+    /// The character, as imported.
+    pub model: crate::model::Model,
+    /// Triangle budgets its levels are cut by (`--levels triangles:…`); `None`: by error.
+    pub budgets: Option<Vec<u32>>,
     pub out: PathBuf,
     pub baseline_meshopt: bool,
     pub progress: bool,

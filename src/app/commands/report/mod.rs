@@ -29,7 +29,6 @@ use crate::bake::character::lod::{Replay, SkinnedLods, bake_lods, progressive_me
 use crate::bake::character::lod_error::{MeshError, Probe};
 use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
-use crate::import::load_model;
 use crate::model::{Model, SkinnedMesh};
 use anyhow::Result;
 use std::collections::BTreeMap;
@@ -37,25 +36,25 @@ use std::collections::BTreeMap;
 /// Runs the whole report and writes `timings.md`, `report.json` and `error.png` into `out`,
 /// `timings.md` first, so it is there even if drawing the plot fails.
 pub fn run(opts: &ReportOptions) -> Result<Report> {
-    let model = load_model(&opts.model)?;
+    let model = &opts.model;
     crate::atomic::make_folder(&opts.out)?;
     let base = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton).optimized_for_gpu();
-    let probe = Probe::for_model(&model, &base, SAMPLES);
-    let lod_opts = crate::runtime::levels::runtime_options(&model);
-    let poses = pose_samples(&model, SILHOUETTE_POSES);
+    let probe = Probe::for_model(model, &base, SAMPLES);
+    let lod_opts = crate::runtime::levels::runtime_options(model, opts.budgets.as_deref());
+    let poses = pose_samples(model, SILHOUETTE_POSES);
 
     // The lighting needs a GPU adapter (lavapipe will do); without one the rest stands.
     let gpu = crate::render::Gpu::headless()
         .map_err(|e| log::warn!("no GPU adapter, so no shading errors: {e:#}"))
         .ok();
     let full =
-        crate::bake::gpu_data::drawable::CharacterBake::new(&model).map_err(anyhow::Error::msg)?;
+        crate::bake::gpu_data::drawable::Drawable::new(model).map_err(anyhow::Error::msg)?;
     let mut methods = BTreeMap::new();
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
     for method in Method::ALL {
         let bar = bar(opts.progress, &format!("{} {method}", model.name));
         let progress = |f: f32| bar.set_fraction(f);
-        let lods = bake_lods(&model, method, &lod_opts, &progress);
+        let lods = bake_lods(model, method, &lod_opts, &progress);
         bar.set_stage("measuring");
         let clock = std::time::Instant::now();
         let curve = measure_sequence(&probe, &base, &lods.sequence);
@@ -68,7 +67,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
                 let which: Vec<usize> = (1..lods.levels.len()).collect();
                 crate::measure::shading_error::shading_errors(
                     gpu,
-                    &model,
+                    model,
                     &full,
                     &lods.levels,
                     &which,
@@ -114,9 +113,9 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
 
     // Rest-pose once more on the same mesh in another order: how far two equal methods'
     // curves stray apart, what the comparison of two methods is read against.
-    let twin = reordered_rest_pose(&model);
+    let twin = reordered_rest_pose(model);
     let comparison = compare(&methods, &twin);
-    let moved = motion(&model);
+    let moved = motion(model);
     let report = Report {
         model: model.name.clone(),
         vertices: model.mesh.vertex_count(),
@@ -135,7 +134,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     };
     crate::atomic::write(
         &opts.out.join("timings.md"),
-        timings_markdown(&report, &model, &sequences, &lod_opts).as_bytes(),
+        timings_markdown(&report, model, &sequences, &lod_opts).as_bytes(),
     )?;
     crate::atomic::write(
         &opts.out.join("report.json"),
@@ -340,13 +339,16 @@ fn reordered_rest_pose(model: &Model) -> MethodReport {
 }
 
 /// `lodlab report`: a tree's billboard-cloud report or a character's error curves.
-pub fn command(a: ReportArgs) -> anyhow::Result<ExitCode> {
+pub fn command(
+    a: ReportArgs,
+    inputs: &crate::runtime::spec::BakeInputs,
+) -> anyhow::Result<ExitCode> {
     let Some(name) = a.model.or(a.model_flag) else {
         anyhow::bail!("report needs a model: lodlab report --model NAME|PATH --out DIR");
     };
     // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
     // report; a character the simplification report.
-    let model = crate::import::load_model(&name)?;
+    let model = crate::import::import(&name, &inputs.import)?.model;
     if crate::bake::foliage::billboard::foliage(&model).is_ok() {
         let r = crate::app::commands::tree_report::run(&model, &a.out)?;
         let last = r.levels.last().map_or(0, |l| l.billboards);
@@ -361,7 +363,8 @@ pub fn command(a: ReportArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let report = run(&data::ReportOptions {
-        model: name,
+        model,
+        budgets: inputs.level_budgets.clone(),
         out: a.out.clone(),
         baseline_meshopt: a.baseline.is_some(),
         progress: true,

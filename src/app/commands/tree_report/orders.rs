@@ -7,7 +7,7 @@
 use crate::app::plotting::{plot_error, register_font, write_plot};
 use crate::bake::foliage::billboard::chain::order::{self, CostChoice};
 use crate::bake::foliage::billboard::chain::{ChainBake, ChainOptions, CloudKind, TreeLevel};
-use crate::bake::seams::{MeasureColour, RasterizeAtlas};
+use crate::bake::gpu_products::{MeasureColour, RasterizeAtlas};
 use crate::model::Model;
 use anyhow::Result;
 use plotters::prelude::*;

@@ -14,6 +14,7 @@
 //! between (Houle & Poulin §5.1). A renderer can then morph any vertex of level k towards level
 //! k+1 with `v = (1−t)·Σ G_i p_i(fine) + t·Σ G_j p_j(coarse)` (Merry et al. §6.4).
 
+pub mod cached;
 pub mod cut;
 pub mod levels;
 pub mod replay;

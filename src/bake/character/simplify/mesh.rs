@@ -515,10 +515,8 @@ impl Mesh {
             .filter(|(_, alive)| **alive)
             .map(|(t, _)| t.map(|r| self.pos(r)))
             .collect();
-        let piece = crate::bake::foliage::billboard::connected_pieces(
-            self.position.len(),
-            tris.iter().map(|t| &t[..]),
-        );
+        let piece =
+            crate::geometry::connected_pieces(self.position.len(), tris.iter().map(|t| &t[..]));
         let mut index: FxHashMap<u32, usize> = FxHashMap::default();
         let mut parts: Vec<Vec<u32>> = Vec::new();
         for u in 0..self.position.len() as u32 {

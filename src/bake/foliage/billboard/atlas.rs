@@ -17,7 +17,7 @@
 
 use super::cloud::Billboard;
 use crate::bake::gpu_data::materials::BILLBOARD_LIGHTING;
-use crate::bake::seams::{AtlasLayout, AtlasVertex};
+use crate::bake::gpu_products::{AtlasLayout, AtlasVertex};
 use glam::{Vec2, Vec3};
 
 /// Texels of gutter round every billboard's rectangle in the atlas, at the least.

@@ -68,7 +68,7 @@ pub fn foliage(model: &Model) -> Result<Foliage, String> {
             "no foliage: no triangle has a material that cuts leaves out with alpha".into(),
         );
     }
-    let roots = connected_pieces(
+    let roots = crate::geometry::connected_pieces(
         mesh.vertex_count(),
         tris.iter()
             .map(|&t| &mesh.indices[3 * t as usize..3 * t as usize + 3]),
@@ -132,30 +132,6 @@ pub fn foliage(model: &Model) -> Result<Foliage, String> {
         out.triangles.push(piece);
     }
     Ok(out)
-}
-
-/// For every vertex, a representative of the connected piece it belongs to: vertices that
-/// share one of `triangles` are in the same piece (union-find).
-pub fn connected_pieces<'a>(
-    vertices: usize,
-    triangles: impl Iterator<Item = &'a [u32]>,
-) -> Vec<u32> {
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
-    let mut parent: Vec<u32> = (0..vertices as u32).collect();
-    for t in triangles {
-        let a = find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = find(&mut parent, v);
-            parent[b as usize] = a;
-        }
-    }
-    (0..vertices as u32).map(|v| find(&mut parent, v)).collect()
 }
 
 /// A skeleton billboard cloud: billboards built bone by bone, each bound to its bone.
@@ -400,7 +376,7 @@ pub fn tree_height(model: &Model) -> f32 {
 pub fn cloud_model(
     tree: &Model,
     cloud: &SkeletonCloud,
-    layout: &crate::bake::seams::AtlasLayout,
+    layout: &crate::bake::gpu_products::AtlasLayout,
     atlas: crate::model::Rgba8Image,
     normals: &[Vec3],
     outlines: &[trim::Outline],

@@ -58,7 +58,7 @@ pub fn whole() -> Outline {
 }
 
 /// The outline to draw the billboard at atlas rectangle `rect` (x, y, width, height in
-/// texels, y down; its corner 0 at the bottom left as [`crate::bake::seams::AtlasLayout::corner_uvs`] maps it) of the RGBA
+/// texels, y down; its corner 0 at the bottom left as [`crate::bake::gpu_products::AtlasLayout::corner_uvs`] maps it) of the RGBA
 /// `atlas` `width` texels wide: trimmed round its texels of non-zero alpha grown by `margin`
 /// texels, or the whole rectangle where trimming does not pay with `texels_per_pixel` atlas
 /// texels to a screen pixel where the level comes in (or where nothing is covered).

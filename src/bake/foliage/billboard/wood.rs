@@ -165,7 +165,7 @@ fn pieces(mesh: &SkinnedMesh, bones: &BoneTree) -> (Vec<usize>, Vec<Piece>) {
     );
     let welded: Vec<u32> = mesh.indices.iter().map(|&v| at[v as usize]).collect();
     let positions = at.iter().max().map_or(0, |&g| g as usize + 1);
-    let roots = super::connected_pieces(positions, welded.chunks_exact(3));
+    let roots = crate::geometry::connected_pieces(positions, welded.chunks_exact(3));
     let mut piece_of_root = std::collections::HashMap::new();
     let piece: Vec<usize> = at
         .iter()

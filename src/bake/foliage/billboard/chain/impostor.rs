@@ -5,10 +5,10 @@
 use crate::bake::foliage::billboard::chain::levels::{
     ChainOptions, CloudKind, CloudLevel, TreeLevel,
 };
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
+use crate::bake::gpu_products::{MeasureColour, MeasureImpostor, RasterizeAtlas};
 use crate::bake::impostor::octahedral::{self, ViewGrid};
 use crate::bake::impostor::placement;
-use crate::bake::seams::{MeasureColour, MeasureImpostor, RasterizeAtlas};
 use crate::model::Model;
 use anyhow::{Result, anyhow};
 
@@ -91,7 +91,7 @@ pub(crate) struct TreeFit<'a> {
     impostor: &'a CloudLevel,
     /// The impostor baked for the GPU once (its views' mipmaps), for every size it is
     /// measured at.
-    impostor_bake: CharacterBake,
+    impostor_bake: Drawable,
     chain: &'a [TreeLevel],
 }
 

@@ -8,7 +8,7 @@ use crate::bake::foliage::billboard::wood::only_foliage;
 use crate::bake::foliage::spectral::cloud::SpectralParams;
 use crate::bake::foliage::spectral::description::DescriptionType;
 use crate::bake::foliage::spectral::metrics::AnimationError;
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::bake::gpu_data::spectra::{NO_ROW, SpectralMotion};
 use crate::bake::impostor::octahedral::ImpostorFrame;
 use crate::model::Model;
@@ -48,6 +48,18 @@ pub enum CloudKind {
 }
 
 impl CloudKind {
+    /// What a level is, in a word (the foliage panel's column): full, skeleton, spectral,
+    /// clumps or impostor.
+    pub fn word(kind: Option<&CloudKind>) -> &'static str {
+        match kind {
+            None => "full",
+            Some(CloudKind::Skeleton(_)) => "skeleton",
+            Some(CloudKind::Spectral(_)) => "spectral",
+            Some(CloudKind::Clumps { .. }) => "clumps",
+            Some(CloudKind::Impostor { .. }) => "impostor",
+        }
+    }
+
     /// In words, for tables and reports.
     pub fn name(kind: Option<&CloudKind>) -> String {
         match kind {
@@ -262,11 +274,10 @@ impl CloudLevel {
     /// Its foliage alone ([`Self::foliage`]) baked for the GPU as the colour measures draw
     /// it: with its motion and view windows, and no crown occlusion (masks and colours
     /// compared alike, and a crown's worth of rays saved a measurement).
-    pub fn foliage_bake(&self) -> Result<(Model, CharacterBake), String> {
+    pub fn foliage_bake(&self) -> Result<(Model, Drawable), String> {
         let (model, motion) = self.foliage();
-        let bake =
-            CharacterBake::tree_level(&model, motion.as_ref(), &[], &self.vertex_windows(&model))
-                .map_err(|e| format!("{}: {e}", model.name))?;
+        let bake = Drawable::tree_level(&model, motion.as_ref(), &[], &self.vertex_windows(&model))
+            .map_err(|e| format!("{}: {e}", model.name))?;
         Ok((model, bake))
     }
 
@@ -340,11 +351,11 @@ impl CloudLevel {
 
     /// The level baked for the GPU: a mesh or cloud with its spectral motion, an impostor
     /// with its frame.
-    pub fn bake(&self) -> Result<CharacterBake, String> {
+    pub fn bake(&self) -> Result<Drawable, String> {
         match self.impostor {
             Some(frame) => {
                 // Its quad's vertices keep their order: the shader finds its rows by index.
-                let mut bake = CharacterBake::in_order(&self.model)?;
+                let mut bake = Drawable::in_order(&self.model)?;
                 // The tree's bounds, not the card's, grown by how far the card sways (its
                 // depth over the animation: at rest it has none).
                 let [lo, hi] = frame.bounds.map(glam::Vec3::from);
@@ -357,9 +368,9 @@ impl CloudLevel {
                 Ok(bake)
             }
             None if self.billboards == 0 => {
-                CharacterBake::with_motion(&self.model, self.motion.as_ref())
+                Drawable::with_motion(&self.model, self.motion.as_ref())
             }
-            None => CharacterBake::tree_level(
+            None => Drawable::tree_level(
                 &self.model,
                 self.motion.as_ref(),
                 &self.occlusion,

@@ -17,12 +17,13 @@ use super::siblings::merge_siblings;
 use super::wood::WoodChain;
 use super::{Foliage, Grouping, SkeletonCloud, cloud_model, grouped_cloud, is_cut_out};
 use crate::anim::skinning_over_loop;
+use crate::bake::cache::keys::CacheKind;
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::foliage::spectral::cloud::{SpectralParams, lines_per_axis, spectral_cloud};
 use crate::bake::foliage::spectral::metrics::{animation_error, traced_leaves};
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate, lit_atlas_material};
 use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
-use crate::bake::seams::{AtlasLayout, MeasureColour, RasterizeAtlas};
+use crate::bake::gpu_products::{AtlasLayout, MeasureColour, RasterizeAtlas};
 use crate::model::{Model, Rgba8Image};
 use anyhow::{Result, anyhow};
 
@@ -513,7 +514,7 @@ pub fn chain_file(
     };
     let key =
         crate::bake::cache::keys::chain_key(source, &epsilon_opts).map_err(anyhow::Error::msg)?;
-    Ok((cache.file(tree, "clouds", &key), key))
+    Ok((cache.file(tree, CacheKind::Clouds, &key), key))
 }
 
 /// The cache file of the cost order's choices for `tree`'s chain cut as `opts`, and its key.
@@ -524,7 +525,7 @@ pub fn order_file(
     opts: &ChainOptions,
 ) -> Result<(std::path::PathBuf, [u8; 32])> {
     let key = crate::bake::cache::keys::order_key(source, opts).map_err(anyhow::Error::msg)?;
-    Ok((cache.file(tree, "order", &key), key))
+    Ok((cache.file(tree, CacheKind::Order, &key), key))
 }
 
 /// The chain of `tree` (whose source file hashes to `source`) from `cache` if a good one is

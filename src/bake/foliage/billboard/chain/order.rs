@@ -18,7 +18,7 @@
 
 pub use crate::bake::foliage::billboard::chain::levels::FoliageOrder;
 use crate::bake::foliage::billboard::chain::levels::TreeLevel;
-use crate::bake::seams::MeasureColour;
+use crate::bake::gpu_products::MeasureColour;
 use crate::model::Model;
 use anyhow::{Result, anyhow};
 use serde::{Deserialize, Serialize};

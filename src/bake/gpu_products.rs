@@ -1,4 +1,4 @@
-//! The seams between the bake and the GPU: the bake is plain CPU code, but a few of its
+//! The products the bake asks the GPU for: the bake is plain CPU code, but a few of its
 //! products are pictures, drawn or measured on the GPU. It asks for them through these traits,
 //! which `render` and `measure` implement (a test may implement them on the CPU), and the
 //! messages they carry are plain data defined here, so that the bake's subjects (foliage,
@@ -9,7 +9,7 @@
 //! - [`MeasureImpostor`] measures an impostor's colour error beside a level's, where it would
 //!   switch in (see [`crate::bake::impostor::placement`]).
 
-use crate::bake::gpu_data::drawable::CharacterBake;
+use crate::bake::gpu_data::drawable::Drawable;
 use crate::bake::gpu_data::materials::MaterialLayers;
 use crate::model::{Model, Rgba8Image};
 use anyhow::Result;
@@ -161,7 +161,7 @@ pub trait MeasureColour {
         &self,
         tree: &Model,
         level: &Model,
-        bake: CharacterBake,
+        bake: Drawable,
         heights_px: &[f32],
     ) -> Result<Vec<f32>>;
 
@@ -171,7 +171,7 @@ pub trait MeasureColour {
         &self,
         tree: &Model,
         level: &Model,
-        bake: CharacterBake,
+        bake: Drawable,
         heights_px: &[f32],
     ) -> Result<Option<Vec<f64>>>;
 }
