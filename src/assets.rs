@@ -145,6 +145,17 @@ pub const BUILTINS: &[Builtin] = &[
     },
 ];
 
+/// The built-in models' names, comma separated (the clips files left out): what the command
+/// line's help lists, from this one table.
+pub fn model_names() -> String {
+    BUILTINS
+        .iter()
+        .filter(|b| b.kind != Kind::Clips)
+        .map(|b| b.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 pub fn builtin(name: &str) -> Option<&'static Builtin> {
     BUILTINS.iter().find(|b| b.name.eq_ignore_ascii_case(name))
 }

@@ -369,10 +369,10 @@ pub struct BenchArgs {
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
-    /// A built-in asset name (horse, walker, broadleaf, conifer, sapling, split-tube, armour,
-    /// patchwork, lowpoly, robot, mocap, knight, card-palm, card-bush, card-oak, card-pine)
-    /// or a glTF path; the same as --model.
-    #[arg(value_name = "MODEL")]
+    #[arg(
+        value_name = "MODEL",
+        help = format!("A built-in asset name ({}) or a glTF path; the same as --model", crate::assets::model_names())
+    )]
     pub model: Option<String>,
     /// The model, as shot, bench and view take it.
     #[arg(long = "model", value_name = "NAME|PATH", conflicts_with = "model")]
@@ -395,10 +395,11 @@ pub enum Baseline {
 
 #[derive(Args, Debug)]
 pub struct BakeArgs {
-    /// Models: built-in asset names (horse, walker, broadleaf, conifer, sapling, split-tube,
-    /// armour, patchwork, lowpoly, robot, mocap, knight, card-palm, card-bush, card-oak,
-    /// card-pine) or glTF paths; the same as --model.
-    #[arg(value_name = "MODEL", required_unless_present = "model_flags")]
+    #[arg(
+        value_name = "MODEL",
+        required_unless_present = "model_flags",
+        help = format!("Models: built-in asset names ({}) or glTF paths; the same as --model", crate::assets::model_names())
+    )]
     pub models: Vec<String>,
     /// A model, as shot, bench and view take it. Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]

@@ -24,11 +24,14 @@ pub struct SceneArgs {
     /// record].
     #[arg(long, value_enum)]
     pub scene: Option<SceneKind>,
-    /// Model: a built-in asset (horse, walker, broadleaf, conifer, sapling, split-tube,
-    /// armour, patchwork, lowpoly, robot, mocap, knight, card-palm, card-bush, card-oak,
-    /// card-pine) or a glTF path. Repeat for several;
-    /// the models replace the scene's own, trees included.
-    #[arg(long = "model", value_name = "NAME|PATH")]
+    #[arg(
+        long = "model",
+        value_name = "NAME|PATH",
+        help = format!(
+            "Model: a built-in asset ({}) or a glTF path. Repeat for several; the models replace the scene's own, trees included",
+            crate::assets::model_names()
+        )
+    )]
     pub models: Vec<String>,
     /// Number of characters (or trees in the forest) [default: 300 characters, 500 trees, 100
     /// copies in the study scene].

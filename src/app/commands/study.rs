@@ -36,10 +36,12 @@ pub fn command(
         StudyCommand::Proxy { dir, cache, msaa } => {
             let p = study::proxy::run(&study::proxy::ProxyOptions {
                 dir,
-                cache_dir: cache,
-                samples: msaa,
-                progress: true,
-                inputs: inputs.clone(),
+                rendering: study::make::ClipRendering {
+                    cache_dir: cache,
+                    samples: msaa,
+                    progress: true,
+                    inputs: inputs.clone(),
+                },
             })?;
             print!("{}", study::proxy::markdown(&p));
             Ok(ExitCode::SUCCESS)
@@ -65,10 +67,12 @@ fn make(
     let options = study::MakeOptions {
         plan: plan.clone(),
         out: out.clone(),
-        cache_dir: cache,
-        samples: msaa,
-        progress: true,
-        inputs: inputs.clone(),
+        rendering: study::make::ClipRendering {
+            cache_dir: cache,
+            samples: msaa,
+            progress: true,
+            inputs: inputs.clone(),
+        },
         merge,
     };
     if let Some(shard) = shard {
@@ -83,7 +87,7 @@ fn make(
             crate::app::cli::command_line::shell_line(&merge_command(
                 &plan,
                 &out,
-                options.cache_dir.as_deref(),
+                options.rendering.cache_dir.as_deref(),
                 msaa
             ))
         );
@@ -114,10 +118,12 @@ fn web(
     let m = study::make(&study::MakeOptions {
         plan,
         out: out.clone(),
-        cache_dir: cache,
-        samples: msaa,
-        progress: true,
-        inputs: inputs.clone(),
+        rendering: study::make::ClipRendering {
+            cache_dir: cache,
+            samples: msaa,
+            progress: true,
+            inputs: inputs.clone(),
+        },
         merge: false,
     })?;
     study::web::write_site(&out, &m, post.as_deref())?;

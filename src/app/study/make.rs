@@ -12,16 +12,25 @@ use crate::scene::{LodMethod, LodPolicy};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 
+/// How a study's clips are rendered: what `make` and `proxy` share, so that the clips and
+/// their full-detail references match.
+#[derive(Clone, Debug)]
+pub struct ClipRendering {
+    pub cache_dir: Option<PathBuf>,
+    /// Multisampling.
+    pub samples: u32,
+    /// Progress lines on stderr.
+    pub progress: bool,
+    /// How the clips' models are read and their levels cut (the global options).
+    pub inputs: crate::runtime::spec::BakeInputs,
+}
+
 /// Options of `study make` beyond the plan.
 #[derive(Clone, Debug)]
 pub struct MakeOptions {
     pub plan: PathBuf,
     pub out: PathBuf,
-    pub cache_dir: Option<PathBuf>,
-    pub samples: u32,
-    pub progress: bool,
-    /// How the clips' models are read and their levels cut (the global options).
-    pub inputs: crate::runtime::spec::BakeInputs,
+    pub rendering: ClipRendering,
     /// Merge only: every clip must be there already (made by the shards); fail naming the
     /// missing ones instead of rendering them.
     pub merge: bool,
@@ -36,7 +45,7 @@ pub fn make(o: &MakeOptions) -> Result<Manifest> {
     let mut earlier = earlier_clips(o, &plan, &manifest_path, &making_path)?;
     // Shards count until they are merged; a finished study's clips are in its manifest.
     if !manifest_path.exists() {
-        earlier.extend(recorded_clips(&o.out, &plan, o.samples)?);
+        earlier.extend(recorded_clips(&o.out, &plan, o.rendering.samples)?);
     }
     crate::atomic::make_folder(&o.out.join(CLIPS))?;
     let mut clips = plan.clips();
@@ -168,7 +177,6 @@ fn earlier_clips(
 /// Recording: renders each of `clips` that `take` picks (by its index) and that is not
 /// already there (from `earlier`), and calls `note` with it once recorded, so that an
 /// interrupted run resumes where it stopped.
-#[allow(clippy::too_many_arguments)]
 fn record_clips(
     o: &MakeOptions,
     plan: &Plan,
@@ -201,10 +209,7 @@ fn record_clips(
             clip.method,
             clip.tolerance_px,
             file,
-            o.cache_dir.clone(),
-            o.samples,
-            o.progress,
-            &o.inputs,
+            &o.rendering,
         )?)?;
         clip.record = Some(report);
         note(clip)?;
@@ -232,13 +237,13 @@ pub fn make_shard(o: &MakeOptions, shard: Shard) -> Result<ShardMade> {
     let path = folder.join(format!("{}.json", shard.file_stem()));
     let mut record = match read_record(&path)? {
         Some(r) => {
-            check_record(&path, &r, &plan, o.samples)?;
+            check_record(&path, &r, &plan, o.rendering.samples)?;
             r
         }
         None => ShardRecord {
             shard,
             plan: plan.clone(),
-            samples: o.samples,
+            samples: o.rendering.samples,
             version: env!("CARGO_PKG_VERSION").to_string(),
             clips: Vec::new(),
         },
@@ -308,18 +313,20 @@ fn write_study(
 /// How a plan's clip of `model` drawn by `method` at `tolerance` is recorded into `out`: the
 /// plan's crowd, size, frame rate, length, camera path and transition. `make` records the
 /// study's clips with it, `proxy` the full-detail references, so the two match frame by frame.
-#[allow(clippy::too_many_arguments)]
 pub fn clip_options(
     plan: &Plan,
     model: &str,
     method: LodMethod,
     tolerance: f32,
     out: PathBuf,
-    cache_dir: Option<PathBuf>,
-    samples: u32,
-    progress: bool,
-    inputs: &crate::runtime::spec::BakeInputs,
+    rendering: &ClipRendering,
 ) -> Result<RecordOptions> {
+    let ClipRendering {
+        cache_dir,
+        samples,
+        progress,
+        inputs,
+    } = rendering.clone();
     let (width, height) = plan.size().map_err(anyhow::Error::msg)?;
     Ok(RecordOptions {
         spec: SceneSpec {
@@ -327,7 +334,7 @@ pub fn clip_options(
             models: vec![model.to_string()],
             count: plan.count,
             cache_dir,
-            inputs: inputs.clone(),
+            inputs,
             ..Default::default()
         },
         lod: ShotLod {

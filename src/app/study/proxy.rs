@@ -110,12 +110,9 @@ pub struct CodecScore {
 #[derive(Clone, Debug)]
 pub struct ProxyOptions {
     pub dir: PathBuf,
-    pub cache_dir: Option<PathBuf>,
-    /// Multisampling of the reference clips (the study's clips' own, to compare like with like).
-    pub samples: u32,
-    pub progress: bool,
-    /// How the clips' models are read and their levels cut (the global options).
-    pub inputs: crate::runtime::spec::BakeInputs,
+    /// How the references are rendered (the study's clips' own multisampling, to compare
+    /// like with like).
+    pub rendering: super::make::ClipRendering,
 }
 
 /// `clips/horse-reference.mp4`: the full-detail clip of a model.
@@ -174,10 +171,7 @@ fn score(o: &ProxyOptions, manifest: &Manifest) -> Result<Proxy> {
             clip.method,
             clip.tolerance_px,
             o.dir.join(&clip.file),
-            o.cache_dir.clone(),
-            o.samples,
-            o.progress,
-            &o.inputs,
+            &o.rendering,
         )?;
         let (ssim, flip) = score_rendered(&options, &o.dir.join(reference_frames(&clip.model)))?;
         let mean_of = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
@@ -255,17 +249,7 @@ fn record_reference(o: &ProxyOptions, manifest: &Manifest, model: &str, frames: 
     }
     eprintln!("lodlab: reference {file} and its frames");
     let tolerance = plan.tolerances.first().copied().unwrap_or(1.5);
-    let mut options = clip_options(
-        plan,
-        model,
-        LodMethod::None,
-        tolerance,
-        path,
-        o.cache_dir.clone(),
-        o.samples,
-        o.progress,
-        &o.inputs,
-    )?;
+    let mut options = clip_options(plan, model, LodMethod::None, tolerance, path, &o.rendering)?;
     options.frames_dir = Some(frames_dir);
     record::run(&options)?;
     Ok(())

@@ -100,7 +100,7 @@ impl ApplicationHandler for App {
         };
         match Viewer::new(event_loop, &self.options, loaded, self.launched) {
             Ok(mut v) => {
-                v.launched.window_seconds = self.launched.at.elapsed().as_secs_f32();
+                v.startup.launched.window_seconds = self.launched.at.elapsed().as_secs_f32();
                 self.viewer = Some(v)
             }
             Err(e) => {

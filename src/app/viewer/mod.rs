@@ -18,6 +18,7 @@ mod panel_schedule;
 mod patches;
 mod select;
 mod selection;
+mod state;
 #[cfg(target_arch = "wasm32")]
 pub mod web;
 
@@ -27,7 +28,7 @@ use crate::atomic::write_png;
 use crate::render::DebugView;
 use crate::render::FrameStats;
 use crate::render::targets::{Offscreen, RenderTargets};
-use crate::render::timer::{FrameTimer, Pass, PassTimes};
+use crate::render::timer::{FrameTimer, Pass};
 use crate::runtime::headless::ShotLod;
 use crate::runtime::levels::{BackgroundBake, Poll};
 use crate::runtime::spec::{Loaded, SceneSpec};
@@ -39,6 +40,7 @@ pub use event_loop::{display_available, run};
 use history::FrameHistory;
 use panel::{Info, Settings};
 use panel_schedule::PanelSchedule;
+use state::{Baking, Clock, Figures, Launch, Startup};
 use std::path::PathBuf;
 use web_time::Instant;
 use winit::event::WindowEvent;
@@ -64,22 +66,9 @@ pub struct ViewOptions {
     pub lod: ShotLod,
 }
 
-/// When the viewer was launched, and how long its models took to load: the start-up figures
-/// it prints.
-#[derive(Clone, Copy)]
-struct Launch {
-    at: Instant,
-    models_seconds: f32,
-    /// Seconds from launch to the window and the scene on the GPU.
-    window_seconds: f32,
-}
-
 struct Viewer {
-    launched: Launch,
-    /// Whether the first frame, and the moment every level the view asks for is on the GPU,
-    /// have been reported.
-    reported_first_frame: bool,
-    reported_levels: bool,
+    /// When it was launched, and whether its start-up figures were reported.
+    startup: Startup,
     win: WindowGpu,
     world: World,
     targets: RenderTargets,
@@ -87,33 +76,16 @@ struct Viewer {
     egui_renderer: egui_wgpu::Renderer,
     controls: Controls,
     settings: Settings,
-    history: FrameHistory,
-    adapter: String,
-    backend: String,
+    /// What the panel's figures show: frame times, passes, memory, the adapter.
+    figures: Figures,
     model_names: Vec<String>,
     clip_names: Vec<Vec<String>>,
-    started: Instant,
-    last_frame: Option<Instant>,
-    time: f32,
-    stats: FrameStats,
-    /// Each pass's GPU time, where the adapter has timestamp queries: read back a frame or
-    /// two late, without waiting.
-    timer: Option<FrameTimer>,
-    /// The passes' times, smoothed over the last second or so of frames.
-    passes: Option<PassTimes>,
-    /// Where memory goes (see [`World::memory`]) and when that was last looked at.
-    memory: Vec<(&'static str, u64)>,
-    memory_at: Option<Instant>,
+    /// The scene's time and the frames drawn.
+    clock: Clock,
     /// The 3D view in physical pixels: x, y, width, height.
     view: [u32; 4],
-    frames: usize,
-    /// Levels of detail being baked on a background thread, one method at a time.
-    bake: Option<BackgroundBake>,
-    /// What the last bake failed with.
-    bake_error: Option<String>,
-    /// When the foliage settings last changed: a new chain is baked once they have been still
-    /// for [`SETTLE_BEFORE_BAKE`] (not for every step of a slider's drag).
-    foliage_changed: Instant,
+    /// Levels of detail being baked in the background.
+    baking: Baking,
     /// F12 asked for a screenshot of the next frame.
     screenshot_requested: bool,
     /// A line for the panel: where the last screenshot went, or why a model did not open.
@@ -207,12 +179,13 @@ impl Viewer {
             foliage,
             impostors: world.lod.impostors_shown(),
         };
+        let (adapter, backend) = (gpu.info.name.clone(), gpu.backend_name());
         Ok(Viewer {
-            launched,
-            reported_first_frame: false,
-            reported_levels: false,
-            adapter: gpu.info.name.clone(),
-            backend: gpu.backend_name(),
+            startup: Startup {
+                launched,
+                reported_first_frame: false,
+                reported_levels: false,
+            },
             model_names: world.bakes.iter().map(|b| b.name.clone()).collect(),
             clip_names: world.bakes.iter().map(|b| b.clip_names()).collect(),
             win,
@@ -222,20 +195,28 @@ impl Viewer {
             egui_renderer,
             controls: Controls::default(),
             settings,
-            history: FrameHistory::default(),
-            started: Instant::now(),
-            last_frame: None,
-            time: 0.0,
-            stats: FrameStats::default(),
-            timer,
-            passes: None,
-            memory: Vec::new(),
-            memory_at: None,
+            figures: Figures {
+                history: FrameHistory::default(),
+                adapter,
+                backend,
+                stats: FrameStats::default(),
+                timer,
+                passes: None,
+                memory: Vec::new(),
+                memory_at: None,
+            },
+            clock: Clock {
+                started: Instant::now(),
+                last_frame: None,
+                time: 0.0,
+                frames: 0,
+            },
             view: [0, 0, 1, 1],
-            frames: 0,
-            bake: None,
-            bake_error: None,
-            foliage_changed: Instant::now() - SETTLE_BEFORE_BAKE,
+            baking: Baking {
+                bake: None,
+                bake_error: None,
+                foliage_changed: Instant::now() - SETTLE_BEFORE_BAKE,
+            },
             screenshot_requested: false,
             notice: None,
             lose_device_at: std::env::var(LOSE_DEVICE_ENV)
@@ -257,27 +238,27 @@ impl Viewer {
 
     /// Takes a finished background bake in, and starts the next one a side needs.
     fn update_levels(&mut self) -> Result<()> {
-        if let Some(job) = &mut self.bake {
+        if let Some(job) = &mut self.baking.bake {
             // Each model's levels go in as soon as they are ready: the characters' within a
             // second or two, while the trees' chains take longer.
             let (ready, over) = match job.poll() {
                 Poll::Running(ready) => (ready, false),
                 Poll::Done(ready) => (ready, true),
                 Poll::Failed => {
-                    self.bake_error = Some(format!("{}: the bake stopped", job.method));
+                    self.baking.bake_error = Some(format!("{}: the bake stopped", job.method));
                     (Vec::new(), true)
                 }
             };
             let (method, chain) = (job.method, job.chain);
             if over {
-                self.bake = None;
+                self.baking.bake = None;
             }
             if !ready.is_empty() {
                 let installed = self
                     .world
                     .install_levels(&self.win.gpu, method, &chain, ready);
                 if let Err(e) = installed {
-                    self.bake_error = Some(format!("{method}: {e:#}"));
+                    self.baking.bake_error = Some(format!("{method}: {e:#}"));
                 }
             }
             if !over {
@@ -288,19 +269,19 @@ impl Viewer {
             self.patches_as_asked()?;
         }
         if let Some(method) = self.world.missing_levels()
-            && self.bake_error.is_none()
-            && self.foliage_changed.elapsed() >= SETTLE_BEFORE_BAKE
+            && self.baking.bake_error.is_none()
+            && self.baking.foliage_changed.elapsed() >= SETTLE_BEFORE_BAKE
         {
             // A page bakes nothing (its GPU read-backs cannot be waited for): it shows what
             // `lodlab web` wrote for it.
             if cfg!(target_arch = "wasm32") && !self.world.levels_cached() {
-                self.bake_error = Some(format!(
+                self.baking.bake_error = Some(format!(
                     "{method}: these levels are not in the page's data (write the page with \
                      these settings: lodlab web)"
                 ));
                 return Ok(());
             }
-            self.bake = Some(BackgroundBake::start(
+            self.baking.bake = Some(BackgroundBake::start(
                 self.win.gpu.clone(),
                 self.world.sources.clone(),
                 self.world.has_levels(method),
@@ -393,8 +374,8 @@ impl Viewer {
     fn recover_device(&mut self) -> Result<()> {
         eprintln!("lodlab: the GPU device was lost; opening another and uploading the scene again");
         // A bake in flight may hold the old device; it starts again for what is missing.
-        self.bake = None;
-        self.bake_error = None;
+        self.baking.bake = None;
+        self.baking.bake_error = None;
         self.win.reopen_device()?;
         let gpu = &self.win.gpu;
         let old = &self.world;
@@ -423,8 +404,8 @@ impl Viewer {
             self.win.format(),
             self.win.gpu.views_formats(),
         );
-        self.timer = FrameTimer::new(&self.win.gpu);
-        self.passes = None;
+        self.figures.timer = FrameTimer::new(&self.win.gpu);
+        self.figures.passes = None;
         self.panel.touch();
         self.notice = Some("the GPU device was lost and has been reopened".into());
         eprintln!("lodlab: the scene is back on a new device");
@@ -448,7 +429,7 @@ impl Viewer {
     }
 
     fn redraw(&mut self, options: &ViewOptions) -> Result<bool> {
-        if self.lose_device_at == Some(self.frames) {
+        if self.lose_device_at == Some(self.clock.frames) {
             self.lose_device_at = None;
             eprintln!("lodlab: destroying the GPU device ({LOSE_DEVICE_ENV})");
             self.win.gpu.device.destroy();
@@ -471,9 +452,12 @@ impl Viewer {
         let x1 = ((central.max.x * ppp).round() as u32).clamp(x0 + 1, w);
         let y1 = ((central.max.y * ppp).round() as u32).clamp(y0 + 1, h);
         self.view = [x0, y0, x1 - x0, y1 - y0];
-        self.stats = self
-            .world
-            .prepare(&self.win.gpu, [self.view[2], self.view[3]], self.time, dt);
+        self.figures.stats = self.world.prepare(
+            &self.win.gpu,
+            [self.view[2], self.view[3]],
+            self.clock.time,
+            dt,
+        );
 
         let panel_started = Instant::now();
         if output.is_some() {
@@ -500,12 +484,12 @@ impl Viewer {
             Err(e) => return Err(e),
         };
         self.encode_frame(&mut frame);
-        if let Some(t) = &mut self.timer {
+        if let Some(t) = &mut self.figures.timer {
             t.resolve(&mut frame.encoder);
         }
 
         // The screenshot: the same frame once more into a texture that can be read back.
-        let last = options.screenshot.is_some() && self.frames + 1 >= options.frames.max(1);
+        let last = options.screenshot.is_some() && self.clock.frames + 1 >= options.frames.max(1);
         let capture = (last || self.screenshot_requested).then(|| {
             let shot = Offscreen::with_format(
                 &self.win.gpu,
@@ -533,16 +517,16 @@ impl Viewer {
             }
             return Err(e);
         }
-        if let Some(t) = &mut self.timer {
+        if let Some(t) = &mut self.figures.timer {
             t.submitted();
             if let Some(new) = t.try_read(&self.win.gpu)? {
-                self.passes = Some(match self.passes {
+                self.figures.passes = Some(match self.figures.passes {
                     Some(old) => old.smoothed(&new, 0.1),
                     None => new,
                 });
             }
         }
-        self.frames += 1;
+        self.clock.frames += 1;
         self.report_start_up();
 
         if let Some(shot) = capture {
@@ -587,7 +571,7 @@ impl Viewer {
             &self.targets,
             &frame.view,
             Some(self.view),
-            self.timer.as_ref(),
+            self.figures.timer.as_ref(),
         );
         // The panel drawn again where it changed (its timing begins there), then copied.
         let refreshed = self.panel_image.needs_refresh(frame.screen.size_in_pixels);
@@ -598,13 +582,13 @@ impl Viewer {
                 &mut frame.encoder,
                 &self.win.panel.primitives,
                 &frame.screen,
-                self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
+                self.figures.timer.as_ref().map(|t| t.writes(Pass::Ui)),
             );
         }
         self.panel_image.draw(
             &mut frame.encoder,
             &frame.view,
-            self.timer.as_ref().map(|t| t.writes(Pass::Ui)),
+            self.figures.timer.as_ref().map(|t| t.writes(Pass::Ui)),
             !refreshed,
         );
     }
@@ -612,17 +596,20 @@ impl Viewer {
     /// Says on stderr when the first frame was shown, and when every level the view asks for
     /// came in: what a user waits for at start-up.
     fn report_start_up(&mut self) {
-        let seconds = self.launched.at.elapsed().as_secs_f32();
-        if !self.reported_first_frame {
-            self.reported_first_frame = true;
+        let seconds = self.startup.launched.at.elapsed().as_secs_f32();
+        if !self.startup.reported_first_frame {
+            self.startup.reported_first_frame = true;
             eprintln!(
                 "lodlab: first frame after {seconds:.1} s (models loaded after {:.1} s, window \
                  and scene on the GPU after {:.1} s)",
-                self.launched.models_seconds, self.launched.window_seconds
+                self.startup.launched.models_seconds, self.startup.launched.window_seconds
             );
         }
-        if !self.reported_levels && self.bake.is_none() && self.world.missing_levels().is_none() {
-            self.reported_levels = true;
+        if !self.startup.reported_levels
+            && self.baking.bake.is_none()
+            && self.world.missing_levels().is_none()
+        {
+            self.startup.reported_levels = true;
             eprintln!("lodlab: every level in place after {seconds:.1} s");
         }
     }
@@ -632,15 +619,19 @@ impl Viewer {
     /// animation too, unless the frame was a pause (see [`FrameHistory::animation_step`]).
     fn tick(&mut self) -> f32 {
         let now = Instant::now();
-        let elapsed = self.last_frame.map_or(0.0, |t| (now - t).as_secs_f32());
-        let dt = self.history.animation_step(elapsed);
-        if self.last_frame.is_some() {
-            self.history
-                .push((now - self.started).as_secs_f64(), elapsed * 1000.0);
+        let elapsed = self
+            .clock
+            .last_frame
+            .map_or(0.0, |t| (now - t).as_secs_f32());
+        let dt = self.figures.history.animation_step(elapsed);
+        if self.clock.last_frame.is_some() {
+            self.figures
+                .history
+                .push((now - self.clock.started).as_secs_f64(), elapsed * 1000.0);
         }
-        self.last_frame = Some(now);
+        self.clock.last_frame = Some(now);
         if self.settings.playing {
-            self.time += dt * self.settings.speed;
+            self.clock.time += dt * self.settings.speed;
         }
         self.controls.fly(&mut self.world.camera, dt);
         self.follow_selection();
@@ -652,11 +643,12 @@ impl Viewer {
     fn upkeep(&mut self) -> Result<()> {
         self.update_levels()?;
         if self
+            .figures
             .memory_at
             .is_none_or(|t| t.elapsed().as_secs_f32() >= 1.0)
         {
-            self.memory = self.world.memory(self.targets.bytes());
-            self.memory_at = Some(Instant::now());
+            self.figures.memory = self.world.memory(self.targets.bytes());
+            self.figures.memory_at = Some(Instant::now());
         }
         self.world.renderer.shadows = self.settings.shadows;
         self.apply_lod_settings();
@@ -671,18 +663,22 @@ impl Viewer {
             .picked
             .and_then(|i| self.world.inspect(i, self.view[3]));
         let info = Info {
-            adapter: &self.adapter,
-            backend: &self.backend,
+            adapter: &self.figures.adapter,
+            backend: &self.figures.backend,
             models: &self.model_names,
             clips: &self.clip_names,
-            stats: self.stats,
-            passes: self.passes,
+            stats: self.figures.stats,
+            passes: self.figures.passes,
             view_pixels: self.view[2] as u64 * self.view[3] as u64,
             panel_cpu_ms: self.panel.cpu_ms(),
-            memory: &self.memory,
-            time: self.time,
-            baking: self.bake.as_ref().map(|b| (b.status(), b.fraction())),
-            bake_error: self.bake_error.as_deref(),
+            memory: &self.figures.memory,
+            time: self.clock.time,
+            baking: self
+                .baking
+                .bake
+                .as_ref()
+                .map(|b| (b.status(), b.fraction())),
+            bake_error: self.baking.bake_error.as_deref(),
             wireframe: self.world.renderer.has_wireframe(),
             ready: LodMethod::ALL.map(|m| self.world.lod.has(m)),
             trees: self.world.bakes.iter().any(|b| b.kind.is_tree()),
@@ -698,7 +694,7 @@ impl Viewer {
                 recent: &self.selection.recent,
             },
         };
-        let (settings, history) = (&mut self.settings, &self.history);
+        let (settings, history) = (&mut self.settings, &self.figures.history);
         let mut requests = panel::Requests::default();
         let mut central = egui::Rect::NOTHING;
         let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
@@ -752,14 +748,15 @@ impl Viewer {
             .ok_or_else(|| anyhow!("screenshot size mismatch"))?;
         write_png(path, &image)?;
         let panel_gpu = self
+            .figures
             .passes
             .and_then(|p| p.ms[Pass::Ui as usize])
             .map_or(String::new(), |ms| format!(", {ms:.2} ms of GPU"));
         eprintln!(
             "lodlab: wrote {} after {} frames ({:.1} fps; the panel took {:.2} ms of CPU{panel_gpu} a frame)",
             path.display(),
-            self.frames,
-            self.history.fps(),
+            self.clock.frames,
+            self.figures.history.fps(),
             self.panel.cpu_ms(),
         );
         Ok(())
@@ -774,7 +771,7 @@ impl Viewer {
             lod.method = s.method;
             lod.compare = s.compare;
             lod.reset();
-            self.bake_error = None;
+            self.baking.bake_error = None;
         }
         if lod.policy.transition != s.policy.transition || lod.policy.drive != s.policy.drive {
             lod.reset();
@@ -786,8 +783,8 @@ impl Viewer {
         let chain_before = (self.world.lod.foliage(), self.world.lod.chain());
         self.world.apply_foliage(&s.foliage);
         if (self.world.lod.foliage(), self.world.lod.chain()) != chain_before {
-            self.foliage_changed = Instant::now();
-            self.bake_error = None;
+            self.baking.foliage_changed = Instant::now();
+            self.baking.bake_error = None;
         }
     }
 }

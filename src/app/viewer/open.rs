@@ -68,8 +68,8 @@ impl Viewer {
                 self.model_names = world.bakes.iter().map(|b| b.name.clone()).collect();
                 self.clip_names = world.bakes.iter().map(|b| b.clip_names()).collect();
                 self.world = world;
-                self.bake = None;
-                self.bake_error = None;
+                self.baking.bake = None;
+                self.baking.bake_error = None;
                 self.settings.model = None;
                 self.settings.clip = None;
                 self.settings.count = self.world.spec.count;

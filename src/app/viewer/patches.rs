@@ -18,7 +18,7 @@ impl Viewer {
                 crate::runtime::levels::Measurer::colour(&crate::measure::GpuMeasurer, gpu);
             if let Err(e) = self.world.ensure_patches(gpu, colour.as_ref()) {
                 // Said once in the panel; the trees are drawn as they were.
-                self.bake_error = Some(format!("forest patches: {e:#}"));
+                self.baking.bake_error = Some(format!("forest patches: {e:#}"));
                 self.settings.foliage.patches = false;
             }
         }

@@ -153,7 +153,7 @@ impl Viewer {
             lod: &lod,
             camera: &self.world.camera,
             size: (self.view[2].max(1), self.view[3].max(1)),
-            time: self.time,
+            time: self.clock.time,
             samples: self.targets.sample_count,
         });
         let line = shell_line(&words);

@@ -154,7 +154,7 @@ impl ApplicationHandler<Ready> for WebApp {
         });
         match viewer {
             Ok(mut v) => {
-                v.launched.window_seconds = self.launched.at.elapsed().as_secs_f32();
+                v.startup.launched.window_seconds = self.launched.at.elapsed().as_secs_f32();
                 status("", false);
                 self.viewer = Some(v);
             }
@@ -200,13 +200,14 @@ fn show_figures(v: &Viewer) {
     else {
         return;
     };
-    let first = (v.frames > 0).then(|| v.launched.at.elapsed().as_millis().to_string());
+    let first =
+        (v.clock.frames > 0).then(|| v.startup.launched.at.elapsed().as_millis().to_string());
     let set = |k: &str, value: String| {
         let _ = body.set_attribute(&format!("data-{k}"), &value);
     };
-    set("frames", v.frames.to_string());
-    set("fps", format!("{:.1}", v.history.fps()));
-    set("triangles", v.stats.triangles.to_string());
+    set("frames", v.clock.frames.to_string());
+    set("fps", format!("{:.1}", v.figures.history.fps()));
+    set("triangles", v.figures.stats.triangles.to_string());
     set("method", v.world.lod.method.name().to_string());
     set("adapter", v.win.gpu.describe());
     let c = &v.world.camera;

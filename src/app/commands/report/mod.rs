@@ -47,8 +47,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     let gpu = crate::render::Gpu::headless()
         .map_err(|e| log::warn!("no GPU adapter, so no shading errors: {e:#}"))
         .ok();
-    let full =
-        crate::bake::gpu_data::drawable::Drawable::new(model).map_err(anyhow::Error::msg)?;
+    let full = crate::bake::gpu_data::drawable::Drawable::new(model).map_err(anyhow::Error::msg)?;
     let mut methods = BTreeMap::new();
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
     for method in Method::ALL {
