@@ -390,6 +390,29 @@ fn skeleton(
     }
     let shown = if all_in_scene { meshes } else { 1 };
     roots.extend(mesh_nodes.iter().take(shown).copied());
+    // glTF lists a node once a skin. A node that is two bones (bound two ways by two skins
+    // of the file read, which the import could not merge) keeps its first; each other bone on
+    // it gets a child node of its own, untransformed, which moves as the node does.
+    let mut seen = std::collections::HashSet::new();
+    let mut joints: Vec<Index<gj::Node>> = Vec::with_capacity(skel.joints.len());
+    for (bone, &j) in skel.joints.iter().enumerate() {
+        if seen.insert(j) {
+            joints.push(Index::new(j));
+            continue;
+        }
+        let twin = Index::push(
+            &mut nodes,
+            gj::Node {
+                name: Some(format!("{}_bone{bone}", skel.nodes[j as usize].name)),
+                ..Default::default()
+            },
+        );
+        nodes[j as usize]
+            .children
+            .get_or_insert_with(Vec::new)
+            .push(twin);
+        joints.push(twin);
+    }
     root.nodes = nodes;
 
     let ibm: Vec<f32> = skel
@@ -402,7 +425,7 @@ fn skeleton(
         extensions: None,
         extras: None,
         inverse_bind_matrices: Some(ibm),
-        joints: skel.joints.iter().map(|&j| Index::new(j)).collect(),
+        joints,
         name: None,
         skeleton: Some(roots[0]),
     });

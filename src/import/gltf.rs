@@ -40,15 +40,37 @@ pub fn read(path: &Path, limits: &validate::Limits) -> Result<Read, InputError> 
     validate::check_file(&meta, limits).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let read = std::fs::read(path).map_err(|e| fail(io_problem(&e)))?;
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "model".into());
-    let (read, warnings) = read_model(&name, read, base, limits).map_err(fail)?;
+    let (read, warnings) = read_model(&model_name(path), read, base, limits).map_err(fail)?;
     for w in warnings {
         log::warn!("{}: {w}", path.display());
     }
     Ok(read)
+}
+
+/// Stems that say nothing of what a file holds: the names exporters give every file.
+const GENERIC_STEMS: [&str; 5] = ["scene", "model", "untitled", "mesh", "export"];
+
+/// What a model read from `path` is called: the file's stem, or, where that is a stem every
+/// export has (Sketchfab publishes every model as `scene.gltf` in a folder named after it),
+/// the folder's name.
+pub fn model_name(path: &Path) -> String {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "model".into());
+    if !GENERIC_STEMS.contains(&stem.to_ascii_lowercase().as_str()) {
+        return stem;
+    }
+    // The folder as given, else as the file system has it (`scene.gltf` in the working one).
+    let folder = match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(p) => std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf()),
+        None => std::env::current_dir().unwrap_or_default(),
+    };
+    folder
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .filter(|n| !n.is_empty())
+        .unwrap_or(stem)
 }
 
 /// Reads a built-in model from the copy built into the binary, within `limits`.
@@ -388,6 +410,7 @@ fn build(
         mut bone_nodes,
         mut inverse_bind,
         maps,
+        into,
     } = merge_skins(&skins, buffers)?;
     let parents = node_parents(doc);
     let props = rigid_parts(
@@ -397,7 +420,7 @@ fn build(
         (&mut bone_nodes, &mut inverse_bind),
         warnings,
     )?;
-    let (nodes, remap) = read_hierarchy(doc, &bone_nodes)?;
+    let (nodes, remap) = read_hierarchy(doc, &bone_nodes, warnings)?;
     let mut skeleton = Skeleton {
         nodes,
         joints: bone_nodes.iter().map(|&j| remap[j]).collect(),
@@ -412,7 +435,7 @@ fn build(
                 .iter()
                 .position(|x| x.index() == s)
                 .expect("collected above");
-            (n.clone(), Binding::Skin(&maps[k]))
+            (n.clone(), Binding::Skin(&maps[k], into[k]))
         })
         .collect();
     bound.extend(rigid_bindings(doc, &parents, &bone_nodes, &skeleton, props));
@@ -441,6 +464,9 @@ struct SkinBones {
     inverse_bind: Vec<Mat4>,
     /// Per skin, the bone of each of its joints.
     maps: Vec<Vec<u32>>,
+    /// Per skin, the transform that takes its meshes' vertices into the space its bones are
+    /// bound in (the identity for most skins).
+    into: Vec<Mat4>,
 }
 
 /// Every skin the `skinned` nodes use, in order of first use.
@@ -455,40 +481,88 @@ fn used_skins<'a>(skinned: &[gltf::Node<'a>]) -> Vec<gltf::Skin<'a>> {
     skins
 }
 
-/// The joints of `skins` merged into one list of bones.
+/// The joints of `skins` merged into one list of bones, one a node where the skins allow.
 ///
-/// Every skin a mesh uses, in order of first use, their joints merged into one list of
-/// bones: a joint another skin has already, with the same inverse bind matrix, is shared;
-/// otherwise it is a bone of its own (bones may share a node).
+/// Every skin a mesh uses, in order of first use. A skin skins its vertex `v` by
+/// `G_j · IBM_j · v`. A joint another skin has already, with the same inverse bind matrix, is
+/// shared. Exporters often write a character as one mesh and skin per part, each part's
+/// vertices in a space of its own (a sword bound in its hand's node), so that the same node
+/// has, skin by skin, `IBM'_j = IBM_j · C` with one `C` for the whole skin: then the skin's
+/// vertices are moved by `C` and its joints share the bones (`G_j · IBM_j · (C v) =
+/// G_j · IBM'_j · v`). Only a skin bound in another pose (no one `C`) keeps bones of its own
+/// on shared nodes.
 fn merge_skins(skins: &[gltf::Skin], buffers: &[gltf::buffer::Data]) -> Result<SkinBones, String> {
     let (mut bone_nodes, mut inverse_bind): (Vec<usize>, Vec<Mat4>) = (Vec::new(), Vec::new());
+    // The bones on each node.
+    let mut on_node: std::collections::HashMap<usize, Vec<usize>> = Default::default();
     let mut maps: Vec<Vec<u32>> = Vec::with_capacity(skins.len());
+    let mut into: Vec<Mat4> = Vec::with_capacity(skins.len());
     for skin in skins {
         let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
         if joints.is_empty() {
             return Err(format!("skin {} has no joints", skin.index()));
         }
         let ibm = read_inverse_bind(skin, buffers, joints.len())?;
+        let c = skin_space(&joints, &ibm, |j| {
+            on_node.get(&j).map(|b| inverse_bind[b[0]])
+        });
+        let back = c.inverse();
         let mut map = Vec::with_capacity(joints.len());
         for (&j, m) in joints.iter().zip(&ibm) {
-            let same = |(&n, b): (&usize, &Mat4)| n == j && b.abs_diff_eq(*m, 1e-5);
-            let bone = match bone_nodes.iter().zip(&inverse_bind).position(same) {
-                Some(i) => i,
+            let m = *m * back;
+            let bones = on_node.entry(j).or_default();
+            let bone = match bones.iter().find(|&&b| same_matrix(&inverse_bind[b], &m)) {
+                Some(&b) => b,
                 None => {
                     bone_nodes.push(j);
-                    inverse_bind.push(*m);
+                    inverse_bind.push(m);
+                    bones.push(bone_nodes.len() - 1);
                     bone_nodes.len() - 1
                 }
             };
             map.push(bone as u32);
         }
         maps.push(map);
+        into.push(c);
     }
     Ok(SkinBones {
         bone_nodes,
         inverse_bind,
         maps,
+        into,
     })
+}
+
+/// `C` with `IBM'_j = bound(j) · C` for every joint `j` of a skin (`joints`, inverse bind
+/// matrices `ibm`) whose node is bound already (`bound`): the space the skin's vertices are
+/// in, seen from the shared bones'. The identity where no joint is bound yet or no one `C`
+/// fits them all.
+fn skin_space(joints: &[usize], ibm: &[Mat4], bound: impl Fn(usize) -> Option<Mat4>) -> Mat4 {
+    let mut found: Option<Mat4> = None;
+    for (&j, m) in joints.iter().zip(ibm) {
+        let Some(b) = bound(j) else {
+            continue;
+        };
+        let c = b.inverse() * *m;
+        match found {
+            None => found = Some(c),
+            Some(f) if same_matrix(&f, &c) => {}
+            Some(_) => return Mat4::IDENTITY,
+        }
+    }
+    found
+        .filter(|c| c.is_finite() && crate::model::keeps_every_direction(c))
+        .unwrap_or(Mat4::IDENTITY)
+}
+
+/// Two matrices equal within rounding, relative to their size.
+fn same_matrix(a: &Mat4, b: &Mat4) -> bool {
+    let size = a
+        .to_cols_array()
+        .iter()
+        .chain(&b.to_cols_array())
+        .fold(1.0f32, |m, x| m.max(x.abs()));
+    a.abs_diff_eq(*b, 1e-5 * size)
 }
 
 /// The unskinned mesh nodes of the scene, each with its world transform and the node that
@@ -625,6 +699,20 @@ fn build_rigid(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_file_with_a_generic_stem_is_named_by_its_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let folder = dir.path().join("red-kite");
+        std::fs::create_dir(&folder).unwrap();
+        assert_eq!(model_name(&folder.join("scene.gltf")), "red-kite");
+        assert_eq!(model_name(&folder.join("Scene.glb")), "red-kite");
+        assert_eq!(model_name(&folder.join("kite.glb")), "kite");
+        // A folder given as `..` is named as the file system names it.
+        let inner = folder.join("source");
+        std::fs::create_dir(&inner).unwrap();
+        assert_eq!(model_name(&inner.join("../untitled.glb")), "red-kite");
+    }
 
     #[test]
     fn speed_guess_uses_clip_names() {

@@ -4,6 +4,7 @@ pub mod clips;
 pub mod container;
 pub mod gltf;
 pub mod gltfpack;
+pub mod limits;
 pub mod nodes;
 pub mod palette;
 pub mod primitives;

@@ -13,10 +13,12 @@ pub(crate) const MIN_PLAUSIBLE_HEIGHT: f32 = 0.1;
 pub(crate) const DEFAULT_HEIGHT: f32 = 1.0;
 
 /// The skeleton's nodes: the joints and all their ancestors, parents first, with their rest
-/// transforms; and every glTF node's index among them (`u32::MAX` for the others).
+/// transforms; and every glTF node's index among them (`u32::MAX` for the others). A rotation
+/// that is not a unit quaternion (glTF asks for one) is normalised, with a line in `warnings`.
 pub(crate) fn read_hierarchy(
     doc: &gltf::Document,
     joints: &[usize],
+    warnings: &mut Vec<String>,
 ) -> Result<(Vec<Node>, Vec<u32>), String> {
     let node_count = doc.nodes().len();
     let mut parent = vec![None; node_count];
@@ -75,6 +77,14 @@ pub(crate) fn read_hierarchy(
                 if rotation.iter().all(|&c| c == 0.0) {
                     return Err(format!(
                         "node {old} has a rotation of length zero (not a quaternion)"
+                    ));
+                }
+                let length = Quat::from_array(rotation).length();
+                // glTF's validator allows a rounding error of about 5·10⁻⁴ in the length.
+                if length.is_finite() && (length - 1.0).abs() > 1e-3 {
+                    warnings.push(format!(
+                        "node {old}'s rotation is a quaternion of length {length:.3}, not 1 as \
+                         glTF asks; read as the rotation it stands for (normalised)"
                     ));
                 }
             }

@@ -86,7 +86,10 @@ pub(crate) fn msft_lod_lower_levels(doc: &gltf::Document) -> Vec<usize> {
 /// nearest joint above the node, and the transform into that bone's bind space, for a part
 /// hanging from a skeleton (a helmet on the head bone).
 pub(crate) enum Binding<'m> {
-    Skin(&'m [u32]),
+    /// A skin: the bone of each of its joints, and the transform that takes its vertices into
+    /// the space the merged skeleton's bones bind (the identity but for a mesh bound in a
+    /// space of its own, see `merge_skins` in [`super::gltf`]).
+    Skin(&'m [u32], Mat4),
     Rigid(Mat4, u32),
 }
 
@@ -95,7 +98,7 @@ impl Binding<'_> {
     /// mesh's node transform does not move it), or the same bone and transform.
     fn key(&self) -> BindingKey {
         match self {
-            Binding::Skin(map) => BindingKey::Skin(map.as_ptr() as usize),
+            Binding::Skin(map, _) => BindingKey::Skin(map.as_ptr() as usize),
             Binding::Rigid(m, bone) => {
                 BindingKey::Rigid(*bone, m.to_cols_array().map(|x| (x + 0.0).to_bits()))
             }
@@ -166,7 +169,7 @@ pub(crate) fn read_meshes(
             let slot = material_slot(&material, images, &mut material_slots, &mut materials)?;
             let (uv_set, transform) = base_colour_uvs(&material);
             let joints = match binding {
-                Binding::Skin(map) => Some(map.len()),
+                Binding::Skin(map, _) => Some(map.len()),
                 Binding::Rigid(..) => None,
             };
             let mut raw = read_primitive(&prim, buffer, uv_set, joints, &label)?;
@@ -273,27 +276,36 @@ fn apply_material_transform(
 /// bones, or a rigid part given its bone and moved by its transform.
 fn bind(raw: &mut RawPrimitive, binding: &Binding) {
     match binding {
-        Binding::Skin(map) => {
+        Binding::Skin(map, into) => {
             for inf in raw.influences.iter_mut().flatten() {
                 inf.bone = map[inf.bone as usize];
+            }
+            if *into != Mat4::IDENTITY {
+                transform(raw, into);
             }
         }
         Binding::Rigid(world, bone) => {
             for inf in raw.influences.iter_mut().flatten() {
                 inf.bone = *bone;
             }
-            let normal_matrix = glam::Mat3::from_mat4(*world).inverse().transpose();
-            for p in &mut raw.positions {
-                *p = world.transform_point3(*p);
-            }
-            for n in raw.normals.iter_mut().flatten() {
-                *n = (normal_matrix * *n).normalize_or(Vec3::Y);
-            }
-            if world.determinant() < 0.0 {
-                // A mirroring transform turns the triangles inside out.
-                raw.triangles.iter_mut().for_each(|t| t.swap(1, 2));
-            }
+            transform(raw, world);
         }
+    }
+}
+
+/// Moves a primitive's vertices by `world`: positions, normals, and the triangles' winding
+/// where it mirrors.
+fn transform(raw: &mut RawPrimitive, world: &Mat4) {
+    let normal_matrix = glam::Mat3::from_mat4(*world).inverse().transpose();
+    for p in &mut raw.positions {
+        *p = world.transform_point3(*p);
+    }
+    for n in raw.normals.iter_mut().flatten() {
+        *n = (normal_matrix * *n).normalize_or(Vec3::Y);
+    }
+    if world.determinant() < 0.0 {
+        // A mirroring transform turns the triangles inside out.
+        raw.triangles.iter_mut().for_each(|t| t.swap(1, 2));
     }
 }
 

@@ -228,7 +228,7 @@ pub fn bake_each(
 }
 
 /// A character's progress once its levels are handed over and its impostor is to come.
-const IMPOSTOR_PENDING: f32 = 0.9;
+pub const IMPOSTOR_PENDING: f32 = 0.9;
 
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.

@@ -31,6 +31,7 @@ mod normal_maps;
 mod patches;
 mod record;
 mod shaders;
+mod shared_skeletons;
 mod soak;
 mod spectral;
 mod study;

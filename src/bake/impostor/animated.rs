@@ -381,12 +381,15 @@ pub fn bake_animated_impostor(
     model: &Model,
     options: ImpostorOptions,
 ) -> Result<AnimatedImpostor> {
+    // Whether its pages fit a sheet is known from its clips alone: asked before the mesh is
+    // simplified (seconds on a large character), so that a character whose impostor cannot
+    // be made costs nothing to find out.
+    let side = options.page_side();
+    let (columns, rows) = sheet_layout(page_times(model, options.frames).len() as u32, side)
+        .map_err(|e| anyhow!("{}: {e}", model.name))?;
     let model = &*drawn_for_impostor(model);
     let name = &model.name;
     let times = page_times(model, options.frames);
-    let side = options.page_side();
-    let (columns, rows) =
-        sheet_layout(times.len() as u32, side).map_err(|e| anyhow!("{name}: {e}"))?;
     let poses: Vec<Model> = times.iter().map(|&(c, t)| posed(model, c, t)).collect();
     let all: Vec<Vec3> = poses
         .iter()

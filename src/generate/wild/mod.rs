@@ -9,6 +9,7 @@ pub mod cards;
 pub mod file;
 pub mod knight;
 pub mod mocap;
+pub mod parts;
 pub mod random;
 pub mod robot;
 pub mod structure;

@@ -433,7 +433,14 @@ impl<'a> BakeProgress<'a> {
             .iter()
             .zip(done.iter())
             .filter(|&(_, &d)| d < 1.0)
-            .map(|(n, d)| format!("{n} {:.0}%", d * 100.0))
+            .map(|(n, &d)| {
+                // A character whose levels are in waits for its impostor: say so.
+                if d >= crate::runtime::levels::IMPOSTOR_PENDING {
+                    format!("{n}'s impostor")
+                } else {
+                    format!("{n} {:.0}%", d * 100.0)
+                }
+            })
             .collect();
         let open = if open.is_empty() {
             "finishing".to_string()
