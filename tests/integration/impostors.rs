@@ -377,3 +377,39 @@ fn every_limb_of_a_t_pose_is_inside_every_view() {
         "the widest view is {widest:.2} as wide as high"
     );
 }
+
+/// A character with more clips than its sheet holds frames for at the frames asked (asset-store
+/// characters ship 10–30) still gets an impostor: the sheet's pages shared among its clips by
+/// duration, the frame error measured over the wider gaps.
+#[test]
+fn a_character_of_many_clips_shares_its_sheet() {
+    use lodlab::bake::impostor::animated::clip_frames;
+    let _serial = serial();
+    let mut walker = load_model("walker").unwrap();
+    let first = walker.clips[0].clone();
+    walker.clips = (0..7)
+        .map(|k| lodlab::model::Clip {
+            name: format!("clip{k}"),
+            duration: first.duration * (1.0 + 0.5 * k as f32),
+            ..first.clone()
+        })
+        .collect();
+    // 8 views of 64 texels: pages of 512², 16 to a 2048² sheet, for 7 clips of 12 frames.
+    let options: ImpostorOptions = "8x12x64".parse().unwrap();
+    let counts = clip_frames(&walker, &options).unwrap();
+    let pages: u32 = counts.iter().sum();
+    assert!(pages <= 16 && counts.iter().all(|&c| c >= 2), "{counts:?}");
+    let imp = bake_animated_impostor(&AtlasRasterizer::new(gpu()), &walker, options).unwrap();
+    assert_eq!(imp.frames, pages);
+    let bounds = lodlab::model::Bounds::of(walker.mesh.positions.iter().copied()).unwrap();
+    let drawable = imp.bake(bounds).unwrap();
+    let frames: Vec<u32> = drawable
+        .animation
+        .clips
+        .iter()
+        .map(|c| c.frame_count)
+        .collect();
+    assert_eq!(frames, counts, "pages and the impostor's animation agree");
+    let e = imp.error;
+    assert!(e.frame > 0.0 && e.total().is_finite(), "{e:?}");
+}

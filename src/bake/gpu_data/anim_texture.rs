@@ -53,7 +53,7 @@ pub fn frame_time(duration: f32, count: u32, k: u32) -> f32 {
 impl AnimationTexture {
     /// Resamples every clip of `model` (or its rest pose, if it has none) at `rate` Hz.
     pub fn bake(model: &Model, rate: f32) -> Self {
-        Self::bake_counted(model, rate, |duration| {
+        Self::bake_counted(model, rate, |_, duration| {
             (duration * rate).round().max(1.0) as u32 + 1
         })
     }
@@ -65,11 +65,23 @@ impl AnimationTexture {
         let frames = frames.max(2);
         let mean =
             model.clips.iter().map(|c| c.duration).sum::<f32>() / model.clips.len().max(1) as f32;
-        Self::bake_counted(model, (frames - 1) as f32 / mean.max(1e-3), |_| frames)
+        Self::bake_counted(model, (frames - 1) as f32 / mean.max(1e-3), |_, _| frames)
     }
 
-    /// [`Self::bake`] with clip frame counts from `count(duration)` (for a clip that lasts).
-    fn bake_counted(model: &Model, rate: f32, count: impl Fn(f32) -> u32) -> Self {
+    /// [`Self::bake_frames`] with a count of its own for each clip (`counts[c]`, at least 2;
+    /// the last count for clips past the list): an impostor whose clips share one sheet.
+    pub fn bake_frames_each(model: &Model, counts: &[u32]) -> Self {
+        let count = |c: usize| counts.get(c).or(counts.last()).copied().unwrap_or(2).max(2);
+        let rates: Vec<f32> = (model.clips.iter().enumerate())
+            .map(|(c, clip)| (count(c) - 1) as f32 / clip.duration.max(1e-3))
+            .collect();
+        let rate = rates.iter().sum::<f32>() / rates.len().max(1) as f32;
+        Self::bake_counted(model, rate, |c, _| count(c))
+    }
+
+    /// [`Self::bake`] with clip frame counts from `count(clip, duration)` (for a clip that
+    /// lasts).
+    fn bake_counted(model: &Model, rate: f32, count: impl Fn(usize, f32) -> u32) -> Self {
         let skel = &model.skeleton;
         let bones = skel.bone_count() as u32;
         let mut clips = Vec::new();
@@ -79,9 +91,13 @@ impl AnimationTexture {
         } else {
             model.clips.iter().map(Some).collect()
         };
-        for clip in sources {
+        for (c, clip) in sources.into_iter().enumerate() {
             let duration = clip.map_or(0.0, |c| c.duration.max(0.0));
-            let count = if duration > 0.0 { count(duration) } else { 1 };
+            let count = if duration > 0.0 {
+                count(c, duration)
+            } else {
+                1
+            };
             clips.push(ClipFrames {
                 name: clip.map_or_else(|| "rest".to_string(), |c| c.name.clone()),
                 first_frame: frames.len() as u32,

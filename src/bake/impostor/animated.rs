@@ -42,122 +42,9 @@ use anyhow::{Result, anyhow};
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-/// How finely an animated impostor is baked: views on a side of its grid, frames per clip and
-/// texels on a side of a view's cell. Memory grows as views² × frames × cell²
-/// ([`ImpostorOptions::bytes`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ImpostorOptions {
-    pub views: u32,
-    pub frames: u32,
-    pub cell: u32,
-}
-
-impl Default for ImpostorOptions {
-    /// 12 × 12 views put one within 14° of any line of sight (with 8 × 8, 22°, the
-    /// walker's impostor was worse than its coarsest mesh at every size measured); 12 frames a
-    /// clip; 24-texel cells hold a character about 20 texels high, more than it covers where
-    /// its impostor comes in (10 to 15 pixels). About 22 MB a model of two clips.
-    fn default() -> Self {
-        ImpostorOptions {
-            views: 12,
-            frames: 12,
-            cell: 24,
-        }
-    }
-}
-
-/// Bounds on the options. The pages of every clip's frames must fit a sheet of at most
-/// [`SHEET_SIZE`] texels a side ([`sheet_layout`]).
-pub const VIEWS: std::ops::RangeInclusive<u32> = 2..=16;
-pub const FRAMES: std::ops::RangeInclusive<u32> = 2..=64;
-pub const CELL: std::ops::RangeInclusive<u32> = 8..=256;
-/// The widest sheet: the material layers' own limit.
-pub const SHEET_SIZE: u32 = crate::bake::gpu_data::materials::MAX_LAYER_SIZE;
-
-/// How `pages` pages of `side` texels lie in a sheet: columns and rows, as square as fits.
-pub fn sheet_layout(pages: u32, side: u32) -> Result<(u32, u32), String> {
-    let most = (SHEET_SIZE / side.max(1)).max(1);
-    let columns = ((pages as f32).sqrt().ceil() as u32).clamp(1, most);
-    let rows = pages.div_ceil(columns);
-    if rows > most {
-        return Err(format!(
-            "{pages} frames of {side}² texels do not fit a {SHEET_SIZE}² sheet (at most {}); lower the frames or views × cell (--impostors VIEWSxFRAMESxCELL)",
-            most * most
-        ));
-    }
-    Ok((columns, rows))
-}
-
-impl std::str::FromStr for ImpostorOptions {
-    type Err = String;
-
-    /// `VIEWSxFRAMESxCELL`, e.g. `8x12x32`.
-    fn from_str(s: &str) -> Result<Self, String> {
-        let parts: Vec<&str> = s.split(['x', 'X', '×']).collect();
-        let [views, frames, cell] = parts.as_slice() else {
-            return Err(format!(
-                "`{s}`: expected VIEWSxFRAMESxCELL, e.g. 8x12x32, or `off`"
-            ));
-        };
-        let number = |what: &str, text: &str, range: std::ops::RangeInclusive<u32>| {
-            let n: u32 = text
-                .trim()
-                .parse()
-                .map_err(|_| format!("`{s}`: {what} `{text}` is not a whole number"))?;
-            if !range.contains(&n) {
-                return Err(format!(
-                    "`{s}`: {what} must be {} to {}, not {n}",
-                    range.start(),
-                    range.end()
-                ));
-            }
-            Ok(n)
-        };
-        let o = ImpostorOptions {
-            views: number("views", views, VIEWS)?,
-            frames: number("frames", frames, FRAMES)?,
-            cell: number("cell", cell, CELL)?,
-        };
-        if o.views * o.cell > crate::bake::gpu_data::materials::MAX_LAYER_SIZE {
-            return Err(format!(
-                "`{s}`: views × cell is {} texels, more than a page's {}",
-                o.views * o.cell,
-                crate::bake::gpu_data::materials::MAX_LAYER_SIZE
-            ));
-        }
-        Ok(o)
-    }
-}
-
-impl std::fmt::Display for ImpostorOptions {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}x{}x{}", self.views, self.frames, self.cell)
-    }
-}
-
-impl ImpostorOptions {
-    pub fn grid(&self) -> ViewGrid {
-        ViewGrid {
-            frames: self.views,
-            cell: self.cell,
-        }
-    }
-
-    /// Bytes the impostor of a model with `clips` clips takes as a texture: two sheets
-    /// (colour and normal) of a page of (views · cell)² RGBA texels per frame, a third more
-    /// with mipmaps (sheets with room for more pages than there are take a little more).
-    pub fn bytes(&self, clips: usize) -> u64 {
-        let side = (self.views * self.cell) as u64;
-        let pages = 2 * self.frames as u64 * clips.max(1) as u64;
-        pages * side * side * 4 * 4 / 3
-    }
-
-    /// Texels on a side of a page: every view's cell.
-    pub fn page_side(&self) -> u32 {
-        self.views * self.cell
-    }
-}
-
+pub use super::sheet::{
+    CELL, FRAMES, ImpostorOptions, SHEET_SIZE, VIEWS, clip_frames, page_times, sheet_layout,
+};
 pub use crate::bake::gpu_data::impostor_frames::AnimatedFrame;
 
 /// The part of each view's cell that any page covers (see [`AnimatedFrame::rects`]), from the
@@ -219,7 +106,7 @@ pub struct ImpostorError {
     pub view: f32,
     pub view_angle: f32,
     pub depth: f32,
-    /// Half the farthest a vertex moves between two frames.
+    /// The farthest the character between two frames strays from the nearer of them.
     pub frame: f32,
     /// Half a texel.
     pub texel: f32,
@@ -263,7 +150,8 @@ impl AnimatedImpostor {
         bounds: crate::model::Bounds,
     ) -> Result<crate::bake::gpu_data::drawable::Drawable, String> {
         let mut bake = crate::bake::gpu_data::drawable::Drawable::in_order(&self.model)?;
-        bake.animation = AnimationTexture::bake_frames(&self.model, self.options.frames);
+        let counts = clip_frames(&self.model, &self.options)?;
+        bake.animation = AnimationTexture::bake_frames_each(&self.model, &counts);
         bake.bounds = bounds;
         // Its pages' alpha is coverage, not a cut-out material: it is a character, drawn in
         // the characters' pass by its own shader.
@@ -303,25 +191,38 @@ pub fn worst_view_angle(grid: &ViewGrid) -> f32 {
     worst
 }
 
-/// The times each page shows: per clip (or the rest pose, for a model without clips), the
-/// clip and the times [`AnimationTexture::bake_frames`] samples it at, in page order (its
-/// frames after the rest pose, frame 0).
-fn page_times(model: &Model, frames: u32) -> Vec<(Option<&crate::model::Clip>, f32)> {
-    let anim = AnimationTexture::bake_frames(model, frames);
-    anim.clips
-        .iter()
-        .enumerate()
-        .flat_map(|(c, clip)| {
-            (0..clip.frame_count).map(move |k| {
-                let t = crate::bake::gpu_data::anim_texture::frame_time(
-                    clip.duration,
-                    clip.frame_count,
-                    k,
-                );
-                (model.clips.get(c), t)
-            })
-        })
-        .collect()
+/// How far the character between two frames of a clip strays from the nearer of them (`model`
+/// posed as `poses` at `times`): the farthest any vertex of the poses a third, half and two
+/// thirds of the way between lies from where the nearer frame has it. Two frames alike (a cycle's first and last) with
+/// a stride between them still count the stride; frames of different clips are not compared.
+fn frame_error(
+    model: &Model,
+    poses: &[Model],
+    times: &[(Option<&crate::model::Clip>, f32)],
+) -> f32 {
+    let mut most = 0.0f32;
+    for (k, pair) in poses.windows(2).enumerate() {
+        let (Some(clip), Some(next)) = (times[k].0, times[k + 1].0) else {
+            continue;
+        };
+        if !std::ptr::eq(clip, next) {
+            continue;
+        }
+        let (t0, t1) = (times[k].1, times[k + 1].1);
+        for s in [1.0 / 3.0, 0.5, 2.0 / 3.0] {
+            let between = posed(model, Some(clip), t0 + s * (t1 - t0));
+            for ((p, a), b) in between
+                .mesh
+                .positions
+                .iter()
+                .zip(&pair[0].mesh.positions)
+                .zip(&pair[1].mesh.positions)
+            {
+                most = most.max(p.distance(*a).min(p.distance(*b)));
+            }
+        }
+    }
+    most
 }
 
 /// The most triangles an impostor is drawn from. Its views are a few dozen pixels across, and
@@ -385,11 +286,12 @@ pub fn bake_animated_impostor(
     // simplified (seconds on a large character), so that a character whose impostor cannot
     // be made costs nothing to find out.
     let side = options.page_side();
-    let (columns, rows) = sheet_layout(page_times(model, options.frames).len() as u32, side)
+    let counts = clip_frames(model, &options).map_err(|e| anyhow!("{}: {e}", model.name))?;
+    let (columns, rows) = sheet_layout(page_times(model, &counts).len() as u32, side)
         .map_err(|e| anyhow!("{}: {e}", model.name))?;
     let model = &*drawn_for_impostor(model);
     let name = &model.name;
-    let times = page_times(model, options.frames);
+    let times = page_times(model, &counts);
     let poses: Vec<Model> = times.iter().map(|&(c, t)| posed(model, c, t)).collect();
     let all: Vec<Vec3> = poses
         .iter()
@@ -397,19 +299,7 @@ pub fn bake_animated_impostor(
         .collect();
     let (centre, radius) =
         view_sphere(&all).ok_or_else(|| anyhow!("{name}: no vertices to draw an impostor of"))?;
-    // Half the farthest a vertex moves between two frames of one clip.
-    let mut frame_error = 0.0f32;
-    for (k, pair) in poses.windows(2).enumerate() {
-        let same_clip = match (times[k].0, times[k + 1].0) {
-            (Some(a), Some(b)) => std::ptr::eq(a, b),
-            _ => false,
-        };
-        if same_clip {
-            for (a, b) in pair[0].mesh.positions.iter().zip(&pair[1].mesh.positions) {
-                frame_error = frame_error.max(0.5 * a.distance(*b));
-            }
-        }
-    }
+    let frame_error = frame_error(model, &poses, &times);
     let grid = options.grid();
     let materials = MaterialLayers::bake(&model.materials);
     let sheet = || Rgba8Image {
@@ -701,10 +591,53 @@ mod tests {
         }
     }
 
+    /// A walker with `n` clips: its own, again and again, of growing durations.
+    fn many_clips(n: usize) -> Model {
+        let mut m = crate::import::load_model("walker").unwrap();
+        let first = m.clips[0].clone();
+        m.clips = (0..n)
+            .map(|k| crate::model::Clip {
+                name: format!("clip{k}"),
+                duration: first.duration * (1.0 + 0.25 * k as f32),
+                ..first.clone()
+            })
+            .collect();
+        m
+    }
+
+    #[test]
+    fn many_clips_share_one_sheet_by_duration() {
+        let options = ImpostorOptions::default();
+        let most = (SHEET_SIZE / options.page_side()).pow(2);
+        // Few clips: every one gets the frames asked for.
+        let walker = crate::import::load_model("walker").unwrap();
+        let n = walker.clips.len();
+        assert_eq!(clip_frames(&walker, &options), Ok(vec![options.frames; n]));
+        for clips in [11, 22] {
+            let m = many_clips(clips);
+            let counts = clip_frames(&m, &options).unwrap();
+            assert_eq!(counts.len(), clips);
+            let pages: u32 = counts.iter().sum();
+            assert!(pages <= most && pages + 2 > most, "{counts:?} in {most}");
+            assert!(counts.iter().all(|&c| (2..=options.frames).contains(&c)));
+            // Longer clips never get fewer frames.
+            assert!(counts.windows(2).all(|w| w[0] <= w[1]), "{counts:?}");
+            assert!(sheet_layout(pages, options.page_side()).is_ok());
+            // The impostor's own animation texture samples them so, page for page.
+            let anim = AnimationTexture::bake_frames_each(&m, &counts);
+            let frames: Vec<u32> = anim.clips.iter().map(|c| c.frame_count).collect();
+            assert_eq!(frames, counts);
+            assert_eq!(page_times(&m, &counts).len() as u32, pages);
+        }
+        // More clips than two frames each can hold: said in one line.
+        let e = clip_frames(&many_clips(30), &options).unwrap_err();
+        assert!(e.contains("30 clips") && e.contains("--impostors"), "{e}");
+    }
+
     #[test]
     fn pages_follow_the_animation_textures_frames() {
         let walker = crate::import::load_model("walker").unwrap();
-        let times = page_times(&walker, 5);
+        let times = page_times(&walker, &[5]);
         let anim = AnimationTexture::bake_frames(&walker, 5);
         // Frame 0 of the texture is the rest pose; page pair p shows texture frame p + 1.
         let frames: u32 = anim.clips.iter().map(|c| c.frame_count).sum();

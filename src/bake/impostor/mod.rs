@@ -5,3 +5,4 @@ pub mod animated;
 pub mod nearest_view;
 pub mod octahedral;
 pub mod placement;
+pub mod sheet;
