@@ -191,6 +191,45 @@ pub fn worst_view_angle(grid: &ViewGrid) -> f32 {
     worst
 }
 
+/// `options` with the cell a character's clips are best drawn at. Where every clip gets the
+/// frames asked for, the cell asked for. Else its sheet trades texels for frames: of the
+/// cells from the one asked for down (each a fifth smaller, to [`CELL`]'s least), the one
+/// whose two traded errors sum least, half a texel of the view sphere and the frame error of
+/// the clips at the frames its sheet then allows ([`clip_frames`], [`frame_error`]).
+fn cell_for_clips(model: &Model, options: ImpostorOptions) -> ImpostorOptions {
+    let clips = model.clips.len().max(1) as u32;
+    let most = |o: &ImpostorOptions| (SHEET_SIZE / o.page_side().max(1)).max(1).pow(2);
+    if clips * options.frames.max(2) <= most(&options) {
+        return options;
+    }
+    let mut best: Option<(f32, ImpostorOptions)> = None;
+    let mut radius = None;
+    let mut cell = options.cell;
+    while cell >= *CELL.start() {
+        let o = ImpostorOptions { cell, ..options };
+        if let Ok(counts) = clip_frames(model, &o) {
+            let times = page_times(model, &counts);
+            let poses: Vec<Model> = times.iter().map(|&(c, t)| posed(model, c, t)).collect();
+            let r = *radius.get_or_insert_with(|| {
+                let all: Vec<Vec3> = poses
+                    .iter()
+                    .flat_map(|p| p.mesh.positions.clone())
+                    .collect();
+                view_sphere(&all).map_or(1.0, |(_, r)| r)
+            });
+            let error = r / cell as f32 + frame_error(model, &poses, &times);
+            if best.is_none_or(|(e, _)| error < e) {
+                best = Some((error, o));
+            }
+            if clips * o.frames.max(2) <= most(&o) {
+                break;
+            }
+        }
+        cell = cell * 4 / 5;
+    }
+    best.map_or(options, |(_, o)| o)
+}
+
 /// How far the character between two frames of a clip strays from the nearer of them (`model`
 /// posed as `poses` at `times`): the farthest any vertex of the poses a third, half and two
 /// thirds of the way between lies from where the nearer frame has it. Two frames alike (a cycle's first and last) with
@@ -285,6 +324,7 @@ pub fn bake_animated_impostor(
     // Whether its pages fit a sheet is known from its clips alone: asked before the mesh is
     // simplified (seconds on a large character), so that a character whose impostor cannot
     // be made costs nothing to find out.
+    let options = cell_for_clips(model, options);
     let side = options.page_side();
     let counts = clip_frames(model, &options).map_err(|e| anyhow!("{}: {e}", model.name))?;
     let (columns, rows) = sheet_layout(page_times(model, &counts).len() as u32, side)
@@ -479,8 +519,9 @@ pub fn load_or_bake_impostor(
         let impostor = bake_animated_impostor(raster, model, options)?;
         let e = impostor.error;
         log::info!(
-            "{}: impostor {options} baked in {:.2} s: {} frames, {:.1} MB of pages; error {:.0} mm (view {:.0} mm at {:.1}° over a depth of {:.0} mm, frames {:.0} mm, texel {:.0} mm)",
+            "{}: impostor {} (asked {options}) baked in {:.2} s: {} frames, {:.1} MB of pages; error {:.0} mm (view {:.0} mm at {:.1}° over a depth of {:.0} mm, frames {:.0} mm, texel {:.0} mm)",
             model.name,
+            impostor.options,
             start.elapsed().as_secs_f64(),
             impostor.frames,
             impostor.texture_bytes() as f64 / 1e6,
