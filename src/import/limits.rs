@@ -65,7 +65,7 @@ impl Limits {
         ("nodes", "nodes in a file"),
         (
             "joints",
-            "bones: all skins' joints, and the nodes unskinned parts ride on",
+            "bones: the skins' joint nodes (each once, however many skins list it), and the nodes unskinned parts ride on",
         ),
         ("clip-seconds", "length of a clip"),
         ("clips-seconds", "length of all clips together"),
