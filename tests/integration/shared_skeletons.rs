@@ -44,6 +44,44 @@ fn write(doc: &lodlab::generate::wild::file::Document, dir: &Path, name: &str) -
     path.to_str().unwrap().to_string()
 }
 
+/// `lodlab export MODEL` into `dir`: the files of its levels, full detail first.
+fn export(model: &str, dir: &Path) -> Vec<std::path::PathBuf> {
+    let out = lodlab(&[
+        "export",
+        model,
+        "--out",
+        dir.join("export").to_str().unwrap(),
+        "--cache",
+        dir.join("cache").to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    e["levels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["file"].as_str().unwrap().into())
+        .collect()
+}
+
+/// No skin of the glTF file `file` lists a node twice.
+fn assert_each_node_once(file: &Path) {
+    let doc = gltf::Gltf::from_slice(&std::fs::read(file).unwrap()).unwrap();
+    assert!(doc.skins().next().is_some());
+    for skin in doc.skins() {
+        let mut nodes: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        let n = nodes.len();
+        nodes.sort_unstable();
+        nodes.dedup();
+        assert_eq!(nodes.len(), n, "a node listed twice in a skin");
+    }
+}
+
 #[test]
 fn skins_over_one_skeleton_share_its_bones() {
     let walker = lodlab::import::load_model("walker").unwrap();
@@ -81,36 +119,8 @@ fn skins_over_one_skeleton_share_its_bones() {
         assert!(same_points(&posed(&walker, t), &posed(&m4, t)), "at {t} s");
     }
     // Exported, one joint a node: what glTF-Validator asks (DUPLICATE_ELEMENTS before).
-    let out = lodlab(&[
-        "export",
-        &four,
-        "--out",
-        dir.path().join("export").to_str().unwrap(),
-        "--cache",
-        dir.path().join("cache").to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let files: Vec<std::path::PathBuf> = e["levels"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|l| l["file"].as_str().unwrap().into())
-        .collect();
-    let glb = std::fs::read(&files[0]).unwrap();
-    let doc = gltf::Gltf::from_slice(&glb).unwrap();
-    for skin in doc.skins() {
-        let mut nodes: Vec<usize> = skin.joints().map(|j| j.index()).collect();
-        let n = nodes.len();
-        nodes.sort_unstable();
-        nodes.dedup();
-        assert_eq!(nodes.len(), n, "a node listed twice in a skin");
-    }
+    let files = export(&four, dir.path());
+    assert_each_node_once(&files[0]);
     if let Some(tools) = gltf_tools() {
         for (errors, _, report) in validate(&tools, &files) {
             assert_eq!(errors, 0, "{report}");
@@ -131,29 +141,8 @@ fn a_node_bound_two_ways_exports_one_joint_a_node() {
     let path = write(&doc, dir.path(), "two-poses.glb");
     let m = import(&path, &ImportOptions::default()).unwrap().model;
     assert!(m.skeleton.bone_count() > walker.skeleton.bone_count());
-    let out = lodlab(&[
-        "export",
-        &path,
-        "--out",
-        dir.path().join("export").to_str().unwrap(),
-        "--cache",
-        dir.path().join("cache").to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let file = std::path::PathBuf::from(e["levels"][0]["file"].as_str().unwrap());
-    let doc = gltf::Gltf::from_slice(&std::fs::read(&file).unwrap()).unwrap();
-    let skin = doc.skins().next().unwrap();
-    let mut nodes: Vec<usize> = skin.joints().map(|j| j.index()).collect();
-    let n = nodes.len();
-    nodes.sort_unstable();
-    nodes.dedup();
-    assert_eq!(nodes.len(), n);
+    let file = export(&path, dir.path()).swap_remove(0);
+    assert_each_node_once(&file);
     // Read back, the exported model poses as the file did.
     let back = lodlab::import::load_model(file.to_str().unwrap()).unwrap();
     assert!(same_points(&posed(&m, 0.2), &posed(&back, 0.2)));

@@ -321,17 +321,23 @@ pub fn bake_animated_impostor(
     model: &Model,
     options: ImpostorOptions,
 ) -> Result<AnimatedImpostor> {
-    // Whether its pages fit a sheet is known from its clips alone: asked before the mesh is
-    // simplified (seconds on a large character), so that a character whose impostor cannot
-    // be made costs nothing to find out.
-    let options = cell_for_clips(model, options);
-    let side = options.page_side();
-    let counts = clip_frames(model, &options).map_err(|e| anyhow!("{}: {e}", model.name))?;
-    let (columns, rows) = sheet_layout(page_times(model, &counts).len() as u32, side)
-        .map_err(|e| anyhow!("{}: {e}", model.name))?;
+    // Whether its pages can fit a sheet at all (at the least cell) is known from its clips
+    // alone: asked before the mesh is simplified (seconds on a large character), so that a
+    // character whose impostor cannot be made costs nothing to find out. The cell is then
+    // chosen on the mesh the pages draw, not the full one: it poses the model at every page.
+    let least = ImpostorOptions {
+        cell: *CELL.start(),
+        ..options
+    };
+    clip_frames(model, &least).map_err(|e| anyhow!("{}: {e}", model.name))?;
     let model = &*drawn_for_impostor(model);
     let name = &model.name;
+    let options = cell_for_clips(model, options);
+    let side = options.page_side();
+    let counts = clip_frames(model, &options).map_err(|e| anyhow!("{name}: {e}"))?;
     let times = page_times(model, &counts);
+    let (columns, rows) =
+        sheet_layout(times.len() as u32, side).map_err(|e| anyhow!("{name}: {e}"))?;
     let poses: Vec<Model> = times.iter().map(|&(c, t)| posed(model, c, t)).collect();
     let all: Vec<Vec3> = poses
         .iter()

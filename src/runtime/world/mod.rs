@@ -283,8 +283,7 @@ impl World {
         let view = FrameView::from_camera(&self.camera, aspect, time);
         let remap = self.remaps();
         if remap {
-            let methods: Vec<LodMethod> = self.lod.methods().collect();
-            for (i, method) in methods.into_iter().enumerate() {
+            for (i, method) in self.lod.methods().enumerate() {
                 self.remap_side(i, method);
             }
         }
