@@ -50,6 +50,7 @@ fn main() -> Result<()> {
             wind: 1.0,
             tint: Vec4::ONE,
             fade: None,
+            travel: Vec3::ZERO,
         });
         println!(
             "LOD {k}: {} triangles, {} influences, error {:.2} mm",

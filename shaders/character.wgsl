@@ -222,11 +222,34 @@ fn heat(x: f32) -> vec3<f32> {
     return clamp(vec3<f32>(1.5 - abs(4.0 * v - 3.0), 1.5 - abs(4.0 * v - 2.0), 1.5 - abs(4.0 * v - 1.0)), vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
+// A mesh's triangles of cut-out materials (a character's hair cards, feathers, lace): the
+// pipelines that draw them (`PipelineKey::cut` in src/render/pipelines.rs) set this, draw
+// both sides and have the fragment shaders below drop what the texture's alpha cuts out at
+// one half (the material layers hold an opaque material's alpha at one). Everywhere else it
+// is false and the tests fold away.
+override cut_out: bool = false;
+
+// Whether a cut-out triangle's texture cuts this fragment away. The colour is worked out
+// before any discard (see `fs_dither`).
+fn cut_away(in: VsOut) -> bool {
+    let alpha = textureSample(material_tex, material_sampler, in.uv, in.material).a;
+    return cut_out && alpha < 0.5;
+}
+
+// The normal of the side the eye sees: a cut-out card is lit on either side.
+fn facing(in: VsOut, n: vec3<f32>) -> vec3<f32> {
+    return select(n, -n, cut_out && dot(n, frame.camera_pos.xyz - in.world) < 0.0);
+}
+
 // Characters shaded by their materials. The debug views are `fs_debug`, a pipeline of their
 // own: a branch on the view here would cost every pixel on a software rasteriser.
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
-    return shaded(in);
+    let colour = shaded(in);
+    if (cut_away(in)) {
+        discard;
+    }
+    return colour;
 }
 
 fn shaded(in: VsOut) -> vec4<f32> {
@@ -284,7 +307,7 @@ fn framed(f: TangentFrame, m: vec3<f32>) -> vec3<f32> {
 
 fn shaded_with(in: VsOut, n: vec3<f32>) -> vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
-    return vec4<f32>(lit(in, texel.rgb * in.tint.rgb, n), in.lod.z);
+    return vec4<f32>(lit(in, texel.rgb * in.tint.rgb, facing(in, n)), in.lod.z);
 }
 
 fn shaded_mapped(in: VsOut) -> vec4<f32> {
@@ -295,13 +318,17 @@ fn shaded_mapped(in: VsOut) -> vec4<f32> {
 // `fs_main` and `fs_dither` for the levels lit through normal maps.
 @fragment
 fn fs_mapped(in: VsOut) -> @location(0) vec4<f32> {
-    return shaded_mapped(in);
+    let colour = shaded_mapped(in);
+    if (cut_away(in)) {
+        discard;
+    }
+    return colour;
 }
 
 @fragment
 fn fs_dither_mapped(in: VsOut) -> @location(0) vec4<f32> {
     let colour = shaded_mapped(in);
-    if (dithered_out(in)) {
+    if (cut_away(in) || dithered_out(in)) {
         discard;
     }
     return colour;
@@ -313,21 +340,29 @@ fn fs_morph_mapped(in: VsOut) -> @location(0) vec4<f32> {
     let f = tangent_frame(in);
     let fine = stored_normal(in, f, in.normal_layer.x);
     let coarse = stored_normal(in, f, in.normal_layer.y);
-    return shaded_with(in, framed(f, mix(fine, coarse, clamp(in.lod.y, 0.0, 1.0))));
+    let colour = shaded_with(in, framed(f, mix(fine, coarse, clamp(in.lod.y, 0.0, 1.0))));
+    if (cut_away(in)) {
+        discard;
+    }
+    return colour;
 }
 
 // Characters painted by the debug view (frame.views.x): by level, by transition, by
 // influences; the material where the view keeps it.
 @fragment
 fn fs_debug(in: VsOut) -> @location(0) vec4<f32> {
-    return painted(in);
+    let colour = painted(in);
+    if (cut_away(in)) {
+        discard;
+    }
+    return colour;
 }
 
 fn painted(in: VsOut) -> vec4<f32> {
     let texel = textureSample(material_tex, material_sampler, in.uv, in.material);
     let d = debug_color(in.lod, in.influences, frame.views.x);
     let base = select(texel.rgb * in.tint.rgb, d.rgb, d.a > 0.5);
-    return vec4<f32>(lit(in, base, normalize(in.normal)), in.lod.z);
+    return vec4<f32>(lit(in, base, facing(in, normalize(in.normal))), in.lod.z);
 }
 
 // One half of a dithered cross-fade (`LodDraw::Dither`): lod.z is the half's coverage, read as
@@ -342,7 +377,7 @@ fn dithered_out(in: VsOut) -> bool {
 @fragment
 fn fs_dither(in: VsOut) -> @location(0) vec4<f32> {
     let colour = shaded(in);
-    if (dithered_out(in)) {
+    if (cut_away(in) || dithered_out(in)) {
         discard;
     }
     return colour;
@@ -351,7 +386,7 @@ fn fs_dither(in: VsOut) -> @location(0) vec4<f32> {
 @fragment
 fn fs_debug_dither(in: VsOut) -> @location(0) vec4<f32> {
     let colour = painted(in);
-    if (dithered_out(in)) {
+    if (cut_away(in) || dithered_out(in)) {
         discard;
     }
     return colour;

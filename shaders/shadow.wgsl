@@ -21,7 +21,10 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: Instance) -> VsOut {
         vec2<f32>(-1.0, -1.0), vec2<f32>(-1.0, 1.0), vec2<f32>(1.0, 1.0),
     );
     let c = corners[vi];
-    let local = shadow.ellipse.xy + c * shadow.ellipse.zw * 1.35;
+    // Under the body, where its clip has carried it (root motion; `GpuInstance` in
+    // src/render/uniforms.rs: x in timing.w, z in fade.w).
+    let centre = shadow.ellipse.xy + vec2<f32>(inst.timing.w, inst.fade.w);
+    let local = centre + c * shadow.ellipse.zw * 1.35;
     var world = instance_point(inst, vec3<f32>(local.x, 0.0, local.y));
     // Sit just above the ground, whatever the instance's height.
     world.y = 0.004;

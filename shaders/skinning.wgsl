@@ -214,7 +214,8 @@ struct Instance {
     @location(2) row2: vec4<f32>,
     // The clip as a frame range of the animation texture (see `clip_frames`).
     @location(3) clip: vec4<f32>,
-    // x: time offset in seconds; y: playback speed; z: wind strength (1: the clip as it is).
+    // x: time offset in seconds; y: playback speed; z: wind strength (1: the clip as it is);
+    // w: x of where its clip has carried it (root motion, for the blob shadow).
     @location(4) timing: vec4<f32>,
     @location(5) tint: vec4<f32>,
     // x: transition t (geomorph: 0 the drawn level, 1 its target hops levels coarser), −1 when
@@ -224,7 +225,8 @@ struct Instance {
     // cross-fade's half, else 1; w: the level.
     @location(6) lod: vec4<f32>,
     // A cross-fade to a second clip: that clip as a frame range (see `clip_frames`), and its
-    // time offset (x), playback speed (y) and weight (z, 0: no cross-fade).
+    // time offset (x), playback speed (y) and weight (z, 0: no cross-fade); w: z of where its
+    // clip has carried it.
     @location(10) clip2: vec4<f32>,
     @location(11) fade: vec4<f32>,
 };

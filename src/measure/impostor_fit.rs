@@ -41,6 +41,9 @@ pub struct ImpostorFit<'a> {
     duration: f32,
     height: f32,
     centre: glam::Vec3,
+    /// Where the first clip has carried the body at each frame measured (root motion; all
+    /// zero for a character that stays put): the views follow it.
+    travel: Vec<glam::Vec3>,
 }
 
 impl<'a> ImpostorFit<'a> {
@@ -52,6 +55,7 @@ impl<'a> ImpostorFit<'a> {
         impostor: &AnimatedImpostor,
     ) -> Result<Self> {
         let world = |loaded: Loaded| metric_world(gpu, loaded);
+        let duration = model.clips.first().map_or(1.0, |c| c.duration);
         let impostor_bake = impostor
             .bake(full.bounds)
             .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
@@ -63,9 +67,12 @@ impl<'a> ImpostorFit<'a> {
             impostor: world(Loaded::forest_of_bake(&impostor.model, impostor_bake, 1))?,
             level: world(Loaded::forest_of_bake(model, full.clone(), 1))?,
             shown: None,
-            duration: model.clips.first().map_or(1.0, |c| c.duration),
+            duration,
             height: full.bounds.size().y.max(1e-3),
             centre: full.bounds.center(),
+            travel: (0..METRIC_FRAMES)
+                .map(|f| full.travel_at(0, duration * f as f32 / METRIC_FRAMES as f32))
+                .collect(),
         })
     }
 
@@ -90,12 +97,19 @@ impl<'a> ImpostorFit<'a> {
         let target = Offscreen::new(gpu, size[0], size[1], 1);
         let shoot = |w: &mut World, camera, t, empty| picture(gpu, w, &target, camera, t, empty);
         let (mut covered, mut off_impostor, mut off_level) = (0u64, 0.0f64, 0.0f64);
+        let still = self.travel.iter().all(|t| *t == glam::Vec3::ZERO);
         for view in 0..METRIC_VIEWS {
             let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
-            let camera = metric_camera(self.centre, self.height, yaw, PITCH_DEG, distance);
-            let background = shoot(&mut self.full, camera, 0.0, true)?;
+            let at = |f: usize| self.centre + self.travel[f];
+            let mut camera = metric_camera(at(0), self.height, yaw, PITCH_DEG, distance);
+            let mut background = shoot(&mut self.full, camera, 0.0, true)?;
             for frame in 0..METRIC_FRAMES {
                 let t = self.duration * frame as f32 / METRIC_FRAMES as f32;
+                if !still && frame > 0 {
+                    // Where the clip carries the body, the view goes with it.
+                    camera = metric_camera(at(frame), self.height, yaw, PITCH_DEG, distance);
+                    background = shoot(&mut self.full, camera, 0.0, true)?;
+                }
                 let full = shoot(&mut self.full, camera, t, false)?;
                 let imp = shoot(&mut self.impostor, camera, t - lag, false)?;
                 let lvl = match self.shown {

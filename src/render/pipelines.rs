@@ -33,6 +33,8 @@ struct PipelineSpec<'a> {
     /// Depth bias: pulls a surface lying on another towards the eye.
     bias: wgpu::DepthBiasState,
     topology: wgpu::PrimitiveTopology,
+    /// Values of the module's `override` constants, for the fragment shader.
+    constants: &'a [(&'a str, f64)],
 }
 
 impl<'a> PipelineSpec<'a> {
@@ -51,6 +53,7 @@ impl<'a> PipelineSpec<'a> {
             alpha_to_coverage: false,
             bias: Default::default(),
             topology: wgpu::PrimitiveTopology::TriangleList,
+            constants: &[],
         }
     }
 }
@@ -98,7 +101,10 @@ fn pipeline(
         fragment: Some(wgpu::FragmentState {
             module: spec.module,
             entry_point: Some(spec.fs),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: spec.constants,
+                ..Default::default()
+            },
             targets: &[Some(wgpu::ColorTargetState {
                 format,
                 blend: spec.blend,
@@ -120,9 +126,10 @@ fn pipeline(
 }
 
 /// What picks a character pipeline: the family of shaders (a drawable's [`DrawClass`]), whether
-/// the vertices geomorph, the stage of the frame it draws in, and how it is painted. A draw
-/// finds its pipeline by its key (see `renderer::draw`); [`PipelineKey::all`] lists the keys
-/// pipelines are built for.
+/// the vertices geomorph, the stage of the frame it draws in, how it is painted, and whether
+/// it draws a mesh's cut-out triangles. A draw finds its pipeline by its key (see
+/// `renderer::draw`); [`PipelineKey::all`] lists the keys pipelines are built for at once,
+/// [`PipelineKey::cut_out`] those built when the first mesh with cut-out parts arrives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PipelineKey {
     pub class: DrawClass,
@@ -130,6 +137,10 @@ pub struct PipelineKey {
     pub morph: bool,
     pub stage: Stage,
     pub look: Look,
+    /// A mesh's triangles of cut-out materials (a character's hair cards, feathers, lace; see
+    /// `PackedLevel::cut_indices`): drawn two-sided, lit on the side the eye sees, and
+    /// alpha-tested at one half by the same fragment shaders (their `cut_out` override).
+    pub cut: bool,
 }
 
 /// The stage of the frame a character pipeline draws in.
@@ -176,7 +187,13 @@ impl PipelineKey {
             morph,
             stage,
             look,
+            cut: false,
         }
+    }
+
+    /// The same pipeline for a mesh's cut-out triangles.
+    pub fn cut_out(self) -> PipelineKey {
+        PipelineKey { cut: true, ..self }
     }
 
     /// The one pipeline foliage and impostors of `class` draw with (foliage also geomorphs).
@@ -186,11 +203,13 @@ impl PipelineKey {
             morph,
             stage: Stage::Opaque,
             look: Look::Shaded,
+            cut: false,
         }
     }
 
-    /// Every key a pipeline is built for; wireframes where the adapter draws lines.
-    pub fn all(wireframe: bool) -> Vec<PipelineKey> {
+    /// The filled meshes' keys: each look at each stage of a level, a geomorph, a dithered
+    /// half and an alpha transition's colour, and a transition's depth.
+    fn meshes() -> Vec<PipelineKey> {
         use Stage::*;
         let mut keys = Vec::new();
         for look in [Look::Shaded, Look::Debug, Look::Mapped] {
@@ -204,6 +223,21 @@ impl PipelineKey {
             }
         }
         keys.push(Self::mesh(false, FadeDepth, Look::Shaded));
+        keys
+    }
+
+    /// The keys of the pipelines for meshes' cut-out triangles: [`Self::cut_out`] of every
+    /// filled mesh key (a wireframe draws them as lines with the rest). Built only once a
+    /// mesh with cut-out parts is uploaded: most scenes have none, and on a CPU adapter each
+    /// pipeline costs tens of milliseconds to build.
+    pub fn cut_outs() -> Vec<PipelineKey> {
+        Self::meshes().into_iter().map(Self::cut_out).collect()
+    }
+
+    /// Every key a pipeline is built for at once; wireframes where the adapter draws lines.
+    pub fn all(wireframe: bool) -> Vec<PipelineKey> {
+        use Stage::*;
+        let mut keys = Self::meshes();
         if wireframe {
             keys.push(Self::mesh(false, Wireframe, Look::Debug));
             keys.push(Self::mesh(true, Wireframe, Look::Debug));
@@ -313,9 +347,16 @@ impl PipelineKey {
                 },
             };
         }
-        let mesh = PipelineSpec {
-            cull: Some(wgpu::Face::Back),
-            ..base
+        let mesh = if self.cut {
+            PipelineSpec {
+                constants: &[("cut_out", 1.0)],
+                ..base
+            }
+        } else {
+            PipelineSpec {
+                cull: Some(wgpu::Face::Back),
+                ..base
+            }
         };
         match self.stage {
             // (The pre-pass stages are foliage's only, the nearest view an impostor's; a mesh
@@ -353,6 +394,11 @@ pub(super) struct Pipelines {
     pub sky: wgpu::RenderPipeline,
     pub ground: wgpu::RenderPipeline,
     pub shadow: wgpu::RenderPipeline,
+    /// What [`Self::build_cut_outs`] builds from, later.
+    character_module: wgpu::ShaderModule,
+    with_characters: wgpu::PipelineLayout,
+    color_format: wgpu::TextureFormat,
+    sample_count: u32,
 }
 
 impl Pipelines {
@@ -454,11 +500,41 @@ impl Pipelines {
             sky,
             ground,
             shadow,
+            character_module,
+            with_characters,
+            color_format,
+            sample_count,
         }
     }
 
-    /// The pipeline of `key`: one of [`PipelineKey::all`] (the renderer's choice of keys is
-    /// checked against that list by a test).
+    /// Builds the pipelines of meshes' cut-out triangles ([`PipelineKey::cut_outs`]), where
+    /// they are not built yet.
+    pub fn build_cut_outs(&mut self, device: &wgpu::Device) {
+        let instances = [Some(GpuInstance::layout())];
+        for key in PipelineKey::cut_outs() {
+            if self.characters.contains_key(&key) {
+                continue;
+            }
+            let label = format!("{key:?}");
+            let spec = key.spec(
+                &label,
+                &self.character_module,
+                &instances,
+                self.sample_count > 1,
+            );
+            let made = pipeline(
+                device,
+                &self.with_characters,
+                self.color_format,
+                self.sample_count,
+                spec,
+            );
+            self.characters.insert(key, made);
+        }
+    }
+
+    /// The pipeline of `key`: one of [`PipelineKey::all`], or of [`PipelineKey::cut_outs`]
+    /// once built (the renderer's choice of keys is checked against those lists by a test).
     pub fn get(&self, key: PipelineKey) -> &wgpu::RenderPipeline {
         &self.characters[&key]
     }

@@ -101,7 +101,8 @@ pub struct GpuInstance {
     pub rows: [[f32; 4]; 3],
     /// The clip as a frame range: [`crate::bake::gpu_data::anim_texture::AnimationTexture::clip_rows`].
     pub clip: [f32; 4],
-    /// Time offset in seconds, playback speed, wind strength (1: the clip as it is), spare.
+    /// Time offset in seconds, playback speed, wind strength (1: the clip as it is), and x of
+    /// where its clip has carried it (`Instance::travel`, for its blob shadow).
     pub timing: [f32; 4],
     pub tint: [f32; 4],
     /// Level of detail: transition t (−1 outside transitions), geomorph hops, [`Cover`]
@@ -109,7 +110,8 @@ pub struct GpuInstance {
     pub lod: [f32; 4],
     /// A cross-fade's second clip as a frame range (as `clip`).
     pub clip2: [f32; 4],
-    /// The second clip's time offset and playback speed, and its weight (0: no cross-fade).
+    /// The second clip's time offset and playback speed, and its weight (0: no cross-fade);
+    /// z of where its clip has carried it (see `timing`).
     pub fade: [f32; 4],
 }
 

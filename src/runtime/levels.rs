@@ -391,7 +391,7 @@ pub(crate) fn mapped_pack(
         levels,
         full,
         &rest_bones,
-        model.materials.len(),
+        &model.materials,
         crate::bake::character::normal_map::NORMAL_MAP_SIZE,
     )
 }

@@ -12,7 +12,7 @@
 //! holds.
 
 use crate::model::Bounds;
-use glam::{Affine3A, Vec2, Vec3A, Vec4};
+use glam::{Affine3A, Vec2, Vec3, Vec3A, Vec4};
 
 /// What the layout needs to know about a model.
 #[derive(Clone, Debug, PartialEq)]
@@ -186,6 +186,11 @@ pub struct Instance {
     pub tint: Vec4,
     /// A cross-fade to a second clip under way, if any.
     pub fade: Option<ClipFade>,
+    /// Where its clip has carried its body, model-local, against where the model stands at
+    /// rest (root motion: see `bake::gpu_data::root_motion`; the world sets it each frame, zero
+    /// for a character whose clips keep it in place). Its sphere, blob shadow and size on
+    /// screen move with it.
+    pub travel: Vec3,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -243,6 +248,7 @@ impl Agent {
                     weight,
                 })
             }),
+            travel: Vec3::ZERO,
         }
     }
 }

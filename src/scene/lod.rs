@@ -328,7 +328,8 @@ impl LodTracker {
                 .length()
                 .max(t.matrix3.y_axis.length())
                 .max(t.matrix3.z_axis.length());
-            let d = screen.sphere_distance(t.transform_point3(model.center), model.radius * scale);
+            let centre = t.transform_point3(model.center + inst.travel);
+            let d = screen.sphere_distance(centre, model.radius * scale);
             // An error of e scene units is within `px` pixels here when e · scale ≤ limit(px).
             let limit = |px: f32| px * d / (screen.pixels_per_unit * scale.max(1e-6));
             let forced = policy.force_level.map(|f| f.min(last));
@@ -478,6 +479,7 @@ mod tests {
             wind: 1.0,
             tint: Vec4::ONE,
             fade: None,
+            travel: Vec3::ZERO,
         }
     }
 

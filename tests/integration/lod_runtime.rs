@@ -75,6 +75,7 @@ fn a_morph_moves_no_vertex_more_than_the_tolerance_per_frame() {
                 wind: 1.0,
                 tint: Vec4::ONE,
                 fade: None,
+                travel: glam::Vec3::ZERO,
             };
             let mut tracker = LodTracker::default();
             let mut out = Vec::new();

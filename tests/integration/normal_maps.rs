@@ -76,7 +76,7 @@ fn a_model_without_texture_coordinates_keeps_its_vertex_normals() {
         &lods.levels,
         &lods.levels[0].mesh,
         &rest,
-        walker.materials.len(),
+        &walker.materials,
         NORMAL_MAP_SIZE,
     )
     .unwrap();

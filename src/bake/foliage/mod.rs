@@ -3,5 +3,6 @@
 //! for ([`spectral`]).
 
 pub mod billboard;
+pub mod classify;
 pub mod patch;
 pub mod spectral;

@@ -7,7 +7,7 @@ use super::materials::{MaterialLayers, billboard_atlas, lit_atlas_material};
 use super::vertex_texture::VertexTexture;
 use crate::bake::foliage::billboard::occlusion::CrownDensity;
 use crate::bake::gpu_data::spectra::{NO_ROW, SpectraTexture, SpectralMotion};
-use crate::model::{Bounds, Material, Model};
+use crate::model::{Bounds, Model};
 use glam::Vec3;
 
 /// Everything the renderer needs to draw one model at one level: a character's mesh, a tree,
@@ -19,8 +19,13 @@ pub struct Drawable {
     pub vertices: VertexTexture,
     pub indices: Vec<u32>,
     pub materials: MaterialLayers,
-    /// Bounds over the sampled frames of every clip, in scene units, model-local.
+    /// Bounds over the sampled frames of every clip, in scene units, model-local; where the
+    /// clips carry the character (root motion), the body's: each pose moved back by its
+    /// [`Self::travel`].
     pub bounds: Bounds,
+    /// Where the clips carry the character, per clip and frame, the offset of its body from
+    /// the rest pose's place (see [`super::root_motion`]); empty where they do not.
+    pub travel: Vec<Vec<glam::Vec3>>,
     pub animation_space: AnimationSpaceMesh,
     /// How the renderer draws it: a mesh, foliage or an impostor's quad.
     pub kind: DrawKind,
@@ -184,7 +189,8 @@ impl Drawable {
     /// [`crate::bake::foliage::billboard::occlusion`]).
     pub fn with_motion(model: &Model, motion: Option<&SpectralMotion>) -> Result<Self, String> {
         let billboards = billboard_atlas(&model.materials).is_some();
-        let crown = (!billboards).then(|| CrownDensity::of(model)).flatten();
+        let tree = !billboards && crate::bake::foliage::classify::is_tree(model);
+        let crown = tree.then(|| CrownDensity::of(model)).flatten();
         let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
         Self::build(model, motion, true, &occlusion, &[])
     }
@@ -258,16 +264,8 @@ impl Drawable {
         let materials = MaterialLayers::bake(&model.materials);
 
         // Bounds over a few frames of every clip: enough for framing, shadows and culling.
-        let mut points = Vec::new();
-        for (c, clip) in animation.clips.iter().enumerate() {
-            let steps = 8.min(clip.frame_count);
-            for k in 0..steps {
-                let t = clip.duration * k as f32 / steps as f32;
-                let (p, _) = am.evaluate(&animation.sample(c, t));
-                points.extend(p);
-            }
-        }
-        let bounds = Bounds::of(points).ok_or("model has no vertices")?;
+        let (bounds, travel) = super::root_motion::bounds_and_travel(&am, &animation)
+            .ok_or("model has no vertices")?;
 
         Ok(Drawable {
             name: model.name.clone(),
@@ -276,7 +274,12 @@ impl Drawable {
             indices: am.indices.clone(),
             materials,
             bounds,
-            kind: if model.materials.iter().any(Material::cuts_out) {
+            travel,
+            // A billboard cloud, or a tree; a character's cut-out parts are a mesh's (see
+            // `LodPack`'s cut-out triangles).
+            kind: if billboard_atlas(&model.materials).is_some()
+                || crate::bake::foliage::classify::is_tree(model)
+            {
                 DrawKind::Foliage {
                     atlas_lit: atlas.is_some(),
                 }
@@ -289,6 +292,17 @@ impl Drawable {
             animation_space: am,
             spectra: motion.map(|m| m.spectra.clone()),
         })
+    }
+
+    /// Where the body of an instance is `time` seconds into clip `clip`, against the rest
+    /// pose's place: zero unless the clips carry the character (see [`Self::travel`]).
+    pub fn travel_at(&self, clip: usize, time: f32) -> glam::Vec3 {
+        self.animation
+            .clips
+            .get(clip)
+            .map_or(glam::Vec3::ZERO, |c| {
+                super::root_motion::travel_at(&self.travel, clip, c.frame_count, c.duration, time)
+            })
     }
 
     /// The CPU reference of the vertex shader's skinning (`skin_vertex` in

@@ -24,6 +24,10 @@ pub struct PackedLevel {
     pub error: f32,
     /// Some of its vertices are lit through a normal map.
     pub normal_mapped: bool,
+    /// A character's triangles of cut-out materials (hair cards, feathers, lace) are the last
+    /// `cut_indices` of its range: the renderer draws them two-sided and alpha-tested, the
+    /// rest culled and opaque. 0 for foliage and impostors, whose own shaders cut out.
+    pub cut_indices: u32,
 }
 
 impl PackedLevel {
@@ -55,22 +59,24 @@ pub struct LodPack {
 
 impl LodPack {
     /// The levels of a bake, each linked to the next by its geomorph map.
+    /// The levels of a bake of a model whose materials all are opaque, each linked to the
+    /// next by its geomorph map.
     pub fn from_levels(levels: &[LodLevel]) -> Result<LodPack, String> {
         let meshes: Vec<&AnimationSpaceMesh> = levels.iter().map(|l| &l.mesh).collect();
         let maps: Vec<&[u32]> = levels.iter().map(|l| l.geomorph.as_slice()).collect();
         let vertices = VertexTexture::pack(&meshes, &maps, &[])?;
         let errors: Vec<f32> = levels.iter().map(|l| l.error).collect();
-        Ok(Self::assemble(vertices, &meshes, &errors, None))
+        Ok(Self::assemble(vertices, &meshes, &errors, None, &[]))
     }
 
-    /// [`Self::from_levels`] with normal maps `size` texels square for every level but full
-    /// detail, baked against `full` (the full-detail mesh, whose vertices the levels keep)
-    /// posed by `rest_bones`, for a model of `materials` materials.
+    /// [`Self::from_levels`] for a model of `materials`, with normal maps `size` texels square
+    /// for every level but full detail, baked against `full` (the full-detail mesh, whose
+    /// vertices the levels keep) posed by `rest_bones`.
     pub fn with_normal_maps(
         levels: &[LodLevel],
         full: &AnimationSpaceMesh,
         rest_bones: &[glam::Affine3A],
-        materials: usize,
+        materials: &[crate::model::Material],
         size: u32,
     ) -> Result<LodPack, String> {
         let meshes: Vec<&AnimationSpaceMesh> = levels.iter().map(|l| &l.mesh).collect();
@@ -82,28 +88,36 @@ impl LodPack {
             full,
             &mapped,
             rest_bones,
-            materials.max(1),
+            materials.len().max(1),
             size,
         );
         let maps: Vec<&[u32]> = levels.iter().map(|l| l.geomorph.as_slice()).collect();
         let vertices = VertexTexture::pack(&meshes, &maps, &normal_maps.layers)?;
         let errors: Vec<f32> = levels.iter().map(|l| l.error).collect();
+        let cut_out: Vec<bool> = materials.iter().map(|m| m.cuts_out()).collect();
         Ok(Self::assemble(
             vertices,
             &meshes,
             &errors,
             Some(normal_maps),
+            &cut_out,
         ))
     }
 
     /// The full-detail mesh of a character as a pack of one level (the `none` method). A
     /// clump level's also holds its triangles by view sector ([`super::view_subsets`]).
     pub fn full_detail(bake: &Drawable) -> LodPack {
+        // Only a mesh draws its cut-out triangles apart; foliage's own shaders cut out.
+        let cut_out: &[bool] = match bake.kind {
+            super::drawable::DrawKind::Mesh => &bake.materials.cut_out,
+            _ => &[],
+        };
         let mut pack = Self::assemble(
             bake.vertices.clone(),
             &[&bake.animation_space],
             &[0.0],
             None,
+            cut_out,
         );
         let am = &bake.animation_space;
         if !am.view_windows.is_empty() {
@@ -123,15 +137,24 @@ impl LodPack {
         pack
     }
 
+    /// The pack of `meshes`, each level's triangles of materials `cut_out` moved to the end
+    /// of its range, in their order (see [`PackedLevel::cut_indices`]).
     fn assemble(
         vertices: VertexTexture,
         meshes: &[&AnimationSpaceMesh],
         errors: &[f32],
         normal_maps: Option<NormalMaps>,
+        cut_out: &[bool],
     ) -> LodPack {
         let mut indices = Vec::with_capacity(meshes.iter().map(|m| m.indices.len()).sum());
         let mut levels = Vec::with_capacity(meshes.len());
         for (k, m) in meshes.iter().enumerate() {
+            let is_cut = |t: &&[u32]| {
+                let material = m.materials.get(t[0] as usize).copied().unwrap_or(0);
+                cut_out.get(material as usize).copied().unwrap_or(false)
+            };
+            let (cut, solid): (Vec<&[u32]>, Vec<&[u32]>) =
+                m.indices.chunks_exact(3).partition(is_cut);
             levels.push(PackedLevel {
                 first_index: indices.len() as u32,
                 index_count: m.indices.len() as u32,
@@ -140,8 +163,9 @@ impl LodPack {
                 influences: m.influences.len() as u32,
                 error: errors[k],
                 normal_mapped: normal_maps.as_ref().is_some_and(|n| n.maps_level(k)),
+                cut_indices: 3 * cut.len() as u32,
             });
-            indices.extend_from_slice(&m.indices);
+            indices.extend(solid.into_iter().chain(cut).flatten());
         }
         LodPack {
             vertices,

@@ -21,6 +21,11 @@ pub struct MaterialLayers {
     pub layer_count: u32,
     /// `mips[level]` holds all layers of that level one after another.
     pub mips: Vec<Vec<u8>>,
+    /// Per layer, whether its material cuts its shape out with alpha
+    /// ([`Material::cuts_out`]): a character's triangles of such layers are drawn two-sided
+    /// and alpha-tested (see [`super::lod_pack::PackedLevel::cut_indices`]).
+    #[serde(default)]
+    pub cut_out: Vec<bool>,
 }
 
 impl MaterialLayers {
@@ -60,6 +65,10 @@ impl MaterialLayers {
             height,
             layer_count: materials_or_default.len() as u32,
             mips: levels,
+            cut_out: materials_or_default
+                .iter()
+                .map(Material::cuts_out)
+                .collect(),
         }
     }
 }

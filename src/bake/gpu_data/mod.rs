@@ -7,6 +7,7 @@ pub mod drawable;
 pub mod impostor_frames;
 pub mod lod_pack;
 pub mod materials;
+pub mod root_motion;
 pub mod spectra;
 pub mod texels;
 pub mod vertex_texture;

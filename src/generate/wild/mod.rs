@@ -6,7 +6,9 @@
 //! `assets/` like the other models ([`super::file`]).
 
 pub mod cards;
+pub mod feathers;
 pub mod file;
+pub mod flight;
 pub mod knight;
 pub mod mocap;
 pub mod parts;

@@ -123,24 +123,16 @@ impl SceneRenderer {
             }
             Pass::Transitions => {
                 let fades = || self.draws.iter().filter(|(k, _)| k.pass() == PASS_FADE);
-                pass.set_pipeline(self.pipelines.get(PipelineKey::mesh(
-                    false,
-                    Stage::FadeDepth,
-                    Look::Shaded,
-                )));
-                for (key, range) in fades() {
-                    scissor.side(pass, key.side());
-                    self.draw_group(pass, key, range);
-                }
+                let depth = PipelineKey::mesh(false, Stage::FadeDepth, Look::Shaded);
                 let mut current = None;
                 for (key, range) in fades() {
-                    let pipeline = PipelineKey::mesh(false, Stage::FadeColor, self.look(key));
-                    if current != Some(pipeline) {
-                        current = Some(pipeline);
-                        pass.set_pipeline(self.pipelines.get(pipeline));
-                    }
                     scissor.side(pass, key.side());
-                    self.draw_group(pass, key, range);
+                    self.draw_group(pass, key, range, depth, &mut current);
+                }
+                for (key, range) in fades() {
+                    let pipeline = PipelineKey::mesh(false, Stage::FadeColor, self.look(key));
+                    scissor.side(pass, key.side());
+                    self.draw_group(pass, key, range, pipeline, &mut current);
                 }
             }
             Pass::Ui => {}
@@ -194,18 +186,46 @@ impl SceneRenderer {
             .is_some_and(|l| l.iter().any(|l| l.normal_mapped))
     }
 
-    /// One instanced draw of a group's level from its method's set.
-    fn draw_group(&self, pass: &mut wgpu::RenderPass<'_>, key: &DrawKey, range: &Range<u32>) {
+    /// One instanced draw of a group's level from its method's set by `pipeline` (`current`:
+    /// the pipeline the pass has set). A mesh level with cut-out triangles is two: its opaque
+    /// triangles by `pipeline`, its cut-out ones by that pipeline's cut-out twin (in
+    /// wireframe, all of them as lines).
+    fn draw_group(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        key: &DrawKey,
+        range: &Range<u32>,
+        pipeline: PipelineKey,
+        current: &mut Option<PipelineKey>,
+    ) {
         let c = &self.characters[key.model()];
         let set = c.set(key.slot()).unwrap_or_else(|| c.full());
         let level = &set.levels[key.level().min(set.levels.len() - 1)];
         pass.set_bind_group(1, &set.bind_group, &[]);
         pass.set_index_buffer(set.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(
-            drawn_indices(set, level, key),
-            level.base_vertex as i32,
-            range.clone(),
-        );
+        let all = drawn_indices(set, level, key);
+        let cut = match pipeline {
+            PipelineKey {
+                class: DrawClass::Mesh,
+                stage,
+                ..
+            } if stage != Stage::Wireframe => level.cut_indices.min(all.len() as u32),
+            _ => 0,
+        };
+        let split = all.end - cut;
+        for (indices, pipeline) in [
+            (all.start..split, pipeline),
+            (split..all.end, pipeline.cut_out()),
+        ] {
+            if indices.is_empty() {
+                continue;
+            }
+            if *current != Some(pipeline) {
+                *current = Some(pipeline);
+                pass.set_pipeline(self.pipelines.get(pipeline));
+            }
+            pass.draw_indexed(indices, level.base_vertex as i32, range.clone());
+        }
     }
 
     /// The opaque draws of the characters (`foliage` None) or of the trees in one of their
@@ -261,12 +281,8 @@ impl SceneRenderer {
             else {
                 continue;
             };
-            if current != Some(pipeline) {
-                current = Some(pipeline);
-                pass.set_pipeline(self.pipelines.get(pipeline));
-            }
             scissor.side(pass, key.side());
-            self.draw_group(pass, &key, range);
+            self.draw_group(pass, &key, range, pipeline, &mut current);
         }
     }
 }
@@ -523,5 +539,19 @@ mod tests {
             "{fades:?}"
         );
         assert_eq!(fades.len(), 4);
+        // Every filled mesh pipeline (the opaque passes' and the transitions') has a cut-out
+        // twin, which draw_group picks for a level's cut-out triangles; nothing else has.
+        let twins: Vec<PipelineKey> = built
+            .iter()
+            .filter(|k| k.class == DrawClass::Mesh && k.stage != Stage::Wireframe)
+            .map(|k| k.cut_out())
+            .collect();
+        let cut_outs = PipelineKey::cut_outs();
+        assert_eq!(twins.len(), cut_outs.len());
+        assert!(
+            twins
+                .iter()
+                .all(|k| cut_outs.contains(k) && !built.contains(k))
+        );
     }
 }

@@ -34,6 +34,9 @@ fn gpu_instance(c: &GpuCharacter, inst: &Instance, wind: f32) -> GpuInstance {
     } else {
         inst.wind
     };
+    // Where its clip has carried it, on the ground: its blob shadow goes there.
+    g.timing[3] = inst.travel.x;
+    g.fade[3] = inst.travel.z;
     g
 }
 

@@ -274,6 +274,9 @@ impl SceneRenderer {
         let c = gpu.checked(&format!("uploading {name}"), || {
             GpuCharacter::upload(gpu, &self.character_layout, &self.sampler, bake)
         })?;
+        if c.full().levels.iter().any(|l| l.cut_indices > 0) {
+            self.pipelines.build_cut_outs(&gpu.device);
+        }
         self.characters.push(c);
         Ok(self.characters.len() - 1)
     }
@@ -331,7 +334,11 @@ impl SceneRenderer {
         let (layout, sampler) = (&self.character_layout, &self.sampler);
         gpu.checked("uploading levels of detail", || {
             c.add_set(gpu, layout, sampler, slot, pack)
-        })
+        })?;
+        if pack.levels.iter().any(|l| l.cut_indices > 0) {
+            self.pipelines.build_cut_outs(&gpu.device);
+        }
+        Ok(())
     }
 
     pub fn characters(&self) -> &[GpuCharacter] {
@@ -396,7 +403,8 @@ impl SceneRenderer {
                 let Some(c) = self.characters.get(inst.model) else {
                     continue;
                 };
-                let (centre, radius) = cull::bounding_sphere(c.sphere, &inst.transform);
+                let sphere = (c.sphere.0 + inst.travel, c.sphere.1);
+                let (centre, radius) = cull::bounding_sphere(sphere, &inst.transform);
                 if cull::outside(&planes, centre, radius) {
                     stats.culled += 1;
                     continue;

@@ -235,6 +235,9 @@ impl World {
             self.lod.refresh_impostors();
         }
         self.crowd.instances_at(time, &mut self.instances);
+        for inst in &mut self.instances {
+            inst.travel = travel_of(self.bakes.get(inst.model), inst, time);
+        }
         if let Some(inst) = self.highlight.and_then(|h| self.instances.get_mut(h)) {
             // Brighter (a little warmer), whatever its own tint: it stands out without an
             // outline pass, at no cost.
@@ -422,6 +425,22 @@ fn tree_draws(
 }
 
 /// What selection needs to know about a character's levels.
+/// Where the clip of `inst` (blended with the clip it cross-fades to, as its poses are) has
+/// carried the body of `bake`'s model at scene time `time`: see [`Instance::travel`].
+fn travel_of(bake: Option<&Drawable>, inst: &Instance, time: f32) -> glam::Vec3 {
+    let Some(b) = bake.filter(|b| !b.travel.is_empty()) else {
+        return glam::Vec3::ZERO;
+    };
+    let own = b.travel_at(inst.clip as usize, time * inst.speed + inst.time_offset);
+    match inst.fade {
+        Some(f) => own.lerp(
+            b.travel_at(f.clip as usize, time * f.speed + f.time_offset),
+            f.weight,
+        ),
+        None => own,
+    }
+}
+
 fn lod_model(bake: &Drawable, pack: &LodPack) -> LodModel {
     LodModel {
         errors: pack.errors(),
@@ -470,6 +489,7 @@ mod tests {
             wind: 1.0,
             tint: glam::Vec4::ONE,
             fade: None,
+            travel: glam::Vec3::ZERO,
         };
         let shown = Instance { model: 7, ..inst };
         let far = 5u8;

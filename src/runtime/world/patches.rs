@@ -273,6 +273,7 @@ impl World {
                     wind: p.wind,
                     tint: Vec4::ONE,
                     fade: None,
+                    travel: Vec3::ZERO,
                 },
                 centre: origin + Vec3::from(frame.centre),
                 radius: frame.radius,

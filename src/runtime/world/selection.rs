@@ -43,7 +43,7 @@ impl World {
         let t = &inst.transform;
         let scale = t.matrix3.x_axis.length().max(t.matrix3.y_axis.length());
         Some((
-            t.transform_point3(bounds.center()),
+            t.transform_point3(bounds.center() + inst.travel),
             bounds.diagonal() * 0.5 * scale,
         ))
     }

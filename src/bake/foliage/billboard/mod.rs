@@ -38,11 +38,7 @@ pub struct Foliage {
     pub rebound: usize,
 }
 
-/// Is this model a tree: has it foliage cut out with alpha? Trees get billboard-cloud chains;
-/// everything else is a character.
-pub fn is_tree(model: &Model) -> bool {
-    model.materials.iter().any(is_cut_out)
-}
+pub use super::classify::is_tree;
 
 /// Does this material cut its shape out with alpha (foliage)?
 pub fn is_cut_out(m: &crate::model::Material) -> bool {
