@@ -27,7 +27,8 @@ struct ImpostorFrame {
     // xyz: the centre of the views' sphere, model space; w: its radius.
     sphere: vec4<f32>,
     // x: views on a side of the grid; y: rows of the quad; z: the lowest row's height; w: the
-    // rows' height span.
+    // rows' height span. An animated impostor's: views, page columns, page rows, and w 1
+    // where `impostor_rects` holds each page's travel after the views.
     grid: vec4<f32>,
     // x: a texel's share of a view's cell.
     cell: vec4<f32>,
@@ -397,9 +398,33 @@ struct AnimatedOut {
 
 @vertex
 fn vs_animated_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> AnimatedOut {
-    let centre = impostor.sphere.xyz;
-    let radius = impostor.sphere.w;
+    // The frames round the instance's time, in the clip that weighs more.
+    let now = instance_frames(inst);
+    let stride = max(u32(inst.clip.w), 1u);
+    var f0 = now.row0 / stride;
+    var f1 = now.row1 / stride;
+    var blend = now.blend;
+    if (now.fade > 0.5) {
+        f0 = now.row0b / stride;
+        f1 = now.row1b / stride;
+        blend = now.blendb;
+    }
+    let p0 = max(f0, 1u) - 1u;
+    let p1 = max(f1, 1u) - 1u;
+
     let views = impostor.grid.x;
+    // Where the clip has carried the body (root motion): the pages draw it where it stands,
+    // and each page's travel follows the views in `impostor_rects` where grid.w is set
+    // (`AnimatedFrame::travel`), blended as the two pages are.
+    var travel = vec3<f32>(0.0);
+    if (impostor.grid.w > 0.5) {
+        let first = u32(views * views);
+        let t0 = textureLoad(impostor_rects, vec2<u32>(first + p0, 0u), 0).xyz;
+        let t1 = textureLoad(impostor_rects, vec2<u32>(first + p1, 0u), 0).xyz;
+        travel = mix(t0, t1, blend);
+    }
+    let centre = impostor.sphere.xyz + travel;
+    let radius = impostor.sphere.w;
     let v = frame.camera_pos.xyz - instance_point(inst, centre);
     let d = normalize(inst.row0.xyz * v.x + inst.row1.xyz * v.y + inst.row2.xyz * v.z);
 
@@ -421,21 +446,7 @@ fn vs_animated_impostor(@builtin(vertex_index) vi: u32, inst: Instance) -> Anima
         cell = base + vec2<f32>(1.0);
     }
 
-    // The frames round the instance's time, in the clip that weighs more.
-    let now = instance_frames(inst);
-    let stride = max(u32(inst.clip.w), 1u);
-    var f0 = now.row0 / stride;
-    var f1 = now.row1 / stride;
-    var blend = now.blend;
-    if (now.fade > 0.5) {
-        f0 = now.row0b / stride;
-        f1 = now.row1b / stride;
-        blend = now.blendb;
-    }
-
     let columns = max(u32(impostor.grid.y), 1u);
-    let p0 = max(f0, 1u) - 1u;
-    let p1 = max(f1, 1u) - 1u;
     let page0 = vec2<f32>(f32(p0 % columns), f32(p0 / columns)) * views;
     let page1 = vec2<f32>(f32(p1 % columns), f32(p1 / columns)) * views;
 

@@ -57,7 +57,7 @@ impl<'a> ImpostorFit<'a> {
         let world = |loaded: Loaded| metric_world(gpu, loaded);
         let duration = model.clips.first().map_or(1.0, |c| c.duration);
         let impostor_bake = impostor
-            .bake(full.bounds)
+            .bake(full)
             .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
         Ok(ImpostorFit {
             gpu,

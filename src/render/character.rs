@@ -198,6 +198,28 @@ fn array_layers(gpu: &Gpu, layers: u32) -> u32 {
 }
 
 /// `mips` (each one level of every layer) as the texture of [`array_layers`] takes them.
+/// An animated impostor's views texture, a texel a view read by index in the vertex shader
+/// (indexing an array in the uniform by a per-instance index took llvmpipe five times as
+/// long); after the views, each page's travel where the clips carry the character (root
+/// motion: `AnimatedFrame::travel`). One blank texel for everything else.
+fn impostor_views(gpu: &Gpu, bake: &Drawable) -> wgpu::Texture {
+    match bake.kind.character_impostor() {
+        Some(a) if !a.rects.is_empty() => {
+            let texels: Vec<[f32; 4]> = (a.rects.iter().copied())
+                .chain(a.travel.iter().map(|t| [t[0], t[1], t[2], 0.0]))
+                .collect();
+            float_texture(
+                gpu,
+                &format!("{} impostor views", bake.name),
+                texels.len() as u32,
+                1,
+                bytemuck::cast_slice(&texels),
+            )
+        }
+        _ => float_texture(gpu, "no impostor views", 1, 1, &[0; 16]),
+    }
+}
+
 fn array_data(gpu: &Gpu, layers: u32, mips: &[Vec<u8>]) -> Vec<u8> {
     let copies = (array_layers(gpu, layers) / layers.max(1)) as usize;
     mips.iter().flat_map(|m| m.repeat(copies)).collect()
@@ -263,18 +285,7 @@ impl GpuCharacter {
             ),
             _ => float_texture(gpu, "no spectra", 1, 1, &[0; 16]),
         };
-        // A texel a view, read by index in the vertex shader: indexing an array in the
-        // uniform by a per-instance index took llvmpipe five times as long.
-        let rects = match bake.kind.character_impostor() {
-            Some(a) if !a.rects.is_empty() => float_texture(
-                gpu,
-                &format!("{} impostor views", bake.name),
-                a.rects.len() as u32,
-                1,
-                bytemuck::cast_slice(&a.rects),
-            ),
-            _ => float_texture(gpu, "no impostor views", 1, 1, &[0; 16]),
-        };
+        let rects = impostor_views(gpu, bake);
         let materials = material_texture(gpu, &bake.materials);
         let material_bytes: usize = bake.materials.mips.iter().map(Vec::len).sum();
         // The blob shadow covers the footprint of the animated bounds.
@@ -306,7 +317,13 @@ impl GpuCharacter {
         };
         if let Some(a) = bake.kind.character_impostor() {
             shadow.sphere = [a.centre[0], a.centre[1], a.centre[2], a.radius];
-            shadow.grid = [a.views as f32, a.columns as f32, a.rows as f32, 0.0];
+            let travels = !a.travel.is_empty();
+            shadow.grid = [
+                a.views as f32,
+                a.columns as f32,
+                a.rows as f32,
+                travels as u32 as f32,
+            ];
             shadow.cell = [1.0 / a.cell.max(1) as f32, 0.0, 0.0, 0.0];
         }
         let shadow_buffer = gpu

@@ -241,21 +241,33 @@ fn impostor_level(
 ) -> anyhow::Result<ImpostorLevel> {
     let (gpu, measure, cache) = (job.gpu, job.measure, job.cache);
     let raster = AtlasRasterizer::new(gpu);
-    let (impostor, origin) = load_or_bake_impostor(&raster, cache, &s.model, &s.hash, *options)?;
+    // The full-detail bake, made only where the impostor or its placement is: a warm run
+    // reads both from the cache.
+    let full = std::sync::OnceLock::new();
+    let full = || full.get_or_init(|| Drawable::new(&s.model));
+    // The pages draw the body where it stands, moved back by its travel as the runtime moves
+    // its sphere (see `bake::gpu_data::root_motion`).
+    let travel = |c: usize, t: f32| {
+        full()
+            .as_ref()
+            .map_or(glam::Vec3::ZERO, |f| f.travel_at(c, t))
+    };
+    let (impostor, origin) =
+        load_or_bake_impostor(&raster, cache, &s.model, &s.hash, &travel, *options)?;
     if let Origin::Baked { warning: Some(w) } = origin {
         warn(w);
     }
     let tolerance = crate::scene::LodPolicy::default().tolerance_px;
     let place = || -> anyhow::Result<Placement> {
         let start = web_time::Instant::now();
-        let full = Drawable::new(&s.model).map_err(anyhow::Error::msg)?;
+        let full = full().as_ref().map_err(|e| anyhow::anyhow!("{e}"))?;
         let errors: Vec<f32> = lods.levels.iter().map(|l| l.error).collect();
         let height = full.bounds.size().y.max(1e-3);
         let placement = if errors.len() < 2 {
             // Full detail alone: nothing for the impostor to stand for (and no worlds to draw).
             Placement::none(tolerance)
         } else {
-            let mut fit = measure.impostor(gpu, &s.model, &full, &lods.levels, &impostor)?;
+            let mut fit = measure.impostor(gpu, &s.model, full, &lods.levels, &impostor)?;
             placement::place(&errors, height, tolerance, 1, &mut *fit)?.0
         };
         log::debug!(

@@ -5,7 +5,7 @@
 use lodlab::bake::character::simplify::Method;
 use lodlab::bake::gpu_data::drawable::Drawable;
 use lodlab::bake::impostor::animated::{
-    AnimatedImpostor, ImpostorOptions, bake_animated_impostor, sheet_layout,
+    AnimatedImpostor, ImpostorOptions, bake_animated_impostor, no_travel, sheet_layout,
 };
 use lodlab::bake::impostor::placement::Placement;
 use lodlab::import::load_model;
@@ -41,7 +41,7 @@ fn walker_impostor() -> &'static AnimatedImpostor {
     IMPOSTOR.get_or_init(|| {
         let walker = load_model("walker").unwrap();
         let options: ImpostorOptions = OPTIONS.parse().unwrap();
-        bake_animated_impostor(&AtlasRasterizer::new(gpu()), &walker, options).unwrap()
+        bake_animated_impostor(&AtlasRasterizer::new(gpu()), &walker, &no_travel, options).unwrap()
     })
 }
 
@@ -300,7 +300,8 @@ fn every_limb_of_a_t_pose_is_inside_every_view() {
     let _serial = serial();
     let model = load_model("mocap").unwrap();
     let options = ImpostorOptions::default();
-    let imp = bake_animated_impostor(&AtlasRasterizer::new(gpu()), &model, options).unwrap();
+    let imp =
+        bake_animated_impostor(&AtlasRasterizer::new(gpu()), &model, &no_travel, options).unwrap();
     let colour = imp.model.materials[0].texture.as_ref().unwrap();
     let (cell, views) = (options.cell as usize, options.views as usize);
     let side = views * cell;
@@ -399,14 +400,14 @@ fn a_character_of_many_clips_shares_its_sheet() {
     let counts = clip_frames(&walker, &options).unwrap();
     let pages: u32 = counts.iter().sum();
     assert!(pages <= 16 && counts.iter().all(|&c| c >= 2), "{counts:?}");
-    let imp = bake_animated_impostor(&AtlasRasterizer::new(gpu()), &walker, options).unwrap();
+    let imp =
+        bake_animated_impostor(&AtlasRasterizer::new(gpu()), &walker, &no_travel, options).unwrap();
     // It may trade texels for frames: a smaller cell, more pages, more frames a clip.
     assert!(imp.options.cell <= 64 && (imp.options.views, imp.options.frames) == (8, 12));
     let counts = clip_frames(&walker, &imp.options).unwrap();
     assert_eq!(imp.frames, counts.iter().sum::<u32>());
     assert!(imp.frames >= pages, "{} frames", imp.frames);
-    let bounds = lodlab::model::Bounds::of(walker.mesh.positions.iter().copied()).unwrap();
-    let drawable = imp.bake(bounds).unwrap();
+    let drawable = imp.bake(&Drawable::new(&walker).unwrap()).unwrap();
     let frames: Vec<u32> = drawable
         .animation
         .clips

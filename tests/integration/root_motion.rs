@@ -81,3 +81,34 @@ fn a_flying_clip_moves_the_bounds_with_the_body() {
         assert!(radius < 0.6 * own, "{radius}");
     }
 }
+
+/// Its impostor's pages draw the body where it stands and the quad is moved by the travel
+/// (kept per page): the views' sphere is the body's, so its error bound is a fraction of
+/// what pages of the whole flight give.
+#[test]
+fn a_flying_creatures_impostor_is_drawn_round_its_body() {
+    use lodlab::bake::impostor::animated::{ImpostorOptions, bake_animated_impostor, no_travel};
+    let flyer = flying(&load_model("robot").unwrap(), RADIUS, CLIMB);
+    let full = Drawable::new(&flyer).unwrap();
+    let travel = |c: usize, t: f32| full.travel_at(c, t);
+    let options: ImpostorOptions = "8x6x24".parse().unwrap();
+    let raster = lodlab::render::atlas::AtlasRasterizer::new(crate::common::gpu());
+    let body = bake_animated_impostor(&raster, &flyer, &travel, options).unwrap();
+    let flight = bake_animated_impostor(&raster, &flyer, &no_travel, options).unwrap();
+    assert!(flight.frame.travel.is_empty());
+    assert_eq!(body.frame.travel.len(), body.frames as usize);
+    // Each page's travel is the flight's at that page (6 frames a clip, the ends included).
+    let duration = flyer.clips[0].duration;
+    for (k, t) in body.frame.travel.iter().enumerate() {
+        let at = duration * k as f32 / (body.frames - 1).max(1) as f32;
+        let expect = flight_offset(RADIUS, CLIMB, duration, at);
+        assert!(
+            (glam::Vec3::from(*t) - expect).length() < 0.25,
+            "page {k}: {t:?} against {expect}"
+        );
+    }
+    let (r_body, r_flight) = (body.frame.radius, flight.frame.radius);
+    assert!(r_body < 0.5 * r_flight, "{r_body} m against {r_flight} m");
+    let (e_body, e_flight) = (body.error.total(), flight.error.total());
+    assert!(e_body < 0.5 * e_flight, "{e_body} m against {e_flight} m");
+}

@@ -16,7 +16,7 @@ pub const ORDER_VERSION: u32 = 3;
 /// A layout's forest patches (`bake::foliage::patch`).
 pub const PATCH_VERSION: u32 = 4;
 /// A character's animated impostor (`bake::impostor::animated`).
-pub const IMPOSTOR_VERSION: u32 = 6;
+pub const IMPOSTOR_VERSION: u32 = 7;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the
 /// runtime places it).
 pub const PLACEMENT_VERSION: u32 = 4;

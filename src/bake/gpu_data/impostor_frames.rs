@@ -45,4 +45,9 @@ pub struct AnimatedFrame {
     /// covers a fifth of its view sphere's square, and on a software rasteriser every
     /// fragment of the quad costs, kept or cut out.
     pub rects: Vec<[f32; 4]>,
+    /// Per page, where the character's clip has carried it (root motion): the page draws the
+    /// body moved back by it, and the renderer moves the quad by it again, blended between
+    /// the two pages as the pages are. Empty where no clip carries it.
+    #[serde(default)]
+    pub travel: Vec<[f32; 3]>,
 }

@@ -30,7 +30,7 @@
 //! and half a texel. That bound says which option to raise (views, frames or cell) when the
 //! impostor comes in late.
 
-use crate::bake::gpu_data::anim_texture::AnimationTexture;
+use crate::bake::gpu_data::anim_texture::{self, AnimationTexture};
 use crate::bake::gpu_data::materials::{MaterialLayers, dilate, preserve_coverage};
 use crate::bake::gpu_products::{RasterizeAtlas, ViewImages};
 use crate::bake::impostor::octahedral::{
@@ -143,16 +143,32 @@ impl AnimatedImpostor {
 
     /// The impostor baked for the GPU: the quad (vertices in order: the shader makes its
     /// corners from their indices), the pages as its material layers, the clips resampled at
-    /// the impostor's frames, and the character's own bounds (`bounds`: culling and the blob
-    /// shadow) in place of the quad's.
+    /// the impostor's frames, and the character's own bounds and travel (`full`'s: culling and
+    /// the blob shadow) in place of the quad's.
     pub fn bake(
         &self,
-        bounds: crate::model::Bounds,
+        full: &crate::bake::gpu_data::drawable::Drawable,
     ) -> Result<crate::bake::gpu_data::drawable::Drawable, String> {
         let mut bake = crate::bake::gpu_data::drawable::Drawable::in_order(&self.model)?;
         let counts = clip_frames(&self.model, &self.options)?;
         bake.animation = AnimationTexture::bake_frames_each(&self.model, &counts);
-        bake.bounds = bounds;
+        bake.bounds = full.bounds;
+        // The character's travel at the impostor's own frames: a world of the impostor alone
+        // (the fit's) moves its sphere and shadow as the character's does.
+        bake.travel = if full.travel.is_empty() {
+            Vec::new()
+        } else {
+            (bake.animation.clips.iter().enumerate())
+                .map(|(c, clip)| {
+                    (0..clip.frame_count)
+                        .map(|f| {
+                            let t = anim_texture::frame_time(clip.duration, clip.frame_count, f);
+                            full.travel_at(c, t)
+                        })
+                        .collect()
+                })
+                .collect()
+        };
         // Its pages' alpha is coverage, not a cut-out material: it is a character, drawn in
         // the characters' pass by its own shader.
         bake.kind =
@@ -191,12 +207,33 @@ pub fn worst_view_angle(grid: &ViewGrid) -> f32 {
     worst
 }
 
+/// Where a character's clip has carried its body `t` seconds into clip `clip` (root motion,
+/// see [`crate::bake::gpu_data::root_motion`]): zero for one that stays put.
+pub type Travel<'a> = &'a dyn Fn(usize, f32) -> Vec3;
+
+/// No root motion: every pose where the clip has it.
+pub fn no_travel(_: usize, _: f32) -> Vec3 {
+    Vec3::ZERO
+}
+
+/// `model` posed `t` seconds into `clip` and moved back by where the clip has carried it
+/// (`travel`): the body where it stands, which the pages draw; the renderer moves the quad
+/// by the travel again.
+fn body_pose(model: &Model, travel: Travel, clip: Option<&crate::model::Clip>, t: f32) -> Model {
+    let mut pose = posed(model, clip, t);
+    let index = clip.and_then(|c| model.clips.iter().position(|k| std::ptr::eq(k, c)));
+    if let Some(moved) = index.map(|c| travel(c, t)).filter(|m| *m != Vec3::ZERO) {
+        pose.mesh.positions.iter_mut().for_each(|p| *p -= moved);
+    }
+    pose
+}
+
 /// `options` with the cell a character's clips are best drawn at. Where every clip gets the
 /// frames asked for, the cell asked for. Else its sheet trades texels for frames: of the
 /// cells from the one asked for down (each a fifth smaller, to [`CELL`]'s least), the one
 /// whose two traded errors sum least, half a texel of the view sphere and the frame error of
 /// the clips at the frames its sheet then allows ([`clip_frames`], [`frame_error`]).
-fn cell_for_clips(model: &Model, options: ImpostorOptions) -> ImpostorOptions {
+fn cell_for_clips(model: &Model, travel: Travel, options: ImpostorOptions) -> ImpostorOptions {
     let clips = model.clips.len().max(1) as u32;
     let most = |o: &ImpostorOptions| (SHEET_SIZE / o.page_side().max(1)).max(1).pow(2);
     if clips * options.frames.max(2) <= most(&options) {
@@ -209,7 +246,10 @@ fn cell_for_clips(model: &Model, options: ImpostorOptions) -> ImpostorOptions {
         let o = ImpostorOptions { cell, ..options };
         if let Ok(counts) = clip_frames(model, &o) {
             let times = page_times(model, &counts);
-            let poses: Vec<Model> = times.iter().map(|&(c, t)| posed(model, c, t)).collect();
+            let poses: Vec<Model> = times
+                .iter()
+                .map(|&(c, t)| body_pose(model, travel, c, t))
+                .collect();
             let r = *radius.get_or_insert_with(|| {
                 let all: Vec<Vec3> = poses
                     .iter()
@@ -217,7 +257,7 @@ fn cell_for_clips(model: &Model, options: ImpostorOptions) -> ImpostorOptions {
                     .collect();
                 view_sphere(&all).map_or(1.0, |(_, r)| r)
             });
-            let error = r / cell as f32 + frame_error(model, &poses, &times);
+            let error = r / cell as f32 + frame_error(model, travel, &poses, &times);
             if best.is_none_or(|(e, _)| error < e) {
                 best = Some((error, o));
             }
@@ -236,6 +276,7 @@ fn cell_for_clips(model: &Model, options: ImpostorOptions) -> ImpostorOptions {
 /// a stride between them still count the stride; frames of different clips are not compared.
 fn frame_error(
     model: &Model,
+    travel: Travel,
     poses: &[Model],
     times: &[(Option<&crate::model::Clip>, f32)],
 ) -> f32 {
@@ -249,7 +290,7 @@ fn frame_error(
         }
         let (t0, t1) = (times[k].1, times[k + 1].1);
         for s in [1.0 / 3.0, 0.5, 2.0 / 3.0] {
-            let between = posed(model, Some(clip), t0 + s * (t1 - t0));
+            let between = body_pose(model, travel, Some(clip), t0 + s * (t1 - t0));
             for ((p, a), b) in between
                 .mesh
                 .positions
@@ -316,9 +357,12 @@ fn simplified_for_impostor(model: &Model) -> std::borrow::Cow<'_, Model> {
 
 /// Bakes the animated impostor of `model`: every page's views drawn through `raster` at
 /// twice the cell size, averaged down and dilated, and the error bound measured on the way.
+/// Where its clips carry it (`travel`), each page draws the body moved back to where it
+/// stands, and the frame keeps each page's travel for the renderer to move the quad by.
 pub fn bake_animated_impostor(
     raster: &dyn RasterizeAtlas,
     model: &Model,
+    travel: Travel,
     options: ImpostorOptions,
 ) -> Result<AnimatedImpostor> {
     // Whether its pages can fit a sheet at all (at the least cell) is known from its clips
@@ -332,20 +376,30 @@ pub fn bake_animated_impostor(
     clip_frames(model, &least).map_err(|e| anyhow!("{}: {e}", model.name))?;
     let model = &*drawn_for_impostor(model);
     let name = &model.name;
-    let options = cell_for_clips(model, options);
+    let options = cell_for_clips(model, travel, options);
     let side = options.page_side();
     let counts = clip_frames(model, &options).map_err(|e| anyhow!("{name}: {e}"))?;
     let times = page_times(model, &counts);
     let (columns, rows) =
         sheet_layout(times.len() as u32, side).map_err(|e| anyhow!("{name}: {e}"))?;
-    let poses: Vec<Model> = times.iter().map(|&(c, t)| posed(model, c, t)).collect();
+    let poses: Vec<Model> = times
+        .iter()
+        .map(|&(c, t)| body_pose(model, travel, c, t))
+        .collect();
+    let page_travel: Vec<[f32; 3]> = times
+        .iter()
+        .map(|&(c, t)| {
+            let index = c.and_then(|c| model.clips.iter().position(|k| std::ptr::eq(k, c)));
+            index.map_or(Vec3::ZERO, |c| travel(c, t)).to_array()
+        })
+        .collect();
     let all: Vec<Vec3> = poses
         .iter()
         .flat_map(|p| p.mesh.positions.iter().copied())
         .collect();
     let (centre, radius) =
         view_sphere(&all).ok_or_else(|| anyhow!("{name}: no vertices to draw an impostor of"))?;
-    let frame_error = frame_error(model, &poses, &times);
+    let frame_error = frame_error(model, travel, &poses, &times);
     let grid = options.grid();
     let materials = MaterialLayers::bake(&model.materials);
     let sheet = || Rgba8Image {
@@ -384,6 +438,11 @@ pub fn bake_animated_impostor(
             centre: centre.to_array(),
             radius,
             rects,
+            travel: if page_travel.iter().all(|t| *t == [0.0; 3]) {
+                Vec::new()
+            } else {
+                page_travel
+            },
         },
         options,
         error,
@@ -518,11 +577,12 @@ pub fn load_or_bake_impostor(
     cache: &crate::bake::cache::LodCache,
     model: &Model,
     source: &[u8; 32],
+    travel: Travel,
     options: ImpostorOptions,
 ) -> Result<(AnimatedImpostor, crate::bake::cache::Origin)> {
     let build = || {
         let start = web_time::Instant::now();
-        let impostor = bake_animated_impostor(raster, model, options)?;
+        let impostor = bake_animated_impostor(raster, model, travel, options)?;
         let e = impostor.error;
         log::info!(
             "{}: impostor {} (asked {options}) baked in {:.2} s: {} frames, {:.1} MB of pages; error {:.0} mm (view {:.0} mm at {:.1}° over a depth of {:.0} mm, frames {:.0} mm, texel {:.0} mm)",

@@ -145,7 +145,7 @@ impl World {
             return Ok(());
         }
         let bake = impostor
-            .bake(self.bakes[m].bounds)
+            .bake(&self.bakes[m])
             .map_err(|e| anyhow::anyhow!("{}: {e}", impostor.model.name))?;
         let bytes = bake.materials.mips.iter().map(|l| l.len() as u64).sum();
         let character = match &self.impostors[m] {
