@@ -345,10 +345,10 @@ pub fn command(
     let Some(name) = a.model.or(a.model_flag) else {
         anyhow::bail!("report needs a model: lodlab report --model NAME|PATH --out DIR");
     };
-    // A tree (a model whose foliage cuts leaves out with alpha) gets the billboard-cloud
-    // report; a character the simplification report.
+    // A tree (`bake::foliage::classify`: cut-out foliage swaying in place) gets the
+    // billboard-cloud report; a character, cut-out parts or not, the simplification report.
     let model = crate::import::import(&name, &inputs.import)?.model;
-    if crate::bake::foliage::billboard::foliage(&model).is_ok() {
+    if crate::bake::foliage::billboard::is_tree(&model) {
         let r = crate::app::commands::tree_report::run(&model, &a.out)?;
         let last = r.levels.last().map_or(0, |l| l.billboards);
         println!(
