@@ -388,3 +388,56 @@ fn doctor_names_the_adapter_the_limits_and_the_problems_it_sees() {
         );
     }
 }
+
+/// A global option a command does not read is refused in one line naming it and the command
+/// (accepted, `doctor --clips FILE` read no file and exited 0); the commands that read models
+/// still take them.
+#[test]
+fn global_options_a_command_does_not_read_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    for (args, option, command) in [
+        (
+            vec!["doctor", "--clips", "/nonexistent.glb"],
+            "--clips",
+            "doctor",
+        ),
+        (vec!["doctor", "--levels", "error"], "--levels", "doctor"),
+        (
+            vec!["study", "analyze", d, "--limit", "nodes=5"],
+            "--limit",
+            "study analyze",
+        ),
+        (
+            vec![
+                "study",
+                "run",
+                d,
+                "--participant",
+                "P01",
+                "--allow-outside-files",
+            ],
+            "--allow-outside-files",
+            "study run",
+        ),
+        (
+            vec!["gen-assets", "--out", d, "--clips", "mocap-walk"],
+            "--clips",
+            "gen-assets",
+        ),
+    ] {
+        let out = crate::common::lodlab(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {stderr}");
+        assert!(
+            lines[0].contains(option) && lines[0].contains(&format!("`lodlab {command}`")),
+            "{args:?}: {stderr}"
+        );
+    }
+    // `bake` reads models: it takes them (and fails on the missing clip file, naming it).
+    let out = crate::common::lodlab(&["bake", "robot", "--clips", "/nonexistent.glb"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nonexistent.glb"));
+}
