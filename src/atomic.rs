@@ -92,20 +92,38 @@ pub fn make_folder(dir: &Path) -> Result<()> {
 
 /// A page gets no signals: the web build has nothing to clean up on one.
 #[cfg(target_arch = "wasm32")]
-fn remove_pending_on_interrupt() {}
+pub fn remove_pending_on_interrupt() {}
 
-/// On Ctrl-C or SIGTERM, removes the temporary files being written and exits with 130.
+/// On Ctrl-C or SIGTERM, removes the temporary files being written, says so in one line (on a
+/// line of its own where a progress bar may have been drawing on the terminal) and exits with
+/// 130. `lodlab` installs it first thing; a library user's first file being written installs
+/// it too, unless the program has a handler of its own.
 #[cfg(not(target_arch = "wasm32"))]
-fn remove_pending_on_interrupt() {
+pub fn remove_pending_on_interrupt() {
     static INSTALL: std::sync::Once = std::sync::Once::new();
     INSTALL.call_once(|| {
         // Another handler already installed (a host program's) keeps its say.
         let _ = ctrlc::set_handler(|| {
+            let mut removed = 0;
             if let Ok(pending) = PENDING.lock() {
                 for p in pending.iter() {
-                    let _ = std::fs::remove_file(p);
+                    removed += std::fs::remove_file(p).is_ok() as usize;
                 }
             }
+            use std::io::{IsTerminal, Write};
+            let mut err = std::io::stderr();
+            let _ = writeln!(
+                err,
+                "{}lodlab: interrupted{}",
+                if err.is_terminal() { "\n" } else { "" },
+                match removed {
+                    0 => String::new(),
+                    n => format!(
+                        "; {n} unfinished file{} removed",
+                        if n == 1 { "" } else { "s" }
+                    ),
+                }
+            );
             std::process::exit(130);
         });
     });

@@ -23,6 +23,8 @@ fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn,rfd=off"))
         .format_timestamp(None)
         .init();
+    // Ctrl-C says so and leaves no half-written file (see `lodlab::atomic`).
+    lodlab::atomic::remove_pending_on_interrupt();
     match lodlab::app::commands::run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {

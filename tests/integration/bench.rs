@@ -287,3 +287,46 @@ fn bench_counts_trees_by_level_kind_and_foliage_by_covered_pixel() {
         }
     }
 }
+
+/// Ctrl-C in a long benchmark stops it at once with 130, saying so in one line (it exited
+/// silently), and leaves no half-written output behind.
+#[test]
+fn an_interrupted_bench_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("b.json");
+    let child = Command::new(env!("CARGO_BIN_EXE_lodlab"))
+        .args([
+            "bench",
+            "--scene",
+            "crowd",
+            "--count",
+            "4",
+            "--size",
+            "160x90",
+            "--seconds",
+            "120",
+            "--json",
+        ])
+        .arg(&json)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(4));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert_eq!(
+        err.trim_end().lines().last(),
+        Some("lodlab: interrupted"),
+        "{err}"
+    );
+    assert!(!json.exists());
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+}
