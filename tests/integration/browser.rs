@@ -56,14 +56,13 @@ fn an_online_study_runs_resumes_and_is_analysed() {
         &post,
     ]);
     ok(&o);
-    for f in [
-        "index.html",
-        "study.js",
-        "study-data.js",
-        "sessions/P01.json",
-    ] {
-        assert!(dir.join(f).is_file(), "{f}");
+    assert!(dir.join("sessions/P01.json").is_file());
+    // The site is a folder of its own, holding only what the page loads.
+    let site = dir.join("site");
+    for f in ["index.html", "study.js", "study-data.js"] {
+        assert!(site.join(f).is_file(), "{f}");
     }
+    let site_d = site.display().to_string();
 
     // P01 online: a training trial and the condition in both orders; reloaded after one.
     let trials: Vec<Trial> =
@@ -74,7 +73,7 @@ fn an_online_study_runs_resumes_and_is_analysed() {
     let out = tmp.path().join("browser");
     let o = Command::new("node")
         .arg(tools.join("study-check.mjs"))
-        .args(["--site", &d, "--participant", "P01", "--answers"])
+        .args(["--site", &site_d, "--participant", "P01", "--answers"])
         .arg(answers.join(","))
         .args(["--reload-after", "1", "--port", &port.to_string(), "--out"])
         .arg(&out)

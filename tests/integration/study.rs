@@ -575,3 +575,88 @@ fn a_study_is_made_in_shards_and_merged() {
         .collect();
     assert_eq!(baked, ["other"], "{json}");
 }
+
+/// `study web` writes its site into a folder of its own holding only what a participant's
+/// browser fetches: the page, its script and data, and the clips the sessions play (the same
+/// bytes as the study's); not the sessions' files, the reference frames, the image metrics'
+/// verdict or any answers, which stay in the study folder beside it.
+#[test]
+fn a_study_site_holds_only_what_the_page_loads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("cylinder.glb");
+    std::fs::write(&model, to_glb(&bent_cylinder(16, 8))).unwrap();
+    let plan = tmp.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "models = [\"{}\"]\npairs = [[\"rest-pose\", \"as+is\"]]\ntolerances = [2.0]\n\
+             participants = 2\ncount = 3\nseconds = 0.4\nfps = 10\nsize = \"64x48\"\n",
+            model.display()
+        ),
+    )
+    .unwrap();
+    let dir = tmp.path().join("study");
+    let cache = tmp.path().join("cache");
+    let o = lodlab(&[
+        "study",
+        "web",
+        plan.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "--msaa",
+        "1",
+    ]);
+    ok(&o);
+    let site = dir.join("site");
+    assert!(String::from_utf8_lossy(&o.stdout).contains(site.to_str().unwrap()));
+    let mut clips: Vec<String> = ["P01", "P02"]
+        .iter()
+        .flat_map(|p| session(&dir, p))
+        .flat_map(|t| [t.first_clip, t.second_clip])
+        .collect();
+    clips.sort();
+    clips.dedup();
+    let mut expected: Vec<String> = ["index.html", "study.js", "study-data.js"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(clips.iter().cloned())
+        .collect();
+    expected.sort();
+    let mut found: Vec<String> = Vec::new();
+    let mut stack = vec![site.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(&site).unwrap().to_string_lossy().to_string();
+                found.push(rel);
+            }
+        }
+    }
+    found.sort();
+    assert_eq!(found, expected);
+    for clip in &clips {
+        assert_eq!(
+            std::fs::read(site.join(clip)).unwrap(),
+            std::fs::read(dir.join(clip)).unwrap(),
+            "{clip}"
+        );
+    }
+    // Made again over the same folder: the site is rewritten in place.
+    ok(&lodlab(&[
+        "study",
+        "web",
+        plan.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "--msaa",
+        "1",
+    ]));
+    assert!(site.join("index.html").is_file());
+}

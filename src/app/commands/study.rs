@@ -126,15 +126,19 @@ fn web(
         },
         merge: false,
     })?;
-    study::web::write_site(&out, &m, post.as_deref())?;
+    let (site, _) = study::web::write_site(&out, &m, post.as_deref())?;
     let first = m.participants.first().map_or("P01", String::as_str);
     println!(
-        "{}: a static site for {} participants; put the folder on any web server (or \
-         try it with `python3 -m http.server -d {}`) and send each participant their \
-         link, index.html?participant={first}; copy the answers-ID.csv files they \
-         send back into the folder and run `lodlab study analyze {}`",
-        out.display(),
+        "{}: a static site for {} participants, holding only what their browsers fetch (the \
+         page, its script and data, the clips); put that folder on any web server (or try it \
+         with `python3 -m http.server -d {}`), never the study folder {} (it holds the \
+         reference frames, the image metrics' verdict and the answers), and send each \
+         participant their link, index.html?participant={first}; copy the answers-ID.csv \
+         files they send back into {} and run `lodlab study analyze {}`",
+        site.display(),
         m.participants.len(),
+        site.display(),
+        out.display(),
         out.display(),
         out.display()
     );

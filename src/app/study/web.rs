@@ -64,9 +64,21 @@ pub fn check_post_url(post_url: Option<&str>) -> Result<()> {
     Ok(())
 }
 
-/// Writes the page into the study folder `dir` (made by `study make`), for the participants
-/// of `m`; answers are POSTed to `post_url` where given. Returns the files written.
-pub fn write_site(dir: &Path, m: &Manifest, post_url: Option<&str>) -> Result<Vec<String>> {
+/// The folder of the study folder that holds the site: only what a participant's browser
+/// fetches. The study folder beside it also holds the lossless reference frames, the image
+/// metrics' verdict (`proxy.md`, `proxy.json`) and the answers collected, none of which a
+/// participant should read.
+pub const SITE: &str = "site";
+
+/// Writes the site into `SITE` in the study folder `dir` (made by `study make`), for the
+/// participants of `m`: the page, its script, the study's data and the clips the sessions
+/// play (hard links to the study's where the file system allows, else copies); answers are
+/// POSTed to `post_url` where given. Returns the site's folder and the files written in it.
+pub fn write_site(
+    dir: &Path,
+    m: &Manifest,
+    post_url: Option<&str>,
+) -> Result<(std::path::PathBuf, Vec<String>)> {
     check_post_url(post_url)?;
     let data = SiteData {
         study: study_id(m)?,
@@ -90,13 +102,43 @@ pub fn write_site(dir: &Path, m: &Manifest, post_url: Option<&str>) -> Result<Ve
         "// Written by `lodlab study web`: the study the page runs.\nwindow.LODLAB_STUDY = {};\n",
         serde_json::to_string(&data)?
     );
+    let site = dir.join(SITE);
+    crate::atomic::make_folder(&site)?;
     let files = [
         ("index.html", PAGE),
         ("study.js", RUNNER),
         (DATA, script.as_str()),
     ];
     for (name, text) in files {
-        write_atomic(&dir.join(name), text.as_bytes())?;
+        write_atomic(&site.join(name), text.as_bytes())?;
     }
-    Ok(files.iter().map(|(n, _)| n.to_string()).collect())
+    let mut written: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
+    let clips: std::collections::BTreeSet<&str> = data
+        .sessions
+        .values()
+        .flatten()
+        .flat_map(|t| [t.first_clip.as_str(), t.second_clip.as_str()])
+        .collect();
+    for clip in clips {
+        link_or_copy(&dir.join(clip), &site.join(clip))?;
+        written.push(clip.to_string());
+    }
+    Ok((site, written))
+}
+
+/// `to` as the same file as `from`: a hard link where the file system allows (a clip is
+/// megabytes), else a copy; whatever stood at `to` is replaced.
+fn link_or_copy(from: &Path, to: &Path) -> Result<()> {
+    use anyhow::Context;
+    if let Some(parent) = to.parent() {
+        crate::atomic::make_folder(parent)?;
+    }
+    if std::fs::remove_file(to).is_err() && to.exists() {
+        bail!("{}: cannot replace it", to.display());
+    }
+    if std::fs::hard_link(from, to).is_err() {
+        let bytes = std::fs::read(from).with_context(|| format!("{}", from.display()))?;
+        write_atomic(to, &bytes)?;
+    }
+    Ok(())
 }
