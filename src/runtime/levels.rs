@@ -179,13 +179,15 @@ pub fn bake_each(
             }
         } else {
             let options = s.lod_options();
+            // The levels are the share up to IMPOSTOR_PENDING; what comes after is the
+            // impostor's (or, without one, the handing over).
             let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
                 cache,
                 &s.model,
                 &s.hash,
                 method,
                 &options,
-                &|f| progress(i, f),
+                &|f| progress(i, f.min(1.0) * IMPOSTOR_PENDING * 0.999),
             );
             if let Origin::Baked { warning: Some(w) } = &origin {
                 warn(w.clone());
@@ -218,7 +220,7 @@ pub fn bake_each(
     later.par_iter().with_max_len(1).for_each(|(i, lods)| {
         let s = &sources[*i];
         let level = s.impostor.and_then(|options| {
-            impostor_level(job, s, lods, &options, warn)
+            impostor_level(job, s, lods, &options, &|f| progress(*i, f), warn)
                 .map_err(|e| warn(format!("{}: no impostor: {e:#}", s.model.name)))
                 .ok()
         });
@@ -227,8 +229,13 @@ pub fn bake_each(
     });
 }
 
-/// A character's progress once its levels are handed over and its impostor is to come.
+/// A character's progress once its levels are handed over and its impostor is to come (read
+/// from the cache, or baked where the cache lacks it).
 pub const IMPOSTOR_PENDING: f32 = 0.9;
+/// A character's progress while its impostor's pages are drawn (a cache miss).
+pub const IMPOSTOR_BAKING: f32 = 0.92;
+/// A character's progress while where its impostor comes in is measured (a cache miss).
+pub const IMPOSTOR_MEASURING: f32 = 0.96;
 
 /// Character `s`'s animated impostor baked with `options` (from the cache or baked now) and
 /// its placement in the chain `lods` (likewise), at the default pixel tolerance.
@@ -237,10 +244,18 @@ fn impostor_level(
     s: &LevelSource,
     lods: &SkinnedLods,
     options: &ImpostorOptions,
+    progress: &(dyn Fn(f32) + Sync),
     warn: &(dyn Fn(String) + Sync),
 ) -> anyhow::Result<ImpostorLevel> {
     let (gpu, measure, cache) = (job.gpu, job.measure, job.cache);
     let raster = AtlasRasterizer::new(gpu);
+    // Said before the work, so that a progress line tells drawing pages from reading them.
+    let impostor_key = crate::bake::impostor::animated::impostor_key(&s.hash, options);
+    if s.hash == [0; 32]
+        || !cache.has(&cache.file(&s.model.name, CacheKind::Impostor, &impostor_key))
+    {
+        progress(IMPOSTOR_BAKING);
+    }
     // The full-detail bake, made only where the impostor or its placement is: a warm run
     // reads both from the cache.
     let full = std::sync::OnceLock::new();
@@ -259,6 +274,7 @@ fn impostor_level(
     }
     let tolerance = crate::scene::LodPolicy::default().tolerance_px;
     let place = || -> anyhow::Result<Placement> {
+        progress(IMPOSTOR_MEASURING);
         let start = web_time::Instant::now();
         let full = full().as_ref().map_err(|e| anyhow::anyhow!("{e}"))?;
         let errors: Vec<f32> = lods.levels.iter().map(|l| l.error).collect();
@@ -289,11 +305,7 @@ fn impostor_level(
             lods.method,
             &lods.options,
         );
-        let key = crate::bake::cache::keys::placement_key(
-            &levels_key,
-            &crate::bake::impostor::animated::impostor_key(&s.hash, options),
-            tolerance,
-        );
+        let key = crate::bake::cache::keys::placement_key(&levels_key, &impostor_key, tolerance);
         let path = cache.file(&s.model.name, CacheKind::Placement, &key);
         let (placement, origin) = cache.load_or_build(&path, &key, place)?;
         if let Origin::Baked { warning: Some(w) } = origin {
@@ -535,13 +547,13 @@ impl BackgroundBake {
             .collect();
         let begun: Vec<_> = state.iter().filter(|&&(_, _, p)| p > 0).copied().collect();
         let shown = if begun.is_empty() { state } else { begun };
-        // A character whose levels are in and whose impostor is baking stands at
-        // IMPOSTOR_PENDING.
+        // A character whose levels are in and whose impostor is read or baked stands at
+        // IMPOSTOR_PENDING or beyond.
         let pending = (IMPOSTOR_PENDING * 1000.0) as u32;
         let names = |trees: bool, impostor: bool| {
             shown
                 .iter()
-                .filter(|&&(_, t, p)| t == trees && (!trees && p == pending) == impostor)
+                .filter(|&&(_, t, p)| t == trees && (!trees && p >= pending) == impostor)
                 .map(|&(n, _, _)| n)
                 .collect::<Vec<_>>()
                 .join(", ")

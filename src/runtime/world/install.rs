@@ -263,8 +263,13 @@ impl World {
             let chain = self.lod.chain;
             let cache = self.cache();
             let names: Vec<&str> = self.sources.iter().map(|s| s.model.name.as_str()).collect();
+            let trees = self
+                .sources
+                .iter()
+                .map(|s| crate::bake::foliage::billboard::is_tree(&s.model))
+                .collect();
             let what = format!("{m} levels");
-            let progress = BakeProgress::new(&names, &skip, &what);
+            let progress = BakeProgress::new(&names, trees, &skip, &what);
             let job = crate::runtime::levels::BakeJob {
                 gpu,
                 measure,
@@ -272,13 +277,15 @@ impl World {
                 method: m,
                 chain: &chain,
             };
-            let packs = bake_all(
-                &job,
-                &self.sources,
-                &skip,
-                &|i, f| progress.report(i, f),
-                &warn,
-            );
+            let packs = with_clock(&progress, || {
+                bake_all(
+                    &job,
+                    &self.sources,
+                    &skip,
+                    &|i, f| progress.report(i, f),
+                    &warn,
+                )
+            });
             // A model that failed is reported by install_levels; none is retried for ever.
             self.install_levels(gpu, m, &chain, packs.into_iter().enumerate())?;
             if self.missing_levels() == Some(m) {
@@ -389,11 +396,15 @@ impl World {
 }
 
 /// Progress of a bake the caller waits for, on stderr every few seconds (a line each, so that
-/// it reads the same in a terminal and in a log): a cold `shot` or `view --screenshot` would
-/// otherwise wait a minute in silence.
+/// it reads the same in a terminal and in a log), saying what each model waits on: reading the
+/// cache, baking its levels, drawing its impostor's pages, measuring where the impostor comes
+/// in. A cold `shot` or `view --screenshot` would otherwise wait a minute in silence, and a
+/// warm one read "baking" while it only read files.
 struct BakeProgress<'a> {
     what: &'a str,
     names: &'a [&'a str],
+    /// Which models are trees (their chains report no impostor stages).
+    trees: Vec<bool>,
     start: web_time::Instant,
     /// When the last line was said, and each model's share done (never going back: a model's
     /// impostor reports from 0 again after its levels).
@@ -404,53 +415,188 @@ impl<'a> BakeProgress<'a> {
     /// Seconds between lines, and before the first: a bake from the cache says nothing.
     const EVERY: f32 = 5.0;
 
-    fn new(names: &'a [&'a str], skip: &[bool], what: &'a str) -> BakeProgress<'a> {
+    fn new(
+        names: &'a [&'a str],
+        trees: Vec<bool>,
+        skip: &[bool],
+        what: &'a str,
+    ) -> BakeProgress<'a> {
         let done = skip.iter().map(|&s| if s { 1.0 } else { 0.0 }).collect();
         let now = web_time::Instant::now();
         BakeProgress {
             what,
             names,
+            trees,
             start: now,
             state: std::sync::Mutex::new((now, done)),
         }
     }
 
-    /// Model `i` is `fraction` done.
+    /// Model `i` is `fraction` done (see [`crate::runtime::levels::IMPOSTOR_PENDING`] and
+    /// the stages after it).
     fn report(&self, i: usize, fraction: f32) {
-        let Ok(mut state) = self.state.lock() else {
-            return;
-        };
-        let (last, done) = &mut *state;
-        if let Some(d) = done.get_mut(i) {
+        if let Ok(mut state) = self.state.lock()
+            && let Some(d) = state.1.get_mut(i)
+        {
             *d = d.max(fraction.clamp(0.0, 1.0));
         }
+        self.tick();
+    }
+
+    /// Says where the bake stands, where [`Self::EVERY`] seconds have passed since the last
+    /// line (or the start). Called on every report and by a clock between them.
+    fn tick(&self) {
+        if let Some(line) = self.due_line() {
+            eprintln!("{line}");
+        }
+    }
+
+    /// The line [`Self::tick`] says, where one is due.
+    fn due_line(&self) -> Option<String> {
+        let Ok(mut state) = self.state.lock() else {
+            return None;
+        };
+        let (last, done) = &mut *state;
         if last.elapsed().as_secs_f32() < Self::EVERY {
-            return;
+            return None;
         }
         *last = web_time::Instant::now();
-        let open: Vec<String> = self
+        let open: Vec<(String, bool)> = self
             .names
             .iter()
             .zip(done.iter())
-            .filter(|&(_, &d)| d < 1.0)
-            .map(|(n, &d)| {
-                // A character whose levels are in waits for its impostor: say so.
-                if d >= crate::runtime::levels::IMPOSTOR_PENDING {
-                    format!("{n}'s impostor")
-                } else {
-                    format!("{n} {:.0}%", d * 100.0)
-                }
-            })
+            .zip(&self.trees)
+            .filter(|&((_, &d), _)| d < 1.0)
+            .map(|((n, &d), &tree)| stage(n, d, tree))
             .collect();
+        let writes = open.iter().any(|(_, w)| *w);
         let open = if open.is_empty() {
             "finishing".to_string()
         } else {
-            open.join(", ")
+            open.into_iter()
+                .map(|(s, _)| s)
+                .collect::<Vec<_>>()
+                .join(", ")
         };
-        eprintln!(
-            "lodlab: baking {} for {:.0} s: {open} (kept in the cache for next time)",
+        Some(format!(
+            "lodlab: {} for {:.0} s: {open}{}",
             self.what,
-            self.start.elapsed().as_secs_f32()
+            self.start.elapsed().as_secs_f32(),
+            if writes {
+                " (kept in the cache for next time)"
+            } else {
+                ""
+            }
+        ))
+    }
+}
+
+/// `work` run while a clock says `progress` every [`BakeProgress::EVERY`] seconds, whether the
+/// work reports or not (a step of a bake can run for tens of seconds between reports). The web
+/// build has no threads to keep a clock on: its lines come with the reports.
+fn with_clock<T: Send>(progress: &BakeProgress, work: impl FnOnce() -> T) -> T {
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = progress;
+        work()
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let done = std::sync::atomic::AtomicBool::new(false);
+        std::thread::scope(|scope| {
+            scope.spawn(|| {
+                while !done.load(std::sync::atomic::Ordering::Relaxed) {
+                    std::thread::sleep(std::time::Duration::from_millis(250));
+                    progress.tick();
+                }
+            });
+            let out = work();
+            done.store(true, std::sync::atomic::Ordering::Relaxed);
+            out
+        })
+    }
+}
+
+/// What model `name` (a tree or not), `d` done, waits on, in words, and whether that work
+/// writes the cache (see [`crate::runtime::levels::IMPOSTOR_PENDING`]): a model that has
+/// reported nothing yet is reading the cache (a miss reports its first share within a second).
+fn stage(name: &str, d: f32, tree: bool) -> (String, bool) {
+    use crate::runtime::levels::{IMPOSTOR_BAKING, IMPOSTOR_MEASURING, IMPOSTOR_PENDING};
+    match d {
+        d if tree && d > 0.0 => (
+            format!(
+                "baking {name}'s billboard clouds {:.0}%",
+                (d * 100.0).min(99.0)
+            ),
+            true,
+        ),
+        d if d >= IMPOSTOR_MEASURING => {
+            (format!("measuring where {name}'s impostor comes in"), true)
+        }
+        d if d >= IMPOSTOR_BAKING => (format!("drawing {name}'s impostor"), true),
+        d if d >= IMPOSTOR_PENDING => (format!("reading {name}'s impostor"), false),
+        // Never 100% while it is still at work: measuring the levels follows simplifying.
+        d if d > 0.0 => (
+            format!(
+                "baking {name} {:.0}%",
+                (d / IMPOSTOR_PENDING * 100.0).min(99.0)
+            ),
+            true,
+        ),
+        _ => (format!("reading {name}"), false),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runtime::levels::{IMPOSTOR_BAKING, IMPOSTOR_MEASURING, IMPOSTOR_PENDING};
+
+    /// The progress line says what each model waits on, and that the cache is written only
+    /// where something is made: a warm run reads.
+    #[test]
+    fn a_progress_line_tells_reading_from_baking() {
+        let names = ["walker", "horse", "broadleaf"];
+        let p = BakeProgress::new(
+            &names,
+            vec![false, false, true],
+            &[false; 3],
+            "as+is levels",
         );
+        let due = || {
+            if let Ok(mut s) = p.state.lock() {
+                s.0 = web_time::Instant::now() - std::time::Duration::from_secs(6);
+            }
+            p.due_line().unwrap()
+        };
+        assert!(p.due_line().is_none(), "nothing is said before 5 s");
+        let line = due();
+        assert!(
+            line.contains("reading walker, reading horse, reading broadleaf"),
+            "{line}"
+        );
+        assert!(!line.contains("cache for next time"), "{line}");
+        p.report(0, IMPOSTOR_PENDING);
+        p.report(1, 0.45);
+        p.report(2, 0.3);
+        let line = due();
+        assert!(line.contains("reading walker's impostor"), "{line}");
+        assert!(line.contains("baking horse 50%"), "{line}");
+        assert!(
+            line.contains("baking broadleaf's billboard clouds 30%"),
+            "{line}"
+        );
+        assert!(
+            line.ends_with("(kept in the cache for next time)"),
+            "{line}"
+        );
+        p.report(0, IMPOSTOR_BAKING);
+        assert!(due().contains("drawing walker's impostor"));
+        p.report(0, IMPOSTOR_MEASURING);
+        assert!(due().contains("measuring where walker's impostor comes in"));
+        for i in 0..3 {
+            p.report(i, 1.0);
+        }
+        assert!(due().contains(": finishing"));
     }
 }
