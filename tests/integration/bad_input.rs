@@ -441,3 +441,41 @@ fn global_options_a_command_does_not_read_are_refused() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("nonexistent.glb"));
 }
+
+/// `study make` and `study web` take their plan the same two ways, as a word or `--plan`
+/// (`study web --plan P` was a usage error): a missing plan is one line naming it either way.
+#[test]
+fn a_study_plan_is_given_the_same_way_to_make_and_web() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("study");
+    let d = d.to_str().unwrap();
+    for args in [
+        vec!["study", "make", "/nonexistent/plan.toml", "--out", d],
+        vec![
+            "study",
+            "make",
+            "--plan",
+            "/nonexistent/plan.toml",
+            "--out",
+            d,
+        ],
+        vec!["study", "web", "/nonexistent/plan.toml", "--out", d],
+        vec![
+            "study",
+            "web",
+            "--plan",
+            "/nonexistent/plan.toml",
+            "--out",
+            d,
+        ],
+    ] {
+        let out = crate::common::lodlab(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("/nonexistent/plan.toml"),
+            "{args:?}: {stderr}"
+        );
+    }
+}

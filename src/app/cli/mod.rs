@@ -193,9 +193,12 @@ pub struct StudyArgs {
 pub enum StudyCommand {
     /// Render every distinct clip of a plan once and write one session list per participant.
     Make {
-        /// The study plan (TOML; docs/study-plan.toml is an example).
-        #[arg(long)]
-        plan: PathBuf,
+        /// The study plan (TOML; docs/study-plan.toml is an example); the same as --plan.
+        #[arg(value_name = "PLAN", required_unless_present = "plan_flag")]
+        plan: Option<PathBuf>,
+        /// The study plan, as `study web` takes it too.
+        #[arg(long = "plan", value_name = "PLAN", conflicts_with = "plan")]
+        plan_flag: Option<PathBuf>,
         /// Folder of the study (new or empty, or one made from the same plan, whose clips are
         /// kept).
         #[arg(long)]
@@ -221,8 +224,12 @@ pub enum StudyCommand {
     /// answer in the browser (a reload resumes) and at the end downloads answers-P01.csv,
     /// which `analyze` reads beside answers.csv.
     Web {
-        /// The study plan (TOML; docs/study-plan.toml is an example).
-        plan: PathBuf,
+        /// The study plan (TOML; docs/study-plan.toml is an example); the same as --plan.
+        #[arg(value_name = "PLAN", required_unless_present = "plan_flag")]
+        plan: Option<PathBuf>,
+        /// The study plan, as `study make` takes it too.
+        #[arg(long = "plan", value_name = "PLAN", conflicts_with = "plan")]
+        plan_flag: Option<PathBuf>,
         /// Folder of the study and the site (new or empty, or one made from the same plan).
         #[arg(long)]
         out: PathBuf,

@@ -13,19 +13,29 @@ pub fn command(
     match command {
         StudyCommand::Make {
             plan,
+            plan_flag,
             out,
             cache,
             msaa,
             shard,
             merge,
-        } => make(plan, out, cache, msaa, shard, merge, inputs),
+        } => make(
+            the_plan(plan, plan_flag)?,
+            out,
+            cache,
+            msaa,
+            shard,
+            merge,
+            inputs,
+        ),
         StudyCommand::Web {
             plan,
+            plan_flag,
             out,
             cache,
             msaa,
             post,
-        } => web(plan, out, cache, msaa, post, inputs),
+        } => web(the_plan(plan, plan_flag)?, out, cache, msaa, post, inputs),
         StudyCommand::Run {
             dir,
             participant,
@@ -52,6 +62,15 @@ pub fn command(
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// The plan, given as `study make PLAN` or `study make --plan PLAN` (and `web` alike).
+fn the_plan(
+    plan: Option<std::path::PathBuf>,
+    flag: Option<std::path::PathBuf>,
+) -> anyhow::Result<std::path::PathBuf> {
+    plan.or(flag)
+        .ok_or_else(|| anyhow::anyhow!("a study needs its plan: lodlab study make PLAN --out DIR"))
 }
 
 /// `study make`: the whole study, or with `--shard` one job's share of its clips.

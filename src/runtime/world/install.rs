@@ -502,16 +502,20 @@ fn with_clock<T: Send>(progress: &BakeProgress, work: impl FnOnce() -> T) -> T {
     }
     #[cfg(not(target_arch = "wasm32"))]
     {
-        let done = std::sync::atomic::AtomicBool::new(false);
+        use std::sync::mpsc::RecvTimeoutError;
+        // The clock stops the moment the work ends (its sender dropped), not at its next
+        // tick: a bake read from the cache in milliseconds waits for nothing.
+        let (stop, stopped) = std::sync::mpsc::channel::<()>();
         std::thread::scope(|scope| {
-            scope.spawn(|| {
-                while !done.load(std::sync::atomic::Ordering::Relaxed) {
-                    std::thread::sleep(std::time::Duration::from_millis(250));
+            scope.spawn(move || {
+                while let Err(RecvTimeoutError::Timeout) =
+                    stopped.recv_timeout(std::time::Duration::from_millis(250))
+                {
                     progress.tick();
                 }
             });
             let out = work();
-            done.store(true, std::sync::atomic::Ordering::Relaxed);
+            drop(stop);
             out
         })
     }
