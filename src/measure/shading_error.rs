@@ -180,10 +180,16 @@ pub fn shading_errors_at(
         let (mut plain_terms, mut mapped_terms) = (Terms::default(), Terms::default());
         for view in 0..METRIC_VIEWS {
             let yaw = 360.0 * view as f32 / METRIC_VIEWS as f32;
-            let camera = metric_camera(centre, height, yaw, PITCH_DEG, distance);
-            let background = picture(gpu, &mut full_world, &target, camera, 0.0, true)?;
+            let mut camera = metric_camera(centre, height, yaw, PITCH_DEG, distance);
+            let mut background = picture(gpu, &mut full_world, &target, camera, 0.0, true)?;
             for frame in 0..METRIC_FRAMES {
                 let t = duration * frame as f32 / METRIC_FRAMES as f32;
+                if !full.travel.is_empty() && frame > 0 {
+                    // Where the clip carries the body (root motion), the view goes with it.
+                    let at = centre + full.travel_at(0, t);
+                    camera = metric_camera(at, height, yaw, PITCH_DEG, distance);
+                    background = picture(gpu, &mut full_world, &target, camera, 0.0, true)?;
+                }
                 let reference = picture(gpu, &mut full_world, &target, camera, t, false)?;
                 level_world.renderer.normal_maps = false;
                 let plain = picture(gpu, &mut level_world, &target, camera, t, false)?;

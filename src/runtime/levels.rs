@@ -265,7 +265,7 @@ fn impostor_level(
     let travel = |c: usize, t: f32| {
         full()
             .as_ref()
-            .map_or(glam::Vec3::ZERO, |f| f.travel_at(c, t))
+            .map_or(glam::Vec3::ZERO, |f| f.travel_within(c, t))
     };
     let (impostor, origin) =
         load_or_bake_impostor(&raster, cache, &s.model, &s.hash, &travel, *options)?;

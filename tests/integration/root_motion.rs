@@ -90,7 +90,7 @@ fn a_flying_creatures_impostor_is_drawn_round_its_body() {
     use lodlab::bake::impostor::animated::{ImpostorOptions, bake_animated_impostor, no_travel};
     let flyer = flying(&load_model("robot").unwrap(), RADIUS, CLIMB);
     let full = Drawable::new(&flyer).unwrap();
-    let travel = |c: usize, t: f32| full.travel_at(c, t);
+    let travel = |c: usize, t: f32| full.travel_within(c, t);
     let options: ImpostorOptions = "8x6x24".parse().unwrap();
     let raster = lodlab::render::atlas::AtlasRasterizer::new(crate::common::gpu());
     let body = bake_animated_impostor(&raster, &flyer, &travel, options).unwrap();

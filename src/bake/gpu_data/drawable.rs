@@ -305,6 +305,18 @@ impl Drawable {
             })
     }
 
+    /// [`Self::travel_at`] for a bake's time within the clip: the clip's length is its last
+    /// frame, not its first again (see [`super::root_motion::travel_within`]).
+    pub fn travel_within(&self, clip: usize, time: f32) -> glam::Vec3 {
+        self.animation
+            .clips
+            .get(clip)
+            .map_or(glam::Vec3::ZERO, |c| {
+                let (frames, duration) = (c.frame_count, c.duration);
+                super::root_motion::travel_within(&self.travel, clip, frames, duration, time)
+            })
+    }
+
     /// The CPU reference of the vertex shader's skinning (`skin_vertex` in
     /// `shaders/skinning.wgsl`): positions and normals at `time` seconds into `clip`, the
     /// motion scaled by the wind strength `wind`, spectral offsets included:

@@ -76,6 +76,27 @@ pub fn bounds_and_travel(
     }
 }
 
+/// [`travel_at`] for a time within the clip, `duration` itself its last frame (a page or a
+/// frame of a bake at the clip's end), not its first again as the looping playback has it.
+pub fn travel_within(
+    travel: &[Vec<Vec3>],
+    clip: usize,
+    frame_count: u32,
+    duration: f32,
+    time: f32,
+) -> Vec3 {
+    let Some(frames) = travel.get(clip).filter(|f| !f.is_empty()) else {
+        return Vec3::ZERO;
+    };
+    if frame_count <= 1 || duration.is_nan() || duration <= 0.0 {
+        return frames[0];
+    }
+    let f = (time / duration).clamp(0.0, 1.0) * (frame_count - 1) as f32;
+    let f0 = (f.floor() as usize).min(frames.len() - 1);
+    let f1 = (f0 + 1).min(frames.len() - 1);
+    frames[f0].lerp(frames[f1], f - f0 as f32)
+}
+
 /// Where the body is `time` seconds into clip `clip` (of `frame_count` frames over
 /// `duration`, looped as the shader loops it), against the rest pose: the travel of the
 /// frames round that time, blended as the shader blends their poses. Zero without travel.
@@ -92,4 +113,21 @@ pub fn travel_at(
     let (f0, f1, a) = frame_pair(frame_count, duration, time);
     let at = |f: u32| frames[(f as usize).min(frames.len() - 1)];
     at(f0).lerp(at(f1), a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A clip that ends elsewhere than it starts (a leap): the playback loops back to the
+    /// start at its length, a bake's last page is at its end.
+    #[test]
+    fn a_clips_end_is_its_last_frame_within_and_its_first_looped() {
+        let travel = vec![vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X]];
+        assert_eq!(travel_within(&travel, 0, 3, 1.0, 1.0), 2.0 * Vec3::X);
+        assert_eq!(travel_at(&travel, 0, 3, 1.0, 1.0), Vec3::ZERO);
+        assert_eq!(travel_within(&travel, 0, 3, 1.0, 0.75), 1.5 * Vec3::X);
+        assert_eq!(travel_at(&travel, 0, 3, 1.0, 0.75), 1.5 * Vec3::X);
+        assert_eq!(travel_within(&travel, 1, 3, 1.0, 0.5), Vec3::ZERO);
+    }
 }

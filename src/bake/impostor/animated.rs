@@ -163,7 +163,7 @@ impl AnimatedImpostor {
                     (0..clip.frame_count)
                         .map(|f| {
                             let t = anim_texture::frame_time(clip.duration, clip.frame_count, f);
-                            full.travel_at(c, t)
+                            full.travel_within(c, t)
                         })
                         .collect()
                 })

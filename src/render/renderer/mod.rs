@@ -271,6 +271,11 @@ impl SceneRenderer {
             m.height,
             m.layer_count,
         )?;
+        if let Some(a) = bake.kind.character_impostor() {
+            // One texel a view, then one a page's travel (see `impostor_views`).
+            let texels = (a.rects.len() + a.travel.len()) as u32;
+            gpu.texture_fits(&format!("{name}: impostor views"), texels, 1, 1)?;
+        }
         let c = gpu.checked(&format!("uploading {name}"), || {
             GpuCharacter::upload(gpu, &self.character_layout, &self.sampler, bake)
         })?;

@@ -425,19 +425,17 @@ fn tree_draws(
 }
 
 /// What selection needs to know about a character's levels.
-/// Where the clip of `inst` (blended with the clip it cross-fades to, as its poses are) has
-/// carried the body of `bake`'s model at scene time `time`: see [`Instance::travel`].
+/// Where the clip of `inst` has carried the body of `bake`'s model at scene time `time`: see
+/// [`Instance::travel`]. In a cross-fade, the clip that weighs more: an impostor shows that
+/// clip's pages alone (`vs_animated_impostor`), and a mesh, whose poses blend, lies between
+/// the two, which its sphere (the body's bounds) holds where the clips travel alike.
 fn travel_of(bake: Option<&Drawable>, inst: &Instance, time: f32) -> glam::Vec3 {
     let Some(b) = bake.filter(|b| !b.travel.is_empty()) else {
         return glam::Vec3::ZERO;
     };
-    let own = b.travel_at(inst.clip as usize, time * inst.speed + inst.time_offset);
     match inst.fade {
-        Some(f) => own.lerp(
-            b.travel_at(f.clip as usize, time * f.speed + f.time_offset),
-            f.weight,
-        ),
-        None => own,
+        Some(f) if f.weight > 0.5 => b.travel_at(f.clip as usize, time * f.speed + f.time_offset),
+        _ => b.travel_at(inst.clip as usize, time * inst.speed + inst.time_offset),
     }
 }
 
