@@ -479,3 +479,25 @@ fn a_study_plan_is_given_the_same_way_to_make_and_web() {
         );
     }
 }
+
+/// The commands that need a model say so the same way, in one line, exit 1 (`export` gave
+/// clap's usage, `report` its own line).
+#[test]
+fn a_missing_model_is_one_line_for_every_command_that_needs_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    for (args, command) in [
+        (vec!["bake"], "bake"),
+        (vec!["export", "--out", d], "export"),
+        (vec!["report", "--out", d], "report"),
+    ] {
+        let out = crate::common::lodlab(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(&format!("{command} needs a model: lodlab {command} ")),
+            "{args:?}: {stderr}"
+        );
+    }
+}

@@ -404,7 +404,6 @@ pub enum Baseline {
 pub struct BakeArgs {
     #[arg(
         value_name = "MODEL",
-        required_unless_present = "model_flags",
         help = format!("Models: built-in asset names ({}) or glTF paths; the same as --model", crate::assets::model_names())
     )]
     pub models: Vec<String>,
@@ -445,7 +444,7 @@ pub struct BakeArgs {
 #[derive(Args, Debug)]
 pub struct ExportArgs {
     /// Model: a built-in asset name (as for bake) or a glTF path; the same as --model.
-    #[arg(value_name = "MODEL", required_unless_present = "model_flag")]
+    #[arg(value_name = "MODEL")]
     pub model: Option<String>,
     /// A model, as shot, bench and view take it.
     #[arg(long = "model", value_name = "NAME|PATH", conflicts_with = "model")]

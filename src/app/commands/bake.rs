@@ -78,6 +78,10 @@ pub fn run(a: &BakeArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::R
         anyhow::bail!("--first-error must be a positive number of pixels");
     }
     let mut names: Vec<String> = a.models.iter().chain(&a.model_flags).cloned().collect();
+    // A missing model is one line, as `export` and `report` say it (not clap's usage).
+    if names.is_empty() {
+        anyhow::bail!("bake needs a model: lodlab bake NAME|PATH [NAME|PATH ...]");
+    }
     if let Some(shard) = a.shard {
         names = shard.share(&names);
         eprintln!(
