@@ -6,8 +6,6 @@
 
 use crate::common::{browser_tools, lodlab, ok, shared_cache, web_package};
 use lodlab::app::study::session::{Trial, read_answers_file};
-use lodlab::generate::cylinder::bent_cylinder;
-use lodlab::generate::glb::to_glb;
 use std::process::Command;
 
 /// A port nothing listens on now (the page POSTs to the check's server there).
@@ -25,18 +23,11 @@ fn an_online_study_runs_resumes_and_is_analysed() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    let model = tmp.path().join("cylinder.glb");
-    std::fs::write(&model, to_glb(&bent_cylinder(16, 8))).unwrap();
-    let plan = tmp.path().join("plan.toml");
-    std::fs::write(
-        &plan,
-        format!(
-            "models = [\"{}\"]\npairs = [[\"rest-pose\", \"as+is\"]]\ntolerances = [2.0]\n\
-             participants = 2\ncount = 3\nseconds = 0.4\nfps = 10\nsize = \"64x48\"\n",
-            model.display()
-        ),
-    )
-    .unwrap();
+    let plan = crate::common::cylinder_plan(
+        tmp.path(),
+        "pairs = [[\"rest-pose\", \"as+is\"]]\ntolerances = [2.0]\n\
+         participants = 2\ncount = 3\nseconds = 0.4\nfps = 10\nsize = \"64x48\"\n",
+    );
     let dir = tmp.path().join("study");
     let d = dir.display().to_string();
     let port = free_port();

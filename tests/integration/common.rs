@@ -299,3 +299,17 @@ pub fn ok(o: &Output) {
         String::from_utf8_lossy(&o.stdout)
     );
 }
+
+/// A study plan over a bent cylinder written into `dir` (cylinder.glb and plan.toml), its
+/// lines after `models` being `rest` (pairs, tolerances, participants, clip size…).
+pub fn cylinder_plan(dir: &Path, rest: &str) -> PathBuf {
+    let model = dir.join("cylinder.glb");
+    std::fs::write(
+        &model,
+        lodlab::generate::glb::to_glb(&lodlab::generate::cylinder::bent_cylinder(16, 8)),
+    )
+    .unwrap();
+    let plan = dir.join("plan.toml");
+    std::fs::write(&plan, format!("models = [\"{}\"]\n{rest}", model.display())).unwrap();
+    plan
+}

@@ -583,18 +583,11 @@ fn a_study_is_made_in_shards_and_merged() {
 #[test]
 fn a_study_site_holds_only_what_the_page_loads() {
     let tmp = tempfile::tempdir().unwrap();
-    let model = tmp.path().join("cylinder.glb");
-    std::fs::write(&model, to_glb(&bent_cylinder(16, 8))).unwrap();
-    let plan = tmp.path().join("plan.toml");
-    std::fs::write(
-        &plan,
-        format!(
-            "models = [\"{}\"]\npairs = [[\"rest-pose\", \"as+is\"]]\ntolerances = [2.0]\n\
-             participants = 2\ncount = 3\nseconds = 0.4\nfps = 10\nsize = \"64x48\"\n",
-            model.display()
-        ),
-    )
-    .unwrap();
+    let plan = crate::common::cylinder_plan(
+        tmp.path(),
+        "pairs = [[\"rest-pose\", \"as+is\"]]\ntolerances = [2.0]\n\
+         participants = 2\ncount = 3\nseconds = 0.4\nfps = 10\nsize = \"64x48\"\n",
+    );
     let dir = tmp.path().join("study");
     let cache = tmp.path().join("cache");
     let o = lodlab(&[

@@ -129,6 +129,13 @@ impl DrawKind {
     }
 }
 
+/// Whether `model` is drawn as foliage: a billboard cloud, or a tree
+/// ([`crate::bake::foliage::classify`]); a character's cut-out parts are a mesh's (see
+/// `LodPack`'s cut-out triangles).
+fn is_foliage(model: &Model) -> bool {
+    billboard_atlas(&model.materials).is_some() || crate::bake::foliage::classify::is_tree(model)
+}
+
 impl DrawClass {
     /// A tree (its mesh, a billboard cloud or its impostor): drawn in the foliage pass,
     /// swayed by the scene's wind, placed by a scene's tree layout.
@@ -192,7 +199,7 @@ impl Drawable {
         let tree = !billboards && crate::bake::foliage::classify::is_tree(model);
         let crown = tree.then(|| CrownDensity::of(model)).flatten();
         let occlusion = crown.map_or_else(Vec::new, |c| c.occlusions(&model.mesh.positions));
-        Self::build(model, motion, true, &occlusion, &[])
+        Self::build(model, motion, true, &occlusion, &[], billboards || tree)
     }
 
     /// [`Self::with_motion`] for a level of a tree, every vertex darkened by the crown by
@@ -208,13 +215,20 @@ impl Drawable {
         if !view_windows.is_empty() && view_windows.len() != model.mesh.vertex_count() {
             return Err("view windows do not fit the model's vertices".into());
         }
-        Self::build(model, motion, true, occlusion, view_windows)
+        Self::build(
+            model,
+            motion,
+            true,
+            occlusion,
+            view_windows,
+            is_foliage(model),
+        )
     }
 
     /// [`Self::new`] with the vertices in the model's order, not reordered for the GPU's
     /// caches: for a mesh whose shader finds vertices by index (an impostor's quad).
     pub fn in_order(model: &Model) -> Result<Self, String> {
-        Self::build(model, None, false, &[], &[])
+        Self::build(model, None, false, &[], &[], is_foliage(model))
     }
 
     fn build(
@@ -223,6 +237,7 @@ impl Drawable {
         optimize: bool,
         occlusion: &[f32],
         view_windows: &[f32],
+        foliage: bool,
     ) -> Result<Self, String> {
         let mut am = AnimationSpaceMesh::from_skinned(&model.mesh, &model.skeleton);
         if let Some(m) = motion {
@@ -275,11 +290,8 @@ impl Drawable {
             materials,
             bounds,
             travel,
-            // A billboard cloud, or a tree; a character's cut-out parts are a mesh's (see
-            // `LodPack`'s cut-out triangles).
-            kind: if billboard_atlas(&model.materials).is_some()
-                || crate::bake::foliage::classify::is_tree(model)
-            {
+            // See `is_foliage`.
+            kind: if foliage {
                 DrawKind::Foliage {
                     atlas_lit: atlas.is_some(),
                 }

@@ -7,7 +7,7 @@
 //! says where the body is at any moment, and the world moves the sphere, shadow and
 //! screen-size measure of each instance with it.
 
-use super::anim_texture::{AnimationTexture, frame_pair, frame_time};
+use super::anim_texture::{AnimationTexture, frame_time};
 use super::animation_space::{AnimationSpaceMesh, transform_homogeneous};
 use crate::model::Bounds;
 use glam::Vec3;
@@ -107,12 +107,14 @@ pub fn travel_at(
     duration: f32,
     time: f32,
 ) -> Vec3 {
-    let Some(frames) = travel.get(clip).filter(|f| !f.is_empty()) else {
-        return Vec3::ZERO;
+    // Looped as `frame_pair` loops the clip: its length is its start again.
+    let u = time / duration;
+    let looped = if duration > 0.0 {
+        duration * (u - u.floor())
+    } else {
+        time
     };
-    let (f0, f1, a) = frame_pair(frame_count, duration, time);
-    let at = |f: u32| frames[(f as usize).min(frames.len() - 1)];
-    at(f0).lerp(at(f1), a)
+    travel_within(travel, clip, frame_count, duration, looped)
 }
 
 #[cfg(test)]
