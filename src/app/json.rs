@@ -76,6 +76,30 @@ pub fn pretty<T: Serialize>(value: &T) -> serde_json::Result<String> {
     Ok(tidy(&serde_json::to_string_pretty(value)?))
 }
 
+/// `--json[=FILE]` as every command that has it reads it: absent, the command prints its
+/// table; bare, it prints the JSON instead; with a file, it prints the table and writes the
+/// JSON there too. `FILE` is checked before the work starts ([`json_file`]).
+pub type JsonOut = Option<Option<std::path::PathBuf>>;
+
+/// Prints `table` or `value` as `json` says, and writes the file it names.
+pub fn emit(json: &JsonOut, value: &impl Serialize, table: &str) -> anyhow::Result<()> {
+    match json {
+        Some(None) => println!("{}", pretty(value)?),
+        Some(Some(file)) => {
+            print!("{table}");
+            crate::atomic::write(file, pretty(value)?.as_bytes())?;
+        }
+        None => print!("{table}"),
+    }
+    Ok(())
+}
+
+/// The file `--json=FILE` names, if any: checked before a long run, so that a run is not lost
+/// to a path that cannot be written.
+pub fn json_file(json: &JsonOut) -> Option<&std::path::PathBuf> {
+    json.as_ref().and_then(|f| f.as_ref())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,13 +10,16 @@ use std::time::Instant;
 /// Seconds between lines where stderr is not a terminal.
 const EVERY: f32 = 5.0;
 
+/// Steps done, when the last line was said, the stage named last and every stage said.
+type Lines = (u64, Instant, String, Vec<String>);
+
 pub struct Progress {
     label: String,
     total: u64,
     bar: Option<ProgressBar>,
-    /// Lines where there is no bar: steps done, when the last line was said, and the stage
-    /// named last; None when nothing is shown.
-    lines: Option<Mutex<(u64, Instant, String)>>,
+    /// Lines where there is no bar: steps done, when the last line was said, the stage named
+    /// last and every stage said so far; None when nothing is shown.
+    lines: Option<Mutex<Lines>>,
     start: Instant,
 }
 
@@ -32,7 +35,8 @@ impl Progress {
             bar
         });
         Progress {
-            lines: (show && !terminal).then(|| Mutex::new((0, Instant::now(), String::new()))),
+            lines: (show && !terminal)
+                .then(|| Mutex::new((0, Instant::now(), String::new(), Vec::new()))),
             label,
             total,
             bar,
@@ -59,7 +63,8 @@ impl Progress {
     }
 
     /// The job has come to a stage of its own (`measuring`, a method's name): on the bar, or
-    /// said at once on a line.
+    /// said at once on a line the first time it comes (stages that take turns, as a bench's
+    /// methods do, are then named in the lines every few seconds).
     pub fn set_stage(&self, stage: &str) {
         if let Some(bar) = &self.bar {
             bar.set_message(stage.to_string());
@@ -69,6 +74,10 @@ impl Progress {
             && state.2 != stage
         {
             state.2 = stage.to_string();
+            if state.3.iter().any(|s| s == stage) {
+                return;
+            }
+            state.3.push(stage.to_string());
             state.1 = Instant::now();
             eprintln!(
                 "lodlab: {}: {stage} after {:.0} s",

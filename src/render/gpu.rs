@@ -189,6 +189,12 @@ impl Gpu {
         self.info.device_type == wgpu::DeviceType::Cpu
     }
 
+    /// The multisampling a command draws with where none is asked: 1 on a CPU adapter, 4
+    /// elsewhere (see [`Self::samples`]).
+    pub fn default_samples(&self) -> u32 {
+        if self.is_cpu() { 1 } else { 4 }
+    }
+
     /// The multisampling to draw with: `asked`, or else by adapter, 1 on a CPU adapter (where
     /// 4× costs about 2.5× the frame on the default scenes, and alpha-tested foliage then needs
     /// no alpha to coverage) and 4 elsewhere. A default is said on stderr, with how to change
@@ -197,10 +203,11 @@ impl Gpu {
         if let Some(samples) = asked {
             return samples;
         }
-        let (samples, why, other) = if self.is_cpu() {
-            (1, "a CPU adapter", 4)
+        let samples = self.default_samples();
+        let (why, other) = if self.is_cpu() {
+            ("a CPU adapter", 4)
         } else {
-            (4, "a GPU", 1)
+            ("a GPU", 1)
         };
         // Said once a process: bench and soak make several worlds.
         static SAID: std::sync::Once = std::sync::Once::new();

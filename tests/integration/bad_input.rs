@@ -292,7 +292,7 @@ fn non_finite_and_absurd_options_are_refused() {
         &["shot", "--frames", "100000000"],
         &["bake", "horse", "--first-error", "nan"],
         &["bench", "--seconds", "inf"],
-        &["record", "--seconds", "nan", "--out", "x.mp4"],
+        &["record", "--length", "nan", "--out", "x.mp4"],
         &["view", "--cross-fade", "nan"],
     ];
     for args in cases {

@@ -43,8 +43,7 @@ fn bench_writes_json_and_a_table_of_every_method() {
         "3",
         "--warmup",
         "0",
-        "--json",
-        &s(&json),
+        &format!("--json={}", s(&json)),
         "--markdown",
         &s(&md),
         "--cache",
@@ -201,8 +200,7 @@ fn bench_refuses_an_unwritable_output_before_measuring() {
     let json = dir.path().join("missing").join("bench.json");
     let out = lodlab(&[
         "bench",
-        "--json",
-        &json.display().to_string(),
+        &format!("--json={}", json.display()),
         "--frames",
         "1",
     ]);
@@ -236,8 +234,7 @@ fn bench_counts_trees_by_level_kind_and_foliage_by_covered_pixel() {
         "2",
         "--warmup",
         "0",
-        "--json",
-        &json.display().to_string(),
+        &format!("--json={}", json.display()),
         "--cache",
         &cache.display().to_string(),
     ]);
@@ -305,9 +302,8 @@ fn an_interrupted_bench_says_so() {
             "160x90",
             "--seconds",
             "120",
-            "--json",
         ])
-        .arg(&json)
+        .arg(format!("--json={}", json.display()))
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -329,4 +325,58 @@ fn an_interrupted_bench_says_so() {
     assert!(!json.exists());
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert!(left.is_empty(), "{left:?}");
+}
+
+/// `--seconds` bounds the measuring, which the bench announces before it starts, with at
+/// least six frames of each method for a median; `--no-coverage` leaves out the fragment and
+/// level-kind views.
+#[test]
+fn bench_says_what_it_will_measure_and_can_leave_out_the_coverage() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = cylinder_glb(dir.path());
+    let json = dir.path().join("bench.json");
+    let cache = dir.path().join("cache");
+    let s = |p: &Path| p.display().to_string();
+    let out = lodlab(&[
+        "bench",
+        "--scene",
+        "crowd",
+        "--model",
+        &model,
+        "--count",
+        "4",
+        "--size",
+        "96x54",
+        "--msaa",
+        "1",
+        "--methods",
+        "none,as",
+        "--seconds",
+        "0.5",
+        "--warmup",
+        "0",
+        "--no-coverage",
+        &format!("--json={}", s(&json)),
+        "--cache",
+        &s(&cache),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let announced = stderr
+        .lines()
+        .find(|l| l.starts_with("lodlab: bench: measuring"))
+        .unwrap_or_else(|| panic!("no announcement: {stderr}"));
+    assert!(announced.contains("2 methods"), "{announced}");
+    assert!(!stderr.contains("coverage"), "{stderr}");
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let n = r["frames_per_method"].as_u64().unwrap();
+    assert!(n >= 6, "{n} frames");
+    assert_eq!(r["coverage_seconds"], 0.0);
+    assert!(r["announced_seconds"].as_f64().unwrap() > 0.0);
+    for m in ["none", "as"] {
+        let m = &r["methods"][m];
+        assert_eq!(m["frame_ms"].as_array().unwrap().len() as u64, n);
+        assert!(m.get("fragments_by_pass").is_none(), "{m}");
+        assert!(m.get("cost_by_kind").is_none(), "{m}");
+    }
 }

@@ -253,19 +253,45 @@ fn report_writes_curves_plot_and_timings() {
     let dir = tempfile::tempdir().unwrap();
     let model = cylinder_glb(dir.path());
     let out_dir = dir.path().join("report");
-    let out = lodlab(&[
-        "report",
-        model.to_str().unwrap(),
-        "--out",
-        out_dir.to_str().unwrap(),
-        "--baseline",
-        "meshopt",
-    ]);
+    let cache = dir.path().join("cache");
+    let report = || {
+        lodlab(&[
+            "report",
+            model.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--baseline",
+            "meshopt",
+            "--cache",
+            cache.to_str().unwrap(),
+        ])
+    };
+    let out = report();
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("read from the cache"), "{stderr}");
+    let first = std::fs::read(out_dir.join("report.json")).unwrap();
+    // A second report reads the three methods' levels from the cache and measures them alike.
+    let again = report();
+    let stderr = String::from_utf8_lossy(&again.stderr);
+    assert!(again.status.success(), "{stderr}");
+    assert_eq!(stderr.matches("read from the cache").count(), 3, "{stderr}");
+    let curves = |bytes: &[u8]| {
+        let j: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+        ["rest-pose", "as", "as+is"].map(|m| j["methods"][m]["curve"].clone())
+    };
+    assert_eq!(
+        curves(&first),
+        curves(&std::fs::read(out_dir.join("report.json")).unwrap())
+    );
+    // Its findings a line each, none of them a paragraph.
+    let stdout = String::from_utf8_lossy(&again.stdout);
+    assert!(stdout.lines().count() >= 5, "{stdout}");
+    assert!(stdout.lines().all(|l| l.chars().count() <= 160), "{stdout}");
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["model"], "cylinder");
@@ -329,6 +355,7 @@ fn report_writes_curves_plot_and_timings() {
     );
     let timings = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
     assert!(timings.contains("## Lighting"), "{timings}");
+    assert!(timings.contains("meshopt ≤ rest-pose on"), "{timings}");
     assert!(json["methods"]["as"]["cache_hit_rate"].is_null());
     let png = image::open(out_dir.join("error.png")).unwrap();
     assert_eq!((png.width(), png.height()), (1000, 640));
@@ -383,6 +410,8 @@ fn report_measures_a_model_without_texture_coordinates_by_closest_points() {
         p.to_str().unwrap(),
         "--out",
         out_dir.to_str().unwrap(),
+        "--cache",
+        dir.path().join("cache").to_str().unwrap(),
     ]);
     assert!(
         out.status.success(),
@@ -393,6 +422,9 @@ fn report_measures_a_model_without_texture_coordinates_by_closest_points() {
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["correspondence"], "closest-point");
+    // Without --baseline, timings.md says nothing of meshoptimizer.
+    let timings = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
+    assert!(!timings.contains("meshopt"), "{timings}");
     let md = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
     assert!(
         md.contains("Measured by closest point in the rest pose"),
@@ -444,6 +476,8 @@ fn report_survives_a_baseline_that_prunes_everything() {
         out_dir.to_str().unwrap(),
         "--baseline",
         "meshopt",
+        "--cache",
+        dir.path().join("cache").to_str().unwrap(),
     ]);
     assert!(
         out.status.success(),

@@ -29,6 +29,7 @@ mod lod_render;
 mod lod_runtime;
 mod malformed;
 mod normal_maps;
+mod options;
 mod patches;
 mod record;
 mod root_motion;

@@ -34,7 +34,7 @@ fn record_args(dir: &Path, out: &Path, seconds: &str, frames_dir: Option<&Path>)
         "1",
         "--fps",
         "10",
-        "--seconds",
+        "--length",
         seconds,
         "--cache",
         &dir.join("cache").display().to_string(),

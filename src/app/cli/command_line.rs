@@ -21,6 +21,19 @@ pub struct ViewState<'a> {
     pub time: f32,
     /// Samples per pixel the view draws with.
     pub samples: u32,
+    /// What `shot` would take without `--msaa` and `--camera` on this machine: the adapter's
+    /// default samples, and the scene's home camera where the shot's scene is the view's.
+    pub default_samples: u32,
+    pub home: Option<Camera>,
+}
+
+/// Whether two cameras frame the same view (to the digits `--camera` is written with).
+fn same_camera(a: &Camera, b: &Camera) -> bool {
+    (a.yaw - b.yaw).abs() < 1e-5
+        && (a.pitch - b.pitch).abs() < 1e-5
+        && (a.distance - b.distance).abs() < 1e-5 * b.distance.max(1.0)
+        && a.target.distance(b.target) < 1e-5 * b.distance.max(1.0)
+        && a.fov_y == b.fov_y
 }
 
 /// `shot`'s arguments when none is given.
@@ -83,7 +96,11 @@ pub fn shot_command(view: &ViewState) -> Vec<String> {
             "compare",
             Some(format!("{},{}", name(&lod.method), name(&right))),
         ),
-        None => push("method", Some(name(&lod.method))),
+        // `none` is shot's own method.
+        None if lod.method != crate::scene::LodMethod::None => {
+            push("method", Some(name(&lod.method)))
+        }
+        None => {}
     }
     let (p, dp) = (&lod.policy, d.lod.policy.policy());
     if p.transition != dp.transition {
@@ -120,8 +137,15 @@ pub fn shot_command(view: &ViewState) -> Vec<String> {
     if view.time != d.time {
         push("time", Some(view.time.to_string()));
     }
-    push("msaa", Some(view.samples.to_string()));
-    push("camera", Some(camera_value(view.camera)));
+    if view.samples != view.default_samples {
+        push("msaa", Some(view.samples.to_string()));
+    }
+    if !view
+        .home
+        .is_some_and(|home| same_camera(view.camera, &home))
+    {
+        push("camera", Some(camera_value(view.camera)));
+    }
     w
 }
 
@@ -293,6 +317,8 @@ mod tests {
             size: (1010, 720),
             time: 4.25,
             samples: 1,
+            default_samples: 4,
+            home: None,
         });
         let line = shell_line(&words);
         assert!(line.contains("'/tmp/my model.glb'"), "{line}");
@@ -316,12 +342,26 @@ mod tests {
             size: (1280, 720),
             time: 1.0,
             samples: 4,
+            default_samples: 4,
+            home: Some(camera),
         });
-        assert_eq!(
-            plain[..4],
-            ["lodlab", "shot", "--method", "none"],
-            "{plain:?}"
-        );
-        assert_eq!(plain.len(), 8, "{plain:?}");
+        assert_eq!(plain, ["lodlab", "shot"], "{plain:?}");
+        // Moved off the home camera, or drawn with other samples than the machine's
+        // default, the view says so.
+        let moved = Camera {
+            yaw: camera.yaw + 0.1,
+            ..camera
+        };
+        let other = shot_command(&ViewState {
+            spec: &defaults().scene.spec(&Default::default()),
+            lod: &ShotLod::default(),
+            camera: &moved,
+            size: (1280, 720),
+            time: 1.0,
+            samples: 1,
+            default_samples: 4,
+            home: Some(camera),
+        });
+        assert_eq!(other[2..5], ["--msaa", "1", "--camera"], "{other:?}");
     }
 }

@@ -170,7 +170,8 @@ pub struct WebArgs {
     /// Folder to write (new or empty, or one `lodlab web` wrote before).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Cache folder the levels are read from, and baked into where missing.
+    /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/):
+    /// the levels are read from it, and baked into it where missing.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
     /// Folder holding lodlab.js and lodlab_bg.wasm (wasm-bindgen's output, see
@@ -199,11 +200,11 @@ pub enum StudyCommand {
         /// The study plan, as `study web` takes it too.
         #[arg(long = "plan", value_name = "PLAN", conflicts_with = "plan")]
         plan_flag: Option<PathBuf>,
-        /// Folder of the study (new or empty, or one made from the same plan, whose clips are
-        /// kept).
-        #[arg(long)]
+        /// Folder of the study to write (new or empty, or one made from the same plan, whose
+        /// clips are kept).
+        #[arg(long, value_name = "DIR")]
         out: PathBuf,
-        /// Cache folder of baked levels of detail.
+        /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
         #[arg(long, value_name = "DIR")]
         cache: Option<PathBuf>,
         /// Multisampling of the clips: 1 (off) or 4.
@@ -230,10 +231,11 @@ pub enum StudyCommand {
         /// The study plan, as `study make` takes it too.
         #[arg(long = "plan", value_name = "PLAN", conflicts_with = "plan")]
         plan_flag: Option<PathBuf>,
-        /// Folder of the study and the site (new or empty, or one made from the same plan).
-        #[arg(long)]
+        /// Folder of the study and the site to write (new or empty, or one made from the same
+        /// plan).
+        #[arg(long, value_name = "DIR")]
         out: PathBuf,
-        /// Cache folder of baked levels of detail.
+        /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
         #[arg(long, value_name = "DIR")]
         cache: Option<PathBuf>,
         /// Multisampling of the clips: 1 (off) or 4.
@@ -272,7 +274,7 @@ pub enum StudyCommand {
     Proxy {
         /// Folder of the study.
         dir: PathBuf,
-        /// Cache folder of baked levels of detail.
+        /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
         #[arg(long, value_name = "DIR")]
         cache: Option<PathBuf>,
         /// Multisampling of the full-detail clips: as the study's were made (`make`'s
@@ -312,14 +314,14 @@ pub struct RecordArgs {
     /// Frames a second.
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=240))]
     pub fps: u32,
-    /// Length of the clip in seconds (at most an hour).
-    #[arg(long, default_value_t = 8.0, value_parser = parse_clip_length)]
+    /// Length of the clip in seconds of scene time (at most an hour).
+    #[arg(long = "length", value_name = "SECONDS", default_value_t = 8.0, value_parser = parse_clip_length)]
     pub seconds: f32,
     /// Camera path over the clip: spiral (inwards, Merry et al. §6.2) or orbit.
     #[arg(long, default_value = "spiral", value_enum)]
     pub path: PathKind,
     /// The MP4 file to write.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.mp4")]
     pub out: PathBuf,
     /// Also write every frame as a PNG into this folder (new or empty).
     #[arg(long, value_name = "DIR")]
@@ -330,9 +332,12 @@ pub struct RecordArgs {
 pub struct BenchArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Methods to measure, comma separated, in this order.
+    /// Level-of-detail methods to measure, comma separated, in this order (`--methods` is the
+    /// same option).
     #[arg(
-        long,
+        long = "method",
+        visible_alias = "methods",
+        value_name = "METHOD,...",
         value_enum,
         value_delimiter = ',',
         default_value = "none,rest-pose,as,as+is"
@@ -351,24 +356,30 @@ pub struct BenchArgs {
     /// Multisampling: 1 (off) or 4 [default: 1 on a CPU adapter such as lavapipe, else 4].
     #[arg(long, value_parser = parse_samples)]
     pub msaa: Option<u32>,
-    /// Seconds of measuring, all methods together (their calibration included; at most a day).
+    /// Seconds of measuring, all methods together, their calibration included (at least six
+    /// frames of each are measured; at most a day).
     #[arg(long, default_value_t = 30.0, value_parser = parse_seconds)]
     pub seconds: f32,
     /// Seconds of unmeasured warm-up frames first (at most a day).
     #[arg(long, default_value_t = 3.0, value_parser = parse_seconds)]
     pub warmup: f32,
-    /// Frames per method, instead of as many as fit --seconds.
+    /// Frames to render of each method, instead of measuring for --seconds.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100000))]
     pub frames: Option<u32>,
+    /// Leave out what follows the frame times: each pass's fragments against the pixels it
+    /// covers and each level kind drawn alone, at a few views a method (the bench says
+    /// before it starts how long they will take).
+    #[arg(long)]
+    pub no_coverage: bool,
     /// Camera path: orbit (one turn, swinging from near to far and back) or spiral (inwards).
     #[arg(long, default_value = "orbit", value_enum)]
     pub path: PathKind,
     /// Seconds the camera path lasts (at most a day).
     #[arg(long, default_value_t = 20.0, value_parser = parse_seconds)]
     pub path_seconds: f32,
-    /// Also write the figures as JSON.
-    #[arg(long, value_name = "FILE")]
-    pub json: Option<PathBuf>,
+    /// The figures as JSON: printed instead of the table, or with =FILE written there too.
+    #[arg(long, value_name = "FILE", num_args = 0..=1, require_equals = true)]
+    pub json: Option<Option<PathBuf>>,
     /// Also write the Markdown table to a file.
     #[arg(long, value_name = "FILE")]
     pub markdown: Option<PathBuf>,
@@ -391,6 +402,17 @@ pub struct ReportArgs {
     /// Also measure this simplifier on the rest pose at the same triangle counts.
     #[arg(long, value_enum)]
     pub baseline: Option<Baseline>,
+    /// Cache folder of baked levels of detail (default: the platform cache folder's
+    /// lodlab/): a character's levels are read from it, and baked into it where missing, so a
+    /// second report measures without baking again (its bake times are those measured when
+    /// the levels were made). A tree's chain is always built afresh: its bake is measured.
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Image size of a tree's colour metric, the pictures each level is compared in
+    /// [default: 800x600, the thesis's]: smaller is quicker and coarser. A character's report
+    /// renders no such pictures and refuses it.
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
 }
 
 /// Simplifiers a report can measure beside the paper's methods.
@@ -410,10 +432,12 @@ pub struct BakeArgs {
     /// A model, as shot, bench and view take it. Repeat for several.
     #[arg(long = "model", value_name = "NAME|PATH")]
     pub model_flags: Vec<String>,
-    /// Simplification methods, comma separated (trees get their billboard clouds whatever
-    /// the methods).
+    /// Level-of-detail methods to bake, comma separated (`--methods` is the same option;
+    /// trees get their billboard clouds whatever the methods).
     #[arg(
-        long,
+        long = "method",
+        visible_alias = "methods",
+        value_name = "METHOD,...",
         value_enum,
         value_delimiter = ',',
         default_value = "rest-pose,as,as+is"
@@ -427,13 +451,14 @@ pub struct BakeArgs {
     /// Cut levels by triangle budgets instead of errors, e.g. 4000,2000,1000.
     #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
     pub triangles: Option<Vec<u32>>,
-    /// Cache folder (default: the platform cache folder's lodlab/).
+    /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    /// Print the table as JSON: per character and method its levels (triangles, vertices,
-    /// influences, error), per tree its billboard-cloud levels.
-    #[arg(long)]
-    pub json: bool,
+    /// The table as JSON (per character and method its levels: triangles, vertices,
+    /// influences, error; per tree its billboard-cloud levels): printed instead of the table,
+    /// or with =FILE written there too.
+    #[arg(long, value_name = "FILE", num_args = 0..=1, require_equals = true)]
+    pub json: Option<Option<PathBuf>>,
     /// Bake only this job's share of the models, K of N (e.g. a Slurm array's
     /// $SLURM_ARRAY_TASK_ID/N): model i goes to shard i mod N + 1. The shards fill one
     /// --cache; a bake of all the models then finds every level there.
@@ -449,27 +474,30 @@ pub struct ExportArgs {
     /// A model, as shot, bench and view take it.
     #[arg(long = "model", value_name = "NAME|PATH", conflicts_with = "model")]
     pub model_flag: Option<String>,
-    /// Simplification method of the levels.
+    /// Level-of-detail method of the levels: rest-pose, as, as+is.
     #[arg(long, value_enum, default_value = "as+is")]
     pub method: crate::bake::character::simplify::Method,
     /// Folder to write the files into (made if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// The pixel tolerance the MSFT_screencoverage hints are worked out for (a level switches
-    /// where the next one's error projects to it, on a 1920×1080 screen).
+    /// Largest projected error allowed, in pixels, as the MSFT_screencoverage hints are
+    /// worked out for (a level switches where the next one's error projects to it, on a
+    /// 1920×1080 screen).
     #[arg(long, default_value_t = 1.5, value_parser = parse_export_tolerance)]
     pub tolerance: f32,
     /// Cache folder of baked levels of detail (default: the platform cache folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    /// Print what was written as JSON instead of a table.
-    #[arg(long)]
-    pub json: bool,
+    /// What was written, as JSON: printed instead of the table, or with =FILE written there
+    /// too.
+    #[arg(long, value_name = "FILE", num_args = 0..=1, require_equals = true)]
+    pub json: Option<Option<PathBuf>>,
 }
 
 #[derive(Args, Debug)]
 pub struct DoctorArgs {
-    /// Cache folder to look at (default: the platform cache folder's lodlab/).
+    /// Cache folder of baked levels of detail to look at (default: the platform cache
+    /// folder's lodlab/).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
 }
@@ -500,7 +528,7 @@ pub struct ViewArgs {
     /// Render --frames frames of the window, write the last one to this PNG and exit.
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
-    /// Frames to render before the screenshot.
+    /// Frames to render, with --screenshot: the last is the one written.
     #[arg(long, default_value_t = 30, requires = "screenshot", value_parser = parse_frames)]
     pub frames: usize,
 }
@@ -512,7 +540,7 @@ pub struct ShotArgs {
     #[command(flatten)]
     pub lod: LodArgs,
     /// PNG file to write (relative paths from the working folder).
-    #[arg(long, default_value = "shot.png")]
+    #[arg(long, value_name = "FILE.png", default_value = "shot.png")]
     pub out: PathBuf,
     /// Image size.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
@@ -526,7 +554,8 @@ pub struct ShotArgs {
     /// Camera as YAW,PITCH,DISTANCE\[,X,Y,Z\] (degrees, metres; X,Y,Z the point looked at).
     #[arg(long, value_parser = parse_camera, allow_hyphen_values = true)]
     pub camera: Option<Camera>,
-    /// Frames to time after one warm-up frame; frame_ms is their median.
+    /// Frames to render and time after one warm-up frame (frame_ms is their median); each
+    /// shows the scene at --time.
     #[arg(long, default_value_t = 5, value_parser = parse_frames)]
     pub frames: usize,
     /// Also time the same triangles drawn by a trivial unskinned shader.
@@ -538,7 +567,7 @@ pub struct ShotArgs {
 pub struct SoakArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Frames to run.
+    /// Frames to render in all, through the cycle of settings.
     #[arg(long, default_value_t = 10_000, value_parser = parse_frames)]
     pub frames: usize,
     /// Frames each phase of the cycle of settings lasts (the cycle has 20 phases).

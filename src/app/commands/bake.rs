@@ -615,14 +615,13 @@ fn character_table(results: &[Baked]) -> String {
 
 /// `lodlab bake`: levels of detail baked or fetched from the cache, as a table.
 pub fn command(a: BakeArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow::Result<ExitCode> {
+    if let Some(file) = crate::app::json::json_file(&a.json) {
+        crate::atomic::check_target(file)?;
+    }
     let results = run(&a, inputs)?;
     for warning in budget_warnings(&results) {
         eprintln!("warning: {warning}");
     }
-    if a.json {
-        println!("{}", crate::app::json::pretty(&summary(&results))?);
-    } else {
-        print!("{}", table(&results));
-    }
+    crate::app::json::emit(&a.json, &summary(&results), &table(&results))?;
     Ok(ExitCode::SUCCESS)
 }

@@ -271,12 +271,11 @@ pub fn command(
     a: ExportArgs,
     inputs: &crate::runtime::spec::BakeInputs,
 ) -> anyhow::Result<ExitCode> {
-    let exported = run(&a, inputs)?;
-    if a.json {
-        println!("{}", crate::app::json::pretty(&exported)?);
-    } else {
-        print!("{}", crate::app::commands::export::table(&exported));
+    if let Some(file) = crate::app::json::json_file(&a.json) {
+        crate::atomic::check_target(file)?;
     }
+    let exported = run(&a, inputs)?;
+    crate::app::json::emit(&a.json, &exported, &table(&exported))?;
     Ok(ExitCode::SUCCESS)
 }
 

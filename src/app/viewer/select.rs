@@ -155,6 +155,9 @@ impl Viewer {
             size: (self.view[2].max(1), self.view[3].max(1)),
             time: self.clock.time,
             samples: self.targets.sample_count,
+            default_samples: self.win.gpu.default_samples(),
+            // Shot's home camera is the view's where it draws the same scene.
+            home: (spec == self.world.spec).then(|| self.world.home_camera()),
         });
         let line = shell_line(&words);
         eprintln!("lodlab: this view as a command: {line}");

@@ -225,7 +225,12 @@ impl World {
     }
 
     pub fn reset_camera(&mut self) {
-        self.camera = default_camera(&self.crowd, &self.bakes);
+        self.camera = self.home_camera();
+    }
+
+    /// The camera the scene starts with, and `shot` draws from without `--camera`.
+    pub fn home_camera(&self) -> Camera {
+        default_camera(&self.crowd, &self.bakes)
     }
 
     /// Chooses every instance's level for a frame at scene time `time`, `dt` seconds of

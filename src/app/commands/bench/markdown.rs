@@ -14,7 +14,7 @@ pub fn markdown(r: &BenchReport) -> String {
         out,
         "lodlab bench: {} scene, {} instances, {}x{}, MSAA {}, {} transitions ({}-driven), \
          tolerance {} px; {} frames per method along the {} path ({} s), measured for {:.1} s \
-         after {:.1} s of warm-up; {}.",
+         (announced: {:.0} s) after {:.1} s of warm-up{}; {}.",
         r.scene,
         r.instances,
         r.size[0],
@@ -27,7 +27,13 @@ pub fn markdown(r: &BenchReport) -> String {
         r.path,
         r.path_seconds,
         r.measured_seconds,
+        r.announced_seconds,
         r.warmup_seconds,
+        if r.coverage_seconds > 0.0 {
+            format!(" and {:.1} s of coverage", r.coverage_seconds)
+        } else {
+            String::new()
+        },
         if r.timing == "gpu timestamps" {
             "GPU time from timestamp queries"
         } else {

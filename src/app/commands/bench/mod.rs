@@ -50,6 +50,8 @@ pub use markdown::markdown;
 const SETTLE_STEPS: usize = 60;
 /// Frames per method when the budget allows fewer: below this a median means little.
 pub const MIN_FRAMES: usize = 6;
+/// Frames per method at most, however many --seconds would fit.
+const MAX_FRAMES: usize = 3600;
 /// At most this many frames of one method in a row.
 const MAX_BLOCK: usize = 5;
 /// Views along the path at which each method's passes are drawn apart to see the pixels they
@@ -72,6 +74,13 @@ pub struct BenchReport {
     pub warmup_seconds: f64,
     #[serde(default)]
     pub measured_seconds: f64,
+    /// Wall seconds of the fragment and level-kind coverage, between the warm-up and the
+    /// measuring (0 with `--no-coverage`).
+    #[serde(default)]
+    pub coverage_seconds: f64,
+    /// What the bench said, before measuring, the measuring would take.
+    #[serde(default)]
+    pub announced_seconds: f64,
     pub adapter: String,
     pub driver: String,
     pub backend: String,
@@ -284,21 +293,58 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
     let path = bench.path;
 
     // Warm-up: round after round of every method, at points spread along the path, until the
-    // time is up; the last round's times estimate what a round costs.
+    // time is up; its rounds' wall time estimates what a round of the measuring costs. Then
+    // the coverage, each view of which is one frame and its passes and level kinds drawn
+    // alone, and last the measuring, which stops when its time is up: so it takes what it
+    // says, whatever the estimate.
     let warm = Instant::now();
-    let round_ms = warm_up(&mut bench, &order, warm, o.warmup)?;
-    let n = o.frames.map(|f| f as usize).unwrap_or_else(|| {
-        ((o.seconds as f64 * 1e3 / round_ms.max(1e-3)).floor() as usize).clamp(MIN_FRAMES, 3600)
-    });
-    let block = (n / 4).clamp(1, MAX_BLOCK);
-
-    let bar = Progress::new(true, "bench", (n * order.len()) as u64);
+    let coverage = !o.no_coverage;
+    eprintln!(
+        "lodlab: bench: warming up for {} s{}, then {}",
+        o.warmup,
+        if coverage {
+            format!(
+                ", then fragments and level kinds at {COVERAGE_VIEWS} views a method \
+                 (--no-coverage leaves them out)"
+            )
+        } else {
+            String::new()
+        },
+        match o.frames {
+            Some(f) => format!("measuring {f} frames of each method"),
+            None => format!("measuring for {} s", o.seconds),
+        }
+    );
+    let round_seconds = warm_up(&mut bench, &order, warm, o.warmup)?;
     let warmup_seconds = warm.elapsed().as_secs_f64();
+    let covering = Instant::now();
+    let mut samples: Vec<Samples> = order.iter().map(|_| Samples::default()).collect();
+    if coverage {
+        let bar = Progress::new(
+            true,
+            "bench coverage",
+            (COVERAGE_VIEWS * order.len()) as u64,
+        );
+        cover(&mut bench, &order, &mut samples, &bar)?;
+        bar.finish();
+    }
+    let coverage_seconds = if coverage {
+        covering.elapsed().as_secs_f64()
+    } else {
+        0.0
+    };
+    let plan = match o.frames {
+        Some(f) => Plan::Frames(f as usize),
+        None => Plan::Seconds(o.seconds as f64),
+    };
+    let announced = plan.announce(round_seconds, &order);
+    eprintln!("lodlab: bench: {}", announced.1);
+    let bar = Progress::new(true, "bench", 1000);
     let measuring = Instant::now();
-    let mut samples = measure(&mut bench, &order, n, block, &bar)?;
+    measure(&mut bench, &order, plan, round_seconds, &mut samples, &bar)?;
     bar.finish();
     let measured_seconds = measuring.elapsed().as_secs_f64();
-    cover(&mut bench, &order, &mut samples)?;
+    let n = samples[0].skinned.len();
 
     let methods = method_figures(&samples, &order, n, width, height);
     let calibration = calibration(&order, &methods);
@@ -307,6 +353,8 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
         schema_version: BENCH_SCHEMA_VERSION,
         warmup_seconds,
         measured_seconds,
+        coverage_seconds,
+        announced_seconds: announced.0,
         adapter: gpu.info.name.clone(),
         driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info)
             .trim()
@@ -391,46 +439,122 @@ fn set_up(
     Ok((bench, msaa))
 }
 
+/// How long the measuring runs: `--frames` of each method, or `--seconds` of them all (at
+/// least [`MIN_FRAMES`] of each, at most [`MAX_FRAMES`]).
+#[derive(Clone, Copy)]
+enum Plan {
+    Frames(usize),
+    Seconds(f64),
+}
+
+impl Plan {
+    /// The seconds the measuring will take, as said before it starts, and the line saying
+    /// it; `round_seconds` is what one frame of every method costs.
+    fn announce(self, round_seconds: f64, order: &[LodMethod]) -> (f64, String) {
+        let methods = format!(
+            "{} method{}",
+            order.len(),
+            if order.len() == 1 { "" } else { "s" }
+        );
+        match self {
+            Plan::Frames(n) => {
+                let t = n as f64 * round_seconds;
+                (
+                    t,
+                    format!("measuring {n} frames of each of {methods}, about {t:.0} s"),
+                )
+            }
+            Plan::Seconds(seconds) => {
+                let fit = (seconds / round_seconds.max(1e-9)).floor() as usize;
+                if fit >= MIN_FRAMES {
+                    (
+                        seconds,
+                        format!(
+                            "measuring {methods} for {seconds} s (about {} frames of each)",
+                            fit.min(MAX_FRAMES)
+                        ),
+                    )
+                } else {
+                    let t = MIN_FRAMES as f64 * round_seconds;
+                    (
+                        t,
+                        format!(
+                            "measuring {MIN_FRAMES} frames of each of {methods}, about {t:.0} s: \
+                             --seconds {seconds} fits {fit}, and a median needs {MIN_FRAMES}"
+                        ),
+                    )
+                }
+            }
+        }
+    }
+}
+
 /// Warm-up: rounds of every method, skinned then calibration, at 7 points along the path in
 /// turn, until `warmup` seconds have passed since `warm` (at least one round). Returns the
-/// last round's milliseconds, which size the measuring when no frame count is given.
+/// mean wall seconds of a round (selection, encoding and waiting included), which sizes the
+/// measuring's blocks and what the bench announces.
 fn warm_up(bench: &mut Bench, order: &[LodMethod], warm: Instant, warmup: f32) -> Result<f64> {
     let path = bench.path;
-    let mut round_ms;
     let mut k = 0;
     loop {
-        round_ms = 0.0;
         for &m in order {
             bench.show(m, path_time(&path, k % 7, 7));
-            round_ms +=
-                bench.time(CharacterShader::Skinned)?.0 + bench.time(CharacterShader::Plain)?.0;
+            bench.time(CharacterShader::Skinned)?;
+            bench.time(CharacterShader::Plain)?;
         }
         k += 1;
         if warm.elapsed().as_secs_f32() >= warmup {
             break;
         }
     }
-    Ok(round_ms)
+    Ok(warm.elapsed().as_secs_f64() / k as f64)
 }
 
-/// The measuring loop: `n` frames per method along the path, methods interleaved in blocks
-/// of `block` frames (see the module's notes), each frame timed skinned and then by the
-/// calibration shader, with its statistics summed. Returns the samples in `order`, ticking
-/// `bar` once a frame.
+/// The measuring loop: frames of every method along the path, methods interleaved in blocks
+/// (see the module's notes), each frame timed skinned and then by the calibration shader, with
+/// its statistics summed into `samples` (in `order`), until `plan` is met. Frame `i` of every
+/// method is the same point of the path ([`measured_time`]). A block is a quarter of the
+/// frames expected (at most [`MAX_BLOCK`]), one frame once the time left is less than a
+/// cycle of blocks, so that the time is kept to within half a frame of each method.
 fn measure(
     bench: &mut Bench,
     order: &[LodMethod],
-    n: usize,
-    block: usize,
+    plan: Plan,
+    round_seconds: f64,
+    samples: &mut [Samples],
     bar: &Progress,
-) -> Result<Vec<Samples>> {
+) -> Result<()> {
     let path = bench.path;
-    let mut samples: Vec<Samples> = order.iter().map(|_| Samples::default()).collect();
-    for start in (0..n).step_by(block) {
+    let expected = match plan {
+        Plan::Frames(n) => n,
+        Plan::Seconds(t) => ((t / round_seconds.max(1e-9)) as usize).clamp(MIN_FRAMES, MAX_FRAMES),
+    };
+    let start = Instant::now();
+    let mut done = 0;
+    loop {
+        let elapsed = start.elapsed().as_secs_f64();
+        let (left, fraction) = match plan {
+            Plan::Frames(n) => (n - done, done as f32 / n as f32),
+            Plan::Seconds(t) if done < MIN_FRAMES => {
+                (MIN_FRAMES - done, (elapsed / t).min(0.99) as f32)
+            }
+            Plan::Seconds(t) if elapsed < t && done < MAX_FRAMES => {
+                let per_frame = elapsed / done.max(1) as f64;
+                // Rounded: the measuring ends within half a round of the time asked.
+                let fits = ((t - elapsed) / per_frame.max(1e-9)).round() as usize;
+                (fits.min(MAX_FRAMES - done), (elapsed / t) as f32)
+            }
+            Plan::Seconds(_) => (0, 1.0),
+        };
+        bar.set_fraction(fraction);
+        if left == 0 {
+            return Ok(());
+        }
+        let block = (expected / 4).clamp(1, MAX_BLOCK).min(left);
         for (s, &m) in samples.iter_mut().zip(order) {
             bar.set_stage(m.name());
-            for i in start..(start + block).min(n) {
-                let (stats, cpu_ms) = bench.show(m, path_time(&path, i, n));
+            for i in done..done + block {
+                let (stats, cpu_ms) = bench.show(m, measured_time(&path, i, plan));
                 let (ms, passes) = bench.time(CharacterShader::Skinned)?;
                 s.skinned.push(ms);
                 s.cpu.push(cpu_ms);
@@ -448,55 +572,84 @@ fn measure(
                 for (sum, &c) in s.kinds.iter_mut().zip(&stats.kinds) {
                     *sum += c as u64;
                 }
-                bar.inc();
             }
         }
+        done += block;
     }
-    Ok(samples)
+}
+
+/// The path time of measured frame `i`: with `--frames N`, N points evenly along the path;
+/// with `--seconds`, where the count is not known in advance, the golden-ratio sequence,
+/// whose every prefix is spread evenly along it (so the frames are the same points on every
+/// machine, however many are measured).
+fn measured_time(path: &CameraPath, i: usize, plan: Plan) -> f32 {
+    match plan {
+        Plan::Frames(n) => path_time(path, i, n),
+        Plan::Seconds(_) => {
+            let phi = 0.618_033_988_749_895_f64;
+            (path.duration() as f64 * ((i as f64 + 0.5) * phi).fract()) as f32
+        }
+    }
 }
 
 /// The pixels each pass covers, at [`COVERAGE_VIEWS`] views along the path per method (where
 /// the adapter counts fragments): the frame timed once for its fragment counts, then each
-/// pass it drew drawn alone (see [`crate::measure::coverage`]). Outside the measured time.
-fn cover(bench: &mut Bench, order: &[LodMethod], samples: &mut [Samples]) -> Result<()> {
-    let path = bench.path;
-    let pixels = (bench.size[0] as u64 * bench.size[1] as u64).max(1) as f64;
+/// pass it drew drawn alone (see [`crate::measure::coverage`]). Before the measured time.
+fn cover(
+    bench: &mut Bench,
+    order: &[LodMethod],
+    samples: &mut [Samples],
+    bar: &Progress,
+) -> Result<()> {
     for (s, &m) in samples.iter_mut().zip(order) {
+        bar.set_stage(m.name());
         for i in 0..COVERAGE_VIEWS {
-            bench.show(m, path_time(&path, i, COVERAGE_VIEWS));
-            let Some(times) = bench.time(CharacterShader::Skinned)?.1 else {
+            if !cover_view(bench, m, i, s)? {
                 return Ok(());
-            };
-            let mut view = [None; Pass::COUNT];
-            for pass in Pass::ALL {
-                let Some(fragments) = times.fragments[pass as usize] else {
-                    continue;
-                };
-                let covered = crate::measure::coverage::covered_pixels(
-                    &bench.gpu,
-                    &bench.world.renderer,
-                    &bench.target,
-                    pass,
-                )?;
-                let f = fragments as f64;
-                view[pass as usize] = Some([
-                    f / pixels,
-                    f / covered.max(1) as f64,
-                    covered as f64 / pixels,
-                ]);
             }
-            s.coverage.push(view);
-            if let Some(timer) = &mut bench.timer {
-                s.kind_costs.push(crate::measure::coverage::kinds_alone(
-                    &bench.gpu,
-                    &mut bench.world.renderer,
-                    &bench.target,
-                    timer,
-                )?);
-            }
+            bar.inc();
         }
     }
     Ok(())
+}
+
+/// Coverage view `i` of [`COVERAGE_VIEWS`] of method `m`, added to `s`. False where the
+/// adapter counts no fragments (then no view will have any).
+fn cover_view(bench: &mut Bench, m: LodMethod, i: usize, s: &mut Samples) -> Result<bool> {
+    let path = bench.path;
+    let pixels = (bench.size[0] as u64 * bench.size[1] as u64).max(1) as f64;
+    bench.show(m, path_time(&path, i, COVERAGE_VIEWS));
+    let Some(times) = bench.time(CharacterShader::Skinned)?.1 else {
+        return Ok(false);
+    };
+    let mut view = [None; Pass::COUNT];
+    for pass in Pass::ALL {
+        let Some(fragments) = times.fragments[pass as usize] else {
+            continue;
+        };
+        let covered = crate::measure::coverage::covered_pixels(
+            &bench.gpu,
+            &bench.world.renderer,
+            &bench.target,
+            pass,
+        )?;
+        let f = fragments as f64;
+        view[pass as usize] = Some([
+            f / pixels,
+            f / covered.max(1) as f64,
+            covered as f64 / pixels,
+        ]);
+    }
+    s.coverage.push(view);
+    if let Some(timer) = &mut bench.timer {
+        s.kind_costs.push(crate::measure::coverage::kinds_alone(
+            &bench.gpu,
+            &mut bench.world.renderer,
+            &bench.target,
+            timer,
+        )?);
+    }
+    Ok(true)
 }
 
 /// Each method's figures from its samples, keyed by name for the report.
@@ -585,13 +738,10 @@ pub fn command(
     a: BenchArgs,
     inputs: &crate::runtime::spec::BakeInputs,
 ) -> anyhow::Result<ExitCode> {
-    check_outputs(&[&a.json, &a.markdown])?;
+    check_outputs(&[&crate::app::json::json_file(&a.json).cloned(), &a.markdown])?;
     let report = run(&a, inputs)?;
     let table = markdown(&report);
-    print!("{table}");
-    if let Some(p) = &a.json {
-        write_atomic(p, crate::app::json::pretty(&report)?.as_bytes())?;
-    }
+    crate::app::json::emit(&a.json, &report, &table)?;
     if let Some(p) = &a.markdown {
         write_atomic(p, table.as_bytes())?;
     }

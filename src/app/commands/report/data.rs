@@ -28,6 +28,11 @@ pub struct ReportOptions {
     pub out: PathBuf,
     pub baseline_meshopt: bool,
     pub progress: bool,
+    /// Where the levels are read from, and baked into where missing (`--cache`): a run
+    /// after the first measures without baking again.
+    pub cache: crate::bake::cache::LodCache,
+    /// The hash of the model's source, the levels' cache key (`Imported::source_hash`).
+    pub source: [u8; 32],
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -145,9 +150,8 @@ impl Report {
     pub fn stillness(&self) -> Option<String> {
         (self.motion_share < STILL).then(|| {
             format!(
-                "its clips barely move it (no vertex more than {:.1} mm, {:.2}% of its height, \
-                 from its rest pose): AS measures what rest-pose measures, and their curves \
-                 differ only by the order of equal steps",
+                "its clips barely move it (at most {:.1} mm, {:.2}% of its height): AS measures \
+                 what rest-pose does, their curves apart only by the order of equal steps",
                 self.motion * 1e3,
                 self.motion_share * 100.0
             )

@@ -75,8 +75,7 @@ pub(crate) fn timings_markdown(
          - AS+IS ≤ AS on {} of the AS+IS curve\n\
          - AS+IS's lighting (colour error by vertex normals) at most {} AS's at the same \
          total influences, over the levels where either shows {VISIBLE_COLOUR} or more\n\
-         - meshopt ≤ rest-pose on {} of the meshopt curve\n\
-         - fewest total influences reached: {}\n",
+         {}- fewest total influences reached: {}\n",
         report.correspondence.describe(),
         report.samples,
         report.frames,
@@ -94,7 +93,15 @@ pub(crate) fn timings_markdown(
         pct(c.as_is_le_as),
         c.as_is_lighting_over_as
             .map_or("–".into(), |r| format!("{r:.2}×")),
-        pct(c.meshopt_le_rest_pose),
+        // Only where the report measured meshoptimizer (`--baseline meshopt`).
+        if report.methods.contains_key("meshopt") {
+            format!(
+                "- meshopt ≤ rest-pose on {} of the meshopt curve\n",
+                pct(c.meshopt_le_rest_pose)
+            )
+        } else {
+            String::new()
+        },
         c.min_influences
             .iter()
             .map(|(k, v)| format!("{k} {v}"))

@@ -25,7 +25,7 @@ use crate::app::commands::report::data::{
 use crate::app::commands::report::markdown::timings_markdown;
 use crate::app::commands::report::plot::plot;
 use crate::app::progress::Progress;
-use crate::bake::character::lod::{Replay, SkinnedLods, bake_lods, progressive_mesh};
+use crate::bake::character::lod::{Replay, SkinnedLods, progressive_mesh};
 use crate::bake::character::lod_error::{MeshError, Probe};
 use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
@@ -53,7 +53,18 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     for method in Method::ALL {
         let bar = bar(opts.progress, &format!("{} {method}", model.name));
         let progress = |f: f32| bar.set_fraction(f);
-        let lods = bake_lods(model, method, &lod_opts, &progress);
+        let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
+            &opts.cache,
+            model,
+            &opts.source,
+            method,
+            &lod_opts,
+            &progress,
+        );
+        if let crate::bake::cache::Origin::Baked { warning: Some(w) } = &origin {
+            log::warn!("{w}");
+        }
+        let read = origin == crate::bake::cache::Origin::Cache;
         bar.set_stage("measuring");
         let clock = std::time::Instant::now();
         let curve = measure_sequence(&probe, &base, &lods.sequence);
@@ -81,7 +92,19 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
             lods.bake_seconds,
             clock.elapsed().as_secs_f64() - measured
         );
-        bar.finish_with(format!("baked in {:.2} s", lods.bake_seconds));
+        // The bake, then what was measured of it, in the order they ran.
+        let measured_all = clock.elapsed().as_secs_f64();
+        bar.finish_with(if read {
+            format!(
+                "read from the cache (baked in {:.2} s when made), measured in {measured_all:.1} s",
+                lods.bake_seconds
+            )
+        } else {
+            format!(
+                "baked in {:.2} s, measured in {measured_all:.1} s",
+                lods.bake_seconds
+            )
+        });
         methods.insert(
             method.name().to_string(),
             MethodReport {
@@ -347,9 +370,14 @@ pub fn command(
     };
     // A tree (`bake::foliage::classify`: cut-out foliage swaying in place) gets the
     // billboard-cloud report; a character, cut-out parts or not, the simplification report.
-    let model = crate::import::import(&name, &inputs.import)?.model;
+    let imported = crate::import::import(&name, &inputs.import)?;
+    let model = imported.model;
     if crate::bake::foliage::billboard::is_tree(&model) {
-        let r = crate::app::commands::tree_report::run(&model, &a.out)?;
+        let size = a.size.map_or(
+            crate::app::commands::tree_report::data::METRIC_SIZE,
+            |(w, h)| [w, h],
+        );
+        let r = crate::app::commands::tree_report::run(&model, &a.out, size)?;
         let last = r.levels.last().map_or(0, |l| l.billboards);
         println!(
             "{}: {} leaves, {} levels down to {last} billboards in {:.2} s; wrote {}",
@@ -361,13 +389,28 @@ pub fn command(
         );
         return Ok(ExitCode::SUCCESS);
     }
+    if a.size.is_some() {
+        anyhow::bail!(
+            "{name}: a character; --size sets the picture size of a tree's colour metric, and a character's report renders none"
+        );
+    }
     let report = run(&data::ReportOptions {
         model,
         budgets: inputs.level_budgets.clone(),
         out: a.out.clone(),
         baseline_meshopt: a.baseline.is_some(),
         progress: true,
+        cache: crate::bake::cache::LodCache::new(a.cache.clone()),
+        source: imported.source_hash,
     })?;
+    print!("{}", summary(&report, &a.out));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// What a character's report found, a line a finding: the methods compared along the curve
+/// and at the levels, against the noise a reordered mesh shows, then the floors, the
+/// correspondence, stillness and where the files are.
+fn summary(report: &Report, out: &std::path::Path) -> String {
     let c = &report.comparison;
     let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
     let floors: Vec<String> = report
@@ -375,32 +418,41 @@ pub fn command(
         .iter()
         .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
         .collect();
-    println!(
-        "{}: AS <= rest-pose on {} of the curve ({} down to the coarsest level; {} within the \
-         noise, {} at the median, where the same mesh reordered scores {}; AS/rest-pose {} at \
-         the median), AS+IS <= AS on {} (its lighting at most {} AS's at equal influences); \
-         coarsest levels {} of {} triangles; errors by {}; wrote {}",
+    let mut s = format!(
+        "{}: AS <= rest-pose on {} of the curve, {} of its levels\n",
         report.model,
         pct(c.as_le_rest_pose),
-        pct(c.as_le_rest_pose_at_levels),
+        pct(c.as_le_rest_pose_at_levels)
+    );
+    s += &format!(
+        "  within the noise: {} (the same mesh reordered moves rest-pose's error {} at the median, and is at or under it on {} of the curve)\n",
         pct(c.as_le_rest_pose_within_noise),
         c.noise
             .map_or("-".into(), |n| format!("±{:.1}%", n * 100.0)),
-        pct(c.reordered_le_rest_pose),
+        pct(c.reordered_le_rest_pose)
+    );
+    s += &format!(
+        "  AS/rest-pose error at the median: {}\n",
         c.as_over_rest_pose
-            .map_or("-".into(), |r| format!("{r:.2}")),
+            .map_or("-".into(), |r| format!("{r:.2}"))
+    );
+    s += &format!(
+        "  AS+IS <= AS on {} of the curve; its lighting at most {} AS's at equal influences\n",
         pct(c.as_is_le_as),
         c.as_is_lighting_over_as
-            .map_or("-".into(), |r| format!("{r:.2}x")),
+            .map_or("-".into(), |r| format!("{r:.2}x"))
+    );
+    s += &format!(
+        "  coarsest levels: {} of {} triangles; errors by {}\n",
         floors.join(", "),
         report.triangles,
-        report.correspondence.describe(),
-        a.out.display()
+        report.correspondence.describe()
     );
     if let Some(still) = report.stillness() {
-        println!("{}: {still}", report.model);
+        s += &format!("  {still}\n");
     }
-    Ok(ExitCode::SUCCESS)
+    s += &format!("wrote {}\n", out.display());
+    s
 }
 
 #[cfg(test)]

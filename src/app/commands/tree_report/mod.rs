@@ -23,8 +23,8 @@ pub mod orders;
 
 use crate::app::commands::tree_report::charts::{contact_sheet, motion_plot, plot};
 use crate::app::commands::tree_report::data::{
-    AtCount, DescriptionReport, FULL_TREE_PX, LIGHTING_PX, LevelReport, METRIC_SIZE,
-    StaticCloudReport, THESIS, ThesisRow, TreeReport, at_billboards, lighting_table, thesis_table,
+    AtCount, DescriptionReport, FULL_TREE_PX, LIGHTING_PX, LevelReport, StaticCloudReport, THESIS,
+    ThesisRow, TreeReport, at_billboards, lighting_table, thesis_table,
 };
 use crate::atomic::write as write_atomic;
 use crate::bake::foliage::billboard::chain::{
@@ -40,8 +40,18 @@ use crate::render::Gpu;
 use anyhow::{Result, anyhow};
 use std::path::Path;
 
-/// Builds the chain of `tree`, measures it and writes the three files into `out`.
-pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
+/// What every level is measured with: the adapter, its fragment counter and the size of the
+/// colour metric's pictures.
+struct Metric<'g> {
+    gpu: &'g Gpu,
+    overdraw: crate::measure::colour_error::GpuColourError<'g>,
+    size: [u32; 2],
+}
+
+/// Builds the chain of `tree`, measures it with the colour metric's pictures `size` pixels
+/// large ([`data::METRIC_SIZE`], the thesis's, unless asked otherwise) and writes the files into
+/// `out`.
+pub fn run(tree: &Model, out: &Path, size: [u32; 2]) -> Result<TreeReport> {
     let f = foliage(tree).map_err(|e| anyhow!("{}: {e}", tree.name))?;
     crate::atomic::make_folder(out)?;
     let gpu = Gpu::headless()?;
@@ -52,15 +62,19 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
     let chain = tree_chain(&raster, tree, &f, &opts, &|_| {})?;
     let chain_seconds = start.elapsed().as_secs_f64();
     // One measuring world for the tree, its levels swapped in one by one.
-    let overdraw = crate::measure::colour_error::GpuColourError::new(&gpu);
+    let metric = Metric {
+        gpu: &gpu,
+        overdraw: crate::measure::colour_error::GpuColourError::new(&gpu),
+        size,
+    };
     let mut levels = Vec::new();
     for (k, l) in chain.iter().enumerate() {
-        levels.push(measure_level(&gpu, &overdraw, tree, k, l, "")?);
+        levels.push(measure_level(&metric, tree, k, l, "")?);
     }
     let (skeleton_chain, skeleton_levels) =
-        skeleton_chain(&gpu, &overdraw, &raster, tree, &f, &chain, &opts)?;
+        skeleton_chain(&metric, &raster, tree, &f, &chain, &opts)?;
     let description_types = description_types(&raster, tree, &f, &chain, &opts)?;
-    let static_clouds = static_clouds(&gpu, &raster, tree, &f, &chain)?;
+    let static_clouds = static_clouds(&metric, &raster, tree, &f, &chain)?;
     let clouds: Vec<(usize, &crate::bake::foliage::billboard::chain::CloudLevel)> = chain
         .iter()
         .enumerate()
@@ -84,7 +98,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
             percentages(&colours.names, &l.full)
         );
     }
-    let orders = orders::orders(&raster, &overdraw, tree, &chain, &opts)?;
+    let orders = orders::orders(&raster, &metric.overdraw, tree, &chain, &opts)?;
     let points = |f: &dyn Fn(&LevelReport) -> f32| -> Vec<(usize, f32)> {
         levels[1..]
             .iter()
@@ -101,7 +115,7 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         .collect();
     let at_counts = THESIS
         .iter()
-        .map(|&(billboards, _)| clumps_at_count(&gpu, &raster, tree, &f, &opts, billboards))
+        .map(|&(billboards, _)| clumps_at_count(&metric, &raster, tree, &f, &opts, billboards))
         .collect::<Result<Vec<_>>>()?;
     let against_thesis = THESIS
         .iter()
@@ -126,8 +140,8 @@ pub fn run(tree: &Model, out: &Path) -> Result<TreeReport> {
         chain_seconds,
         metric: format!(
             "binary coverage masks at {}x{}, {} views round the tree at ground level, {} times over the loop; of the pixels either covers, the share that differ (0 the same, 1 nothing in common)",
-            METRIC_SIZE[0],
-            METRIC_SIZE[1],
+            size[0],
+            size[1],
             crate::measure::colour_error::METRIC_VIEWS,
             crate::measure::colour_error::METRIC_FRAMES
         ),
@@ -196,8 +210,7 @@ fn write_files(
 
 /// The skeleton-only chain of `tree`, and its levels measured where it parts from `chain`.
 fn skeleton_chain(
-    gpu: &Gpu,
-    overdraw: &crate::measure::colour_error::GpuColourError<'_>,
+    metric: &Metric<'_>,
     raster: &crate::render::atlas::AtlasRasterizer,
     tree: &Model,
     f: &Foliage,
@@ -214,7 +227,7 @@ fn skeleton_chain(
         if chain.get(k).is_some_and(|c| c.kind == l.kind) {
             continue;
         }
-        levels.push(measure_level(gpu, overdraw, tree, k, l, "skeleton-only ")?);
+        levels.push(measure_level(metric, tree, k, l, "skeleton-only ")?);
     }
     Ok((skeleton_chain, levels))
 }
@@ -230,10 +243,9 @@ fn percentages(names: &[String], shares: &[f32]) -> String {
 }
 
 /// A level of a chain with its colour error and its fragments per covered pixel (measured
-/// through `overdraw`), said on stderr as it goes.
+/// through `metric`), said on stderr as it goes.
 fn measure_level(
-    gpu: &Gpu,
-    overdraw: &crate::measure::colour_error::GpuColourError<'_>,
+    metric: &Metric<'_>,
     tree: &Model,
     k: usize,
     l: &TreeLevel,
@@ -243,10 +255,10 @@ fn measure_level(
     // Where the level comes in, and its errors there (none for the full tree, level 0).
     let (error, switch_px, from_switch, at_switch) = if l.epsilon > 0.0 {
         let px = ChainOptions::default().tolerance_px * h / l.epsilon;
-        let e = at_switch(gpu, tree, &l.cloud, METRIC_SIZE, px)?;
+        let e = at_switch(metric.gpu, tree, &l.cloud, metric.size, px)?;
         (e.close, px, e.from_switch, e.at_switch)
     } else {
-        let close = colour_error(gpu, tree, &l.cloud, METRIC_SIZE)?;
+        let close = colour_error(metric.gpu, tree, &l.cloud, metric.size)?;
         (close, 0.0, 0.0, 0.0)
     };
     let anim = &l.cloud.animation;
@@ -254,7 +266,8 @@ fn measure_level(
         .cloud
         .bake()
         .map_err(|e| anyhow::anyhow!("{}: {e}", tree.name))?;
-    let overdraw = overdraw
+    let overdraw = metric
+        .overdraw
         .fragments_per_covered_pixel(
             tree,
             &l.cloud.model,
@@ -364,7 +377,7 @@ fn description_types(
 /// chain's tolerance): the chain's method at the thesis's count itself, where the chain's
 /// own levels straddle it.
 fn clumps_at_count(
-    gpu: &Gpu,
+    metric: &Metric<'_>,
     raster: &crate::render::atlas::AtlasRasterizer,
     tree: &Model,
     f: &Foliage,
@@ -413,7 +426,7 @@ fn clumps_at_count(
         crown.as_ref(),
     )?;
     let px = opts.tolerance_px * h / eps;
-    let e = at_switch(gpu, tree, &level, METRIC_SIZE, px)?;
+    let e = at_switch(metric.gpu, tree, &level, metric.size, px)?;
     eprintln!(
         "lodlab: {} {clumps} clumps: ε {:.4} h, colour error {:.3} ({:.3} from the switch distance, {px:.0} px)",
         tree.name,
@@ -432,7 +445,7 @@ fn clumps_at_count(
 /// The thesis's own set-up (§8.4) at every level's ε: one static cloud for the whole crown of
 /// the tree at rest, scored by the static colour metric.
 fn static_clouds(
-    gpu: &Gpu,
+    metric: &Metric<'_>,
     raster: &crate::render::atlas::AtlasRasterizer,
     tree: &Model,
     f: &Foliage,
@@ -463,7 +476,7 @@ fn static_clouds(
             &still,
             crown.as_ref(),
         )?;
-        let error = colour_error_over(gpu, &still, &cloud, METRIC_SIZE, 1)?;
+        let error = colour_error_over(metric.gpu, &still, &cloud, metric.size, 1)?;
         eprintln!(
             "lodlab: {} static whole-crown cloud: ε {:.4} h, {} billboards, colour error {:.3}",
             tree.name,
