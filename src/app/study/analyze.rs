@@ -354,7 +354,8 @@ pub fn chart(a: &Analysis, path: &Path) -> Result<()> {
             .margin(20)
             .x_label_area_size(50)
             .y_label_area_size(70)
-            .build_cartesian_2d((0..(n as u32 - 1).max(1)).into_segmented(), 0.0..1.0)
+            // A segmented range 0..k holds k + 1 segments: one a condition.
+            .build_cartesian_2d((0..n as u32 - 1).into_segmented(), 0.0..1.0)
             .map_err(plot_error)?;
         let labels: Vec<String> = a
             .conditions
@@ -471,6 +472,52 @@ pub fn run(dir: &Path) -> Result<Analysis> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One condition's bar stands in the middle of the chart, not in the left half of an
+    /// axis made for two.
+    #[test]
+    fn one_condition_fills_its_chart() {
+        let condition = |model: &str| ConditionResult {
+            condition: Condition {
+                model: model.into(),
+                method_a: crate::scene::LodMethod::ALL[1],
+                method_b: crate::scene::LodMethod::ALL[2],
+                tolerance_px: 1.5,
+            },
+            answers: 10,
+            prefer_a: 2,
+            prefer_b: 8,
+            share_b: 0.8,
+            p_value: 0.1,
+        };
+        for n in [1, 2, 3] {
+            let a = Analysis {
+                answer_files: Vec::new(),
+                participants: 1,
+                training_answers_left_out: 0,
+                conditions: (0..n).map(|i| condition(&format!("m{i}"))).collect(),
+                proxy: Vec::new(),
+            };
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("p.png");
+            chart(&a, &path).unwrap();
+            let img = image::open(&path).unwrap().to_rgb8();
+            let xs: Vec<u32> = img
+                .enumerate_pixels()
+                .filter(|(_, _, p)| p.0 == [170, 180, 195])
+                .map(|(x, _, _)| x)
+                .collect();
+            assert!(!xs.is_empty(), "{n}: no bars");
+            let mean = xs.iter().map(|&x| x as f64).sum::<f64>() / xs.len() as f64;
+            let centre = img.width() as f64 / 2.0;
+            // The bars balance round the middle of the plot (its y labels pull it right a
+            // little).
+            assert!(
+                (mean - centre).abs() < 0.08 * img.width() as f64,
+                "{n}: bars' mean x {mean}, centre {centre}"
+            );
+        }
+    }
 
     #[test]
     fn binomial_p_values_match_known_values() {

@@ -1,7 +1,7 @@
 //! Camera controls: orbit with the left mouse button, pan with the right (or middle), zoom with
 //! the wheel over the 3D view, fly with WASD (Q/E down/up, Shift faster); on a touch screen
 //! orbit with one finger, pinch to zoom and pan with two; and the keys that act once (see
-//! [`KeyAction`]), F11, F12, Esc and Ctrl+Q among them.
+//! [`KeyAction`]), F1, F11, F12, Esc and Ctrl+Q among them.
 
 use crate::scene::Camera;
 use std::collections::{BTreeMap, HashSet};
@@ -46,6 +46,8 @@ pub enum KeyAction {
     ToggleFullscreen,
     /// F12: save a screenshot.
     Screenshot,
+    /// F1: hide the panel, or show it again.
+    TogglePanel,
     /// A left click on the 3D view (pressed and released without dragging): select what is
     /// under the cursor.
     Pick,
@@ -64,6 +66,7 @@ pub fn window_key(code: KeyCode, ctrl: bool) -> Option<KeyAction> {
     match code {
         KeyCode::F11 => Some(KeyAction::ToggleFullscreen),
         KeyCode::F12 => Some(KeyAction::Screenshot),
+        KeyCode::F1 => Some(KeyAction::TogglePanel),
         KeyCode::KeyQ if ctrl => Some(KeyAction::Quit),
         _ => None,
     }
@@ -108,7 +111,7 @@ impl Controls {
                 self.ctrl = m.state().control_key();
                 self.shift = m.state().shift_key();
             }
-            // The window's own keys (F11, F12, Ctrl+Q) work whoever has the keyboard.
+            // The window's own keys (F1, F11, F12, Ctrl+Q) work whoever has the keyboard.
             WindowEvent::KeyboardInput { event, .. }
                 if event.state == ElementState::Pressed
                     && !event.repeat
@@ -284,6 +287,7 @@ mod tests {
     #[test]
     fn keys_do_what_the_readme_says() {
         assert_eq!(window_key(KeyCode::F12, false), Some(KeyAction::Screenshot));
+        assert_eq!(window_key(KeyCode::F1, false), Some(KeyAction::TogglePanel));
         assert_eq!(
             window_key(KeyCode::F11, false),
             Some(KeyAction::ToggleFullscreen)

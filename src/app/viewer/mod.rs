@@ -178,6 +178,7 @@ impl Viewer {
             normal_maps: world.renderer.normal_maps,
             foliage,
             impostors: world.lod.impostors_shown(),
+            panel_shown: true,
         };
         let (adapter, backend) = (gpu.info.name.clone(), gpu.backend_name());
         Ok(Viewer {
@@ -355,6 +356,10 @@ impl Viewer {
                         self.notice = Some("no F12 screenshots in the browser".into());
                     }
                     Some(KeyAction::Screenshot) => self.screenshot_requested = true,
+                    Some(KeyAction::TogglePanel) => {
+                        s.panel_shown = !s.panel_shown;
+                        self.panel.touch();
+                    }
                     Some(KeyAction::Pick) => self.pick_at_cursor(),
                     Some(KeyAction::Frame) => self.frame_selection(),
                     Some(KeyAction::Bookmark) => self.bookmark(false),
@@ -697,7 +702,18 @@ impl Viewer {
         let (settings, history) = (&mut self.settings, &self.figures.history);
         let mut requests = panel::Requests::default();
         let mut central = egui::Rect::NOTHING;
-        let mut output = self.egui.egui_ctx().clone().run_ui(raw, |ui| {
+        // Small windows draw the interface smaller (see `panel::panel_zoom`).
+        let ctx = self.egui.egui_ctx().clone();
+        let native = ctx.native_pixels_per_point().unwrap_or(1.0);
+        let points = [
+            self.win.config.width as f32 / native,
+            self.win.config.height as f32 / native,
+        ];
+        let zoom = panel::panel_zoom(points);
+        if (ctx.zoom_factor() - zoom).abs() > 1e-3 {
+            ctx.set_zoom_factor(zoom);
+        }
+        let mut output = ctx.run_ui(raw, |ui| {
             (requests, central) = panel::frame(ui, settings, history, &info);
         });
         self.egui.handle_platform_output(

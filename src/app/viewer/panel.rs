@@ -41,6 +41,8 @@ pub struct Settings {
     pub impostors: bool,
     /// Coarse levels are lit through their normal maps.
     pub normal_maps: bool,
+    /// The panel is shown (F1 hides it, and the view takes the whole window).
+    pub panel_shown: bool,
 }
 
 /// Facts the panel shows.
@@ -95,6 +97,22 @@ pub struct Requests {
 /// Width of the side panel in points.
 pub const PANEL_WIDTH: f32 = 270.0;
 
+/// The window size, in points, the panel is laid out for: smaller windows draw it smaller
+/// (see [`panel_zoom`]).
+const LAID_OUT_FOR: [f32; 2] = [1280.0, 720.0];
+
+/// The smallest zoom a small window draws the panel at: its small text still reads.
+const MIN_ZOOM: f32 = 0.7;
+
+/// The zoom the interface is drawn at in a window `size` points large: 1 from 1280×720 up, and
+/// below that shrinking with the window (to [`MIN_ZOOM`]), so that at 640×360 the panel takes
+/// under a third of the width instead of 42% with its controls cut off. F1 hides it.
+pub fn panel_zoom(size: [f32; 2]) -> f32 {
+    (size[0] / LAID_OUT_FOR[0])
+        .min(size[1] / LAID_OUT_FOR[1])
+        .clamp(MIN_ZOOM, 1.0)
+}
+
 /// One frame of the viewer's interface: the panel on the left and, over the 3D view, the
 /// split-screen labels. Returns what the panel asked for and the rectangle left to the 3D view
 /// (in points).
@@ -105,15 +123,20 @@ pub fn frame(
     info: &Info,
 ) -> (Requests, egui::Rect) {
     let mut requests = Requests::default();
-    egui::Panel::left("lodlab panel")
-        .resizable(false)
-        .exact_size(PANEL_WIDTH)
-        .show(ui, |ui| {
-            egui::ScrollArea::vertical().show(ui, |ui| {
-                requests = show(ui, s, history, info);
+    if s.panel_shown {
+        egui::Panel::left("lodlab panel")
+            .resizable(false)
+            .exact_size(PANEL_WIDTH)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    requests = show(ui, s, history, info);
+                });
             });
-        });
+    }
     let central = ui.available_rect_before_wrap();
+    if !s.panel_shown {
+        hidden_hint(ui, central);
+    }
     if let Some(right) = s.compare {
         compare_overlay(ui, central, s.method, right);
     }
@@ -189,7 +212,7 @@ fn header(ui: &mut egui::Ui, info: &Info) -> bool {
     let keys = if cfg!(target_arch = "wasm32") {
         "drag to orbit · wheel or pinch to zoom · M method · T transition"
     } else {
-        "F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit"
+        "F1 panel · F12 screenshot · F11 fullscreen · Esc or Ctrl+Q quit"
     };
     let line = match info.notice {
         Some(notice) => egui::RichText::new(notice).small().strong(),
@@ -484,6 +507,28 @@ fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
 }
 
 /// The divider and the method names over the 3D view in compare mode.
+/// Where the panel is hidden, a small label in the view's corner says how to bring it back.
+fn hidden_hint(ui: &egui::Ui, view: egui::Rect) {
+    let painter = ui.ctx().layer_painter(egui::LayerId::new(
+        egui::Order::Foreground,
+        egui::Id::unique("hidden panel hint"),
+    ));
+    let galley = painter.layout_no_wrap(
+        "F1: panel".into(),
+        egui::FontId::proportional(12.0),
+        egui::Color32::from_gray(230),
+    );
+    let rect = egui::Align2::LEFT_BOTTOM
+        .anchor_size(view.left_bottom() + egui::vec2(8.0, -8.0), galley.size())
+        .expand(3.0);
+    painter.rect_filled(rect, 3.0, egui::Color32::from_black_alpha(140));
+    painter.galley(
+        rect.min + egui::vec2(3.0, 3.0),
+        galley,
+        egui::Color32::WHITE,
+    );
+}
+
 pub fn compare_overlay(ui: &egui::Ui, view: egui::Rect, left: LodMethod, right: LodMethod) {
     let painter = ui.ctx().layer_painter(egui::LayerId::new(
         egui::Order::Foreground,
@@ -601,6 +646,7 @@ mod clicks {
             foliage: FoliageView::default(),
             impostors: true,
             normal_maps: true,
+            panel_shown: true,
         };
         Harness::builder()
             .with_size([PANEL_WIDTH + 300.0, 2000.0])
@@ -667,6 +713,24 @@ mod clicks {
         harness.input_mut().events.push(button(false));
         harness.step();
         harness.step();
+    }
+
+    /// F1's hidden panel leaves its controls out and the view the whole window, with a
+    /// label saying how to bring it back; small windows draw it smaller.
+    #[test]
+    fn a_hidden_panel_leaves_the_window_to_the_view() {
+        let mut h = panel(0.1);
+        h.run_steps(2);
+        assert!(h.query_by_label("transition").is_some());
+        h.state_mut().0.panel_shown = false;
+        h.run_steps(2);
+        assert!(h.query_by_label("transition").is_none());
+        assert!(h.query_by_label("force level").is_none());
+        assert_eq!(panel_zoom([1280.0, 720.0]), 1.0);
+        assert_eq!(panel_zoom([2560.0, 1440.0]), 1.0);
+        let small = panel_zoom([640.0, 360.0]);
+        assert!(PANEL_WIDTH * small / 640.0 < 1.0 / 3.0, "{small}");
+        assert!(small >= MIN_ZOOM);
     }
 
     #[test]
