@@ -356,6 +356,22 @@ fn report_writes_curves_plot_and_timings() {
     let timings = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
     assert!(timings.contains("## Lighting"), "{timings}");
     assert!(timings.contains("meshopt ≤ rest-pose on"), "{timings}");
+    // Its row of the table in docs/levels.md, with the columns that table has.
+    let row = std::fs::read_to_string(out_dir.join("docs-row.md")).unwrap();
+    assert!(row.starts_with("| cylinder | 240 | "), "{row}");
+    let levels_md =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/levels.md"))
+            .unwrap();
+    let header = levels_md
+        .lines()
+        .skip_while(|l| *l != "<!-- error-table -->")
+        .nth(1)
+        .expect("docs/levels.md's error table");
+    assert_eq!(
+        header.matches('|').count(),
+        row.trim_end().matches('|').count(),
+        "{header}\n{row}"
+    );
     assert!(json["methods"]["as"]["cache_hit_rate"].is_null());
     let png = image::open(out_dir.join("error.png")).unwrap();
     assert_eq!((png.width(), png.height()), (1000, 640));

@@ -57,8 +57,10 @@ fn viewer_compares_two_methods_side_by_side() {
     assert!(out.status.success(), "viewer failed: {stderr}");
     check_screenshot(&shot);
     let img = image::open(&shot).unwrap().to_rgba8();
-    // The 3D view is right of the 270-point panel; its middle column is the divider.
-    let mid = 270 + (960 - 270) / 2;
+    // The 3D view is right of the 270-point panel, drawn at 0.75 in this 960×540 window (the
+    // interface shrinks with windows under 1280×720); its middle column is the divider.
+    let panel = (270.0f32 * (960.0 / 1280.0f32).min(540.0 / 720.0)).round() as u32;
+    let mid = panel + (960 - panel) / 2;
     let light = |x: u32| {
         (40..540)
             .filter(|&y| img.get_pixel(x, y).0[..3].iter().all(|&c| c > 220))

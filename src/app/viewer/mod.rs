@@ -13,6 +13,7 @@ mod history;
 mod inspect;
 mod open;
 mod options;
+mod overlay;
 mod panel;
 mod panel_schedule;
 mod patches;
@@ -702,17 +703,8 @@ impl Viewer {
         let (settings, history) = (&mut self.settings, &self.figures.history);
         let mut requests = panel::Requests::default();
         let mut central = egui::Rect::NOTHING;
-        // Small windows draw the interface smaller (see `panel::panel_zoom`).
         let ctx = self.egui.egui_ctx().clone();
-        let native = ctx.native_pixels_per_point().unwrap_or(1.0);
-        let points = [
-            self.win.config.width as f32 / native,
-            self.win.config.height as f32 / native,
-        ];
-        let zoom = panel::panel_zoom(points);
-        if (ctx.zoom_factor() - zoom).abs() > 1e-3 {
-            ctx.set_zoom_factor(zoom);
-        }
+        panel::zoom_for_window(&ctx, [self.win.config.width, self.win.config.height]);
         let mut output = ctx.run_ui(raw, |ui| {
             (requests, central) = panel::frame(ui, settings, history, &info);
         });

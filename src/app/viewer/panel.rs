@@ -113,6 +113,15 @@ pub fn panel_zoom(size: [f32; 2]) -> f32 {
         .clamp(MIN_ZOOM, 1.0)
 }
 
+/// Sets `ctx`'s zoom for a window `pixels` large (physical), as [`panel_zoom`] says.
+pub fn zoom_for_window(ctx: &egui::Context, pixels: [u32; 2]) {
+    let native = ctx.native_pixels_per_point().unwrap_or(1.0);
+    let zoom = panel_zoom(pixels.map(|p| p as f32 / native));
+    if (ctx.zoom_factor() - zoom).abs() > 1e-3 {
+        ctx.set_zoom_factor(zoom);
+    }
+}
+
 /// One frame of the viewer's interface: the panel on the left and, over the 3D view, the
 /// split-screen labels. Returns what the panel asked for and the rectangle left to the 3D view
 /// (in points).
@@ -135,10 +144,10 @@ pub fn frame(
     }
     let central = ui.available_rect_before_wrap();
     if !s.panel_shown {
-        hidden_hint(ui, central);
+        super::overlay::hidden_hint(ui, central);
     }
     if let Some(right) = s.compare {
-        compare_overlay(ui, central, s.method, right);
+        super::overlay::compare_overlay(ui, central, s.method, right);
     }
     (requests, central)
 }
@@ -503,67 +512,6 @@ fn debug_views(ui: &mut egui::Ui, s: &mut Settings, info: &Info) {
     };
     if let Some(l) = legend {
         ui.label(egui::RichText::new(l).small());
-    }
-}
-
-/// The divider and the method names over the 3D view in compare mode.
-/// Where the panel is hidden, a small label in the view's corner says how to bring it back.
-fn hidden_hint(ui: &egui::Ui, view: egui::Rect) {
-    let painter = ui.ctx().layer_painter(egui::LayerId::new(
-        egui::Order::Foreground,
-        egui::Id::unique("hidden panel hint"),
-    ));
-    let galley = painter.layout_no_wrap(
-        "F1: panel".into(),
-        egui::FontId::proportional(12.0),
-        egui::Color32::from_gray(230),
-    );
-    let rect = egui::Align2::LEFT_BOTTOM
-        .anchor_size(view.left_bottom() + egui::vec2(8.0, -8.0), galley.size())
-        .expand(3.0);
-    painter.rect_filled(rect, 3.0, egui::Color32::from_black_alpha(140));
-    painter.galley(
-        rect.min + egui::vec2(3.0, 3.0),
-        galley,
-        egui::Color32::WHITE,
-    );
-}
-
-pub fn compare_overlay(ui: &egui::Ui, view: egui::Rect, left: LodMethod, right: LodMethod) {
-    let painter = ui.ctx().layer_painter(egui::LayerId::new(
-        egui::Order::Foreground,
-        egui::Id::unique("compare overlay"),
-    ));
-    let x = view.center().x;
-    painter.vline(
-        x,
-        view.y_range(),
-        egui::Stroke::new(2.0, egui::Color32::from_gray(235)),
-    );
-    for (pos, align, name) in [
-        (
-            egui::pos2(x - 10.0, view.top() + 10.0),
-            egui::Align2::RIGHT_TOP,
-            left,
-        ),
-        (
-            egui::pos2(x + 10.0, view.top() + 10.0),
-            egui::Align2::LEFT_TOP,
-            right,
-        ),
-    ] {
-        let galley = painter.layout_no_wrap(
-            name.name().to_string(),
-            egui::FontId::proportional(16.0),
-            egui::Color32::WHITE,
-        );
-        let rect = align.anchor_size(pos, galley.size()).expand(4.0);
-        painter.rect_filled(rect, 3.0, egui::Color32::from_black_alpha(150));
-        painter.galley(
-            rect.min + egui::vec2(4.0, 4.0),
-            galley,
-            egui::Color32::WHITE,
-        );
     }
 }
 

@@ -231,3 +231,44 @@ pub(crate) fn levels_markdown(report: &Report, lod_opts: &LodOptions) -> String 
     }
     md
 }
+
+/// This model's row of the table of error curves and bake times in `docs/levels.md`, as the
+/// report measured it (`docs-row.md`): `tools/docs/error-table.sh` builds that table from
+/// these rows, so that its figures are what `report` prints, not copied by hand.
+pub(crate) fn docs_row(report: &Report) -> String {
+    let c = &report.comparison;
+    let pct = |x: Option<f64>| x.map_or("–".into(), |x| format!("{:.0}%", x * 100.0));
+    let each = |f: &dyn Fn(&crate::app::commands::report::data::MethodReport) -> String| {
+        ["rest-pose", "as", "as+is"]
+            .map(|m| report.methods.get(m).map_or("–".into(), f))
+            .join(" / ")
+    };
+    let digits = report.triangles.to_string();
+    let mut triangles = String::new();
+    for (i, d) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            triangles.push(',');
+        }
+        triangles.push(d);
+    }
+    format!(
+        "| {} | {triangles} | {} | {} | {} | {} | {} ({}) | {} | {} | {} | {} |\n",
+        report.model,
+        each(&|m| format!("{:.2}", m.bake_seconds)),
+        each(&|m| m
+            .levels
+            .last()
+            .map_or("–".into(), |l| l.triangles.to_string())),
+        pct(c.as_le_rest_pose),
+        pct(c.as_le_rest_pose_at_levels),
+        pct(c.as_le_rest_pose_within_noise),
+        c.noise
+            .map_or("–".into(), |n| format!("±{:.1}%", n * 100.0)),
+        pct(c.reordered_le_rest_pose),
+        c.as_over_rest_pose
+            .map_or("–".into(), |r| format!("{r:.2}")),
+        pct(c.as_is_le_as),
+        c.as_is_lighting_over_as
+            .map_or("–".into(), |r| format!("{r:.2}×")),
+    )
+}

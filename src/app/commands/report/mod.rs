@@ -22,7 +22,7 @@ use crate::app::commands::report::data::{
     CURVE_POINTS, CurvePoint, LevelReport, MethodReport, Report, ReportOptions, SAMPLES,
     SHADING_PX, SILHOUETTE_POSES, SILHOUETTE_TOLERANCES, motion,
 };
-use crate::app::commands::report::markdown::timings_markdown;
+use crate::app::commands::report::markdown::{docs_row, timings_markdown};
 use crate::app::commands::report::plot::plot;
 use crate::app::progress::Progress;
 use crate::bake::character::lod::{Replay, SkinnedLods, progressive_mesh};
@@ -50,75 +50,18 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
     let full = crate::bake::gpu_data::drawable::Drawable::new(model).map_err(anyhow::Error::msg)?;
     let mut methods = BTreeMap::new();
     let mut sequences: Vec<(Method, Sequence)> = Vec::new();
+    let measuring = Measuring {
+        probe: &probe,
+        base: &base,
+        poses: &poses,
+        gpu: gpu.as_ref(),
+        full: &full,
+        lod_opts: &lod_opts,
+    };
     for method in Method::ALL {
-        let bar = bar(opts.progress, &format!("{} {method}", model.name));
-        let progress = |f: f32| bar.set_fraction(f);
-        let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
-            &opts.cache,
-            model,
-            &opts.source,
-            method,
-            &lod_opts,
-            &progress,
-        );
-        if let crate::bake::cache::Origin::Baked { warning: Some(w) } = &origin {
-            log::warn!("{w}");
-        }
-        let read = origin == crate::bake::cache::Origin::Cache;
-        bar.set_stage("measuring");
-        let clock = std::time::Instant::now();
-        let curve = measure_sequence(&probe, &base, &lods.sequence);
-        let measured = clock.elapsed().as_secs_f64();
-        bar.set_stage("silhouettes");
-        let levels = level_reports(&lods, &poses);
-        bar.set_stage("lighting");
-        let shading = match &gpu {
-            Some(gpu) => {
-                let which: Vec<usize> = (1..lods.levels.len()).collect();
-                crate::measure::shading_error::shading_errors(
-                    gpu,
-                    model,
-                    &full,
-                    &lods.levels,
-                    &which,
-                    SHADING_PX,
-                )?
-            }
-            None => Vec::new(),
-        };
-        log::debug!(
-            "{} by {method}: bake {:.2} s, error curve {measured:.2} s, silhouettes {:.2} s",
-            model.name,
-            lods.bake_seconds,
-            clock.elapsed().as_secs_f64() - measured
-        );
-        // The bake, then what was measured of it, in the order they ran.
-        let measured_all = clock.elapsed().as_secs_f64();
-        bar.finish_with(if read {
-            format!(
-                "read from the cache (baked in {:.2} s when made), measured in {measured_all:.1} s",
-                lods.bake_seconds
-            )
-        } else {
-            format!(
-                "baked in {:.2} s, measured in {measured_all:.1} s",
-                lods.bake_seconds
-            )
-        });
-        methods.insert(
-            method.name().to_string(),
-            MethodReport {
-                bake_seconds: lods.bake_seconds,
-                cache_hit_rate: match method {
-                    Method::InfluenceSimplification => lods.sequence.stats.cache_hit_rate(),
-                    _ => None,
-                },
-                curve,
-                levels,
-                shading,
-            },
-        );
-        sequences.push((method, lods.sequence));
+        let (report, sequence) = measure_method(opts, &measuring, method)?;
+        methods.insert(method.name().to_string(), report);
+        sequences.push((method, sequence));
     }
     if opts.baseline_meshopt {
         let triangles: Vec<u32> = methods["rest-pose"]
@@ -162,8 +105,96 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         &opts.out.join("report.json"),
         crate::app::json::pretty(&report)?.as_bytes(),
     )?;
+    crate::atomic::write(&opts.out.join("docs-row.md"), docs_row(&report).as_bytes())?;
     plot(&report, &opts.out.join("error.png"))?;
     Ok(report)
+}
+
+/// What every method's measuring shares: the surface samples, the animation-space mesh, the
+/// poses of the silhouettes, the adapter for the lighting (if any), full detail drawn, the
+/// options the levels are cut by.
+struct Measuring<'a> {
+    probe: &'a Probe<'a>,
+    base: &'a AnimationSpaceMesh,
+    poses: &'a [Vec<glam::Affine3A>],
+    gpu: Option<&'a crate::render::Gpu>,
+    full: &'a crate::bake::gpu_data::drawable::Drawable,
+    lod_opts: &'a crate::bake::character::lod::LodOptions,
+}
+
+/// One method's levels, from the cache or baked, and measured: its error curve, each level's
+/// silhouettes and lighting. Returns its report and its collapse sequence.
+fn measure_method(
+    opts: &ReportOptions,
+    m: &Measuring<'_>,
+    method: Method,
+) -> Result<(MethodReport, Sequence)> {
+    let model = &opts.model;
+    let bar = bar(opts.progress, &format!("{} {method}", model.name));
+    let progress = |f: f32| bar.set_fraction(f);
+    let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
+        &opts.cache,
+        model,
+        &opts.source,
+        method,
+        m.lod_opts,
+        &progress,
+    );
+    if let crate::bake::cache::Origin::Baked { warning: Some(w) } = &origin {
+        log::warn!("{w}");
+    }
+    let read = origin == crate::bake::cache::Origin::Cache;
+    bar.set_stage("measuring");
+    let clock = std::time::Instant::now();
+    let curve = measure_sequence(m.probe, m.base, &lods.sequence);
+    let measured = clock.elapsed().as_secs_f64();
+    bar.set_stage("silhouettes");
+    let levels = level_reports(&lods, m.poses);
+    bar.set_stage("lighting");
+    let shading = match m.gpu {
+        Some(gpu) => {
+            let which: Vec<usize> = (1..lods.levels.len()).collect();
+            crate::measure::shading_error::shading_errors(
+                gpu,
+                model,
+                m.full,
+                &lods.levels,
+                &which,
+                SHADING_PX,
+            )?
+        }
+        None => Vec::new(),
+    };
+    log::debug!(
+        "{} by {method}: bake {:.2} s, error curve {measured:.2} s, silhouettes {:.2} s",
+        model.name,
+        lods.bake_seconds,
+        clock.elapsed().as_secs_f64() - measured
+    );
+    // The bake, then what was measured of it, in the order they ran.
+    let measured_all = clock.elapsed().as_secs_f64();
+    bar.finish_with(if read {
+        format!(
+            "read from the cache (baked in {:.2} s when made), measured in {measured_all:.1} s",
+            lods.bake_seconds
+        )
+    } else {
+        format!(
+            "baked in {:.2} s, measured in {measured_all:.1} s",
+            lods.bake_seconds
+        )
+    });
+    let report = MethodReport {
+        bake_seconds: lods.bake_seconds,
+        cache_hit_rate: match method {
+            Method::InfluenceSimplification => lods.sequence.stats.cache_hit_rate(),
+            _ => None,
+        },
+        curve,
+        levels,
+        shading,
+    };
+    Ok((report, lods.sequence))
 }
 
 /// Every level of `lods` with its silhouette distances at [`SILHOUETTE_TOLERANCES`] (full

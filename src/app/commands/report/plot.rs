@@ -72,6 +72,9 @@ pub fn plot(report: &Report, path: &Path) -> Result<()> {
     let pad = 0.03 * (x1 - x0);
     let (x0, x1) = (x0 - pad, x1 + pad);
     let (y0, y1) = ((y0.min(-0.3) - 0.1).max(-4.0), (y1.max(0.3) + 0.1).min(4.0));
+    // Headroom above every curve for the legend in the upper left (a quarter of the plot's
+    // height holds its five lines at most): it hid the reordered curve's highest points.
+    let y1 = y1 + 0.35 * (y1 - y0);
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_error)?;

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Rebuilds the table of error curves and bake times in docs/levels.md (between its
+# `<!-- error-table -->` markers) from the row `lodlab report` writes for each model
+# (docs-row.md), so that the table's figures are what the report measured on this machine.
+#
+#   tools/docs/error-table.sh [LODLAB]     (default: target/release/lodlab; about 5 min)
+#
+# Fox.glb is read from ../shared/models where it is there, and left out where not.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+lodlab=${1:-target/release/lodlab}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+rows="$work/rows.md"
+: >"$rows"
+# One line a row: the name the table gives it, then the report's arguments.
+entries=(
+    "horse|horse"
+    "walker|walker"
+    "Fox.glb|../shared/models/Fox.glb"
+    "robot|robot"
+    "mocap (2-key T-pose clip)|mocap"
+    "mocap, \`--clips mocap-walk\`|mocap --clips mocap-walk"
+    "lowpoly|lowpoly"
+    "knight|knight"
+    "armour|armour"
+    "patchwork|patchwork"
+    "split-tube|split-tube"
+)
+for entry in "${entries[@]}"; do
+    label=${entry%%|*}
+    read -r -a args <<<"${entry#*|}"
+    if [[ ${args[0]} == *.glb && ! -f ${args[0]} ]]; then
+        echo "error-table: ${args[0]} is missing; its row is left out" >&2
+        continue
+    fi
+    out="$work/report-$(wc -l <"$rows")"
+    echo "error-table: lodlab report ${args[*]}" >&2
+    "$lodlab" report "${args[@]}" --out "$out" --cache "$work/cache" >/dev/null 2>&1
+    # The row under the table's own name for it.
+    sed "s/^| [^|]* |/| ${label//\//\\/} |/" "$out/docs-row.md" >>"$rows"
+done
+doc=docs/levels.md
+grep -q '^<!-- error-table -->$' "$doc" || { echo "error-table: $doc has no markers" >&2; exit 1; }
+awk -v rows="$rows" '
+    /^<!-- error-table -->$/ {
+        print
+        print "| model | triangles | bake rest / AS / AS+IS (s) | coarsest level (rest / AS / AS+IS) | AS ≤ rest-pose | down to the coarsest level | within noise (median band) | reordered ≤ rest-pose | AS / rest-pose (median) | AS+IS ≤ AS | AS+IS lighting / AS'"'"'s |"
+        print "|---|---|---|---|---|---|---|---|---|---|---|"
+        while ((getline line < rows) > 0) print line
+        skipping = 1
+        next
+    }
+    /^<!-- \/error-table -->$/ { skipping = 0 }
+    !skipping
+' "$doc" >"$work/levels.md"
+cp "$work/levels.md" "$doc"
+echo "error-table: rewrote the table in $doc ($(wc -l <"$rows") rows)" >&2
