@@ -489,8 +489,8 @@ fn a_report_of_a_tree_writes_its_three_files() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("report");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_lodlab"))
-        // A quarter of the thesis's 800x600 pictures: the same levels, measured coarser,
-        // in a third of the time.
+        // A quarter of the thesis's 800x600 pictures: the same levels, measured coarser and
+        // sooner.
         .args([
             "report",
             "sapling",

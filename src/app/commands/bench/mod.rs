@@ -601,13 +601,22 @@ fn cover(
     samples: &mut [Samples],
     bar: &Progress,
 ) -> Result<()> {
-    for (s, &m) in samples.iter_mut().zip(order) {
-        bar.set_stage(m.name());
-        for i in 0..COVERAGE_VIEWS {
+    // View by view, every method at each: the first round's time says what the rest take.
+    let start = std::time::Instant::now();
+    for i in 0..COVERAGE_VIEWS {
+        for (s, &m) in samples.iter_mut().zip(order) {
+            bar.set_stage(m.name());
             if !cover_view(bench, m, i, s)? {
                 return Ok(());
             }
             bar.inc();
+        }
+        if i == 0 {
+            let rest = start.elapsed().as_secs_f64() * (COVERAGE_VIEWS - 1) as f64;
+            eprintln!(
+                "lodlab: bench: coverage: about {rest:.0} s more ({} views a method left)",
+                COVERAGE_VIEWS - 1
+            );
         }
     }
     Ok(())
