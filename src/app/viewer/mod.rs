@@ -7,7 +7,7 @@
 mod clipboard;
 mod controls;
 mod event_loop;
-mod figures;
+pub(crate) mod figures;
 mod foliage_panel;
 mod history;
 mod inspect;

@@ -243,14 +243,7 @@ pub(crate) fn docs_row(report: &Report) -> String {
             .map(|m| report.methods.get(m).map_or("–".into(), f))
             .join(" / ")
     };
-    let digits = report.triangles.to_string();
-    let mut triangles = String::new();
-    for (i, d) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            triangles.push(',');
-        }
-        triangles.push(d);
-    }
+    let triangles = crate::app::viewer::figures::thousands(report.triangles as u64);
     format!(
         "| {} | {triangles} | {} | {} | {} | {} | {} ({}) | {} | {} | {} | {} |\n",
         report.model,
