@@ -62,9 +62,22 @@ fn bench_writes_json_and_a_table_of_every_method() {
     assert_eq!(r["scene"], "crowd");
     assert_eq!(r["instances"], 12);
     assert_eq!(r["frames_per_method"], 3);
-    assert_eq!(r["schema_version"], 2);
+    assert_eq!(r["schema_version"], 3);
     assert!(r["measured_seconds"].as_f64().unwrap() > 0.0);
     assert!(r["warmup_seconds"].as_f64().unwrap() >= 0.0);
+    // Once warm it says how long the rest takes: the other coverage views, then the frames.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let rest = stderr
+        .lines()
+        .find(|l| l.starts_with("lodlab: bench: about "))
+        .unwrap_or_else(|| panic!("no announcement: {stderr}"));
+    assert!(
+        rest.contains("the other 3 coverage views a method")
+            && rest.contains("measuring 3 frames of each of 4 methods"),
+        "{rest}"
+    );
+    assert!(r["announced_seconds"].as_f64().unwrap() > 0.0);
+    assert!(r["rest_seconds"].as_f64().unwrap() > 0.0);
     assert!(stdout.contains("measured for"), "{stdout}");
     assert!(stdout.contains("CPU per frame"), "{stdout}");
     assert!(r["calibration"]["triangles_per_second"].as_f64().unwrap() > 0.0);
@@ -364,9 +377,12 @@ fn bench_says_what_it_will_measure_and_can_leave_out_the_coverage() {
     assert!(out.status.success(), "{stderr}");
     let announced = stderr
         .lines()
-        .find(|l| l.starts_with("lodlab: bench: measuring"))
+        .find(|l| l.starts_with("lodlab: bench: about "))
         .unwrap_or_else(|| panic!("no announcement: {stderr}"));
-    assert!(announced.contains("2 methods"), "{announced}");
+    assert!(
+        announced.contains("s more: measuring") && announced.contains("2 methods"),
+        "{announced}"
+    );
     assert!(!stderr.contains("coverage"), "{stderr}");
     let r: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let n = r["frames_per_method"].as_u64().unwrap();

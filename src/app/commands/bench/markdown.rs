@@ -14,7 +14,7 @@ pub fn markdown(r: &BenchReport) -> String {
         out,
         "lodlab bench: {} scene, {} instances, {}x{}, MSAA {}, {} transitions ({}-driven), \
          tolerance {} px; {} frames per method along the {} path ({} s), measured for {:.1} s \
-         (announced: {:.0} s) after {:.1} s of warm-up{}; {}.",
+         after {:.1} s of warm-up{} (once warm, {:.1} s more, announced as {:.0} s); {}.",
         r.scene,
         r.instances,
         r.size[0],
@@ -27,13 +27,14 @@ pub fn markdown(r: &BenchReport) -> String {
         r.path,
         r.path_seconds,
         r.measured_seconds,
-        r.announced_seconds,
         r.warmup_seconds,
         if r.coverage_seconds > 0.0 {
             format!(" and {:.1} s of coverage", r.coverage_seconds)
         } else {
             String::new()
         },
+        r.rest_seconds,
+        r.announced_seconds,
         if r.timing == "gpu timestamps" {
             "GPU time from timestamp queries"
         } else {

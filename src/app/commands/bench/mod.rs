@@ -43,7 +43,9 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
+mod coverage;
 mod markdown;
+use coverage::COVERAGE_VIEWS;
 pub use markdown::markdown;
 
 /// Selection runs this many 60 Hz steps before every measured frame.
@@ -54,13 +56,12 @@ pub const MIN_FRAMES: usize = 6;
 const MAX_FRAMES: usize = 3600;
 /// At most this many frames of one method in a row.
 const MAX_BLOCK: usize = 5;
-/// Views along the path at which each method's passes are drawn apart to see the pixels they
-/// cover (see [`crate::measure::coverage`]): outside the timed frames.
-const COVERAGE_VIEWS: usize = 4;
 
 /// The version of [`BenchReport`]'s JSON: bumped whenever a field changes meaning or goes.
 /// 2: `schema_version`, `warmup_seconds`, `measured_seconds` and each method's `frame_ms`.
-pub const BENCH_SCHEMA_VERSION: u32 = 2;
+/// 3: `announced_seconds` is all that follows the warm-up (the coverage's other views and the
+/// measuring), beside `rest_seconds`, what that took.
+pub const BENCH_SCHEMA_VERSION: u32 = 3;
 
 /// What `--json` writes.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -78,9 +79,13 @@ pub struct BenchReport {
     /// measuring (0 with `--no-coverage`).
     #[serde(default)]
     pub coverage_seconds: f64,
-    /// What the bench said, before measuring, the measuring would take.
+    /// What the bench said, once warm, the rest would take: the coverage's views after its
+    /// first (taken during the warm-up) and the measuring.
     #[serde(default)]
     pub announced_seconds: f64,
+    /// What the rest took.
+    #[serde(default)]
+    pub rest_seconds: f64,
     pub adapter: String,
     pub driver: String,
     pub backend: String,
@@ -292,15 +297,17 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
     let (mut bench, msaa) = set_up(o, &spec, &order, policy, foliage, normal_maps)?;
     let path = bench.path;
 
-    // Warm-up: round after round of every method, at points spread along the path, until the
-    // time is up; its rounds' wall time estimates what a round of the measuring costs. Then
-    // the coverage, each view of which is one frame and its passes and level kinds drawn
-    // alone, and last the measuring, which stops when its time is up: so it takes what it
-    // says, whatever the estimate.
+    // Warm-up: round after round of every method, at the path's points the measuring takes
+    // first, until the time is up. Then the coverage's frames, a round of every method at
+    // each of its views, and its first view drawn pass by pass (see [`coverage`]). The
+    // rounds after the first (which pays for first uses) estimate what a round of the
+    // measuring costs, and the coverage's first view what its others do: with both known it
+    // says how long the rest will take, the coverage's other views and last the measuring,
+    // which stops when its time is up, so it takes what it said.
     let warm = Instant::now();
     let coverage = !o.no_coverage;
     eprintln!(
-        "lodlab: bench: warming up for {} s{}, then {}",
+        "lodlab: bench: warming up for {} s{}, then {}; how long it takes is said once warm",
         o.warmup,
         if coverage {
             format!(
@@ -315,35 +322,54 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
             None => format!("measuring for {} s", o.seconds),
         }
     );
-    let round_seconds = warm_up(&mut bench, &order, warm, o.warmup)?;
+    let mut rounds = warm_up(&mut bench, &order, warm, o.warmup)?;
     let warmup_seconds = warm.elapsed().as_secs_f64();
-    let covering = Instant::now();
     let mut samples: Vec<Samples> = order.iter().map(|_| Samples::default()).collect();
-    if coverage {
-        let bar = Progress::new(
-            true,
-            "bench coverage",
-            (COVERAGE_VIEWS * order.len()) as u64,
-        );
-        cover(&mut bench, &order, &mut samples, &bar)?;
-        bar.finish();
+    let covering = Instant::now();
+    let cover = match coverage {
+        true => coverage::Coverage::frames(&mut bench, &order)?,
+        false => None,
+    };
+    let coverage_left = match &cover {
+        Some(c) => {
+            rounds.push((c.round_seconds(), COVERAGE_VIEWS));
+            c.first_view(&mut bench, &order, &mut samples)?
+        }
+        None => 0.0,
+    };
+    let round_seconds = rounds.iter().map(|r| r.0 * r.1 as f64).sum::<f64>()
+        / rounds.iter().map(|r| r.1).sum::<usize>().max(1) as f64;
+    let plan = match o.frames {
+        Some(f) => Plan::Frames(f as usize),
+        None => Plan::Seconds(o.seconds as f64),
+    };
+    let (measuring_announced, measuring_line) = plan.announce(round_seconds, &order);
+    let announced = coverage_left + measuring_announced;
+    eprintln!(
+        "lodlab: bench: about {announced:.0} s more: {}{measuring_line}",
+        match &cover {
+            Some(_) => format!(
+                "the other {} coverage views a method, about {coverage_left:.0} s, then ",
+                COVERAGE_VIEWS - 1
+            ),
+            None => String::new(),
+        }
+    );
+    let rest = Instant::now();
+    if let Some(c) = cover {
+        c.other_views(&mut bench, &order, &mut samples)?;
     }
     let coverage_seconds = if coverage {
         covering.elapsed().as_secs_f64()
     } else {
         0.0
     };
-    let plan = match o.frames {
-        Some(f) => Plan::Frames(f as usize),
-        None => Plan::Seconds(o.seconds as f64),
-    };
-    let announced = plan.announce(round_seconds, &order);
-    eprintln!("lodlab: bench: {}", announced.1);
     let bar = Progress::new(true, "bench", 1000);
     let measuring = Instant::now();
     measure(&mut bench, &order, plan, round_seconds, &mut samples, &bar)?;
     bar.finish();
     let measured_seconds = measuring.elapsed().as_secs_f64();
+    let rest_seconds = rest.elapsed().as_secs_f64();
     let n = samples[0].skinned.len();
 
     let methods = method_figures(&samples, &order, n, width, height);
@@ -354,7 +380,8 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
         warmup_seconds,
         measured_seconds,
         coverage_seconds,
-        announced_seconds: announced.0,
+        announced_seconds: announced,
+        rest_seconds,
         adapter: gpu.info.name.clone(),
         driver: format!("{} {}", gpu.info.driver, gpu.info.driver_info)
             .trim()
@@ -489,25 +516,41 @@ impl Plan {
     }
 }
 
-/// Warm-up: rounds of every method, skinned then calibration, at 7 points along the path in
-/// turn, until `warmup` seconds have passed since `warm` (at least one round). Returns the
-/// mean wall seconds of a round (selection, encoding and waiting included), which sizes the
-/// measuring's blocks and what the bench announces.
-fn warm_up(bench: &mut Bench, order: &[LodMethod], warm: Instant, warmup: f32) -> Result<f64> {
+/// Warm-up: rounds of every method, skinned then calibration, at the path's golden-ratio
+/// points in turn (the frames a measuring by time takes first), until `warmup` seconds have
+/// passed since `warm` (at least one round). Returns the mean wall seconds of a round
+/// (selection, encoding and waiting included) with the number of rounds it is the mean of:
+/// those after the first where there are more (the first pays for first uses: buffers grown,
+/// caches filled). With the coverage's rounds, it sizes the measuring's blocks and what the
+/// bench announces.
+fn warm_up(
+    bench: &mut Bench,
+    order: &[LodMethod],
+    warm: Instant,
+    warmup: f32,
+) -> Result<Vec<(f64, usize)>> {
     let path = bench.path;
     let mut k = 0;
+    let mut first = 0.0;
     loop {
         for &m in order {
-            bench.show(m, path_time(&path, k % 7, 7));
+            bench.show(m, measured_time(&path, k, Plan::Seconds(0.0)));
             bench.time(CharacterShader::Skinned)?;
             bench.time(CharacterShader::Plain)?;
         }
         k += 1;
+        if k == 1 {
+            first = warm.elapsed().as_secs_f64();
+        }
         if warm.elapsed().as_secs_f32() >= warmup {
             break;
         }
     }
-    Ok(warm.elapsed().as_secs_f64() / k as f64)
+    let all = warm.elapsed().as_secs_f64();
+    Ok(vec![match k {
+        1 => (all, 1),
+        _ => ((all - first) / (k - 1) as f64, k - 1),
+    }])
 }
 
 /// The measuring loop: frames of every method along the path, methods interleaved in blocks
@@ -590,75 +633,6 @@ fn measured_time(path: &CameraPath, i: usize, plan: Plan) -> f32 {
             (path.duration() as f64 * ((i as f64 + 0.5) * phi).fract()) as f32
         }
     }
-}
-
-/// The pixels each pass covers, at [`COVERAGE_VIEWS`] views along the path per method (where
-/// the adapter counts fragments): the frame timed once for its fragment counts, then each
-/// pass it drew drawn alone (see [`crate::measure::coverage`]). Before the measured time.
-fn cover(
-    bench: &mut Bench,
-    order: &[LodMethod],
-    samples: &mut [Samples],
-    bar: &Progress,
-) -> Result<()> {
-    // View by view, every method at each: the first round's time says what the rest take.
-    let start = std::time::Instant::now();
-    for i in 0..COVERAGE_VIEWS {
-        for (s, &m) in samples.iter_mut().zip(order) {
-            bar.set_stage(m.name());
-            if !cover_view(bench, m, i, s)? {
-                return Ok(());
-            }
-            bar.inc();
-        }
-        if i == 0 {
-            let rest = start.elapsed().as_secs_f64() * (COVERAGE_VIEWS - 1) as f64;
-            eprintln!(
-                "lodlab: bench: coverage: about {rest:.0} s more ({} views a method left)",
-                COVERAGE_VIEWS - 1
-            );
-        }
-    }
-    Ok(())
-}
-
-/// Coverage view `i` of [`COVERAGE_VIEWS`] of method `m`, added to `s`. False where the
-/// adapter counts no fragments (then no view will have any).
-fn cover_view(bench: &mut Bench, m: LodMethod, i: usize, s: &mut Samples) -> Result<bool> {
-    let path = bench.path;
-    let pixels = (bench.size[0] as u64 * bench.size[1] as u64).max(1) as f64;
-    bench.show(m, path_time(&path, i, COVERAGE_VIEWS));
-    let Some(times) = bench.time(CharacterShader::Skinned)?.1 else {
-        return Ok(false);
-    };
-    let mut view = [None; Pass::COUNT];
-    for pass in Pass::ALL {
-        let Some(fragments) = times.fragments[pass as usize] else {
-            continue;
-        };
-        let covered = crate::measure::coverage::covered_pixels(
-            &bench.gpu,
-            &bench.world.renderer,
-            &bench.target,
-            pass,
-        )?;
-        let f = fragments as f64;
-        view[pass as usize] = Some([
-            f / pixels,
-            f / covered.max(1) as f64,
-            covered as f64 / pixels,
-        ]);
-    }
-    s.coverage.push(view);
-    if let Some(timer) = &mut bench.timer {
-        s.kind_costs.push(crate::measure::coverage::kinds_alone(
-            &bench.gpu,
-            &mut bench.world.renderer,
-            &bench.target,
-            timer,
-        )?);
-    }
-    Ok(true)
 }
 
 /// Each method's figures from its samples, keyed by name for the report.
