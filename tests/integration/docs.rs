@@ -349,3 +349,84 @@ fn model_help_names_every_builtin() {
         "--model's help lacks {missing:?}: {help}"
     );
 }
+
+/// The cells of a Markdown table's line: `|` outside code spans and not escaped.
+fn table_cells(line: &str) -> usize {
+    let (mut in_code, mut escaped, mut bars) = (false, false, 0usize);
+    for c in line.chars() {
+        match c {
+            '`' if !escaped => in_code = !in_code,
+            '|' if !in_code && !escaped => bars += 1,
+            _ => {}
+        }
+        escaped = c == '\\' && !escaped;
+    }
+    bars.saturating_sub(1)
+}
+
+/// Every table of the README and the chapters (quoted ones too) has as many cells in each row
+/// as in its header: a table a script rewrites, or a row added by hand, cannot lose a column.
+#[test]
+fn every_table_row_has_its_headers_cells() {
+    // Bars in code spans and escaped ones are not cells' edges.
+    assert_eq!(table_cells(r"| a | `x|y` | b \| c |"), 3);
+    assert_eq!(table_cells("|---|---:|"), 2);
+    for (path, text) in pages() {
+        let (prose, _) = split_fences(&text);
+        let mut header: Option<usize> = None;
+        for (n, line) in prose.lines().enumerate() {
+            let line = line.trim_start_matches('>').trim();
+            if !line.starts_with('|') {
+                header = None;
+                continue;
+            }
+            let cells = table_cells(line);
+            match header {
+                None => header = Some(cells),
+                Some(h) => assert_eq!(
+                    cells,
+                    h,
+                    "{}: line {} of its prose has {cells} cells, its table's header {h}: {line}",
+                    path.display(),
+                    n + 1
+                ),
+            }
+        }
+    }
+}
+
+/// Every block a script rewrites (`<!-- NAME -->` … `<!-- /NAME -->`) is closed, and a script
+/// under tools/docs names its marker: no generated table is left without its generator.
+#[test]
+fn generated_blocks_are_closed_and_have_their_script() {
+    let scripts: String = std::fs::read_dir(root().join("tools/docs"))
+        .unwrap()
+        .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap())
+        .collect();
+    let mut found = 0;
+    for (path, text) in pages() {
+        for line in text.lines() {
+            let Some(name) = line
+                .strip_prefix("<!-- ")
+                .and_then(|l| l.strip_suffix(" -->"))
+                .filter(|n| !n.starts_with('/'))
+            else {
+                continue;
+            };
+            found += 1;
+            assert!(
+                text.lines().any(|l| l == format!("<!-- /{name} -->")),
+                "{}: <!-- {name} --> is never closed",
+                path.display()
+            );
+            // The scripts build the name from its parts (`speed-table $kind`): its first word.
+            let stem = name.split(' ').next().unwrap();
+            assert!(
+                scripts.contains(stem),
+                "{}: no script under tools/docs writes <!-- {name} -->",
+                path.display()
+            );
+        }
+    }
+    assert!(found >= 6, "{found} generated blocks");
+}

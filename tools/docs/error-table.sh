@@ -8,6 +8,7 @@
 # Fox.glb is read from ../shared/models where it is there, and left out where not.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+. tools/docs/splice.sh
 lodlab=${1:-target/release/lodlab}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -40,19 +41,10 @@ for entry in "${entries[@]}"; do
     # The row under the table's own name for it.
     sed "s/^| [^|]* |/| ${label//\//\\/} |/" "$out/docs-row.md" >>"$rows"
 done
-doc=docs/levels.md
-grep -q '^<!-- error-table -->$' "$doc" || { echo "error-table: $doc has no markers" >&2; exit 1; }
-awk -v rows="$rows" '
-    /^<!-- error-table -->$/ {
-        print
-        print "| model | triangles | bake rest / AS / AS+IS (s) | coarsest level (rest / AS / AS+IS) | AS ≤ rest-pose | down to the coarsest level | within noise (median band) | reordered ≤ rest-pose | AS / rest-pose (median) | AS+IS ≤ AS | AS+IS lighting / AS'"'"'s |"
-        print "|---|---|---|---|---|---|---|---|---|---|---|"
-        while ((getline line < rows) > 0) print line
-        skipping = 1
-        next
-    }
-    /^<!-- \/error-table -->$/ { skipping = 0 }
-    !skipping
-' "$doc" >"$work/levels.md"
-cp "$work/levels.md" "$doc"
-echo "error-table: rewrote the table in $doc ($(wc -l <"$rows") rows)" >&2
+{
+    echo "| model | triangles | bake rest / AS / AS+IS (s) | coarsest level (rest / AS / AS+IS) | AS ≤ rest-pose | down to the coarsest level | within noise (median band) | reordered ≤ rest-pose | AS / rest-pose (median) | AS+IS ≤ AS | AS+IS lighting / AS's |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|"
+    cat "$rows"
+} >"$work/table.md"
+splice docs/levels.md error-table "$work/table.md"
+echo "error-table: rewrote the table in docs/levels.md ($(wc -l <"$rows") rows)" >&2

@@ -9,7 +9,7 @@
 //! frame's (it draws the same passes again), so its first view of every method, over that
 //! view's frame, scales the other views' frames into an estimate of the rest.
 
-use super::{Bench, Samples, path_time};
+use super::frame::{Bench, Samples, path_time};
 use crate::app::progress::Progress;
 use crate::render::CharacterShader;
 use crate::render::timer::{Pass, PassTimes};

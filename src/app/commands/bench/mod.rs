@@ -27,15 +27,12 @@ use crate::app::progress::Progress;
 use crate::atomic::check_target;
 use crate::bake::gpu_data::drawable::LevelKind;
 use crate::measure::statistics::{medians, percentile};
-use crate::render::targets::Offscreen;
-use crate::render::timer::{FrameTimer, Pass, PassTimes, overdraw_median, pass_medians};
-use crate::render::{CharacterShader, FrameStats, Gpu};
+use crate::render::CharacterShader;
+use crate::render::timer::{FrameTimer, Pass, overdraw_median, pass_medians};
 use crate::runtime::headless::{Headless, ShotLod};
 use crate::runtime::spec::SceneSpec;
-use crate::runtime::world::World;
 use crate::scene::camera_path::PathKind;
 use crate::scene::foliage::FoliageView;
-use crate::scene::lod::MAX_LEVELS;
 use crate::scene::{CameraPath, LodMethod, LodPolicy};
 use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
@@ -44,12 +41,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 mod coverage;
+mod frame;
 mod markdown;
 use coverage::COVERAGE_VIEWS;
+use frame::{Bench, Samples, path_time};
 pub use markdown::markdown;
 
-/// Selection runs this many 60 Hz steps before every measured frame.
-const SETTLE_STEPS: usize = 60;
 /// Frames per method when the budget allows fewer: below this a median means little.
 pub const MIN_FRAMES: usize = 6;
 /// Frames per method at most, however many --seconds would fit.
@@ -201,92 +198,6 @@ fn over_views(views: &[[Option<[f64; 3]>; Pass::COUNT]], i: usize) -> Option<Pas
     })
 }
 
-/// The frame times and statistics of one method.
-#[derive(Default)]
-struct Samples {
-    skinned: Vec<f64>,
-    /// CPU milliseconds of each frame's selection and upload.
-    cpu: Vec<f64>,
-    /// The skinned frames' passes, where timed.
-    passes: Vec<PassTimes>,
-    plain: Vec<f64>,
-    triangles: u64,
-    vertices: u64,
-    influences: u64,
-    levels: [u64; MAX_LEVELS],
-    in_transition: u64,
-    kinds: [u64; LevelKind::COUNT],
-    /// Per coverage view, each pass's fragments per pixel of the view, per pixel covered, and
-    /// share covered.
-    coverage: Vec<[Option<[f64; 3]>; Pass::COUNT]>,
-    /// Per coverage view, each level kind drawn alone: its pass's GPU ms and fragments per
-    /// pixel of the view.
-    kind_costs: Vec<[Option<[f64; 2]>; LevelKind::COUNT]>,
-}
-
-/// The scene, its target and its timer: what a frame needs.
-struct Bench {
-    gpu: Gpu,
-    world: World,
-    target: Offscreen,
-    timer: Option<FrameTimer>,
-    path: CameraPath,
-    fov_y: f32,
-    size: [u32; 2],
-}
-
-impl Bench {
-    /// Shows path time `t` as a 60 Hz viewer of `method` would, from a clean state; with
-    /// the CPU milliseconds the frame itself took to select every instance's level and to
-    /// encode and upload the instances (its last selection step and the upload).
-    fn show(&mut self, method: LodMethod, t: f32) -> (FrameStats, f64) {
-        let world = &mut self.world;
-        world.lod.method = method;
-        world.lod.reset();
-        let dt = 1.0 / 60.0;
-        for k in (1..=SETTLE_STEPS).rev() {
-            let tk = t - k as f32 * dt;
-            world.camera = self.path.at(tk, self.fov_y);
-            world.select(self.size[1], tk, dt);
-        }
-        world.camera = self.path.at(t, self.fov_y);
-        let start = Instant::now();
-        world.select(self.size[1], t, dt);
-        let stats = world.upload(&self.gpu, self.size[0] as f32 / self.size[1] as f32, t);
-        (stats, start.elapsed().as_secs_f64() * 1e3)
-    }
-
-    /// Renders what is shown with `shader` and returns the frame's time in milliseconds, and
-    /// its passes' figures where the adapter has timestamp queries.
-    fn time(&mut self, shader: CharacterShader) -> Result<(f64, Option<PassTimes>)> {
-        self.world.renderer.shader = shader;
-        let start = Instant::now();
-        self.world.renderer.render_timed(
-            &self.gpu,
-            &self.target.targets,
-            &self.target.view,
-            self.timer.as_mut(),
-        )?;
-        let timed = match &mut self.timer {
-            Some(timer) => {
-                let t = timer.read(&self.gpu)?;
-                (t.frame_ms, Some(t))
-            }
-            None => {
-                self.gpu.wait()?;
-                (start.elapsed().as_secs_f64() * 1e3, None)
-            }
-        };
-        self.world.renderer.shader = CharacterShader::Skinned;
-        Ok(timed)
-    }
-}
-
-/// Path time of frame `i` of `n`: the middles of `n` equal stretches of the path.
-fn path_time(path: &CameraPath, i: usize, n: usize) -> f32 {
-    path.duration() * (i as f32 + 0.5) / n as f32
-}
-
 pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<BenchReport> {
     // Measured in the order given, each once, interleaved.
     let order = crate::app::cli::values::dedup(o.methods.clone());
@@ -306,22 +217,7 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
     // which stops when its time is up, so it takes what it said.
     let warm = Instant::now();
     let coverage = !o.no_coverage;
-    eprintln!(
-        "lodlab: bench: warming up for {} s{}, then {}; how long it takes is said once warm",
-        o.warmup,
-        if coverage {
-            format!(
-                ", then fragments and level kinds at {COVERAGE_VIEWS} views a method \
-                 (--no-coverage leaves them out)"
-            )
-        } else {
-            String::new()
-        },
-        match o.frames {
-            Some(f) => format!("measuring {f} frames of each method"),
-            None => format!("measuring for {} s", o.seconds),
-        }
-    );
+    say_what_follows(o);
     let mut rounds = warm_up(&mut bench, &order, warm, o.warmup)?;
     let warmup_seconds = warm.elapsed().as_secs_f64();
     let mut samples: Vec<Samples> = order.iter().map(|_| Samples::default()).collect();
@@ -408,6 +304,26 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
         methods,
         order: order.iter().map(|m| m.name().to_string()).collect(),
     })
+}
+
+/// The bench's first line once loaded: the warm-up, the coverage and the measuring, in order.
+fn say_what_follows(o: &BenchArgs) {
+    eprintln!(
+        "lodlab: bench: warming up for {} s{}, then {}; how long it takes is said once warm",
+        o.warmup,
+        if !o.no_coverage {
+            format!(
+                ", then fragments and level kinds at {COVERAGE_VIEWS} views a method \
+                 (--no-coverage leaves them out)"
+            )
+        } else {
+            String::new()
+        },
+        match o.frames {
+            Some(f) => format!("measuring {f} frames of each method"),
+            None => format!("measuring for {} s", o.seconds),
+        }
+    );
 }
 
 /// Input checks, before anything is loaded: there is a method to measure, and the measuring
