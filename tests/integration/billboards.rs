@@ -554,8 +554,9 @@ fn surface(m: &lodlab::model::SkinnedMesh) -> (f32, lodlab::model::Bounds) {
 /// A tree's chain is cached: the second load reads the file, and a damaged file is reported in
 /// one line and rebuilt, never trusted.
 ///
-/// Named to sort first: libtest starts tests in name order, and this one (half a minute, three
-/// chains baked) started last ran alone at the end while the other thread idled.
+/// Named to sort first: libtest starts tests in name order, and this one (half a minute where
+/// it bakes the broadleaf for the shared cache) started last ran alone at the end while the
+/// other thread idled.
 #[test]
 fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     use lodlab::bake::cache::{LodCache, Origin};
@@ -563,6 +564,10 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     let gpu = crate::common::gpu().clone();
     let dir = tempfile::tempdir().unwrap();
     let cache = LodCache::new(Some(dir.path().to_path_buf()));
+    // The broadleaf's chain is the default scene's: from the tests' shared cache, where the
+    // scenes of other tests (and CI's look at the window) bake it once; the sapling's is baked
+    // into this test's own folder, to see it baked, read and damaged.
+    let shared = LodCache::new(Some(crate::common::shared_cache()));
     let tree_and_hash = |name: &str| {
         let tree = load_model(name).unwrap();
         let hash = lodlab::import::import(name, &Default::default())
@@ -576,21 +581,28 @@ fn a_tree_chain_comes_from_the_cache_and_survives_a_damaged_file() {
     // cached below).
     let (tree, hash) = tree_and_hash("broadleaf");
     let opts = ChainOptions::default();
+    let load_in =
+        |cache: &LodCache, tree: &lodlab::model::Model, hash: &[u8; 32], opts: &ChainOptions| {
+            load_or_build_chain(
+                &AtlasRasterizer::new(&gpu),
+                &lodlab::measure::colour_error::GpuColourError::new(&gpu),
+                cache,
+                tree,
+                hash,
+                opts,
+                &|_| {},
+            )
+            .unwrap()
+        };
     let load_with = |tree: &lodlab::model::Model, hash: &[u8; 32], opts: &ChainOptions| {
-        load_or_build_chain(
-            &AtlasRasterizer::new(&gpu),
-            &lodlab::measure::colour_error::GpuColourError::new(&gpu),
-            &cache,
-            tree,
-            hash,
-            opts,
-            &|_| {},
-        )
-        .unwrap()
+        load_in(&cache, tree, hash, opts)
     };
-    let load = || load_with(&tree, &hash, &opts);
+    let load = || load_in(&shared, &tree, &hash, &opts);
     let (built, origin) = load();
-    assert_eq!(origin, Origin::Baked { warning: None });
+    assert!(
+        matches!(origin, Origin::Baked { warning: None } | Origin::Cache),
+        "{origin:?}"
+    );
     // The chain ends with the impostor, which comes in where the level it stands for would
     // have: ε still grows level by level.
     let last = built.last().unwrap();

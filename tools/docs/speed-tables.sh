@@ -4,7 +4,7 @@
 # build measures here:
 #
 #   tools/docs/speed-tables.sh [LODLAB]    (default: target/release/lodlab; needs jq;
-#                                           about 12 min on lavapipe, 2 on a GPU)
+#                                           about 8 min on lavapipe with an empty cache)
 #
 # The adapter picks the table: `<!-- speed-table lavapipe -->` on a CPU adapter (llvmpipe),
 # `<!-- speed-table gpu -->` on any other; the example bench is rewritten on lavapipe only.
