@@ -4,11 +4,12 @@
 
 use super::MeshError;
 use super::animation_frames;
+use super::geometry::Surface;
 use crate::bake::character::simplify::expectation::ExpectationMatrix;
 use crate::bake::character::uv_grid::UvGrid;
 use crate::bake::gpu_data::animation_space::{AnimationSpaceMesh, AsInfluence};
 use crate::model::Model;
-use glam::{Affine3A, DVec2, Vec2};
+use glam::{Affine3A, DVec2, DVec3, Vec2};
 
 /// A sparse animation-space vector: one 4-vector per bone.
 type SparseVec = Vec<(u32, [f64; 4])>;
@@ -16,8 +17,9 @@ type SparseVec = Vec<(u32, [f64; 4])>;
 struct Sample {
     chart: u32,
     uv: DVec2,
-    /// The original surface point in animation space.
+    /// The original surface point in animation space, and in the rest pose.
     value: SparseVec,
+    rest: DVec3,
 }
 
 /// Surface samples of the original mesh and the poses to measure them in.
@@ -25,6 +27,7 @@ pub struct ErrorProbe {
     samples: Vec<Sample>,
     chart: Vec<u32>,
     uvs: Vec<Vec2>,
+    rest_bones: Vec<Affine3A>,
     frames_p: ExpectationMatrix,
     frames: Vec<Vec<Affine3A>>,
 }
@@ -99,6 +102,7 @@ impl ErrorProbe {
                 Sample {
                     chart: chart[tri[0] as usize],
                     uv,
+                    rest: rest_point(&rest_bones, &value),
                     value,
                 }
             })
@@ -110,6 +114,7 @@ impl ErrorProbe {
             samples,
             chart,
             uvs: base.uvs.clone(),
+            rest_bones,
             frames_p,
             frames,
         })
@@ -121,26 +126,57 @@ impl ErrorProbe {
 
     /// The error of a simplified mesh given as triangles of the original's render vertices,
     /// each vertex with its (possibly simplified) influences.
+    ///
+    /// A sample whose chart the mesh has lost (a part pruned, a small island collapsed away)
+    /// has nothing at its texture coordinate: it is matched to the mesh's closest point in the
+    /// rest pose, where its pixels now fall. (It was matched to the first corner of the first
+    /// triangle listed, a point anywhere on the body that moved with the order of the file.)
     pub fn measure<'a>(
         &self,
         triangles: &[[u32; 3]],
         influences: impl Fn(u32) -> &'a [AsInfluence],
     ) -> MeshError {
         let grid = UvGrid::new(triangles, &self.uvs);
+        let surface = std::cell::OnceCell::new();
+        let rest_of = |r: u32| {
+            let mut value: SparseVec = Vec::new();
+            accumulate(&mut value, influences(r), 1.0);
+            rest_point(&self.rest_bones, &value)
+        };
         let diffs = self
             .samples
             .iter()
             .map(|s| {
-                let (tri, w) = grid.locate(triangles, &self.uvs, &self.chart, s.chart, s.uv);
                 let mut diff = s.value.clone();
-                for k in 0..3 {
-                    accumulate(&mut diff, influences(tri[k]), -w[k]);
+                let located = grid
+                    .locate(triangles, &self.uvs, &self.chart, s.chart, s.uv)
+                    .or_else(|| {
+                        surface
+                            .get_or_init(|| Surface::new(triangles, rest_of))
+                            .closest(s.rest)
+                    });
+                // No triangle at all: the whole point is the error.
+                if let Some((tri, w)) = located {
+                    for k in 0..3 {
+                        accumulate(&mut diff, influences(tri[k]), -w[k]);
+                    }
                 }
                 diff
             })
             .collect();
         summarise(&self.frames_p, &self.frames, diffs)
     }
+}
+
+/// `Σ G_i p_i` in the rest pose.
+fn rest_point(rest_bones: &[Affine3A], value: &SparseVec) -> DVec3 {
+    value
+        .iter()
+        .map(|&(bone, p)| {
+            let m = rest_bones[bone as usize];
+            m.matrix3.as_dmat3() * DVec3::new(p[0], p[1], p[2]) + m.translation.as_dvec3() * p[3]
+        })
+        .sum()
 }
 
 /// Differences in animation space, one per sample → RMS over samples and frames, and the
