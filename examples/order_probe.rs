@@ -3,7 +3,8 @@
 //! - the same levels measured with every triangle's corners rotated, and with the triangle list
 //!   reversed: the measurement's own dependence on order (1.000 where it has none);
 //! - the levels of the reordered twin (`report`'s [`reordered`]: vertices reversed, corners
-//!   rotated) against the original's, each measured by its own probe: the bake's.
+//!   rotated) against the original's at the same influence count, each measured by its own
+//!   probe: the bake's; and how far each simplifies (its coarsest influence count).
 //!
 //! `cargo run --release --example order_probe -- walker horse patchwork`
 
@@ -51,16 +52,33 @@ fn main() {
         let tprobe = Probe::for_model(&twin, &tbase, 6000);
         let tcurve = measure_sequence(&tprobe, &tbase, &tseq);
         // The twin's levels measured with its own probe, against the original's at the same
-        // curve point.
+        // influence count (log-log interpolation of the twin's curve), where both reach.
+        let at = |x: f64| -> Option<f64> {
+            let pts: Vec<(f64, f64)> = tcurve
+                .iter()
+                .filter(|p| p.rms_error > 0.0)
+                .map(|p| ((p.influences as f64).ln(), p.rms_error.ln()))
+                .collect();
+            let x = x.ln();
+            pts.windows(2).find_map(|w| {
+                let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+                let (lo, hi) = (x0.min(x1), x0.max(x1));
+                (lo <= x && x <= hi && hi > lo)
+                    .then(|| (y0 + (y1 - y0) * (x - x0) / (x1 - x0)).exp())
+            })
+        };
         let ratios: Vec<f64> = curve
             .iter()
-            .zip(&tcurve)
-            .filter(|(a, _)| a.rms_error > 0.0)
-            .map(|(a, b)| b.rms_error / a.rms_error)
+            .filter(|a| a.rms_error > 0.0)
+            .filter_map(|a| at(a.influences as f64).map(|b| b / a.rms_error))
             .collect();
+        let reach = (
+            curve.last().map_or(0, |p| p.influences),
+            tcurve.last().map_or(0, |p| p.influences),
+        );
         let coarse: Vec<f64> = ratios[ratios.len() * 9 / 10..].to_vec();
         println!(
-            "{name}: same levels, corners rotated: median {:.3} (min {:.3} max {:.3}); triangles reversed: median {:.3} (max {:.3}); twin/original: median {:.3}, coarsest 10% {:.3}, share twin worse {:.0}%",
+            "{name}: same levels, corners rotated: median {:.3} (min {:.3} max {:.3}); triangles reversed: median {:.3} (max {:.3}); twin/original: median {:.3}, coarsest 10% {:.3}, share twin worse {:.0}%; coarsest influences {} / {}",
             median(rot.clone()),
             rot.iter().cloned().fold(f64::MAX, f64::min),
             rot.iter().cloned().fold(0.0, f64::max),
@@ -68,7 +86,9 @@ fn main() {
             rev.iter().cloned().fold(0.0, f64::max),
             median(ratios.clone()),
             median(coarse),
-            100.0 * ratios.iter().filter(|&&r| r > 1.0).count() as f64 / ratios.len() as f64
+            100.0 * ratios.iter().filter(|&&r| r > 1.0).count() as f64 / ratios.len() as f64,
+            reach.0,
+            reach.1
         );
     }
 }
