@@ -117,7 +117,7 @@ impl UvGrid {
 }
 
 /// A triangle's corners in ascending order: the same key however the triangle is rotated.
-fn sorted(mut t: [u32; 3]) -> [u32; 3] {
+pub(crate) fn sorted(mut t: [u32; 3]) -> [u32; 3] {
     t.sort_unstable();
     t
 }

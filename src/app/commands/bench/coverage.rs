@@ -67,11 +67,10 @@ impl Coverage {
         Ok(Some(Coverage { frames, bar }))
     }
 
-    /// Wall seconds of a round of every method, over the views' frames.
-    pub fn round_seconds(&self) -> f64 {
-        let rounds = self.frames.first().map_or(0, Vec::len).max(1);
+    /// Wall seconds of its rounds of every method, one a view, and how many they are.
+    pub fn rounds(&self) -> (f64, usize) {
         let total: f64 = self.frames.iter().flatten().map(|f| f.round_seconds).sum();
-        total / rounds as f64
+        (total, self.frames.first().map_or(0, Vec::len))
     }
 
     /// The second step's first view of every method, added to `samples`; returns the

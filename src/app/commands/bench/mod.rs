@@ -228,13 +228,13 @@ pub fn run(o: &BenchArgs, inputs: &crate::runtime::spec::BakeInputs) -> Result<B
     };
     let coverage_left = match &cover {
         Some(c) => {
-            rounds.push((c.round_seconds(), COVERAGE_VIEWS));
+            let (seconds, count) = c.rounds();
+            rounds = (rounds.0 + seconds, rounds.1 + count);
             c.first_view(&mut bench, &order, &mut samples)?
         }
         None => 0.0,
     };
-    let round_seconds = rounds.iter().map(|r| r.0 * r.1 as f64).sum::<f64>()
-        / rounds.iter().map(|r| r.1).sum::<usize>().max(1) as f64;
+    let round_seconds = rounds.0 / rounds.1.max(1) as f64;
     let plan = match o.frames {
         Some(f) => Plan::Frames(f as usize),
         None => Plan::Seconds(o.seconds as f64),
@@ -434,23 +434,22 @@ impl Plan {
 
 /// Warm-up: rounds of every method, skinned then calibration, at the path's golden-ratio
 /// points in turn (the frames a measuring by time takes first), until `warmup` seconds have
-/// passed since `warm` (at least one round). Returns the mean wall seconds of a round
-/// (selection, encoding and waiting included) with the number of rounds it is the mean of:
-/// those after the first where there are more (the first pays for first uses: buffers grown,
-/// caches filled). With the coverage's rounds, it sizes the measuring's blocks and what the
-/// bench announces.
+/// passed since `warm` (at least one round). Returns the wall seconds of the rounds after the
+/// first where there are more (the first pays for first uses: buffers grown, caches filled),
+/// selection, encoding and waiting included, and how many they are: with the coverage's
+/// rounds, they size the measuring's blocks and what the bench announces.
 fn warm_up(
     bench: &mut Bench,
     order: &[LodMethod],
     warm: Instant,
     warmup: f32,
-) -> Result<Vec<(f64, usize)>> {
+) -> Result<(f64, usize)> {
     let path = bench.path;
     let mut k = 0;
     let mut first = 0.0;
     loop {
         for &m in order {
-            bench.show(m, measured_time(&path, k, Plan::Seconds(0.0)));
+            bench.show(m, golden_time(&path, k));
             bench.time(CharacterShader::Skinned)?;
             bench.time(CharacterShader::Plain)?;
         }
@@ -463,10 +462,10 @@ fn warm_up(
         }
     }
     let all = warm.elapsed().as_secs_f64();
-    Ok(vec![match k {
+    Ok(match k {
         1 => (all, 1),
-        _ => ((all - first) / (k - 1) as f64, k - 1),
-    }])
+        _ => (all - first, k - 1),
+    })
 }
 
 /// The measuring loop: frames of every method along the path, methods interleaved in blocks
@@ -544,11 +543,14 @@ fn measure(
 fn measured_time(path: &CameraPath, i: usize, plan: Plan) -> f32 {
     match plan {
         Plan::Frames(n) => path_time(path, i, n),
-        Plan::Seconds(_) => {
-            let phi = 0.618_033_988_749_895_f64;
-            (path.duration() as f64 * ((i as f64 + 0.5) * phi).fract()) as f32
-        }
+        Plan::Seconds(_) => golden_time(path, i),
     }
+}
+
+/// Path time `i` of the golden-ratio sequence: every prefix spread evenly along the path.
+fn golden_time(path: &CameraPath, i: usize) -> f32 {
+    let phi = 0.618_033_988_749_895_f64;
+    (path.duration() as f64 * ((i as f64 + 0.5) * phi).fract()) as f32
 }
 
 /// Each method's figures from its samples, keyed by name for the report.

@@ -4,6 +4,7 @@
 
 use super::MeshError;
 use super::geometry::{Located, Surface};
+use crate::bake::character::uv_grid::sorted;
 use crate::bake::gpu_data::animation_space::{AnimationSpaceMesh, AsInfluence};
 use crate::model::Model;
 use glam::{Affine3A, DVec3, Vec3};
@@ -74,12 +75,6 @@ const TIGHTEN_CHUNK: usize = 4096;
 
 /// A sample of a surface: its triangle (render vertices), weights and rest-pose point.
 type SurfaceSample = ([u32; 3], [f64; 3], DVec3);
-
-/// A triangle's corners in ascending order: the same triangle whatever corner it starts at.
-fn sorted(mut t: [u32; 3]) -> [u32; 3] {
-    t.sort_unstable();
-    t
-}
 
 /// Triangles round every position, flat: position `p`'s are `items[start[p]..start[p + 1]]`.
 struct Fans {
