@@ -355,6 +355,35 @@ impl Model {
             .sum();
         (mesh + textures) as u64
     }
+
+    /// The same model with its vertices and its triangles each listed in another order (a
+    /// fixed shuffle per `seed`) and every triangle's corners rotated by a shuffled amount:
+    /// the same surface and skin as another exporter might write them. What a method makes of
+    /// it must be what it makes of `self` (issue: comparisons with error bars).
+    pub fn relisted(&self, seed: u64) -> Model {
+        let mut rng = fastrand::Rng::with_seed(seed);
+        let src = &self.mesh;
+        let mut order: Vec<usize> = (0..src.vertex_count()).collect();
+        rng.shuffle(&mut order);
+        let mut new_index = vec![0u32; order.len()];
+        let mut mesh = SkinnedMesh::empty();
+        for &v in &order {
+            new_index[v] = mesh.copy_vertex_from(src, v);
+        }
+        let mut triangles: Vec<&[u32]> = src.indices.chunks_exact(3).collect();
+        rng.shuffle(&mut triangles);
+        mesh.indices = triangles
+            .into_iter()
+            .flat_map(|t| {
+                let k = rng.usize(0..3);
+                [t[k], t[(k + 1) % 3], t[(k + 2) % 3]].map(|v| new_index[v as usize])
+            })
+            .collect();
+        Model {
+            mesh,
+            ..self.clone()
+        }
+    }
 }
 
 /// Axis-aligned bounds.

@@ -30,6 +30,7 @@ mod lod_runtime;
 mod malformed;
 mod normal_maps;
 mod options;
+mod orders;
 mod patches;
 mod record;
 mod root_motion;

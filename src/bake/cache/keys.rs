@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 /// The cache file's encoding and the progressive-mesh levels' bake.
-pub const FORMAT_VERSION: u32 = 10;
+pub const FORMAT_VERSION: u32 = 11;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
 pub const CHAIN_VERSION: u32 = 28;
@@ -19,7 +19,7 @@ pub const PATCH_VERSION: u32 = 4;
 pub const IMPOSTOR_VERSION: u32 = 7;
 /// Where a character's impostor joins a method's chain (`bake::impostor::placement`, as the
 /// runtime places it).
-pub const PLACEMENT_VERSION: u32 = 4;
+pub const PLACEMENT_VERSION: u32 = 5;
 
 /// What a cache file holds: the word its file names carry and the version of the code that
 /// makes it, in one place, so that a kind is neither misspelt nor versioned apart from its

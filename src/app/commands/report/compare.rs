@@ -5,7 +5,7 @@ use crate::app::commands::report::data::{Comparison, MethodReport, NEGLIGIBLE};
 use std::collections::BTreeMap;
 
 /// `y` of a curve at `x`, interpolated linearly in log–log; `None` outside its range.
-pub(crate) fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
+pub fn interpolate(curve: &[(f64, f64)], x: f64) -> Option<f64> {
     let pts: Vec<(f64, f64)> = curve.iter().copied().filter(|p| p.1 > NEGLIGIBLE).collect();
     between(pts, x, |a, b, t| (a.ln() + t * (b.ln() - a.ln())).exp())
 }

@@ -29,13 +29,15 @@ pub use replay::{Replay, extract};
 
 use super::simplify::expectation::ExpectationMatrix;
 use super::simplify::{
-    Feed, FirstPricing, Method, Prepared, Sequence, SimplifyInput, Stats, Step, gathered,
+    Feed, FirstPricing, Method, Prepared, Sequence, SimplifyInput, Stats, Step, Ties, gathered,
     pose_samples, simplify_prepared,
 };
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use crate::model::Model;
+use std::collections::BTreeMap;
 use std::sync::OnceLock;
 use std::sync::mpsc::{self};
+use std::sync::{Arc, Mutex};
 
 /// The full-detail mesh of `model` in animation space (GPU order) and its progressive mesh by
 /// `method`, with the wall time the simplification took (estimating `P` included).
@@ -46,8 +48,7 @@ pub fn progressive_mesh(
 ) -> (AnimationSpaceMesh, Sequence, f64) {
     let base = full_detail(model);
     let start = web_time::Instant::now();
-    let sequence =
-        gathered(|feed| SharedBake::default().simplify(model, &base, method, progress, feed));
+    let sequence = SharedBake::default().sequence(model, &base, method, 0, progress);
     let seconds = start.elapsed().as_secs_f64();
     (base, sequence, seconds)
 }
@@ -59,17 +60,24 @@ pub fn full_detail(model: &Model) -> AnimationSpaceMesh {
 
 /// What the bakes of one model by several methods share, made by the first bake that needs
 /// each (see [`bake_lods_sharing`]): the probes its levels are measured with, what the
-/// simplifier prepares of its full detail ([`Prepared`]), the expectation matrix `P` and the
-/// first pricing of every position in animation space ([`FirstPricing`]), which AS and AS+IS
-/// share.
+/// simplifier prepares of its full detail ([`Prepared`]), the expectation matrix `P`, and per
+/// tie order ([`Ties`]) the order itself and the first pricing of every position in animation
+/// space ([`FirstPricing`]), which AS and AS+IS share.
 /// On a 2-million-triangle model the probes are about a gigabyte and several seconds, the
 /// preparation five seconds and half a gigabyte, and the first pricing a quarter of a
-/// method's simplification: three methods baking at once each made them again.
+/// method's simplification: three methods baking at once each made them again. `report`'s
+/// bakes in several tie orders share all but the last two.
 #[derive(Default)]
 pub struct SharedBake<'a> {
     probes: OnceLock<LevelProbes<'a>>,
     prepared: OnceLock<Prepared>,
     expectation: OnceLock<ExpectationMatrix>,
+    by_order: Mutex<BTreeMap<u32, Arc<InOrder>>>,
+}
+
+/// What the bakes in one tie order share.
+struct InOrder {
+    ties: Ties,
     as_start: OnceLock<FirstPricing>,
 }
 
@@ -79,30 +87,58 @@ impl<'a> SharedBake<'a> {
         self.probes.get_or_init(|| LevelProbes::new(model, base))
     }
 
-    /// The progressive mesh of `base` (the full detail of `model`) by `method`, handed to
-    /// `feed` as it is built, from what the bakes share; returns its statistics (see
+    /// The progressive mesh of `base` (the full detail of `model`) by `method`, its ties
+    /// broken in tie order `order` (0 is the order every level the viewer draws is baked in,
+    /// see [`Ties`]), from what the bakes share.
+    pub fn sequence(
+        &self,
+        model: &Model,
+        base: &AnimationSpaceMesh,
+        method: Method,
+        order: u32,
+        progress: &(dyn Fn(f32) + Sync),
+    ) -> Sequence {
+        gathered(|feed| self.simplify(model, base, method, order, progress, feed))
+    }
+
+    /// [`Self::sequence`], handed to `feed` as it is built; returns its statistics (see
     /// [`super::simplify::simplify_feeding`]).
     fn simplify(
         &self,
         model: &Model,
         base: &AnimationSpaceMesh,
         method: Method,
+        order: u32,
         progress: &(dyn Fn(f32) + Sync),
         feed: &mut (dyn FnMut(Feed) + Send),
     ) -> Stats {
         let prepared = self.prepared.get_or_init(|| prepare(model, base));
+        let in_order = Arc::clone(
+            self.by_order
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .entry(order)
+                .or_insert_with(|| {
+                    Arc::new(InOrder {
+                        ties: prepared.ties(order),
+                        as_start: OnceLock::new(),
+                    })
+                }),
+        );
+        let ties = &in_order.ties;
         match method {
             // No other method ranks by the rest pose: its first pricing is its own.
             Method::RestPose => {
                 let none = ExpectationMatrix::from_poses(0, std::iter::empty::<Vec<_>>());
                 let start = OnceLock::new();
-                simplify_prepared(prepared, &none, &start, method, progress, feed)
+                simplify_prepared(prepared, ties, &none, &start, method, progress, feed)
             }
             Method::AnimationSpace | Method::InfluenceSimplification => {
                 let pm = self
                     .expectation
                     .get_or_init(|| ExpectationMatrix::estimate(model));
-                simplify_prepared(prepared, pm, &self.as_start, method, progress, feed)
+                let start = &in_order.as_start;
+                simplify_prepared(prepared, ties, pm, start, method, progress, feed)
             }
         }
     }
@@ -166,7 +202,7 @@ pub fn bake_lods_sharing<'a>(
             Some((levels, seq.into_whole()))
         });
         // A closed channel means the cutter panicked: joining it below says so.
-        let stats = shared.simplify(model, base, method, progress, &mut |feed| match feed {
+        let stats = shared.simplify(model, base, method, 0, progress, &mut |feed| match feed {
             Feed::Start(first) => {
                 let _ = start_tx.send(first);
             }

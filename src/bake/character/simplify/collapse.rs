@@ -279,21 +279,35 @@ impl Context<'_> {
     /// a corner tears: a chart of its that does not reach `u2` takes a wedge of `u2` of its own
     /// colour where there is one (its material, and its texture coordinate on a textured one),
     /// and among those the one whose normal is closest to its own (the same side of a hard
-    /// edge, where one is). A material border is a seam like any other: a chart that must take
-    /// another colour pays for it in [`Self::tear`].
+    /// edge, where one is), then the nearest in texture space (the least torn), then by texture
+    /// coordinate and normal: never by index, so that the choice does not depend on the file's vertex
+    /// order. A material border is a seam like any other: a chart that must take another colour
+    /// pays for it in [`Self::tear`].
     pub fn wedge_map(&self, u1: u32, u2: u32) -> Option<WedgeMap> {
         if self.mesh.kind[u1 as usize] != Kind::Corner {
             return self.mesh.torn_wedge_map(u1, u2, |_, _| None);
         }
         self.mesh.torn_wedge_map(u1, u2, |r1, candidates| {
             let n = self.normals[r1 as usize];
+            let t = self.uv[r1 as usize];
             candidates.iter().copied().max_by(|&a, &b| {
                 let (ca, cb) = (self.same_colour(r1, a), self.same_colour(r1, b));
                 let (da, db) = (
                     self.normals[a as usize].dot(n),
                     self.normals[b as usize].dot(n),
                 );
-                ca.cmp(&cb).then(da.total_cmp(&db)).then(b.cmp(&a))
+                let (ua, ub) = (self.uv[a as usize], self.uv[b as usize]);
+                ca.cmp(&cb)
+                    .then(da.total_cmp(&db))
+                    .then(ub.distance_squared(t).total_cmp(&ua.distance_squared(t)))
+                    .then(ub.x.total_cmp(&ua.x))
+                    .then(ub.y.total_cmp(&ua.y))
+                    .then_with(|| {
+                        let (na, nb) = (self.normals[a as usize], self.normals[b as usize]);
+                        (nb.x.total_cmp(&na.x))
+                            .then(nb.y.total_cmp(&na.y))
+                            .then(nb.z.total_cmp(&na.z))
+                    })
             })
         })
     }

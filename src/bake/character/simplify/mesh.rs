@@ -26,11 +26,53 @@ pub const WELD_TOLERANCE: f32 = 1e-5;
 /// Skin weights differing by less than this are the same skinning.
 pub const WEIGHT_TOLERANCE: f64 = 1e-3;
 
-/// For every render vertex, the position it belongs to: the lowest-numbered render vertex at
-/// the same rest position (within [`WELD_TOLERANCE`] of the bounding-box diagonal) with the
-/// same skinning (every bone's weight within [`WEIGHT_TOLERANCE`]). Copies whose weights
-/// differ more move apart when the character moves: they stay separate positions.
+/// For every render vertex, the position it belongs to: one of the render vertices at the
+/// same rest position (within [`WELD_TOLERANCE`] of the bounding-box diagonal) with the same
+/// skinning (every bone's weight within [`WEIGHT_TOLERANCE`]). Copies whose weights differ
+/// more move apart when the character moves: they stay separate positions.
+///
+/// The position is the copy least in rest position, then in skinning, not the first listed:
+/// its rest point and weights are the position's, copies differ by rounding, and a tube's
+/// rings have one coordinate equal but for that rounding, so which copy speaks for a position
+/// must not depend on the file's vertex order (see [`Ties`](super::prepare::Ties)).
 pub fn weld_positions(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
+    let mut position = first_copies(rest, infl);
+    let least = |a: usize, b: usize| {
+        let (x, y) = (rest[a], rest[b]);
+        x.x.total_cmp(&y.x)
+            .then(x.y.total_cmp(&y.y))
+            .then(x.z.total_cmp(&y.z))
+            .then_with(|| {
+                let p = |v: usize| {
+                    infl[v]
+                        .iter()
+                        .flat_map(|i| i.p)
+                        .collect::<SmallVec<[f64; 16]>>()
+                };
+                p(a).iter()
+                    .zip(p(b).iter())
+                    .map(|(s, t)| s.total_cmp(t))
+                    .find(|o| o.is_ne())
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            })
+            .then(a.cmp(&b))
+            .is_lt()
+    };
+    let mut speaker: Vec<u32> = (0..position.len() as u32).collect();
+    for v in 0..position.len() {
+        let first = position[v] as usize;
+        if least(v, speaker[first] as usize) {
+            speaker[first] = v as u32;
+        }
+    }
+    for p in &mut position {
+        *p = speaker[*p as usize];
+    }
+    position
+}
+
+/// [`weld_positions`] with each position named by its first copy.
+fn first_copies(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
     let points: Vec<glam::Vec3> = rest.iter().map(|p| p.as_vec3()).collect();
     let diagonal = crate::model::Bounds::of(points.iter().copied()).map_or(0.0, |b| b.diagonal());
     let groups = crate::geometry::weld::position_groups(&points, diagonal * WELD_TOLERANCE);
@@ -144,7 +186,7 @@ pub struct Mesh {
     /// Triangles as render vertices.
     pub tris: Vec<[u32; 3]>,
     pub tri_alive: Vec<bool>,
-    /// Render vertex → its position (the lowest render vertex with the same influences).
+    /// Render vertex → its position (one of its copies, see [`weld_positions`]).
     pub position: Vec<u32>,
     /// Position → its render vertices (empty for ids that are not positions).
     pub wedges: Vec<Wedges>,

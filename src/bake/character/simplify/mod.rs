@@ -38,7 +38,7 @@ mod sequence;
 pub use input::{Method, SimplifyInput, pose_samples};
 use metric::Metric;
 pub use metric::influences64;
-pub use prepare::Prepared;
+pub use prepare::{Prepared, Ties};
 pub use queue::{Feed, FirstPricing};
 use queue::{Simplifier, Workspace};
 pub use sequence::{Sequence, Stats, Step, StepKind};
@@ -94,15 +94,26 @@ pub fn simplify_feeding(
 ) -> Stats {
     let prepared = Prepared::new(input.mesh, input.rest_bones, input.poses, input.textured);
     let start = OnceLock::new();
-    simplify_prepared(&prepared, input.expectation, &start, method, progress, feed)
+    let ties = prepared.ties(0);
+    simplify_prepared(
+        &prepared,
+        &ties,
+        input.expectation,
+        &start,
+        method,
+        progress,
+        feed,
+    )
 }
 
 /// [`simplify_feeding`] from a prepared character ([`Prepared`]), ranked by `method` with the
-/// expectation matrix `expectation` (unused by the rest-pose method). `start` is the first
-/// pricing of every position: made here if it is empty, and left for the other methods that
-/// rank by the same metric (see [`FirstPricing`]).
+/// expectation matrix `expectation` (unused by the rest-pose method), equal costs taken in
+/// the tie order `ties` (made by [`Prepared::ties`]). `start` is the first pricing of every
+/// position: made here if it is empty, and left for the other methods that rank by the same
+/// metric in the same tie order (see [`FirstPricing`]).
 pub fn simplify_prepared(
     prepared: &Prepared,
+    ties: &Ties,
     expectation: &ExpectationMatrix,
     start: &OnceLock<FirstPricing>,
     method: Method,
@@ -149,6 +160,8 @@ pub fn simplify_prepared(
         parts: &p.parts,
         part_of: &p.part_of,
         located: &p.located,
+        ties: &ties.rank,
+        tie_order: ties.order,
         workspace: Workspace::default(),
         workspaces: Mutex::new(Vec::new()),
         influences: p.influences,

@@ -29,11 +29,14 @@ pub(crate) enum Action {
     Prune,
 }
 
-/// A queue entry. Ordered by cost, then kind and vertex so that runs are deterministic.
+/// A queue entry. Ordered by cost, then kind, then the tie order's rank of its vertex (or
+/// part), never its index: equal costs go the same way whatever order the file lists its
+/// vertices in (see [`Ties`](super::prepare::Ties)).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Entry {
     pub(crate) cost: f64,
     pub(crate) action: Action,
+    pub(crate) tie: u32,
     pub(crate) vertex: u32,
     pub(crate) version: u32,
 }
@@ -54,6 +57,7 @@ impl Ord for Entry {
         self.cost
             .total_cmp(&other.cost)
             .then(self.action.cmp(&other.action))
+            .then(self.tie.cmp(&other.tie))
             .then(self.vertex.cmp(&other.vertex))
             .then(self.version.cmp(&other.version))
     }
@@ -103,6 +107,9 @@ pub(crate) struct Simplifier<'a> {
     pub(crate) parts: &'a [Vec<u32>],
     pub(crate) part_of: &'a [u32],
     pub(crate) located: &'a RTree<Located>,
+    /// Per position: its rank in the tie order ([`Ties`](super::prepare::Ties)).
+    pub(crate) ties: &'a [u32],
+    pub(crate) tie_order: u32,
     /// The serial steps' scratch space.
     pub(crate) workspace: Workspace,
     /// Scratch spaces for the candidates priced in parallel, one per task at a time.
@@ -148,6 +155,8 @@ pub(crate) type Priced = (Option<(f64, u32)>, u64);
 /// happened yet), so a bake of both prices the full-detail mesh once. It holds for the
 /// [`Prepared`](super::prepare::Prepared) character, metric and expectation matrix it was made with, and for no other.
 pub struct FirstPricing {
+    /// The tie order it was priced in: ties between targets of equal cost go by it.
+    pub(crate) order: u32,
     pub(crate) found: Vec<Priced>,
 }
 
@@ -165,8 +174,13 @@ impl Simplifier<'_> {
         // Every position priced at full detail: shared with any other simplification from the
         // same start (see [`FirstPricing`]).
         let first = start.get_or_init(|| FirstPricing {
+            order: self.tie_order,
             found: self.price_in_parallel(&positions),
         });
+        assert_eq!(
+            first.order, self.tie_order,
+            "a first pricing is shared only by simplifications in one tie order"
+        );
         self.queue_priced(&positions, &first.found);
         for &u in &positions {
             self.evaluate_influence(u);
@@ -334,7 +348,8 @@ impl Simplifier<'_> {
             .iter()
             .filter_map(|&u2| Some((self.unoriented_cost(u, u2, &mut w.scratch)?, u2)))
             .collect();
-        costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let tie = |u: u32| self.ties[u as usize];
+        costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(tie(a.1).cmp(&tie(b.1))));
         let ctx = self.context();
         let best = costs.into_iter().find(|&(_, u2)| {
             ctx.check_link(u, u2, &w.neighbours).is_ok() && ctx.check_orientation(u, u2).is_ok()
@@ -403,6 +418,7 @@ impl Simplifier<'_> {
             self.heap.push(Reverse(Entry {
                 cost,
                 action: Action::Collapse,
+                tie: self.ties[ui],
                 vertex: u,
                 version: self.collapse_version[ui],
             }));
@@ -421,6 +437,7 @@ impl Simplifier<'_> {
             self.heap.push(Reverse(Entry {
                 cost,
                 action: Action::Influence,
+                tie: self.ties[ui],
                 vertex: u,
                 version: self.influence_version[ui],
             }));
@@ -430,9 +447,16 @@ impl Simplifier<'_> {
     /// Queues the removal of part `part` at its current diameter.
     pub(crate) fn queue_prune(&mut self, part: u32) {
         if let Some(cost) = self.part_diameter(part) {
+            // A part ranks as its first position does.
+            let tie = self.parts[part as usize]
+                .iter()
+                .map(|&u| self.ties[u as usize])
+                .min()
+                .unwrap_or(u32::MAX);
             self.heap.push(Reverse(Entry {
                 cost,
                 action: Action::Prune,
+                tie,
                 vertex: part,
                 version: 0,
             }));
