@@ -59,8 +59,8 @@ pub fn weld_positions(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
             .is_lt()
     };
     let mut speaker: Vec<u32> = (0..position.len() as u32).collect();
-    for v in 0..position.len() {
-        let first = position[v] as usize;
+    for (v, &first) in position.iter().enumerate() {
+        let first = first as usize;
         if least(v, speaker[first] as usize) {
             speaker[first] = v as u32;
         }
