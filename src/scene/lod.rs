@@ -36,12 +36,15 @@ pub enum LodMethod {
 }
 
 impl LodMethod {
-    pub const ALL: [LodMethod; 4] = [
+    pub const ALL: [LodMethod; 5] = [
         LodMethod::None,
         LodMethod::Simplified(Method::RestPose),
         LodMethod::Simplified(Method::AnimationSpace),
         LodMethod::Simplified(Method::InfluenceSimplification),
+        LodMethod::Simplified(Method::Meshopt),
     ];
+    /// How many there are: the length of per-method tables.
+    pub const COUNT: usize = Self::ALL.len();
 
     pub fn name(self) -> &'static str {
         match self {

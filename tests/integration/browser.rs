@@ -305,16 +305,23 @@ fn the_web_viewer_draws_and_switches_method_in_a_browser() {
             "{report}"
         );
         let methods = report["methods"].as_array().unwrap();
-        assert_eq!(methods[0]["method"], "as+is", "{report}");
+        let names: Vec<&str> = methods
+            .iter()
+            .map(|m| m["method"].as_str().unwrap())
+            .collect();
         assert_eq!(
-            methods[1]["method"], "none",
-            "M goes to the next method: {report}"
+            names,
+            ["as+is", "meshopt", "none"],
+            "M goes to the next method, meshoptimizer's levels in the page too: {report}"
         );
-        let (simplified, full) = (
-            methods[0]["triangles"].as_u64().unwrap(),
-            methods[1]["triangles"].as_u64().unwrap(),
+        let triangles: Vec<u64> = methods
+            .iter()
+            .map(|m| m["triangles"].as_u64().unwrap())
+            .collect();
+        assert!(
+            triangles[0] > 0 && triangles[1] > 0 && triangles[2] > triangles[0].max(triangles[1]),
+            "{report}"
         );
-        assert!(simplified > 0 && full > simplified, "{report}");
         // Dragging right orbits one way, a finger dragging left the other.
         let orbit = &report["orbit"];
         assert!(

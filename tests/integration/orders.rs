@@ -67,3 +67,42 @@ fn a_character_in_any_order_simplifies_alike() {
         }
     }
 }
+
+/// A relisted model is the same surface and skin in another order: every triangle's corners
+/// (positions and skins) are there, up to rotation, and the lists differ.
+#[test]
+fn a_relisted_model_is_the_same_surface_and_skin() {
+    let model = lodlab::import::load_model("lowpoly").unwrap();
+    let corners = |m: &lodlab::model::Model| {
+        let mesh = &m.mesh;
+        let mut tris: Vec<String> = mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let c: Vec<String> = t
+                    .iter()
+                    .map(|&v| {
+                        let v = v as usize;
+                        format!(
+                            "{:?}{:?}{:?}",
+                            mesh.positions[v],
+                            mesh.uvs[v],
+                            mesh.influences_of(v)
+                        )
+                    })
+                    .collect();
+                let k = (0..3).min_by_key(|&k| &c[k]).unwrap();
+                format!("{}{}{}", c[k], c[(k + 1) % 3], c[(k + 2) % 3])
+            })
+            .collect();
+        tris.sort();
+        tris
+    };
+    for seed in 1..3 {
+        let other = model.relisted(seed);
+        assert_eq!(corners(&model), corners(&other));
+        assert_ne!(model.mesh.positions, other.mesh.positions);
+        assert_ne!(model.mesh.indices, other.mesh.indices);
+        assert_eq!(other, model.relisted(seed), "a seed is one order");
+    }
+}

@@ -82,14 +82,17 @@ try {
     for (let k = 1; k <= 10; k++) await page.touchscreen.touchMove(width * 0.6 - 15 * k, height * 0.5);
     await page.touchscreen.touchEnd();
   });
-  // M over the 3D view (the canvas has the keyboard once clicked).
+  // M over the 3D view (the canvas has the keyboard once clicked), twice: each method the
+  // page offers after the first draws.
   await page.mouse.click(width * 0.75, height * 0.5);
-  const before = d.method;
-  await page.keyboard.press("KeyM");
-  d = await waitFor((d) => d.method !== before, "the next method");
-  const frames = Number(d.frames);
-  d = await waitFor((d) => Number(d.frames) >= frames + 3, "frames under the next method");
-  report.methods.push({ method: d.method, triangles: Number(d.triangles), fps: Number(d.fps) });
+  for (let k = 1; k <= 2; k++) {
+    const before = d.method;
+    await page.keyboard.press("KeyM");
+    d = await waitFor((d) => d.method !== before, "the next method");
+    const frames = Number(d.frames);
+    d = await waitFor((d) => Number(d.frames) >= frames + 3, "frames under the next method");
+    report.methods.push({ method: d.method, triangles: Number(d.triangles), fps: Number(d.fps) });
+  }
   await page.screenshot({ path: path.join(o.out, "viewer-next-method.png") });
   report.frames = Number(d.frames);
   report.fps = Number(d.fps);

@@ -402,6 +402,12 @@ pub struct ReportArgs {
     /// Also measure this simplifier on the rest pose at the same triangle counts.
     #[arg(long, value_enum)]
     pub baseline: Option<Baseline>,
+    /// Tie orders each method is baked in: every curve is their median with a band from the
+    /// lowest to the highest, and methods are compared only where their bands separate. The
+    /// first order is the levels' own; each other costs a simplification.
+    #[arg(long, value_name = "N", default_value_t = crate::app::commands::report::data::ORDERS,
+          value_parser = clap::value_parser!(u32).range(1..=32))]
+    pub orders: u32,
     /// Cache folder of baked levels of detail (default: the platform cache folder's
     /// lodlab/): a character's levels are read from it, and baked into it where missing, so a
     /// second report measures without baking again (its bake times are those measured when

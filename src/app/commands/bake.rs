@@ -190,6 +190,8 @@ impl Bakery<'_> {
                 Some(Method::InfluenceSimplification) | None => 0,
                 Some(Method::RestPose) => 1,
                 Some(Method::AnimationSpace) => 2,
+                // A few calls to meshoptimizer: the cheapest.
+                Some(Method::Meshopt) => 3,
             };
             (job.model, rank)
         });

@@ -53,7 +53,7 @@ fn phase(k: usize, count: usize, size: [u32; 2], vary: &[Setting]) -> Phase {
     ];
     let t = at(Setting::Transition);
     Phase {
-        method: LodMethod::ALL[at(Setting::Method) % 4],
+        method: LodMethod::ALL[at(Setting::Method) % LodMethod::COUNT],
         transition: Transition::ALL[(t / 4 + t) % Transition::ALL.len()],
         foliage: FoliagePolicy::ALL[(at(Setting::Foliage) / 5) % FoliagePolicy::ALL.len()],
         count: [count, count.div_ceil(3), 1][at(Setting::Count) % 3],

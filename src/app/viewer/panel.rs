@@ -70,7 +70,7 @@ pub struct Info<'a> {
     /// Can the adapter draw wireframes?
     pub wireframe: bool,
     /// Which methods' levels are on the GPU, in [`LodMethod::ALL`] order.
-    pub ready: [bool; 4],
+    pub ready: [bool; LodMethod::COUNT],
     /// Does the scene have trees?
     pub trees: bool,
     /// The characters' animated impostors, in a line (see `World::impostor_summary`).
@@ -587,7 +587,7 @@ mod clicks {
             playing: true,
             speed: 1.0,
             shadows: true,
-            method: LodMethod::ALL[3],
+            method: LodMethod::AS_IS,
             compare: None,
             policy: LodPolicy::default(),
             debug: DebugView::Shaded,
@@ -619,7 +619,7 @@ mod clicks {
                         baking: None,
                         bake_error: None,
                         wireframe: false,
-                        ready: [true; 4],
+                        ready: [true; LodMethod::COUNT],
                         trees: false,
                         impostors: String::new(),
                         normal_maps: String::new(),

@@ -157,7 +157,7 @@ impl World {
             models: bakes
                 .iter()
                 .map(|b| {
-                    let mut slots: [Option<LodModel>; 4] = Default::default();
+                    let mut slots: [Option<LodModel>; LodMethod::COUNT] = Default::default();
                     slots[0] = Some(lod_model(b, &LodPack::full_detail(b)));
                     slots
                 })

@@ -20,19 +20,20 @@ pub struct LodView {
     pub(super) trackers: [LodTracker; 2],
     pub(super) draws: [Vec<LodDraw>; 2],
     /// Per model, per method slot: what selection needs, once the levels are on the GPU.
-    pub(super) models: Vec<[Option<LodModel>; 4]>,
+    pub(super) models: Vec<[Option<LodModel>; LodMethod::COUNT]>,
     /// Whether far characters show as their animated impostors (where they have one).
     pub(super) impostors: bool,
     /// Per model and method slot: its impostor's placement in that method's chain, where it
     /// has one on the GPU.
-    pub(super) impostor_errors: Vec<[Option<crate::bake::impostor::placement::Placement>; 4]>,
+    pub(super) impostor_errors:
+        Vec<[Option<crate::bake::impostor::placement::Placement>; LodMethod::COUNT]>,
     /// The tolerance `with_impostors` was worked out for (see [`Placement::epsilon_at`]).
     ///
     /// [`Placement::epsilon_at`]: crate::bake::impostor::placement::Placement::epsilon_at
     pub(super) impostors_at: f32,
     /// `models` with each character's impostor appended as its last level (see
     /// [`with_impostor`]), for the simplified methods.
-    pub(super) with_impostors: Vec<[Option<LodModel>; 4]>,
+    pub(super) with_impostors: Vec<[Option<LodModel>; LodMethod::COUNT]>,
 }
 
 impl LodView {
@@ -111,7 +112,7 @@ impl LodView {
             .iter()
             .zip(&self.impostor_errors)
             .map(|(slots, errors)| {
-                let mut with: [Option<LodModel>; 4] = Default::default();
+                let mut with: [Option<LodModel>; LodMethod::COUNT] = Default::default();
                 for (slot, levels) in slots.iter().enumerate().skip(1) {
                     let e = errors[slot]
                         .as_ref()

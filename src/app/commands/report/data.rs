@@ -1,6 +1,7 @@
 //! What `lodlab report` measures, as plain data: the options, each method's curve of error
 //! against triangles and its levels, the comparisons between methods, and the report itself.
 
+use crate::app::viewer::figures::thousands;
 use crate::bake::character::lod_error::Correspondence;
 use crate::model::Model;
 use serde::Serialize;
@@ -9,6 +10,8 @@ use std::path::PathBuf;
 
 /// Points per curve, spaced evenly in log(influences) from full detail to the coarsest mesh.
 pub const CURVE_POINTS: usize = 40;
+/// Tie orders each method is baked in (`--orders`): the band of every curve.
+pub const ORDERS: u32 = 5;
 /// Errors below this (in scene units) are rounding, not simplification: full detail.
 pub(crate) const NEGLIGIBLE: f64 = 1e-9;
 /// Surface samples the error is averaged over.
@@ -27,6 +30,8 @@ pub struct ReportOptions {
     pub budgets: Option<Vec<u32>>,
     pub out: PathBuf,
     pub baseline_meshopt: bool,
+    /// Tie orders each method is baked in ([`ORDERS`] by default): 1 draws no band.
+    pub orders: u32,
     pub progress: bool,
     /// Where the levels are read from, and baked into where missing (`--cache`): a run
     /// after the first measures without baking again.
@@ -35,19 +40,29 @@ pub struct ReportOptions {
     pub source: [u8; 32],
 }
 
+/// A point of a method's error curve: over the tie orders that reach it, the median RMS
+/// error and the lowest and highest (the band), and the median largest error.
 #[derive(Clone, Debug, Serialize)]
 pub struct CurvePoint {
     pub influences: u32,
     pub triangles: u32,
     pub rms_error: f64,
+    pub rms_low: f64,
+    pub rms_high: f64,
     pub max_error: f64,
+    /// The tie orders whose sequences reach this far.
+    pub orders: u32,
 }
 
 #[derive(Clone, Debug, Serialize)]
 pub struct MethodReport {
     /// Wall time of the whole bake: the simplification and cutting the levels.
     pub bake_seconds: f64,
+    /// Wall time of the simplifications in the other tie orders, and measuring them.
+    pub orders_seconds: f64,
     pub cache_hit_rate: Option<f64>,
+    /// The median width of the curve's band: (highest − lowest) / median over the orders.
+    pub band: Option<f64>,
     pub curve: Vec<CurvePoint>,
     /// The levels the viewer uses (empty for the meshopt baseline).
     pub levels: Vec<LevelReport>,
@@ -80,30 +95,24 @@ pub struct LevelReport {
     pub silhouette_resolution_px: Vec<f32>,
 }
 
-/// How the methods compare at equal influence counts (Merry et al.'s Figure 7 read at equal influences).
+/// How the methods compare at equal influence counts (Merry et al.'s Figure 7 read at equal
+/// influences), counting only the points where two methods' bands separate: where they
+/// overlap, the tie orders alone part the curves as far ([`Separation`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct Comparison {
-    /// Fraction of the AS curve (where the rest-pose curve covers it) with AS ≤ rest-pose.
+    /// Of the AS curve's points where its band and rest-pose's separate, the share where AS is
+    /// better.
     pub as_le_rest_pose: Option<f64>,
-    /// Fraction of the AS+IS curve (where the AS curve covers it) with AS+IS ≤ AS.
+    /// The same for AS+IS against AS.
     pub as_is_le_as: Option<f64>,
-    /// Fraction of the meshopt curve with meshopt ≤ rest-pose.
+    /// The same for meshopt against rest-pose.
     pub meshopt_le_rest_pose: Option<f64>,
-    /// What two equal methods score against each other: the fraction of the curve of
-    /// rest-pose baked on the same mesh in another order ([`reordered`](crate::app::commands::report::reordered)) that lies at or
-    /// under rest-pose's. Where steps of nearly equal cost abound, which comes first is
-    /// decided by order and rounding, and the fraction strays far from 100% (or 50%) for
-    /// that alone: read `as_le_rest_pose` against it.
-    pub reordered_le_rest_pose: Option<f64>,
-    /// The noise band: the median of |rest-pose reordered / rest-pose − 1| over its curve.
-    pub noise: Option<f64>,
-    /// Fraction of the AS curve no further above rest-pose than the reordered rest-pose strays
-    /// from it there: AS ≤ rest-pose × (1 + band), the band the local one of [`local_band`](crate::app::commands::report::compare::local_band)
-    /// (the largest deviation of the nearest reordered points, at least `noise`).
-    pub as_le_rest_pose_within_noise: Option<f64>,
     /// `as_le_rest_pose` over the part of the curve the viewer's levels span: down to the
     /// coarsest level of AS or rest-pose, not on to the end of the sequence.
     pub as_le_rest_pose_at_levels: Option<f64>,
+    /// Each pair ("as vs rest-pose", "as+is vs as", "meshopt vs rest-pose"): the shares of the
+    /// first's curve better, indistinguishable and worse, and where.
+    pub separations: BTreeMap<String, Separation>,
     /// The median of AS / rest-pose over the AS curve: below 1 where AS is better on most
     /// of it, by how much.
     pub as_over_rest_pose: Option<f64>,
@@ -136,9 +145,8 @@ pub struct Report {
     /// place over the frames measured, scene units, and as a share of its height.
     pub motion: f64,
     pub motion_share: f64,
-    /// Rest-pose's curve on the same mesh in another order ([`reordered`](crate::app::commands::report::reordered)): the noise
-    /// reference of [`Comparison`], drawn in `error.png` beside the methods.
-    pub reordered_rest_pose: Vec<CurvePoint>,
+    /// Tie orders each method was baked in: its curve's band.
+    pub orders: u32,
 }
 
 /// Clips that move no vertex further than this share of the height from the rest pose give
@@ -151,7 +159,8 @@ impl Report {
         (self.motion_share < STILL).then(|| {
             format!(
                 "its clips barely move it (at most {:.1} mm, {:.2}% of its height): AS measures \
-                 what rest-pose does, their curves apart only by the order of equal steps",
+                 what rest-pose does, their curves apart only by the order of equal steps, \
+                 within their bands",
                 self.motion * 1e3,
                 self.motion_share * 100.0
             )
@@ -178,4 +187,81 @@ pub(crate) fn motion(model: &Model) -> (f64, f64) {
     }
     let height = crate::bake::character::lod::model_height(model) as f64;
     (far, far / height.max(1e-9))
+}
+
+/// How one method's band sits against another's at a point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    /// Its highest order below the other's lowest.
+    Better,
+    /// The bands overlap: the tie orders alone part them as far.
+    Indistinguishable,
+    /// Its lowest order above the other's highest.
+    Worse,
+}
+
+impl Verdict {
+    pub(crate) fn word(self) -> &'static str {
+        match self {
+            Verdict::Better => "better",
+            Verdict::Indistinguishable => "indistinguishable",
+            Verdict::Worse => "worse",
+        }
+    }
+}
+
+/// A run of one verdict along the curve, from its first point's influence count to its last's.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Span {
+    pub verdict: Verdict,
+    pub from: u32,
+    pub to: u32,
+}
+
+/// Method `a` against method `b` along `a`'s curve, where `b`'s reaches.
+#[derive(Clone, Debug, Serialize)]
+pub struct Separation {
+    /// Shares of `a`'s points compared: better, indistinguishable, worse.
+    pub better: f64,
+    pub indistinguishable: f64,
+    pub worse: f64,
+    /// The verdicts in runs, from full detail down.
+    pub spans: Vec<Span>,
+    /// The runs in words: "as better than rest-pose from 7,645 to 2,500 influences,
+    /// indistinguishable from 2,400 to 600, worse from 580 to 120".
+    pub says: String,
+}
+
+impl Separation {
+    /// The runs in short: "better 10,130–1,263, overlap 1,117–874, worse 773" (influences).
+    pub fn runs(&self) -> String {
+        self.spans
+            .iter()
+            .map(|s| {
+                let word = match s.verdict {
+                    Verdict::Better => "better",
+                    Verdict::Indistinguishable => "overlap",
+                    Verdict::Worse => "worse",
+                };
+                if s.from == s.to {
+                    format!("{word} {}", thousands(u64::from(s.from)))
+                } else {
+                    format!(
+                        "{word} {}–{}",
+                        thousands(u64::from(s.from)),
+                        thousands(u64::from(s.to))
+                    )
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Of the points where the bands separate, the share where `a` is better; `None` where
+    /// they never separate.
+    pub fn better_where_separate(&self) -> Option<f64> {
+        let separate = self.better + self.worse;
+        (separate > 0.0).then(|| self.better / separate)
+    }
 }

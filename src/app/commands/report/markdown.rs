@@ -62,51 +62,60 @@ pub(crate) fn timings_markdown(
     }
     md += &levels_markdown(report, lod_opts);
     md += &shading_markdown(report);
+    md += &comparison_markdown(report);
+    md
+}
+
+/// The methods compared at equal influence counts, where their bands separate.
+fn comparison_markdown(report: &Report) -> String {
     let c = &report.comparison;
     let pct = |x: Option<f64>| x.map_or("–".into(), |x| format!("{:.0}%", x * 100.0));
-    md += &format!(
+    let mut md = format!(
         "\n## Error at equal influence counts\n\n\
-         Measured by {}, over {} surface samples and {} frames.\n\n\
-         {}- AS ≤ rest-pose on {} of the AS curve ({} down to the coarsest level, not \
-         beyond); within the noise (above rest-pose by no more than the reordered curve strays \
-         from it nearby; that is {} at the median), on {}; AS / rest-pose {} at the median\n\
-         - the same mesh in another order, baked by rest-pose, ≤ rest-pose on {} of its \
-         curve: what two equal methods score, the fraction above is read against it\n\
-         - AS+IS ≤ AS on {} of the AS+IS curve\n\
-         - AS+IS's lighting (colour error by vertex normals) at most {} AS's at the same \
-         total influences, over the levels where either shows {VISIBLE_COLOUR} or more\n\
-         {}- fewest total influences reached: {}\n",
+         Measured by {}, over {} surface samples and {} frames. Each method was baked in {} tie \
+         orders (the order steps of equal cost are taken in; the order a file lists its \
+         vertices in changes nothing): its curve is their median, its band the lowest to the \
+         highest. Two methods are compared only where their bands separate; where they overlap, \
+         the tie orders alone part them as far, and the points count for neither.\n\n{}",
         report.correspondence.describe(),
         report.samples,
         report.frames,
+        report.orders,
         report
             .stillness()
             .map_or(String::new(), |s| format!("Note: {s}.\n\n")),
-        pct(c.as_le_rest_pose),
+    );
+    md += "| method | median band (highest − lowest) / median | fewest influences |\n|---|---:|---:|\n";
+    for (name, m) in &report.methods {
+        md += &format!(
+            "| {name} | {} | {} |\n",
+            m.band.map_or("–".into(), |b| format!("{:.1}%", b * 100.0)),
+            c.min_influences.get(name).copied().unwrap_or(0)
+        );
+    }
+    md += "\n";
+    for (pair, s) in &c.separations {
+        md += &format!(
+            "- {pair}: bands apart on {} of the curve, the first better on {} of that ({} \
+             better, {} indistinguishable, {} worse): {}\n",
+            pct(Some(s.better + s.worse)),
+            pct(s.better_where_separate()),
+            pct(Some(s.better)),
+            pct(Some(s.indistinguishable)),
+            pct(Some(s.worse)),
+            s.says
+        );
+    }
+    md += &format!(
+        "- AS better than rest-pose on {} of the points where they separate down to the \
+         coarsest level (not beyond); AS / rest-pose {} at the median\n\
+         - AS+IS's lighting (colour error by vertex normals) at most {} AS's at the same \
+         total influences, over the levels where either shows {VISIBLE_COLOUR} or more\n",
         pct(c.as_le_rest_pose_at_levels),
-        c.noise
-            .map_or("–".into(), |n| format!("±{:.1}%", n * 100.0)),
-        pct(c.as_le_rest_pose_within_noise),
         c.as_over_rest_pose
             .map_or("–".into(), |r| format!("{r:.2}")),
-        pct(c.reordered_le_rest_pose),
-        pct(c.as_is_le_as),
         c.as_is_lighting_over_as
             .map_or("–".into(), |r| format!("{r:.2}×")),
-        // Only where the report measured meshoptimizer (`--baseline meshopt`).
-        if report.methods.contains_key("meshopt") {
-            format!(
-                "- meshopt ≤ rest-pose on {} of the meshopt curve\n",
-                pct(c.meshopt_le_rest_pose)
-            )
-        } else {
-            String::new()
-        },
-        c.min_influences
-            .iter()
-            .map(|(k, v)| format!("{k} {v}"))
-            .collect::<Vec<_>>()
-            .join(", ")
     );
     md
 }
@@ -243,24 +252,30 @@ pub(crate) fn docs_row(report: &Report) -> String {
             .map(|m| report.methods.get(m).map_or("–".into(), f))
             .join(" / ")
     };
+    let apart = |pair: &str| {
+        c.separations.get(pair).map_or("–".into(), |s| {
+            format!(
+                "{} ({} apart)",
+                pct(s.better_where_separate()),
+                pct(Some(s.better + s.worse))
+            )
+        })
+    };
     let triangles = crate::app::viewer::figures::thousands(report.triangles as u64);
     format!(
-        "| {} | {triangles} | {} | {} | {} | {} | {} ({}) | {} | {} | {} | {} |\n",
+        "| {} | {triangles} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
         report.model,
         each(&|m| format!("{:.2}", m.bake_seconds)),
         each(&|m| m
             .levels
             .last()
             .map_or("–".into(), |l| l.triangles.to_string())),
-        pct(c.as_le_rest_pose),
+        each(&|m| m.band.map_or("–".into(), |b| format!("{:.0}%", b * 100.0))),
+        apart("as vs rest-pose"),
         pct(c.as_le_rest_pose_at_levels),
-        pct(c.as_le_rest_pose_within_noise),
-        c.noise
-            .map_or("–".into(), |n| format!("±{:.1}%", n * 100.0)),
-        pct(c.reordered_le_rest_pose),
         c.as_over_rest_pose
             .map_or("–".into(), |r| format!("{r:.2}")),
-        pct(c.as_is_le_as),
+        apart("as+is vs as"),
         c.as_is_lighting_over_as
             .map_or("–".into(), |r| format!("{r:.2}×")),
     )

@@ -8,10 +8,14 @@
 //!
 //! The curves measure through the texture where the model's texture coordinates are a
 //! parameterisation, else by closest points ([`Probe::for_model`]); the report says which.
+//! Each method is baked in several tie orders (`--orders`), its curve the median with a band
+//! from the lowest to the highest, and methods are compared only where their bands separate
+//! ([`bands`]).
 
 use crate::app::cli::ReportArgs;
 use std::process::ExitCode;
 
+pub mod bands;
 pub mod compare;
 pub mod data;
 pub mod markdown;
@@ -25,11 +29,10 @@ use crate::app::commands::report::data::{
 use crate::app::commands::report::markdown::{docs_row, timings_markdown};
 use crate::app::commands::report::plot::plot;
 use crate::app::progress::Progress;
-use crate::bake::character::lod::{Replay, SkinnedLods, progressive_mesh};
+use crate::bake::character::lod::{Replay, SharedBake, SkinnedLods};
 use crate::bake::character::lod_error::{MeshError, Probe};
 use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
-use crate::model::{Model, SkinnedMesh};
 use anyhow::Result;
 use std::collections::BTreeMap;
 
@@ -57,8 +60,11 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         gpu: gpu.as_ref(),
         full: &full,
         lod_opts: &lod_opts,
+        // The other tie orders' bakes share the preparation, `P` and each order's first
+        // pricing.
+        shared: SharedBake::default(),
     };
-    for method in Method::ALL {
+    for method in Method::PAPERS {
         let (report, sequence) = measure_method(opts, &measuring, method)?;
         methods.insert(method.name().to_string(), report);
         sequences.push((method, sequence));
@@ -72,14 +78,10 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
         methods.insert(
             "meshopt".into(),
-            meshopt_curve(&probe, &base, &rest_bones, &triangles),
+            meshopt_curve(&probe, &base, &rest_bones, &triangles, opts.orders),
         );
     }
-
-    // Rest-pose once more on the same mesh in another order: how far two equal methods'
-    // curves stray apart, what the comparison of two methods is read against.
-    let twin = reordered_rest_pose(model);
-    let comparison = compare(&methods, &twin);
+    let comparison = compare(&methods);
     let moved = motion(model);
     let report = Report {
         model: model.name.clone(),
@@ -95,7 +97,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
         silhouette_tolerances: SILHOUETTE_TOLERANCES.to_vec(),
         motion: moved.0,
         motion_share: moved.1,
-        reordered_rest_pose: twin.curve,
+        orders: opts.orders,
     };
     crate::atomic::write(
         &opts.out.join("timings.md"),
@@ -112,7 +114,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
 
 /// What every method's measuring shares: the surface samples, the animation-space mesh, the
 /// poses of the silhouettes, the adapter for the lighting (if any), full detail drawn, the
-/// options the levels are cut by.
+/// options the levels are cut by, what the bakes in other tie orders share.
 struct Measuring<'a> {
     probe: &'a Probe<'a>,
     base: &'a AnimationSpaceMesh,
@@ -120,6 +122,7 @@ struct Measuring<'a> {
     gpu: Option<&'a crate::render::Gpu>,
     full: &'a crate::bake::gpu_data::drawable::Drawable,
     lod_opts: &'a crate::bake::character::lod::LodOptions,
+    shared: SharedBake<'a>,
 }
 
 /// One method's levels, from the cache or baked, and measured: its error curve, each level's
@@ -144,9 +147,16 @@ fn measure_method(
         log::warn!("{w}");
     }
     let read = origin == crate::bake::cache::Origin::Cache;
-    bar.set_stage("measuring");
     let clock = std::time::Instant::now();
-    let curve = measure_sequence(m.probe, m.base, &lods.sequence);
+    // Order 0 is the levels' own sequence; the others are baked here.
+    let mut others = Vec::new();
+    for order in 1..opts.orders {
+        bar.set_stage(&format!("tie order {} of {}", order + 1, opts.orders));
+        others.push(m.shared.sequence(model, m.base, method, order, &progress));
+    }
+    bar.set_stage("measuring");
+    let all: Vec<&Sequence> = std::iter::once(&lods.sequence).chain(&others).collect();
+    let curve = measure_in_orders(m.probe, m.base, &all);
     let measured = clock.elapsed().as_secs_f64();
     bar.set_stage("silhouettes");
     let levels = level_reports(&lods, m.poses);
@@ -186,10 +196,12 @@ fn measure_method(
     });
     let report = MethodReport {
         bake_seconds: lods.bake_seconds,
+        orders_seconds: measured,
         cache_hit_rate: match method {
             Method::InfluenceSimplification => lods.sequence.stats.cache_hit_rate(),
             _ => None,
         },
+        band: bands::band_width(&curve),
         curve,
         levels,
         shading,
@@ -237,32 +249,74 @@ pub fn measure_sequence(
     base: &AnimationSpaceMesh,
     seq: &Sequence,
 ) -> Vec<CurvePoint> {
-    let first = seq.influences_after(0).max(1) as f64;
-    let last = seq.influences_after(seq.steps.len()).max(1) as f64;
-    let mut prefixes: Vec<usize> = (0..CURVE_POINTS)
+    measure_in_orders(probe, base, &[seq])
+}
+
+/// The error along each of `sequences` (one method in several tie orders) at the same
+/// [`CURVE_POINTS`] influence counts, spaced evenly in log(influences) from full detail to the
+/// farthest any of them reaches, made into one curve with its band ([`bands::banded`]).
+pub fn measure_in_orders(
+    probe: &Probe,
+    base: &AnimationSpaceMesh,
+    sequences: &[&Sequence],
+) -> Vec<CurvePoint> {
+    let Some(first) = sequences.first() else {
+        return Vec::new();
+    };
+    let full = first.influences_after(0).max(1) as f64;
+    let last = sequences
+        .iter()
+        .map(|s| s.influences_after(s.steps.len()).max(1))
+        .min()
+        .unwrap_or(1) as f64;
+    let targets: Vec<f64> = (0..CURVE_POINTS)
         .map(|j| {
             let t = j as f64 / (CURVE_POINTS - 1) as f64;
-            let target = (first.ln() + t * (last.ln() - first.ln())).exp();
-            // The first prefix at or below the target influence count.
-            (0..=seq.steps.len())
-                .find(|&p| seq.influences_after(p) as f64 <= target + 0.5)
-                .unwrap_or(seq.steps.len())
+            (full.ln() + t * (last.ln() - full.ln())).exp()
         })
         .collect();
-    prefixes.dedup();
+    let per_order: Vec<Vec<Option<CurvePoint>>> = sequences
+        .iter()
+        .map(|seq| measure_at(probe, base, seq, &targets))
+        .collect();
+    bands::banded(&per_order)
+}
+
+/// The error of `seq` at the first prefix at or below each of `targets` influences; `None`
+/// for those it stops short of. One step can pass several targets: they share its point.
+fn measure_at(
+    probe: &Probe,
+    base: &AnimationSpaceMesh,
+    seq: &Sequence,
+    targets: &[f64],
+) -> Vec<Option<CurvePoint>> {
     let mut replay = Replay::new(base, seq);
-    prefixes
-        .into_iter()
-        .map(|p| {
+    let mut taken: Option<(usize, CurvePoint)> = None;
+    targets
+        .iter()
+        .map(|&target| {
+            let from = taken.as_ref().map_or(0, |t| t.0);
+            let p = (from..=seq.steps.len())
+                .find(|&p| seq.influences_after(p) as f64 <= target + 0.5)?;
+            if let Some((q, point)) = &taken
+                && *q == p
+            {
+                return Some(point.clone());
+            }
             replay.advance_to(seq, p);
             let tris: Vec<[u32; 3]> = replay.triangles().collect();
             let MeshError { rms, max } = probe.measure(&tris, |r| replay.influences_of(r));
-            CurvePoint {
+            let point = CurvePoint {
                 influences: seq.influences_after(p),
                 triangles: seq.triangles_after(p),
                 rms_error: rms,
+                rms_low: rms,
+                rms_high: rms,
                 max_error: max,
-            }
+                orders: 1,
+            };
+            taken = Some((p, point.clone()));
+            Some(point)
         })
         .collect()
 }
@@ -270,20 +324,23 @@ pub fn measure_sequence(
 /// meshoptimizer's simplifier on the rest pose, to each triangle count, set up as gltfpack
 /// sets it up for a skinned mesh (its `simplifyMesh`): normals as attributes of weight 0.5,
 /// texture seams kept by meshoptimizer's own topology, small parts pruned, triangles kept
-/// regular.
+/// regular. Its ties go by the order it is handed vertices and triangles in, which this
+/// project does not control: its band is over `orders` listings of the mesh (the first as
+/// the file has it, then [`relisted`](crate::model::Model::relisted)'s shuffles).
 fn meshopt_curve(
     probe: &Probe,
     base: &AnimationSpaceMesh,
     rest_bones: &[glam::Affine3A],
     triangles: &[u32],
+    orders: u32,
 ) -> MethodReport {
     let positions: Vec<[f32; 3]> = base
         .rest_positions(rest_bones)
         .iter()
         .map(|p| p.to_array())
         .collect();
-    let normals: Vec<f32> = (0..base.vertex_count())
-        .flat_map(|v| {
+    let normals: Vec<[f32; 3]> = (0..base.vertex_count())
+        .map(|v| {
             let n: glam::Vec3 = base
                 .influences_of(v)
                 .iter()
@@ -292,102 +349,143 @@ fn meshopt_curve(
             n.normalize_or_zero().to_array()
         })
         .collect();
-    let locks = vec![false; base.vertex_count()];
-    let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&positions), 12, 0)
-        .expect("tightly packed positions");
-    let options = meshopt::SimplifyOptions::Prune | meshopt::SimplifyOptions::Regularize;
-    let mut curve = Vec::new();
+    let clock = std::time::Instant::now();
     let mut seconds = 0.0;
-    let full = base.triangle_count() as u32;
-    for &target in triangles {
-        let start = std::time::Instant::now();
-        let indices = if target >= full {
-            base.indices.clone()
-        } else {
-            meshopt::simplify_with_attributes_and_locks(
-                &base.indices,
-                &adapter,
-                &normals,
-                &[0.5; 3],
-                12,
-                &locks,
-                target as usize * 3,
-                f32::MAX,
-                options,
-                None,
-            )
-        };
-        seconds = start.elapsed().as_secs_f64();
-        let tris: Vec<[u32; 3]> = indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .collect();
-        if tris.is_empty() {
-            // Component pruning removed every part: nothing is left to measure, and no
-            // smaller target keeps anything either.
-            eprintln!(
-                "note: meshopt keeps no triangle at a target of {target}; its curve ends there"
-            );
-            break;
-        }
-        let mut used = vec![false; base.vertex_count()];
-        tris.iter().flatten().for_each(|&v| used[v as usize] = true);
-        let influences = (0..base.vertex_count())
-            .filter(|&v| used[v])
-            .map(|v| base.influences_of(v).len() as u32)
-            .sum();
-        let MeshError { rms, max } = probe.measure(&tris, |r| base.influences_of(r as usize));
-        curve.push(CurvePoint {
-            influences,
-            triangles: tris.len() as u32,
-            rms_error: rms,
-            max_error: max,
-        });
-    }
+    let per_order: Vec<Vec<Option<CurvePoint>>> = (0..orders)
+        .map(|order| {
+            let listing = Listing::new(base, order);
+            let (curve, s) = listing.meshopt_points(probe, base, &positions, &normals, triangles);
+            if order == 0 {
+                seconds = s;
+            }
+            curve
+        })
+        .collect();
+    let curve = bands::banded(&per_order);
     MethodReport {
         // One call to the coarsest target: what building a level costs.
         bake_seconds: seconds,
+        orders_seconds: clock.elapsed().as_secs_f64(),
         cache_hit_rate: None,
+        band: bands::band_width(&curve),
         curve,
         levels: Vec::new(),
         shading: Vec::new(),
     }
 }
 
-/// `model` with its vertices in reverse order and each triangle's corners rotated: the same
-/// surface, the same skin, so a method baked on it differs from the original only where
-/// steps of equal cost are taken in another order.
-pub fn reordered(model: &Model) -> Model {
-    let src = &model.mesh;
-    let n = src.vertex_count() as u32;
-    let mut mesh = SkinnedMesh::empty();
-    for v in (0..n as usize).rev() {
-        mesh.copy_vertex_from(src, v);
-    }
-    mesh.indices = src
-        .indices
-        .chunks_exact(3)
-        .rev()
-        .flat_map(|t| [t[1], t[2], t[0]])
-        .map(|v| n - 1 - v)
-        .collect();
-    Model {
-        mesh,
-        ..model.clone()
-    }
+/// The full-detail mesh as meshoptimizer is handed it in one order: vertex `v` listed as
+/// `new[v]`, and the triangles.
+struct Listing {
+    old: Vec<u32>,
+    indices: Vec<u32>,
 }
 
-/// Rest-pose's error curve on [`reordered`] `model`, for the noise band.
-fn reordered_rest_pose(model: &Model) -> MethodReport {
-    let twin = reordered(model);
-    let (base, sequence, seconds) = progressive_mesh(&twin, Method::RestPose, &|_| {});
-    let probe = Probe::for_model(&twin, &base, SAMPLES);
-    MethodReport {
-        bake_seconds: seconds,
-        cache_hit_rate: None,
-        curve: measure_sequence(&probe, &base, &sequence),
-        levels: Vec::new(),
-        shading: Vec::new(),
+impl Listing {
+    /// Order 0 as it is; order k the vertices and triangles shuffled by seed k, each
+    /// triangle's corners rotated.
+    fn new(base: &AnimationSpaceMesh, order: u32) -> Listing {
+        let n = base.vertex_count() as u32;
+        let mut old: Vec<u32> = (0..n).collect();
+        let mut triangles: Vec<[u32; 3]> = base
+            .indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        if order > 0 {
+            let mut rng = fastrand::Rng::with_seed(u64::from(order));
+            rng.shuffle(&mut old);
+            rng.shuffle(&mut triangles);
+            for t in &mut triangles {
+                t.rotate_left(rng.usize(0..3));
+            }
+        }
+        let mut new = vec![0u32; n as usize];
+        for (k, &v) in old.iter().enumerate() {
+            new[v as usize] = k as u32;
+        }
+        let indices = triangles
+            .iter()
+            .flatten()
+            .map(|&v| new[v as usize])
+            .collect();
+        Listing { old, indices }
+    }
+
+    /// meshoptimizer's levels at each of `triangles` in this listing, measured by `probe` in
+    /// the original's numbering; and the seconds of the coarsest call.
+    fn meshopt_points(
+        &self,
+        probe: &Probe,
+        base: &AnimationSpaceMesh,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        triangles: &[u32],
+    ) -> (Vec<Option<CurvePoint>>, f64) {
+        let listed =
+            |a: &[[f32; 3]]| -> Vec<[f32; 3]> { self.old.iter().map(|&v| a[v as usize]).collect() };
+        let (positions, normals) = (listed(positions), listed(normals));
+        let listed_as_is = self.old.iter().enumerate().all(|(k, &v)| k as u32 == v);
+        let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&positions), 12, 0)
+            .expect("tightly packed positions");
+        let options = meshopt::SimplifyOptions::Prune | meshopt::SimplifyOptions::Regularize;
+        let locks = vec![false; positions.len()];
+        let full = base.triangle_count() as u32;
+        let mut seconds = 0.0;
+        let mut curve = Vec::new();
+        for &target in triangles {
+            let start = std::time::Instant::now();
+            let indices = if target >= full {
+                self.indices.clone()
+            } else {
+                meshopt::simplify_with_attributes_and_locks(
+                    &self.indices,
+                    &adapter,
+                    bytemuck::cast_slice(&normals),
+                    &[0.5; 3],
+                    12,
+                    &locks,
+                    target as usize * 3,
+                    f32::MAX,
+                    options,
+                    None,
+                )
+            };
+            seconds = start.elapsed().as_secs_f64();
+            let tris: Vec<[u32; 3]> = indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]].map(|v| self.old[v as usize]))
+                .collect();
+            if tris.is_empty() {
+                // Component pruning removed every part: nothing is left to measure, and no
+                // smaller target keeps anything either. Said once, of the file's own order.
+                if listed_as_is {
+                    eprintln!(
+                        "note: meshopt keeps no triangle at a target of {target}; its curve ends there"
+                    );
+                }
+                curve.push(None);
+                break;
+            }
+            let mut used = vec![false; base.vertex_count()];
+            tris.iter().flatten().for_each(|&v| used[v as usize] = true);
+            let influences = (0..base.vertex_count())
+                .filter(|&v| used[v])
+                .map(|v| base.influences_of(v).len() as u32)
+                .sum();
+            let MeshError { rms, max } = probe.measure(&tris, |r| base.influences_of(r as usize));
+            curve.push(Some(CurvePoint {
+                influences,
+                triangles: tris.len() as u32,
+                rms_error: rms,
+                rms_low: rms,
+                rms_high: rms,
+                max_error: max,
+                orders: 1,
+            }));
+        }
+        curve.resize(triangles.len(), None);
+        (curve, seconds)
     }
 }
 
@@ -430,6 +528,7 @@ pub fn command(
         budgets: inputs.level_budgets.clone(),
         out: a.out.clone(),
         baseline_meshopt: a.baseline.is_some(),
+        orders: a.orders,
         progress: true,
         cache: crate::bake::cache::LodCache::new(a.cache.clone()),
         source: imported.source_hash,
@@ -438,9 +537,8 @@ pub fn command(
     Ok(ExitCode::SUCCESS)
 }
 
-/// What a character's report found, a line a finding: the methods compared along the curve
-/// and at the levels, against the noise a reordered mesh shows, then the floors, the
-/// correspondence, stillness and where the files are.
+/// What a character's report found, a line a finding: the methods compared where their bands
+/// separate and where, the floors, the correspondence, stillness and where the files are.
 fn summary(report: &Report, out: &std::path::Path) -> String {
     let c = &report.comparison;
     let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.0}%", x * 100.0));
@@ -449,27 +547,35 @@ fn summary(report: &Report, out: &std::path::Path) -> String {
         .iter()
         .filter_map(|(m, r)| Some(format!("{m} {}", r.levels.last()?.triangles)))
         .collect();
+    let bands: Vec<String> = report
+        .methods
+        .iter()
+        .filter_map(|(m, r)| Some(format!("{m} ±{:.0}%", r.band? * 50.0)))
+        .collect();
     let mut s = format!(
-        "{}: AS <= rest-pose on {} of the curve, {} of its levels\n",
+        "{}: {} tie orders a method; median band {}\n",
         report.model,
-        pct(c.as_le_rest_pose),
-        pct(c.as_le_rest_pose_at_levels)
+        report.orders,
+        bands.join(", ")
     );
+    for (pair, sep) in &c.separations {
+        let first = pair.split(' ').next().unwrap_or(pair);
+        s += &format!(
+            "  {pair}: bands apart on {} of the curve, {first} better on {} of that; by influences:\n",
+            pct(Some(sep.better + sep.worse)),
+            pct(sep.better_where_separate()),
+        );
+        s += &wrapped(&sep.runs(), "    ", 150);
+    }
     s += &format!(
-        "  within the noise: {} (the same mesh reordered moves rest-pose's error {} at the median, and is at or under it on {} of the curve)\n",
-        pct(c.as_le_rest_pose_within_noise),
-        c.noise
-            .map_or("-".into(), |n| format!("±{:.1}%", n * 100.0)),
-        pct(c.reordered_le_rest_pose)
-    );
-    s += &format!(
-        "  AS/rest-pose error at the median: {}\n",
+        "  AS better than rest-pose on {} of the points where they separate down to the \
+         coarsest level; AS/rest-pose error at the median: {}\n",
+        pct(c.as_le_rest_pose_at_levels),
         c.as_over_rest_pose
             .map_or("-".into(), |r| format!("{r:.2}"))
     );
     s += &format!(
-        "  AS+IS <= AS on {} of the curve; its lighting at most {} AS's at equal influences\n",
-        pct(c.as_is_le_as),
+        "  AS+IS's lighting at most {} AS's at equal influences\n",
         c.as_is_lighting_over_as
             .map_or("-".into(), |r| format!("{r:.2}x"))
     );
@@ -486,9 +592,24 @@ fn summary(report: &Report, out: &std::path::Path) -> String {
     s
 }
 
+/// `text` broken after its commas into lines of at most `width` characters, each indented.
+fn wrapped(text: &str, indent: &str, width: usize) -> String {
+    let mut lines: Vec<String> = Vec::new();
+    for piece in text.split_inclusive(", ") {
+        match lines.last_mut() {
+            Some(l) if l.chars().count() + piece.chars().count() <= width => l.push_str(piece),
+            _ => lines.push(format!("{indent}{piece}")),
+        }
+    }
+    lines
+        .iter()
+        .map(|l| format!("{}\n", l.trim_end()))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::compare::{lighting_at, lighting_over, local_band};
+    use super::compare::{lighting_at, lighting_over};
     use super::*;
     use crate::app::plotting::log_label;
 
@@ -500,21 +621,6 @@ mod tests {
             .collect();
         assert_eq!(labels, ["0.0012", "0.050", "0.50", "1.0", "3.2", "40"]);
     }
-    #[test]
-    fn the_noise_band_follows_the_reordered_curve_along_it() {
-        // Equal methods part by 50% around 500 influences and by 1% elsewhere.
-        let deviations: Vec<(f64, f64)> = [8000.0, 4000.0, 2000.0, 1000.0, 500.0, 250.0, 125.0]
-            .into_iter()
-            .map(|x| (x, if x == 500.0 { 0.5 } else { 0.01 }))
-            .collect();
-        let median = 0.02;
-        assert_eq!(local_band(&deviations, median, 480.0), 0.5);
-        // A neighbour of the spike sees it; two points off, the median is the band.
-        assert_eq!(local_band(&deviations, median, 1000.0), 0.5);
-        assert_eq!(local_band(&deviations, median, 4000.0), median);
-        assert_eq!(local_band(&deviations, median, 130.0), median);
-    }
-
     /// A method's report of its levels' colour errors only, each level with as many
     /// influences as triangles.
     fn lit(levels: &[(u32, f32)]) -> MethodReport {
@@ -541,7 +647,9 @@ mod tests {
         };
         MethodReport {
             bake_seconds: 0.0,
+            orders_seconds: 0.0,
             cache_hit_rate: None,
+            band: None,
             curve: Vec::new(),
             levels: levels.iter().map(level).collect(),
             shading: levels.iter().enumerate().skip(1).map(shading).collect(),
@@ -566,39 +674,5 @@ mod tests {
         assert!(lighting_over(&faint_is, &faint_as).is_none());
         // Where one of them shows, it counts.
         assert!(lighting_over(&is, &faint_as).unwrap() > 20.0);
-    }
-
-    #[test]
-    fn a_reordered_model_is_the_same_surface_and_skin() {
-        let model = crate::generate::walker::lowpoly();
-        let twin = reordered(&model);
-        let corners = |m: &Model| {
-            let mesh = &m.mesh;
-            let mut tris: Vec<String> = mesh
-                .indices
-                .chunks_exact(3)
-                .map(|t| {
-                    // A triangle up to rotation, by its corners' positions and skins.
-                    let c: Vec<String> = t
-                        .iter()
-                        .map(|&v| {
-                            let v = v as usize;
-                            format!("{:?}{:?}", mesh.positions[v], mesh.influences_of(v))
-                        })
-                        .collect();
-                    let k = (0..3).min_by_key(|&k| &c[k]).unwrap();
-                    format!("{}{}{}", c[k], c[(k + 1) % 3], c[(k + 2) % 3])
-                })
-                .collect();
-            tris.sort();
-            tris
-        };
-        assert_eq!(corners(&model), corners(&twin));
-        // And not the same order: vertex 0 is the last one now.
-        assert_eq!(
-            twin.mesh.positions[0],
-            *model.mesh.positions.last().unwrap()
-        );
-        assert_ne!(model.mesh.indices, twin.mesh.indices);
     }
 }

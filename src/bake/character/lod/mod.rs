@@ -17,6 +17,7 @@
 pub mod cached;
 pub mod cut;
 pub mod levels;
+pub mod meshopt;
 pub mod replay;
 
 use cut::cut_growing_levels;
@@ -140,7 +141,24 @@ impl<'a> SharedBake<'a> {
                 let start = &in_order.as_start;
                 simplify_prepared(prepared, ties, pm, start, method, progress, feed)
             }
+            // meshoptimizer hands back levels, not collapses: its sequence is the start alone.
+            Method::Meshopt => {
+                feed(Feed::Start(no_steps(prepared, method)));
+                Stats::default()
+            }
         }
+    }
+}
+
+/// A sequence of no steps from `prepared`: the full detail alone.
+fn no_steps(prepared: &Prepared, method: Method) -> Sequence {
+    Sequence {
+        method,
+        positions: prepared.positions.clone(),
+        base_triangles: prepared.mesh.tris.clone(),
+        base_influences: prepared.influences as u32,
+        steps: Vec::new(),
+        stats: Stats::default(),
     }
 }
 
@@ -186,6 +204,27 @@ pub fn bake_lods_sharing<'a>(
     progress: &(dyn Fn(f32) + Sync),
 ) -> SkinnedLods {
     let start = web_time::Instant::now();
+    if method == Method::Meshopt {
+        let probes = shared.probes(model, base);
+        let (levels, stopped) = meshopt::meshopt_levels(model, base, opts, probes, progress);
+        if let Some(left) = stopped {
+            log::info!(
+                "{}: meshoptimizer stops at {left} triangles, above the floor of {} (locked \
+                 seams and borders it will not move)",
+                model.name,
+                opts.floor_triangles
+            );
+        }
+        let prepared = shared.prepared.get_or_init(|| prepare(model, base));
+        return SkinnedLods {
+            model: model.name.clone(),
+            method,
+            options: opts.clone(),
+            levels,
+            sequence: no_steps(prepared, method),
+            bake_seconds: start.elapsed().as_secs_f64(),
+        };
+    }
     let (sequence, levels) = std::thread::scope(|scope| {
         // Made inside the scope, so that a panicking simplifier drops them and the cutter,
         // seeing the channel close, ends before the scope joins it.

@@ -145,45 +145,57 @@ impl<'a> Replay<'a> {
 
     /// The current mesh as a compact level: used vertices only, GPU order.
     pub(crate) fn snapshot(&self, prefix: usize, error: f32, bound: f32) -> LodLevel {
-        let n = self.base.vertex_count();
-        let mut local = vec![u32::MAX; n];
-        let mut used: Vec<u32> = Vec::new();
-        let mut indices = Vec::with_capacity(self.mesh.alive_triangles * 3);
-        for t in self.triangles() {
-            for r in t {
-                if local[r as usize] == u32::MAX {
-                    local[r as usize] = used.len() as u32;
-                    used.push(r);
-                }
-                indices.push(local[r as usize]);
+        let mut level = compact_level(self.base, self.triangles(), |r| self.influences_of(r));
+        level.prefix = prefix as u32;
+        level.error = error;
+        level.bound = bound;
+        level
+    }
+}
+
+/// A level made of `triangles` of `base`'s render vertices, each with `influences(r)`: only
+/// the vertices used, in the order a GPU draws fastest, with their full-detail numbers
+/// (`source`); no geomorph map yet, and its prefix, error and bound 0.
+pub(crate) fn compact_level<'i>(
+    base: &AnimationSpaceMesh,
+    triangles: impl Iterator<Item = [u32; 3]>,
+    influences: impl Fn(u32) -> &'i [AsInfluence],
+) -> LodLevel {
+    let n = base.vertex_count();
+    let mut local = vec![u32::MAX; n];
+    let mut used: Vec<u32> = Vec::new();
+    let mut indices = Vec::new();
+    for t in triangles {
+        for r in t {
+            if local[r as usize] == u32::MAX {
+                local[r as usize] = used.len() as u32;
+                used.push(r);
             }
+            indices.push(local[r as usize]);
         }
-        let mut compact = AnimationSpaceMesh {
-            offsets: vec![0],
-            influences: Vec::new(),
-            uvs: used.iter().map(|&r| self.base.uvs[r as usize]).collect(),
-            materials: used
-                .iter()
-                .map(|&r| self.base.materials[r as usize])
-                .collect(),
-            indices,
-            spectral_rows: Vec::new(),
-            crown_occlusion: Vec::new(),
-            view_windows: Vec::new(),
-        };
-        for &r in &used {
-            compact.influences.extend_from_slice(self.influences_of(r));
-            compact.offsets.push(compact.influences.len() as u32);
-        }
-        let (mesh, order) = compact.optimized_for_gpu_with_order();
-        LodLevel {
-            prefix: prefix as u32,
-            error,
-            bound,
-            mesh,
-            source: order.iter().map(|&i| used[i]).collect(),
-            geomorph: Vec::new(),
-        }
+    }
+    let mut compact = AnimationSpaceMesh {
+        offsets: vec![0],
+        influences: Vec::new(),
+        uvs: used.iter().map(|&r| base.uvs[r as usize]).collect(),
+        materials: used.iter().map(|&r| base.materials[r as usize]).collect(),
+        indices,
+        spectral_rows: Vec::new(),
+        crown_occlusion: Vec::new(),
+        view_windows: Vec::new(),
+    };
+    for &r in &used {
+        compact.influences.extend_from_slice(influences(r));
+        compact.offsets.push(compact.influences.len() as u32);
+    }
+    let (mesh, order) = compact.optimized_for_gpu_with_order();
+    LodLevel {
+        prefix: 0,
+        error: 0.0,
+        bound: 0.0,
+        mesh,
+        source: order.iter().map(|&i| used[i]).collect(),
+        geomorph: Vec::new(),
     }
 }
 

@@ -7,7 +7,8 @@ use glam::Affine3A;
 use serde::{Deserialize, Serialize};
 
 crate::choice! {
-    /// The three ways of ranking simplifications the paper compares.
+    /// How a character's levels are made: the three ways of ranking simplifications the paper
+    /// compares, and meshoptimizer, what engines ship today, to compare them against.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
     pub enum Method {
         /// Edge collapses ranked by Euclidean deviation in the rest pose ("3D" in Table 1).
@@ -19,7 +20,20 @@ crate::choice! {
         /// As `AnimationSpace`, with influence simplifications in the same queue (§5).
         #[serde(rename = "as+is")]
         InfluenceSimplification => "as+is",
+        /// meshoptimizer's attribute-aware simplifier on the rest pose, as gltfpack runs it,
+        /// at the same error targets (`bake::character::lod::meshopt`).
+        #[serde(rename = "meshopt")]
+        Meshopt => "meshopt",
     }
+}
+
+impl Method {
+    /// The paper's three methods: those that make a collapse sequence.
+    pub const PAPERS: [Method; 3] = [
+        Method::RestPose,
+        Method::AnimationSpace,
+        Method::InfluenceSimplification,
+    ];
 }
 
 /// What the simplifier needs to know about a character.

@@ -144,8 +144,9 @@ impl Prepared {
     }
 }
 
-/// The order in which the simplifier breaks ties between steps of equal cost (on the cost
-/// grid, a flat region's free collapses are many): a rank per position.
+/// The order in which the simplifier breaks the ties left between steps of equal cost and
+/// equal edge length (on the cost grid, a flat region's free collapses are many, and a
+/// mirror-symmetric character's edges come in equal pairs): a rank per position.
 ///
 /// The rank is made from what each position is, never from where the file lists it, so that
 /// the same mesh in any vertex and triangle order simplifies alike (issue: comparisons with

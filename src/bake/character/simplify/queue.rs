@@ -29,13 +29,19 @@ pub(crate) enum Action {
     Prune,
 }
 
-/// A queue entry. Ordered by cost, then kind, then the tie order's rank of its vertex (or
-/// part), never its index: equal costs go the same way whatever order the file lists its
-/// vertices in (see [`Ties`](super::prepare::Ties)).
+/// A queue entry. Ordered by cost, then kind, then (collapses) the shorter edge, then the tie
+/// order's rank of its vertex (or part), never its index: equal costs go the same way whatever
+/// order the file lists its vertices in (see [`Ties`](super::prepare::Ties)). Of free
+/// collapses in a flat region, the shortest first keeps triangles even where the clips bend
+/// the region later: ranked by position alone, the rest-pose method emptied the split tube's
+/// straight runs end to end and cut 3 levels where it had cut 5.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Entry {
     pub(crate) cost: f64,
     pub(crate) action: Action,
+    /// A collapse's edge length at rest (0 for other actions): of equal costs, the shorter
+    /// edge goes first.
+    pub(crate) length: f64,
     pub(crate) tie: u32,
     pub(crate) vertex: u32,
     pub(crate) version: u32,
@@ -57,6 +63,7 @@ impl Ord for Entry {
         self.cost
             .total_cmp(&other.cost)
             .then(self.action.cmp(&other.action))
+            .then(self.length.total_cmp(&other.length))
             .then(self.tie.cmp(&other.tie))
             .then(self.vertex.cmp(&other.vertex))
             .then(self.version.cmp(&other.version))
@@ -349,7 +356,12 @@ impl Simplifier<'_> {
             .filter_map(|&u2| Some((self.unoriented_cost(u, u2, &mut w.scratch)?, u2)))
             .collect();
         let tie = |u: u32| self.ties[u as usize];
-        costs.sort_by(|a, b| a.0.total_cmp(&b.0).then(tie(a.1).cmp(&tie(b.1))));
+        let length = |u2: u32| self.rest[ui].distance_squared(self.rest[u2 as usize]);
+        costs.sort_by(|a, b| {
+            a.0.total_cmp(&b.0)
+                .then(length(a.1).total_cmp(&length(b.1)))
+                .then(tie(a.1).cmp(&tie(b.1)))
+        });
         let ctx = self.context();
         let best = costs.into_iter().find(|&(_, u2)| {
             ctx.check_link(u, u2, &w.neighbours).is_ok() && ctx.check_orientation(u, u2).is_ok()
@@ -418,6 +430,7 @@ impl Simplifier<'_> {
             self.heap.push(Reverse(Entry {
                 cost,
                 action: Action::Collapse,
+                length: self.rest[ui].distance(self.rest[u2 as usize]),
                 tie: self.ties[ui],
                 vertex: u,
                 version: self.collapse_version[ui],
@@ -437,6 +450,7 @@ impl Simplifier<'_> {
             self.heap.push(Reverse(Entry {
                 cost,
                 action: Action::Influence,
+                length: 0.0,
                 tie: self.ties[ui],
                 vertex: u,
                 version: self.influence_version[ui],
@@ -456,6 +470,7 @@ impl Simplifier<'_> {
             self.heap.push(Reverse(Entry {
                 cost,
                 action: Action::Prune,
+                length: 0.0,
                 tie,
                 vertex: part,
                 version: 0,
