@@ -96,7 +96,9 @@ fn cylinder_levels_are_valid_for_every_method() {
     let model = bent_cylinder(16, 12);
     for method in Method::ALL {
         let lods = bake_lods(&model, method, &options(2e-3, 20), &|_| {});
-        check_levels(&lods.levels, true);
+        // meshoptimizer may press a thin part flat into two sheets back to back (edges of
+        // four triangles): the papers' simplifier keeps the link condition.
+        check_levels(&lods.levels, method != Method::Meshopt);
         assert!(
             lods.levels.len() >= 3,
             "{method}: {} levels",

@@ -336,7 +336,7 @@ fn report_writes_curves_plot_and_timings() {
         let s = &c["separations"][pair];
         let share = |k: &str| s[k].as_f64().unwrap();
         let total = share("better") + share("indistinguishable") + share("worse");
-        assert!((total - 1.0).abs() < 1e-9, "{pair}: {s}");
+        assert!((total - 1.0).abs() < 1e-4, "{pair}: {s}");
         assert!(!s["spans"].as_array().unwrap().is_empty(), "{pair}: {s}");
         assert!(s["says"].as_str().unwrap().contains(" influences"), "{s}");
     }

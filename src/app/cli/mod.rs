@@ -405,7 +405,7 @@ pub struct ReportArgs {
     /// Tie orders each method is baked in: every curve is their median with a band from the
     /// lowest to the highest, and methods are compared only where their bands separate. The
     /// first order is the levels' own; each other costs a simplification.
-    #[arg(long, value_name = "N", default_value_t = crate::app::commands::report::data::ORDERS,
+    #[arg(long, value_name = "N", default_value_t = REPORT_ORDERS,
           value_parser = clap::value_parser!(u32).range(1..=32))]
     pub orders: u32,
     /// Cache folder of baked levels of detail (default: the platform cache folder's
@@ -420,6 +420,9 @@ pub struct ReportArgs {
     #[arg(long, value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
 }
+
+/// Tie orders `report` bakes each method in by default (`--orders`).
+pub const REPORT_ORDERS: u32 = 5;
 
 /// Simplifiers a report can measure beside the paper's methods.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 /// Points per curve, spaced evenly in log(influences) from full detail to the coarsest mesh.
 pub const CURVE_POINTS: usize = 40;
 /// Tie orders each method is baked in (`--orders`): the band of every curve.
-pub const ORDERS: u32 = 5;
+pub const ORDERS: u32 = crate::app::cli::REPORT_ORDERS;
 /// Errors below this (in scene units) are rounding, not simplification: full detail.
 pub(crate) const NEGLIGIBLE: f64 = 1e-9;
 /// Surface samples the error is averaged over.

@@ -17,6 +17,8 @@
 pub mod cached;
 pub mod cut;
 pub mod levels;
+// meshoptimizer is C++: the web build goes without it (its levels come from the desktop's bake).
+#[cfg(not(target_arch = "wasm32"))]
 pub mod meshopt;
 pub mod replay;
 
@@ -205,8 +207,23 @@ pub fn bake_lods_sharing<'a>(
 ) -> SkinnedLods {
     let start = web_time::Instant::now();
     if method == Method::Meshopt {
-        let probes = shared.probes(model, base);
-        let (levels, stopped) = meshopt::meshopt_levels(model, base, opts, probes, progress);
+        #[cfg(not(target_arch = "wasm32"))]
+        let (levels, stopped) =
+            meshopt::meshopt_levels(model, base, opts, shared.probes(model, base), progress);
+        // No meshoptimizer in the browser: full detail alone, said once.
+        #[cfg(target_arch = "wasm32")]
+        let (levels, stopped) = {
+            log::warn!(
+                "{}: meshoptimizer's levels are baked on the desktop",
+                model.name
+            );
+            let level = replay::compact_level(
+                base,
+                base.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]),
+                |r| base.influences_of(r as usize),
+            );
+            (vec![level], None::<u32>)
+        };
         if let Some(left) = stopped {
             log::info!(
                 "{}: meshoptimizer stops at {left} triangles, above the floor of {} (locked \
