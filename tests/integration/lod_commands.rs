@@ -374,6 +374,14 @@ fn report_writes_curves_plot_and_timings() {
             .unwrap()
             .is_empty()
     );
+    // meshoptimizer's levels as the viewer bakes them, and where they end, said.
+    let meshopt_levels = json["methods"]["meshopt"]["levels"].as_array().unwrap();
+    assert!(meshopt_levels.len() >= 2, "{meshopt_levels:?}");
+    assert!(
+        stdout.contains("meshopt's levels stop short at")
+            || stdout.contains("meshopt's levels reach"),
+        "{stdout}"
+    );
     let timings = std::fs::read_to_string(out_dir.join("timings.md")).unwrap();
     assert!(timings.contains("## Lighting"), "{timings}");
     assert!(

@@ -64,7 +64,7 @@ pub struct MethodReport {
     /// The median width of the curve's band: (highest − lowest) / median over the orders.
     pub band: Option<f64>,
     pub curve: Vec<CurvePoint>,
-    /// The levels the viewer uses (empty for the meshopt baseline).
+    /// The levels the viewer uses, with their silhouettes (meshopt's too, without lighting).
     pub levels: Vec<LevelReport>,
     /// Every level but full detail's colour error against full detail, lit by its vertex
     /// normals and through its normal map, [`SHADING_PX`] high (empty for the meshopt

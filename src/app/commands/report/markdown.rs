@@ -106,6 +106,9 @@ fn comparison_markdown(report: &Report) -> String {
             s.says
         );
     }
+    if let Some(line) = meshopt_floor(report) {
+        md += &format!("- {line}\n");
+    }
     md += &format!(
         "- AS better than rest-pose on {} of the points where they separate down to the \
          coarsest level (not beyond); AS / rest-pose {} at the median\n\
@@ -279,4 +282,23 @@ pub(crate) fn docs_row(report: &Report) -> String {
         c.as_is_lighting_over_as
             .map_or("–".into(), |r| format!("{r:.2}×")),
     )
+}
+
+/// Where meshoptimizer's levels end against the floor the papers' methods reach, in words;
+/// `None` where the report has no meshopt levels.
+pub(crate) fn meshopt_floor(report: &Report) -> Option<String> {
+    let coarsest = report.methods.get("meshopt")?.levels.last()?.triangles;
+    let floor = report
+        .methods
+        .get("rest-pose")
+        .and_then(|r| r.levels.last())
+        .map_or(0, |l| l.triangles);
+    Some(if coarsest > floor {
+        format!(
+            "meshopt's levels stop short at {coarsest} triangles (rest-pose reaches {floor}): \
+             seams and borders meshoptimizer will not move"
+        )
+    } else {
+        format!("meshopt's levels reach {coarsest} triangles, as far as rest-pose's")
+    })
 }

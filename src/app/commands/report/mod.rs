@@ -76,10 +76,19 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
             .map(|p| p.triangles)
             .collect();
         let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
-        methods.insert(
-            "meshopt".into(),
-            meshopt_curve(&probe, &base, &rest_bones, &triangles, opts.orders),
+        let mut meshopt = meshopt_curve(&probe, &base, &rest_bones, &triangles, opts.orders);
+        // Its levels as the viewer bakes them, with their silhouettes: where they end says
+        // where meshoptimizer stops short of the floor.
+        let (lods, _) = crate::bake::character::lod::cached::load_or_bake(
+            &opts.cache,
+            model,
+            &opts.source,
+            Method::Meshopt,
+            &lod_opts,
+            &|_| {},
         );
+        meshopt.levels = level_reports(&lods, &poses);
+        methods.insert("meshopt".into(), meshopt);
     }
     let comparison = compare(&methods);
     let moved = motion(model);
@@ -574,6 +583,9 @@ fn summary(report: &Report, out: &std::path::Path) -> String {
         c.as_over_rest_pose
             .map_or("-".into(), |r| format!("{r:.2}"))
     );
+    if let Some(line) = markdown::meshopt_floor(report) {
+        s += &format!("  {line}\n");
+    }
     s += &format!(
         "  AS+IS's lighting at most {} AS's at equal influences\n",
         c.as_is_lighting_over_as
