@@ -223,6 +223,20 @@ impl AnimationSpaceMesh {
             .collect()
     }
 
+    /// Every vertex's normal in the rest pose, `Σ Ĝ_i n_i` normalised (zero where it vanishes),
+    /// for the rest-pose bone matrices `rest_bones`.
+    pub fn rest_normals(&self, rest_bones: &[Affine3A]) -> Vec<Vec3> {
+        (0..self.vertex_count())
+            .map(|v| {
+                self.influences_of(v)
+                    .iter()
+                    .map(|i| rest_bones[i.bone as usize].matrix3 * i.n)
+                    .sum::<Vec3>()
+                    .normalize_or_zero()
+            })
+            .collect()
+    }
+
     /// The CPU reference of animation-space skinning: `v = Σ G_i p_i` and `n = Σ G_i n_i`
     /// (normals not renormalised), for bone matrices `g`.
     pub fn evaluate(&self, g: &[Affine3A]) -> (Vec<Vec3>, Vec<Vec3>) {

@@ -348,15 +348,10 @@ fn meshopt_curve(
         .iter()
         .map(|p| p.to_array())
         .collect();
-    let normals: Vec<[f32; 3]> = (0..base.vertex_count())
-        .map(|v| {
-            let n: glam::Vec3 = base
-                .influences_of(v)
-                .iter()
-                .map(|i| rest_bones[i.bone as usize].matrix3 * i.n)
-                .sum();
-            n.normalize_or_zero().to_array()
-        })
+    let normals: Vec<[f32; 3]> = base
+        .rest_normals(rest_bones)
+        .iter()
+        .map(|n| n.to_array())
         .collect();
     let clock = std::time::Instant::now();
     let mut seconds = 0.0;

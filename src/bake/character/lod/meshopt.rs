@@ -62,15 +62,10 @@ impl Input {
             .enumerate()
             .map(|(v, g)| first.entry(*g).or_insert(points[v]).to_array())
             .collect();
-        let normals = (0..base.vertex_count())
-            .map(|v| {
-                let n: glam::Vec3 = base
-                    .influences_of(v)
-                    .iter()
-                    .map(|i| rest_bones[i.bone as usize].matrix3 * i.n)
-                    .sum();
-                n.normalize_or_zero().to_array()
-            })
+        let normals = base
+            .rest_normals(&rest_bones)
+            .iter()
+            .map(|n| n.to_array())
             .collect();
         Input {
             locks: skin_seams(&groups, &position),

@@ -31,6 +31,8 @@ use replay::GrowingSequence;
 pub use replay::{Replay, extract};
 
 use super::simplify::expectation::ExpectationMatrix;
+use super::simplify::influences64;
+use super::simplify::mesh::{Mesh, weld_positions};
 use super::simplify::{
     Feed, FirstPricing, Method, Prepared, Sequence, SimplifyInput, Stats, Step, Ties, gathered,
     pose_samples, simplify_prepared,
@@ -115,6 +117,12 @@ impl<'a> SharedBake<'a> {
         progress: &(dyn Fn(f32) + Sync),
         feed: &mut (dyn FnMut(Feed) + Send),
     ) -> Stats {
+        // meshoptimizer hands back levels, not collapses: its sequence is the start alone, and
+        // it needs nothing the simplifier prepares.
+        if method == Method::Meshopt {
+            feed(Feed::Start(no_steps(model, base, method)));
+            return Stats::default();
+        }
         let prepared = self.prepared.get_or_init(|| prepare(model, base));
         let in_order = Arc::clone(
             self.by_order
@@ -136,29 +144,41 @@ impl<'a> SharedBake<'a> {
                 let start = OnceLock::new();
                 simplify_prepared(prepared, ties, &none, &start, method, progress, feed)
             }
-            Method::AnimationSpace | Method::InfluenceSimplification => {
+            // AS and AS+IS (meshopt has returned above).
+            _ => {
                 let pm = self
                     .expectation
                     .get_or_init(|| ExpectationMatrix::estimate(model));
                 let start = &in_order.as_start;
                 simplify_prepared(prepared, ties, pm, start, method, progress, feed)
             }
-            // meshoptimizer hands back levels, not collapses: its sequence is the start alone.
-            Method::Meshopt => {
-                feed(Feed::Start(no_steps(prepared, method)));
-                Stats::default()
-            }
         }
     }
 }
 
-/// A sequence of no steps from `prepared`: the full detail alone.
-fn no_steps(prepared: &Prepared, method: Method) -> Sequence {
+/// A sequence of no steps from `base` (the full detail of `model`): the full detail alone,
+/// with its welded positions and its triangles as the simplifier would start from them. Only
+/// the welding is done: the rest of a [`Prepared`] (posed positions, charts, parts) is half a
+/// gigabyte and seconds on a 2-million-triangle model, which meshoptimizer's levels need none of.
+fn no_steps(model: &Model, base: &AnimationSpaceMesh, method: Method) -> Sequence {
+    let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
+    let infl = influences64(base);
+    let rest: Vec<glam::DVec3> = base
+        .rest_positions(&rest_bones)
+        .iter()
+        .map(|p| p.as_dvec3())
+        .collect();
+    let positions = weld_positions(&rest, &infl);
+    let mesh = Mesh::new(&base.indices, positions.clone());
+    let influences: usize = (0..positions.len())
+        .filter(|&v| mesh.refs[v] > 0)
+        .map(|v| infl[positions[v] as usize].len())
+        .sum();
     Sequence {
         method,
-        positions: prepared.positions.clone(),
-        base_triangles: prepared.mesh.tris.clone(),
-        base_influences: prepared.influences as u32,
+        positions,
+        base_triangles: mesh.tris,
+        base_influences: influences as u32,
         steps: Vec::new(),
         stats: Stats::default(),
     }
@@ -232,13 +252,12 @@ pub fn bake_lods_sharing<'a>(
                 opts.floor_triangles
             );
         }
-        let prepared = shared.prepared.get_or_init(|| prepare(model, base));
         return SkinnedLods {
             model: model.name.clone(),
             method,
             options: opts.clone(),
             levels,
-            sequence: no_steps(prepared, method),
+            sequence: no_steps(model, base, method),
             bake_seconds: start.elapsed().as_secs_f64(),
         };
     }

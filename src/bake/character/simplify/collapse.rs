@@ -303,10 +303,7 @@ impl Context<'_> {
                     .then(ub.x.total_cmp(&ua.x))
                     .then(ub.y.total_cmp(&ua.y))
                     .then_with(|| {
-                        let (na, nb) = (self.normals[a as usize], self.normals[b as usize]);
-                        (nb.x.total_cmp(&na.x))
-                            .then(nb.y.total_cmp(&na.y))
-                            .then(nb.z.total_cmp(&na.z))
+                        super::mesh::point_order(self.normals[b as usize], self.normals[a as usize])
                     })
             })
         })

@@ -38,10 +38,7 @@ pub const WEIGHT_TOLERANCE: f64 = 1e-3;
 pub fn weld_positions(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
     let mut position = first_copies(rest, infl);
     let least = |a: usize, b: usize| {
-        let (x, y) = (rest[a], rest[b]);
-        x.x.total_cmp(&y.x)
-            .then(x.y.total_cmp(&y.y))
-            .then(x.z.total_cmp(&y.z))
+        point_order(rest[a], rest[b])
             .then_with(|| {
                 let p = |v: usize| {
                     infl[v]
@@ -69,6 +66,14 @@ pub fn weld_positions(rest: &[DVec3], infl: &[Vec<Influence64>]) -> Vec<u32> {
         *p = speaker[*p as usize];
     }
     position
+}
+
+/// A total order of points, by x, then y, then z: ties and copies are decided by what a point
+/// is, not by where a file lists it.
+pub(crate) fn point_order(a: DVec3, b: DVec3) -> std::cmp::Ordering {
+    (a.x.total_cmp(&b.x))
+        .then(a.y.total_cmp(&b.y))
+        .then(a.z.total_cmp(&b.z))
 }
 
 /// [`weld_positions`] with each position named by its first copy.

@@ -208,11 +208,7 @@ fn content_order(
 ) -> Vec<u32> {
     use std::cmp::Ordering;
     let n = mesh.position.len();
-    let vec3 = |a: DVec3, b: DVec3| {
-        (a.x.total_cmp(&b.x))
-            .then(a.y.total_cmp(&b.y))
-            .then(a.z.total_cmp(&b.z))
-    };
+    let vec3 = super::mesh::point_order;
     let wedge = |a: u32, b: u32| -> Ordering {
         let (a, b) = (a as usize, b as usize);
         (uv[a].x.total_cmp(&uv[b].x))

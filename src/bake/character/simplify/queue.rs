@@ -114,9 +114,8 @@ pub(crate) struct Simplifier<'a> {
     pub(crate) parts: &'a [Vec<u32>],
     pub(crate) part_of: &'a [u32],
     pub(crate) located: &'a RTree<Located>,
-    /// Per position: its rank in the tie order ([`Ties`](super::prepare::Ties)).
-    pub(crate) ties: &'a [u32],
-    pub(crate) tie_order: u32,
+    /// The tie order: a rank per position ([`Ties`](super::prepare::Ties)).
+    pub(crate) ties: &'a super::prepare::Ties,
     /// The serial steps' scratch space.
     pub(crate) workspace: Workspace,
     /// Scratch spaces for the candidates priced in parallel, one per task at a time.
@@ -181,11 +180,11 @@ impl Simplifier<'_> {
         // Every position priced at full detail: shared with any other simplification from the
         // same start (see [`FirstPricing`]).
         let first = start.get_or_init(|| FirstPricing {
-            order: self.tie_order,
+            order: self.ties.order,
             found: self.price_in_parallel(&positions),
         });
         assert_eq!(
-            first.order, self.tie_order,
+            first.order, self.ties.order,
             "a first pricing is shared only by simplifications in one tie order"
         );
         self.queue_priced(&positions, &first.found);
@@ -355,7 +354,7 @@ impl Simplifier<'_> {
             .iter()
             .filter_map(|&u2| Some((self.unoriented_cost(u, u2, &mut w.scratch)?, u2)))
             .collect();
-        let tie = |u: u32| self.ties[u as usize];
+        let tie = |u: u32| self.ties.rank[u as usize];
         let length = |u2: u32| self.rest[ui].distance_squared(self.rest[u2 as usize]);
         costs.sort_by(|a, b| {
             a.0.total_cmp(&b.0)
@@ -431,7 +430,7 @@ impl Simplifier<'_> {
                 cost,
                 action: Action::Collapse,
                 length: self.rest[ui].distance(self.rest[u2 as usize]),
-                tie: self.ties[ui],
+                tie: self.ties.rank[ui],
                 vertex: u,
                 version: self.collapse_version[ui],
             }));
@@ -451,7 +450,7 @@ impl Simplifier<'_> {
                 cost,
                 action: Action::Influence,
                 length: 0.0,
-                tie: self.ties[ui],
+                tie: self.ties.rank[ui],
                 vertex: u,
                 version: self.influence_version[ui],
             }));
@@ -464,7 +463,7 @@ impl Simplifier<'_> {
             // A part ranks as its first position does.
             let tie = self.parts[part as usize]
                 .iter()
-                .map(|&u| self.ties[u as usize])
+                .map(|&u| self.ties.rank[u as usize])
                 .min()
                 .unwrap_or(u32::MAX);
             self.heap.push(Reverse(Entry {
