@@ -16,24 +16,29 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Built-in models (a creature cut into a couple of hundred texture charts, a hard-edged robot,
 /// an untextured tube in two parts, a low-polygon creature), each relisted in random orders
-/// and simplified: every step costs what the original's did, and the error curves, each
-/// measured by its own probe as `report` measures them, agree within ±10% at the median over
-/// the curve and ±20% over its coarsest tenth.
+/// and simplified: every step costs what the original's did. Where the curves are measured
+/// (the seamed creature and the robot, whose probes go through texture charts and by closest
+/// points), each by its own probe as `report` measures them, they agree within ±10% at the
+/// median over the curve and ±20% over its coarsest tenth; elsewhere equal steps say the same
+/// meshes, and the probe's sampling is what the others check.
 #[test]
 fn a_character_in_any_order_simplifies_alike() {
+    // (model, method, orders, measure the curves)
     let cases = [
-        ("patchwork", Method::RestPose, 2),
-        ("patchwork", Method::InfluenceSimplification, 1),
-        ("robot", Method::AnimationSpace, 1),
-        ("split-tube", Method::RestPose, 1),
-        ("lowpoly", Method::AnimationSpace, 1),
+        ("patchwork", Method::RestPose, 2, true),
+        ("patchwork", Method::InfluenceSimplification, 1, true),
+        ("robot", Method::AnimationSpace, 1, true),
+        ("split-tube", Method::RestPose, 1, false),
+        ("lowpoly", Method::AnimationSpace, 1, false),
     ];
-    for (name, method, orders) in cases {
+    for (name, method, orders, curves) in cases {
         let model = lodlab::import::load_model(name).unwrap();
         let (base, seq, _) = progressive_mesh(&model, method, &|_| {});
-        let probe = Probe::for_model(&model, &base, SAMPLES);
-        let curve = measure_sequence(&probe, &base, &seq);
         let costs: Vec<f32> = seq.steps.iter().map(|s| s.cost).collect();
+        let curve = curves.then(|| {
+            let probe = Probe::for_model(&model, &base, SAMPLES);
+            measure_sequence(&probe, &base, &seq)
+        });
         for seed in 1..=orders {
             let other = model.relisted(seed);
             assert_ne!(other.mesh.indices, model.mesh.indices);
@@ -43,6 +48,7 @@ fn a_character_in_any_order_simplifies_alike() {
                 costs, ocosts,
                 "{name} by {method}, order {seed}: the steps' costs differ"
             );
+            let Some(curve) = &curve else { continue };
             let oprobe = Probe::for_model(&other, &obase, SAMPLES);
             let theirs: Vec<(f64, f64)> = measure_sequence(&oprobe, &obase, &oseq)
                 .iter()

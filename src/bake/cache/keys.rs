@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 /// The cache file's encoding and the progressive-mesh levels' bake.
-pub const FORMAT_VERSION: u32 = 11;
+pub const FORMAT_VERSION: u32 = 12;
 /// A tree's chain of billboard-cloud levels and its impostor
 /// (`bake::foliage::billboard::chain`).
 pub const CHAIN_VERSION: u32 = 28;

@@ -64,11 +64,11 @@ pub struct MethodReport {
     /// The median width of the curve's band: (highest − lowest) / median over the orders.
     pub band: Option<f64>,
     pub curve: Vec<CurvePoint>,
-    /// The levels the viewer uses, with their silhouettes (meshopt's too, without lighting).
+    /// The levels the viewer uses, with their silhouettes.
     pub levels: Vec<LevelReport>,
     /// Every level but full detail's colour error against full detail, lit by its vertex
-    /// normals and through its normal map, [`SHADING_PX`] high (empty for the meshopt
-    /// baseline, or where no GPU adapter could draw them).
+    /// normals and through its normal map, [`SHADING_PX`] high (empty where no GPU adapter
+    /// could draw them).
     pub shading: Vec<crate::measure::shading_error::LevelShading>,
 }
 

@@ -29,9 +29,9 @@ use crate::app::commands::report::data::{
 use crate::app::commands::report::markdown::{docs_row, timings_markdown};
 use crate::app::commands::report::plot::plot;
 use crate::app::progress::Progress;
-use crate::bake::character::lod::{Replay, SharedBake, SkinnedLods};
+use crate::bake::character::lod::{Replay, SharedBake, SkinnedLods, meshopt};
 use crate::bake::character::lod_error::{MeshError, Probe};
-use crate::bake::character::simplify::{Method, Sequence, SimplifyInput, pose_samples};
+use crate::bake::character::simplify::{Method, Sequence, pose_samples};
 use crate::bake::gpu_data::animation_space::AnimationSpaceMesh;
 use anyhow::Result;
 use std::collections::BTreeMap;
@@ -75,8 +75,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
             .iter()
             .map(|p| p.triangles)
             .collect();
-        let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
-        let mut meshopt = meshopt_curve(&probe, &base, &rest_bones, &triangles, opts.orders);
+        let mut meshopt = meshopt_curve(&probe, model, &base, &triangles, opts.orders);
         // Its levels as the viewer bakes them, with their silhouettes: where they end says
         // where meshoptimizer stops short of the floor.
         let (lods, _) = crate::bake::character::lod::cached::load_or_bake(
@@ -88,6 +87,7 @@ pub fn run(opts: &ReportOptions) -> Result<Report> {
             &|_| {},
         );
         meshopt.levels = level_reports(&lods, &poses);
+        meshopt.shading = level_shading(&measuring, model, &lods)?;
         methods.insert("meshopt".into(), meshopt);
     }
     let comparison = compare(&methods);
@@ -170,20 +170,7 @@ fn measure_method(
     bar.set_stage("silhouettes");
     let levels = level_reports(&lods, m.poses);
     bar.set_stage("lighting");
-    let shading = match m.gpu {
-        Some(gpu) => {
-            let which: Vec<usize> = (1..lods.levels.len()).collect();
-            crate::measure::shading_error::shading_errors(
-                gpu,
-                model,
-                m.full,
-                &lods.levels,
-                &which,
-                SHADING_PX,
-            )?
-        }
-        None => Vec::new(),
-    };
+    let shading = level_shading(m, model, &lods)?;
     log::debug!(
         "{} by {method}: bake {:.2} s, error curve {measured:.2} s, silhouettes {:.2} s",
         model.name,
@@ -216,6 +203,26 @@ fn measure_method(
         shading,
     };
     Ok((report, lods.sequence))
+}
+
+/// Each level's lighting against full detail's, [`SHADING_PX`] high (none without an adapter).
+fn level_shading(
+    m: &Measuring<'_>,
+    model: &crate::model::Model,
+    lods: &SkinnedLods,
+) -> Result<Vec<crate::measure::shading_error::LevelShading>> {
+    let Some(gpu) = m.gpu else {
+        return Ok(Vec::new());
+    };
+    let which: Vec<usize> = (1..lods.levels.len()).collect();
+    crate::measure::shading_error::shading_errors(
+        gpu,
+        model,
+        m.full,
+        &lods.levels,
+        &which,
+        SHADING_PX,
+    )
 }
 
 /// Every level of `lods` with its silhouette distances at [`SILHOUETTE_TOLERANCES`] (full
@@ -330,35 +337,25 @@ fn measure_at(
         .collect()
 }
 
-/// meshoptimizer's simplifier on the rest pose, to each triangle count, set up as gltfpack
-/// sets it up for a skinned mesh (its `simplifyMesh`): normals as attributes of weight 0.5,
-/// texture seams kept by meshoptimizer's own topology, small parts pruned, triangles kept
-/// regular. Its ties go by the order it is handed vertices and triangles in, which this
-/// project does not control: its band is over `orders` listings of the mesh (the first as
-/// the file has it, then [`relisted`](crate::model::Model::relisted)'s shuffles).
+/// meshoptimizer's simplifier on the rest pose, to each triangle count, handed the mesh as its
+/// levels are ([`meshopt::Input`]: seams welded, skin seams locked, normals of weight 0.5,
+/// small parts pruned unless that passes the count). Its ties go by the order it is handed
+/// vertices and triangles in, which this project does not control: its band is over `orders`
+/// listings of the mesh (the first as the file has it, then shuffles of it).
 fn meshopt_curve(
     probe: &Probe,
+    model: &crate::model::Model,
     base: &AnimationSpaceMesh,
-    rest_bones: &[glam::Affine3A],
     triangles: &[u32],
     orders: u32,
 ) -> MethodReport {
-    let positions: Vec<[f32; 3]> = base
-        .rest_positions(rest_bones)
-        .iter()
-        .map(|p| p.to_array())
-        .collect();
-    let normals: Vec<[f32; 3]> = base
-        .rest_normals(rest_bones)
-        .iter()
-        .map(|n| n.to_array())
-        .collect();
+    let input = meshopt::Input::new(model, base);
     let clock = std::time::Instant::now();
     let mut seconds = 0.0;
     let per_order: Vec<Vec<Option<CurvePoint>>> = (0..orders)
         .map(|order| {
             let listing = Listing::new(base, order);
-            let (curve, s) = listing.meshopt_points(probe, base, &positions, &normals, triangles);
+            let (curve, s) = listing.meshopt_points(probe, base, &input, triangles);
             if order == 0 {
                 seconds = s;
             }
@@ -417,60 +414,42 @@ impl Listing {
     }
 
     /// meshoptimizer's levels at each of `triangles` in this listing, measured by `probe` in
-    /// the original's numbering; and the seconds of the coarsest call.
+    /// the original's numbering; and the seconds of the coarsest call. The points end where
+    /// no level keeps the count (the floor rule of [`meshopt::Input::simplify`]).
     fn meshopt_points(
         &self,
         probe: &Probe,
         base: &AnimationSpaceMesh,
-        positions: &[[f32; 3]],
-        normals: &[[f32; 3]],
+        input: &meshopt::Input,
         triangles: &[u32],
     ) -> (Vec<Option<CurvePoint>>, f64) {
-        let listed =
-            |a: &[[f32; 3]]| -> Vec<[f32; 3]> { self.old.iter().map(|&v| a[v as usize]).collect() };
-        let (positions, normals) = (listed(positions), listed(normals));
-        let listed_as_is = self.old.iter().enumerate().all(|(k, &v)| k as u32 == v);
-        let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&positions), 12, 0)
-            .expect("tightly packed positions");
-        let options = meshopt::SimplifyOptions::Prune | meshopt::SimplifyOptions::Regularize;
-        let locks = vec![false; positions.len()];
+        let input = input.listed(&self.old);
         let full = base.triangle_count() as u32;
         let mut seconds = 0.0;
         let mut curve = Vec::new();
         for &target in triangles {
             let start = std::time::Instant::now();
             let indices = if target >= full {
-                self.indices.clone()
+                Some(self.indices.clone())
             } else {
-                meshopt::simplify_with_attributes_and_locks(
-                    &self.indices,
-                    &adapter,
-                    bytemuck::cast_slice(&normals),
-                    &[0.5; 3],
-                    12,
-                    &locks,
-                    target as usize * 3,
-                    f32::MAX,
-                    options,
-                    None,
-                )
+                input.simplify(&self.indices, target, f32::MAX)
             };
             seconds = start.elapsed().as_secs_f64();
-            let tris: Vec<[u32; 3]> = indices
-                .chunks_exact(3)
-                .map(|t| [t[0], t[1], t[2]].map(|v| self.old[v as usize]))
-                .collect();
-            if tris.is_empty() {
-                // Component pruning removed every part: nothing is left to measure, and no
-                // smaller target keeps anything either. Said once, of the file's own order.
-                if listed_as_is {
+            let Some(indices) = indices else {
+                // Said once, of the file's own order.
+                if self.old.iter().enumerate().all(|(k, &v)| k as u32 == v) {
                     eprintln!(
-                        "note: meshopt keeps no triangle at a target of {target}; its curve ends there"
+                        "note: meshopt keeps no level of {target} triangles (pruned or not); its \
+                         curve ends there"
                     );
                 }
                 curve.push(None);
                 break;
-            }
+            };
+            let tris: Vec<[u32; 3]> = indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]].map(|v| self.old[v as usize]))
+                .collect();
             let mut used = vec![false; base.vertex_count()];
             tris.iter().flatten().for_each(|&v| used[v as usize] = true);
             let influences = (0..base.vertex_count())

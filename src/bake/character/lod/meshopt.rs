@@ -31,15 +31,20 @@ use rstar::primitives::GeomWithData;
 /// over it (as [`CUT_PROBES`](super::cut::CUT_PROBES) for the papers' methods).
 const TRIES: usize = 4;
 
-/// What meshoptimizer is handed: the mesh at rest with seams welded, and its normals.
-struct Input {
+/// What meshoptimizer is handed: the mesh at rest with seams welded, its normals and the
+/// vertices it must not move. `report`'s meshopt curve hands it the same, in other listings.
+pub(crate) struct Input {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     locks: Vec<bool>,
 }
 
+/// Triangles meshoptimizer may pass its target by: it stops after the collapse that reaches
+/// it, and a collapse inside the mesh removes two (`performEdgeCollapses`).
+const OVERSHOOT: usize = 1;
+
 impl Input {
-    fn new(model: &Model, base: &AnimationSpaceMesh) -> Input {
+    pub(crate) fn new(model: &Model, base: &AnimationSpaceMesh) -> Input {
         let rest_bones = SimplifyInput::rest_bones(&model.skeleton);
         let rest: Vec<DVec3> = base
             .rest_positions(&rest_bones)
@@ -74,12 +79,24 @@ impl Input {
         }
     }
 
+    /// The same input with vertex `k` of the new listing being vertex `old[k]` of this one.
+    pub(crate) fn listed(&self, old: &[u32]) -> Input {
+        fn pick<T: Copy>(a: &[T], old: &[u32]) -> Vec<T> {
+            old.iter().map(|&v| a[v as usize]).collect()
+        }
+        Input {
+            positions: pick(&self.positions, old),
+            normals: pick(&self.normals, old),
+            locks: pick(&self.locks, old),
+        }
+    }
+
     /// `indices` simplified towards `floor` triangles and an absolute error of `error` (scene
     /// units; `f32::MAX` for none), whichever comes first. Pruning small parts can overshoot
     /// the count: where it leaves fewer than `floor` triangles, the level is made again
     /// without it, and if that too is under the floor there is none (`None`), the floor
     /// rule of the papers' methods.
-    fn simplify(&self, indices: &[u32], floor: u32, error: f32) -> Option<Vec<u32>> {
+    pub(crate) fn simplify(&self, indices: &[u32], floor: u32, error: f32) -> Option<Vec<u32>> {
         let adapter =
             meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&self.positions), 12, 0).ok()?;
         let run = |prune: bool| {
@@ -102,13 +119,13 @@ impl Input {
                 None,
             )
         };
-        let floor_indices = floor as usize * 3;
+        let least = (floor as usize).saturating_sub(OVERSHOOT) * 3;
         let pruned = run(true);
-        if pruned.len() >= floor_indices {
+        if !pruned.is_empty() && pruned.len() >= least {
             return Some(pruned);
         }
         let kept = run(false);
-        (kept.len() >= floor_indices).then_some(kept)
+        (!kept.is_empty() && kept.len() >= least).then_some(kept)
     }
 }
 
