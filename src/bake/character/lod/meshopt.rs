@@ -39,9 +39,13 @@ pub(crate) struct Input {
     locks: Vec<bool>,
 }
 
-/// Triangles meshoptimizer may pass its target by: it stops after the collapse that reaches
-/// it, and a collapse inside the mesh removes two (`performEdgeCollapses`).
-const OVERSHOOT: usize = 1;
+/// How far below its target count meshoptimizer's own stopping may leave a level, in
+/// triangles: at least [`OVERSHOOT_MIN`] and [`OVERSHOOT_SHARE`] of the target. It stops after
+/// the pass of collapses that passes its target, each collapse taking two triangles: here 2 to
+/// 4 below (the walker at 122 keeps 120, the robot at 380 keeps 376). Pruning falls far more
+/// (the robot at 122 keeps 10 pruned, 352 not), which is what the floor rule is for.
+const OVERSHOOT_MIN: usize = 4;
+const OVERSHOOT_SHARE: f32 = 0.02;
 
 impl Input {
     pub(crate) fn new(model: &Model, base: &AnimationSpaceMesh) -> Input {
@@ -119,7 +123,8 @@ impl Input {
                 None,
             )
         };
-        let least = (floor as usize).saturating_sub(OVERSHOOT) * 3;
+        let slack = OVERSHOOT_MIN.max((floor as f32 * OVERSHOOT_SHARE) as usize);
+        let least = (floor as usize).saturating_sub(slack) * 3;
         let pruned = run(true);
         if !pruned.is_empty() && pruned.len() >= least {
             return Some(pruned);
