@@ -136,6 +136,23 @@ fn png(image: &crate::model::Rgba8Image) -> Vec<u8> {
 pub(crate) type Attributes =
     BTreeMap<gj::validation::Checked<gj::mesh::Semantic>, Index<gj::Accessor>>;
 
+/// What a file may carry beyond its model: a tangent-space normal map for some materials
+/// (linear RGB, glTF's `normalTexture`; one entry a material, or none at all) and, for each
+/// mesh written, a tangent a vertex (glTF's `TANGENT`, xyz unit and w the handedness), written
+/// for the primitives whose material has a normal map. A billboard cloud's atlas lighting goes
+/// out this way (`lodlab export TREE`).
+#[derive(Clone, Debug, Default)]
+pub struct Extra {
+    pub normal_maps: Vec<Option<crate::model::Rgba8Image>>,
+    pub tangents: Vec<Vec<glam::Vec4>>,
+}
+
+impl Extra {
+    fn normal_map(&self, material: usize) -> Option<&crate::model::Rgba8Image> {
+        self.normal_maps.get(material)?.as_ref()
+    }
+}
+
 /// Positions, normals, texture coordinates and joint/weight sets of the vertices `used`.
 /// A mesh whose texture coordinates are all zero has none, and is written without
 /// `TEXCOORD_0`, as a file without texture coordinates reads back; a mesh without influences (an
@@ -206,7 +223,13 @@ pub(crate) fn vertex_attributes(b: &mut Builder, mesh: &SkinnedMesh, used: &[usi
 /// a triangle's material from (its provoking vertex): a simplified mesh can join corners of two
 /// materials in one triangle, and such a corner is then written in both primitives. A
 /// material no triangle uses gets no primitive.
-fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::mesh::Primitive> {
+fn primitives(
+    b: &mut Builder,
+    mesh: &SkinnedMesh,
+    materials: usize,
+    extra: &Extra,
+    tangents: Option<&[glam::Vec4]>,
+) -> Vec<gj::mesh::Primitive> {
     let material_of = |v: u32| mesh.materials.get(v as usize).copied().unwrap_or(0) as usize;
     let mut primitives = Vec::new();
     for material in 0..materials.max(1) {
@@ -232,7 +255,17 @@ fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::
             .iter()
             .flat_map(|t| t.iter().map(|&i| local[i as usize]))
             .collect();
-        let attributes = vertex_attributes(b, mesh, &used);
+        let mut attributes = vertex_attributes(b, mesh, &used);
+        if let Some(tangents) = tangents
+            && tangents.len() == mesh.vertex_count()
+            && extra.normal_map(material).is_some()
+        {
+            let t: Vec<f32> = used.iter().flat_map(|&v| tangents[v].to_array()).collect();
+            attributes.insert(
+                Valid(gj::mesh::Semantic::Tangents),
+                b.floats(&t, Type::Vec4, false, Some(gj::buffer::Target::ArrayBuffer)),
+            );
+        }
         let indices = b.accessor(
             bytemuck::cast_slice(&indices),
             Some(gj::buffer::Target::ElementArrayBuffer),
@@ -256,7 +289,12 @@ fn primitives(b: &mut Builder, mesh: &SkinnedMesh, materials: usize) -> Vec<gj::
 
 /// Materials, with each base colour texture embedded as a PNG in the binary chunk.
 pub(crate) fn materials(b: &mut Builder, materials: &[Material], root: &mut gj::Root) {
-    for m in materials {
+    materials_with(b, materials, &Extra::default(), root);
+}
+
+/// [`materials`], each with its normal map from `extra` where it has one.
+fn materials_with(b: &mut Builder, materials: &[Material], extra: &Extra, root: &mut gj::Root) {
+    for (k, m) in materials.iter().enumerate() {
         let mut pbr = gj::material::PbrMetallicRoughness {
             base_color_factor: gj::material::PbrBaseColorFactor(m.base_color),
             metallic_factor: gj::material::StrengthFactor(0.0),
@@ -277,9 +315,19 @@ pub(crate) fn materials(b: &mut Builder, materials: &[Material], root: &mut gj::
             AlphaMode::Mask => gj::material::AlphaMode::Mask,
             AlphaMode::Blend => gj::material::AlphaMode::Blend,
         };
+        let normal_texture = extra
+            .normal_map(k)
+            .map(|image| gj::material::NormalTexture {
+                index: embedded_texture(b, root, image),
+                scale: 1.0,
+                tex_coord: 0,
+                extensions: None,
+                extras: None,
+            });
         root.push(gj::Material {
             name: Some(m.name.clone()),
             pbr_metallic_roughness: pbr,
+            normal_texture,
             alpha_mode: Valid(alpha_mode),
             alpha_cutoff: (m.alpha_mode == AlphaMode::Mask)
                 .then_some(gj::material::AlphaCutoff(m.alpha_cutoff)),
@@ -500,7 +548,12 @@ pub(crate) fn animations(b: &mut Builder, clips: &[Clip]) -> Vec<gj::Animation> 
 
 /// Encodes `model` as a `.glb` file.
 pub fn to_glb(model: &Model) -> Vec<u8> {
-    let (root, bin) = document(model, &[&model.mesh], "lodlab gen-assets", true);
+    to_glb_with(model, &Extra::default(), "lodlab gen-assets")
+}
+
+/// [`to_glb`] with what `extra` adds (its tangents, if any, those of the model's mesh).
+pub fn to_glb_with(model: &Model, extra: &Extra, generator: &str) -> Vec<u8> {
+    let (root, bin) = document(model, &[&model.mesh], generator, true, extra);
     let json = gj::serialize::to_vec(&root).expect("serialising JSON into memory");
     glb_bytes(json, bin)
 }
@@ -516,8 +569,19 @@ pub fn to_lod_glb(
     coverage: &[f32],
     generator: &str,
 ) -> Vec<u8> {
+    to_lod_glb_with(model, levels, coverage, generator, &Extra::default())
+}
+
+/// [`to_lod_glb`] with what `extra` adds (its tangents, if any, a list for each level).
+pub fn to_lod_glb_with(
+    model: &Model,
+    levels: &[&SkinnedMesh],
+    coverage: &[f32],
+    generator: &str,
+    extra: &Extra,
+) -> Vec<u8> {
     assert_eq!(levels.len(), coverage.len(), "a coverage value per level");
-    let (root, bin) = document(model, levels, generator, false);
+    let (root, bin) = document(model, levels, generator, false, extra);
     let mut json = serde_json::to_value(&root).expect("a glTF document is JSON");
     let finest = skeleton_nodes(model);
     let ids: Vec<usize> = (1..levels.len()).map(|k| finest + k).collect();
@@ -536,6 +600,7 @@ fn document(
     meshes: &[&SkinnedMesh],
     generator: &str,
     all_in_scene: bool,
+    extra: &Extra,
 ) -> (gj::Root, Vec<u8>) {
     let mut b = Builder::default();
     let mut root = gj::Root {
@@ -546,7 +611,8 @@ fn document(
         ..Default::default()
     };
     for (k, mesh) in meshes.iter().enumerate() {
-        let primitives = primitives(&mut b, mesh, model.materials.len());
+        let tangents = extra.tangents.get(k).map(Vec::as_slice);
+        let primitives = primitives(&mut b, mesh, model.materials.len(), extra, tangents);
         root.push(gj::Mesh {
             extensions: None,
             extras: None,
@@ -559,7 +625,7 @@ fn document(
             weights: None,
         });
     }
-    materials(&mut b, &model.materials, &mut root);
+    materials_with(&mut b, &model.materials, extra, &mut root);
     skeleton(&mut b, model, &mut root, meshes.len(), all_in_scene);
     root.animations = animations(&mut b, &model.clips);
     while !b.bin.len().is_multiple_of(4) {

@@ -483,7 +483,8 @@ pub struct ExportArgs {
     /// A model, as shot, bench and view take it.
     #[arg(long = "model", value_name = "NAME|PATH", conflicts_with = "model")]
     pub model_flag: Option<String>,
-    /// Level-of-detail method of the levels: rest-pose, as, as+is.
+    /// Level-of-detail method of a character's levels: rest-pose, as, as+is or meshopt (a
+    /// tree's levels are its billboard clouds, whatever this says).
     #[arg(long, value_enum, default_value = "as+is")]
     pub method: crate::bake::character::simplify::Method,
     /// Folder to write the files into (made if missing).

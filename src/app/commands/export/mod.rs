@@ -1,6 +1,7 @@
 //! `lodlab export`: a character's levels of detail by one method as glTF, for other engines:
 //! one `.glb` per level (skin, clips, materials and textures with each), and one `.glb` holding
-//! every level under `MSFT_lod`, with `MSFT_screencoverage` switching hints.
+//! every level under `MSFT_lod`, with `MSFT_screencoverage` switching hints. A tree's chain of
+//! billboard clouds goes out the same way ([`tree`]).
 //!
 //! glTF skins by linear blending, so each level goes back from animation space to joint weights
 //! ([`AnimationSpaceMesh::to_skinned`]): exact for `rest-pose` and `as`, whose levels keep their
@@ -12,6 +13,8 @@
 
 use crate::app::cli::ExportArgs;
 use std::process::ExitCode;
+
+pub mod tree;
 
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::character::lod::{SkinnedLods, model_height};
@@ -42,6 +45,9 @@ pub struct ExportedLevel {
     pub coverage: f32,
     pub file: PathBuf,
     pub bytes: usize,
+    /// What a tree's level is, in words (a character's levels have none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
 }
 
 /// What an export wrote.
@@ -54,6 +60,9 @@ pub struct Exported {
     pub lod_file: PathBuf,
     pub lod_bytes: usize,
     pub from_cache: bool,
+    /// Levels that plain glTF cannot draw and were left out, a line each saying why.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub left_out: Vec<String>,
 }
 
 /// `model` with `mesh` in place of its own.
@@ -129,15 +138,23 @@ pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Resu
         anyhow::bail!("export needs a model: lodlab export --model NAME|PATH --out DIR");
     };
     let Imported { model, source_hash } = import(name, &inputs.import)?;
-    if crate::bake::foliage::billboard::is_tree(&model) {
-        anyhow::bail!(
-            "{}: a tree; export writes a character's levels (a tree's are billboard clouds)",
-            name
-        );
-    }
     let hash = source_hash;
     crate::atomic::make_folder(&opts.out)?;
     let cache = LodCache::new(opts.cache.clone());
+    if crate::bake::foliage::billboard::is_tree(&model) {
+        let (levels, left_out, from_cache) = tree::tree_levels(&model, &hash, &cache)?;
+        let (levels, lod_file, lod_bytes) =
+            tree::write_tree(&model, &levels, &opts.out, opts.tolerance)?;
+        return Ok(Exported {
+            model: model.name.clone(),
+            method: "billboard clouds".into(),
+            levels,
+            lod_file,
+            lod_bytes,
+            from_cache,
+            left_out,
+        });
+    }
     let options = crate::runtime::levels::runtime_options(&model, inputs.level_budgets.as_deref());
     let (lods, origin) = crate::bake::character::lod::cached::load_or_bake(
         &cache,
@@ -189,6 +206,7 @@ pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Resu
             coverage: next,
             file,
             bytes: bytes.len(),
+            kind: None,
         });
     }
     let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
@@ -205,6 +223,7 @@ pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Resu
         lod_file,
         lod_bytes: lod_bytes.len(),
         from_cache: origin == Origin::Cache,
+        left_out: Vec::new(),
     })
 }
 
@@ -246,7 +265,7 @@ pub fn table(e: &Exported) -> String {
     );
     for l in &e.levels {
         out += &format!(
-            "{:<5} {:>9} {:>8} {:>14} {:>11} {:>10.3} {:>10.6} {:>8}  {}\n",
+            "{:<5} {:>9} {:>8} {:>14} {:>11} {:>10.3} {:>10.6} {:>8}  {}{}\n",
             l.level,
             l.triangles,
             l.vertices,
@@ -255,8 +274,12 @@ pub fn table(e: &Exported) -> String {
             l.error * 1000.0,
             l.coverage,
             l.bytes / 1024,
-            l.file.display()
+            l.file.display(),
+            l.kind.as_ref().map_or(String::new(), |k| format!(" ({k})"))
         );
+    }
+    for line in &e.left_out {
+        out += &format!("{line}\n");
     }
     out += &format!(
         "all levels under MSFT_lod: {} ({} KB)\n",

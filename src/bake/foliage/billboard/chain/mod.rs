@@ -490,6 +490,47 @@ pub fn tree_chain(
     Ok(levels)
 }
 
+/// The skeleton cloud that stands in for `level` (a spectral one) where nothing moves
+/// billboards by their spectra: glTF skins by bones alone (`lodlab export`). The same ε, its
+/// leaves grouped by the finest of the chain's groupings that makes no more billboards than
+/// `level` has (else the coarsest), the atlas and wood as the chain makes them at that ε.
+pub fn skeleton_stand_in(
+    raster: &dyn RasterizeAtlas,
+    tree: &Model,
+    foliage: &Foliage,
+    level: &TreeLevel,
+    opts: &ChainOptions,
+) -> Result<TreeLevel> {
+    let start = web_time::Instant::now();
+    let h = crate::bake::foliage::billboard::tree_height(tree);
+    let params = CloudParams {
+        epsilon: level.epsilon,
+        seed: opts.seed,
+        ..Default::default()
+    };
+    let mut chosen = None;
+    for grouping in GROUPINGS {
+        let kind = CloudKind::Skeleton(grouping);
+        let built = build_cloud(tree, foliage, &params, &kind)?;
+        let fits = built.cloud.billboards.len() <= level.cloud.billboards.max(1);
+        chosen = Some((kind, built));
+        if fits {
+            break;
+        }
+    }
+    let (kind, built) = chosen.expect("the chain has groupings");
+    let wood = WoodChain::new(tree).tree_at(tree, level.epsilon);
+    let density = opts.atlas_density(level.epsilon, h, &kind);
+    let crown = CrownDensity::of(tree);
+    let cloud = level_of_cloud(raster, tree, built, density, &wood, crown.as_ref())?;
+    Ok(TreeLevel {
+        epsilon: level.epsilon,
+        kind: Some(kind),
+        cloud,
+        bake_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
 /// Level 0 of a tree's chain: the tree itself.
 fn full_tree(tree: &Model) -> TreeLevel {
     TreeLevel {
