@@ -59,13 +59,15 @@ pub fn around(models: &[CrowdModel], count: usize, seed: u64, clearing: f32) -> 
         };
         radius = radius.max(position.length() + crown * 0.5);
         let m = i % models.len();
-        // A slightly different green for every tree.
+        // A slightly different green for every tree; a lone tree its own colours, as a
+        // measurement or another renderer's picture of it expects.
         let tint = Vec4::new(
             0.92 + 0.16 * rng.f32(),
             0.92 + 0.16 * rng.f32(),
             0.9 + 0.12 * rng.f32(),
             1.0,
         );
+        let tint = if count == 1 { Vec4::ONE } else { tint };
         agents.push(Agent {
             model: m,
             // Gusts differ from tree to tree: between 0.6 and 1.4 of the clip's sway.

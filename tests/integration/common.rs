@@ -251,6 +251,7 @@ pub fn browser_tools() -> Option<PathBuf> {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from("/usr/bin/chromium"));
     let installed = dir.join("node_modules/puppeteer-core").is_dir()
+        && dir.join("node_modules/three").is_dir()
         && chromium.is_file()
         && Command::new("node").arg("--version").output().is_ok();
     if installed {

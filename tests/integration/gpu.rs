@@ -94,6 +94,7 @@ fn render(
         camera,
         timed_frames: 1,
         calibrate: false,
+        backdrop: Default::default(),
         lod: Default::default(),
     })
     .unwrap();

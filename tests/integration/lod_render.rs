@@ -246,6 +246,7 @@ fn take_at(name: &str, lod: ShotLod, time: f32) -> Shot {
         camera: None,
         timed_frames: 1,
         calibrate: false,
+        backdrop: Default::default(),
         lod,
     })
     .unwrap();

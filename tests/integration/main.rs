@@ -39,5 +39,6 @@ mod shared_skeletons;
 mod soak;
 mod spectral;
 mod study;
+mod third_party;
 mod trees;
 mod window;

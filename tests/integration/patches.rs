@@ -46,6 +46,7 @@ fn far_shot(out: &std::path::Path, count: usize, patches: bool, distance: f32) -
         )),
         timed_frames: 1,
         calibrate: false,
+        backdrop: Default::default(),
         lod: lod(patches),
     })
     .unwrap()

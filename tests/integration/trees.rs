@@ -281,6 +281,7 @@ fn forest_shot(
         camera: None,
         timed_frames: 1,
         calibrate: false,
+        backdrop: Default::default(),
         lod,
     })
     .unwrap()
@@ -350,6 +351,7 @@ fn forest_trees_use_their_cloud_levels() {
             camera: None,
             timed_frames: 1,
             calibrate: false,
+            backdrop: Default::default(),
             lod: ShotLod {
                 method,
                 policy: LodPolicy {

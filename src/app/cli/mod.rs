@@ -571,6 +571,10 @@ pub struct ShotArgs {
     /// Also time the same triangles drawn by a trivial unskinned shader.
     #[arg(long)]
     pub calibrate: bool,
+    /// What the figures are drawn over: scene (sky, ground and shadows) or plain (black, no
+    /// ground, shadows or fog).
+    #[arg(long, value_enum, default_value_t = values::Backdrop::Scene)]
+    pub backdrop: values::Backdrop,
 }
 
 #[derive(Args, Debug)]

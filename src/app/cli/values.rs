@@ -193,3 +193,16 @@ pub fn dedup<T: PartialEq>(list: Vec<T>) -> Vec<T> {
     }
     out
 }
+
+crate::choice! {
+    /// What `shot` draws its figures over.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum Backdrop {
+        /// The sky, the ground and the shadows, as the viewer draws them.
+        #[default]
+        Scene => "scene",
+        /// Black, without ground, shadows or fog: the figures alone, for masks, figures and
+        /// comparisons with other renderers.
+        Plain => "plain",
+    }
+}

@@ -32,6 +32,8 @@ pub struct ShotOptions {
     /// Also time the same triangles drawn by the trivial unskinned shader.
     pub calibrate: bool,
     pub lod: ShotLod,
+    /// What the figures are drawn over.
+    pub backdrop: crate::app::cli::values::Backdrop,
 }
 
 /// The JSON line `shot` prints.
@@ -122,6 +124,10 @@ pub fn run(options: &ShotOptions) -> Result<ShotReport> {
         )?;
         if let Some(c) = options.camera {
             h.world.camera = c;
+        }
+        if options.backdrop == crate::app::cli::values::Backdrop::Plain {
+            let r = &mut h.world.renderer;
+            (r.environment, r.shadows, r.lighting.fog_density) = (false, false, 0.0);
         }
         h.show(&options.lod)?;
         h
@@ -236,6 +242,7 @@ pub fn command(a: ShotArgs, inputs: &crate::runtime::spec::BakeInputs) -> anyhow
         timed_frames: a.frames,
         calibrate: a.calibrate,
         lod,
+        backdrop: a.backdrop,
     })?;
     println!("{}", crate::app::json::line(&report)?);
     Ok(ExitCode::SUCCESS)

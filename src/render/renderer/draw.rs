@@ -92,6 +92,7 @@ impl SceneRenderer {
                 self.draw_opaque(pass, &mut scissor, Some(FoliagePhase::Colour));
             }
             Pass::Foliage => self.draw_opaque(pass, &mut scissor, Some(FoliagePhase::Single)),
+            Pass::Environment if !self.environment => {}
             Pass::Environment => {
                 // Over the whole view.
                 scissor.whole(pass);

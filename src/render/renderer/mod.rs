@@ -112,6 +112,8 @@ pub struct SceneRenderer {
     pub lighting: Lighting,
     pub shader: CharacterShader,
     pub shadows: bool,
+    /// Draw the ground and the sky; off, the figures stand on black (`shot --backdrop plain`).
+    pub environment: bool,
     /// Light the coarse levels through their normal maps, where their sets have them (see
     /// `bake::normal_map`); off, every level keeps its vertex normals.
     pub normal_maps: bool,
@@ -210,6 +212,7 @@ impl SceneRenderer {
             lighting: Lighting::default(),
             shader: CharacterShader::Skinned,
             shadows: true,
+            environment: true,
             normal_maps: true,
             wind: 1.0,
             outlines: false,
