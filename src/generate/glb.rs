@@ -5,8 +5,8 @@
 //!
 //! [`to_lod_glb`] writes several meshes of one model (its levels of detail) into one file: one
 //! node per level, all bound to the one skin, the finest carrying `MSFT_lod` with the others'
-//! node indices and `MSFT_screencoverage` in its `extras` (Microsoft's vendor extension, read
-//! by Babylon.js and three.js's loader).
+//! node indices and `MSFT_screencoverage` in its `extras` (Microsoft's vendor extension; most
+//! engines read it through a little code of their own, docs/commands.md says how).
 
 use crate::model::{AlphaMode, ChannelTarget, Clip, Interpolation, Material, Model, SkinnedMesh};
 use gltf::json::accessor::{ComponentType, GenericComponentType, Type};

@@ -17,7 +17,7 @@
 //! [`billboard_frame`]: crate::bake::foliage::billboard::atlas::billboard_frame
 //! [`skeleton_stand_in`]: crate::bake::foliage::billboard::chain::skeleton_stand_in
 
-use super::{ExportedLevel, coverage_hints, file_stem};
+use super::exported::{ExportedLevel, coverage_hints, file_stem};
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::foliage::billboard::atlas::billboard_frame;
 use crate::bake::foliage::billboard::chain::{
