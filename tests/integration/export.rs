@@ -277,10 +277,28 @@ fn a_tree_exports_its_clouds_as_valid_gltf() {
     assert_eq!(json["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
     assert_eq!(json["meshes"].as_array().unwrap().len(), levels.len());
     files.push(lod_file);
-    // The impostor, where the chain has one, is left out in a line saying why.
+    // The impostor, where the chain has one, and levels heavier than a finer one are left
+    // out, each in a line saying why; the levels written keep their chain's order.
     for line in e["left_out"].as_array().into_iter().flatten() {
-        assert!(line.as_str().unwrap().contains("impostor"), "{line}");
+        let line = line.as_str().unwrap();
+        assert!(
+            line.contains("impostor") || line.contains("triangles against"),
+            "{line}"
+        );
     }
+    let chain: Vec<u64> = levels
+        .iter()
+        .map(|l| l["chain_level"].as_u64().unwrap())
+        .collect();
+    assert!(
+        chain[0] == 0 && chain.windows(2).all(|w| w[1] > w[0]),
+        "{chain:?}"
+    );
+    let triangles: Vec<u64> = levels
+        .iter()
+        .map(|l| l["triangles"].as_u64().unwrap())
+        .collect();
+    assert!(triangles.windows(2).all(|w| w[1] < w[0]), "{triangles:?}");
     if let Some(tools) = gltf_tools() {
         for (errors, warnings, report) in validate(&tools, &files) {
             assert_eq!((errors, warnings), (0, 0), "{report}");

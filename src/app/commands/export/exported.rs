@@ -27,6 +27,9 @@ pub struct ExportedLevel {
     /// What a tree's level is, in words (a character's levels have none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind: Option<String>,
+    /// A tree's level's place in lodlab's chain by ε, levels left out counted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub chain_level: Option<usize>,
 }
 
 /// What an export wrote.

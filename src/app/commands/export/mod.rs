@@ -127,6 +127,7 @@ pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Resu
             file,
             bytes: bytes.len(),
             kind: None,
+            chain_level: None,
         });
     }
     let refs: Vec<&SkinnedMesh> = meshes.iter().collect();

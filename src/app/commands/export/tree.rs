@@ -37,6 +37,8 @@ pub struct TreeOut {
     pub extra: Extra,
     pub epsilon: f32,
     pub kind: String,
+    /// Its place in lodlab's chain by ε (`shot --foliage-order epsilon --force-level`).
+    pub chain_level: usize,
 }
 
 /// What a tree's export wrote: its levels, the combined file, and the levels left out (a
@@ -49,8 +51,8 @@ pub struct TreeExport {
     pub from_cache: bool,
 }
 
-/// The chain of `tree` (source hash `hash`) as the viewer cuts it by ε, from `cache` or baked
-/// now, each level as it goes out, and the levels left out.
+/// The chain of `tree` (source hash `hash`) as the viewer draws it by default, from `cache` or
+/// baked now, each level as it goes out, and the levels left out.
 pub fn tree_levels(
     tree: &Model,
     hash: &[u8; 32],
@@ -59,7 +61,8 @@ pub fn tree_levels(
     let gpu = crate::render::Gpu::headless()?;
     let raster = AtlasRasterizer::new(&gpu);
     // The ε order: each level from where its ε projects to the tolerance, which is what a
-    // coverage hint can say.
+    // coverage hint can say. (The viewer's default cost order leans on the impostor, which
+    // cannot go out: a card oak's would leave the tree alone.)
     let opts = ChainOptions {
         order: FoliageOrder::Epsilon,
         ..ChainOptions::default()
@@ -111,6 +114,19 @@ pub fn tree_levels(
             ),
             Some(kind @ CloudKind::Skeleton(_)) => (level, CloudKind::name(Some(kind))),
         };
+        // A level of more triangles than a finer one kept would only cost more in an engine
+        // (a card tree's first clouds, crossed clumps): the finer one draws on instead, as
+        // lodlab's cost order keeps a tree lighter than its clouds.
+        let finer = out
+            .last()
+            .map_or(usize::MAX, |o: &TreeOut| o.model.mesh.triangle_count());
+        if level.cloud.model.mesh.triangle_count() >= finer {
+            left_out.push(format!(
+                "level {k} ({kind}): left out, {} triangles against the {finer} of a finer level",
+                level.cloud.model.mesh.triangle_count()
+            ));
+            continue;
+        }
         out.push(level_out(level, k, kind));
     }
     Ok((out, left_out, origin == Origin::Cache))
@@ -141,6 +157,7 @@ fn level_out(level: &TreeLevel, k: usize, kind: String) -> TreeOut {
         extra,
         epsilon: level.epsilon,
         kind,
+        chain_level: k,
     }
 }
 
@@ -199,6 +216,7 @@ pub fn write_tree(
             file,
             bytes: bytes.len(),
             kind: Some(level.kind.clone()),
+            chain_level: Some(level.chain_level),
         });
     }
     let all = combined(levels);
