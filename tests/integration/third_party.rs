@@ -12,14 +12,15 @@ use std::process::Command;
 /// How far, in pixels, one outline may stray from the other.
 const OUTLINE_PX: i64 = 2;
 /// The share of the figures' pixels allowed to stray further: leaves and twigs a pixel wide
-/// that one renderer's sampling keeps and the other's drops (0.3% here), and a clump level's
+/// that one renderer's sampling keeps and the other's drops (0.2% here), and a clump level's
 /// crossed planes, whose leaves seen from aside lie off the plane lodlab would pick for the
-/// view by up to the level's ε (1.4% on the sapling's last clumps at 12 times their size).
+/// view by up to the level's ε (1.2% on the sapling's last clumps at 12 times their size).
 const STRAY_SHARE: f64 = 0.015;
 /// The most the mean colours may differ, relative to lodlab's. lodlab adds to the sun and sky
 /// a rim light of the horizon's colour and lights the share of a texel's leaves that face
 /// apart as spread every way; three.js's standard material has neither, and draws the clouds
-/// 3-10% darker (the full tree, whose crown darkening it lacks, within 3%).
+/// 2-9% darker (the full tree, whose crown darkening it lacks, within 3%), a coarse level of
+/// the walker lit by its own normals 11% off.
 const COLOUR_SHARE: f64 = 0.12;
 
 fn lodlab(args: &[&str]) -> std::process::Output {
@@ -222,7 +223,7 @@ fn three_js_draws_every_exported_tree_level_as_lodlab_does() {
         .iter()
         .map(|l| l["chain_level"].as_u64().unwrap() as usize)
         .collect();
-    let (camera, size, time) = ("30,10,14,0,3,0", 256, 1.0);
+    let (camera, size, time) = ("30,10,14,0,3,0", 256, 0.75);
     let three = three_pictures(
         &tools,
         &files,
@@ -258,33 +259,27 @@ fn three_js_draws_every_exported_tree_level_as_lodlab_does() {
     eprintln!("{table}");
     assert!(failures.is_empty(), "levels {failures:?} differ:\n{table}");
 
-    // The wind: level 1 at two times of the clip a little apart (its sway at its widest
-    // here) has moved by more than the bound, and each picture matches lodlab's at its time.
-    let pictures: Vec<(Figure, f32)> = [3.0, 3.75]
-        .into_iter()
-        .map(|t| {
-            let out = dir.path().join(format!("three-{t}"));
-            let three = three_pictures(&tools, &files[1..2], &out, camera, t, size);
-            let theirs = Figure::read(Path::new(three[0]["png"].as_str().unwrap()), true);
-            let ours = dir.path().join(format!("lodlab-{t}.png"));
-            lodlab_picture("sapling", chain[1], &ours, camera, t, size);
-            let ours = Figure::read(&ours, false);
-            let (stray, colour) = (ours.stray(&theirs), theirs.colour_off(&ours));
-            assert!(
-                stray <= STRAY_SHARE && colour <= COLOUR_SHARE,
-                "at {t} s: stray {:.2}%, colour off {:.1}%",
-                100.0 * stray,
-                100.0 * colour
-            );
-            (theirs, t)
-        })
-        .collect();
-    let swayed = pictures[0].0.stray(&pictures[1].0);
+    // The wind: level 1 at another time of the clip (its sway between the two at its widest
+    // here) has moved by more than the bound, and matches lodlab's picture at that time.
+    let later = 5.25;
+    let out = dir.path().join("three-later");
+    let moved = three_pictures(&tools, &files[1..2], &out, camera, later, size);
+    let theirs = Figure::read(Path::new(moved[0]["png"].as_str().unwrap()), true);
+    let ours = dir.path().join("lodlab-later.png");
+    lodlab_picture("sapling", chain[1], &ours, camera, later, size);
+    let ours = Figure::read(&ours, false);
+    let (stray, colour) = (ours.stray(&theirs), theirs.colour_off(&ours));
+    assert!(
+        stray <= STRAY_SHARE && colour <= COLOUR_SHARE,
+        "at {later} s: stray {:.2}%, colour off {:.1}%",
+        100.0 * stray,
+        100.0 * colour
+    );
+    let before = Figure::read(Path::new(three[1]["png"].as_str().unwrap()), true);
+    let swayed = before.stray(&theirs);
     assert!(
         swayed > STRAY_SHARE,
-        "between {} s and {} s the cloud sways by {:.2}% of its pixels",
-        pictures[0].1,
-        pictures[1].1,
+        "between {time} s and {later} s the cloud sways by {:.2}% of its pixels",
         100.0 * swayed
     );
 }
