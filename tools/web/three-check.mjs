@@ -4,7 +4,12 @@
 // PNG, to be compared with `lodlab shot` of the same view (tests/integration/export.rs).
 //
 //   node three-check.mjs --out DIR [--size 256x256] [--camera YAW,PITCH,DISTANCE,X,Y,Z]
-//                        [--time SECONDS] [--no-normal-maps] FILE.glb...
+//                        [--time SECONDS] [--no-normal-maps] [--place] FILE.glb...
+//
+// --place stands every file where lodlab's importer stands the first (src/import/nodes.rs,
+// place_in_scene): its rest pose's bounds centred over the origin, their bottom on the ground.
+// The files keep their source's space (an engine puts its own asset's levels where the asset
+// was), and a file's levels share one placement.
 //
 // The camera is lodlab's (`shot --camera`): yaw about +y (0 looks along -z), pitch above the
 // horizon, distance from the point looked at, a vertical field of view of 50°. The lights are
@@ -29,6 +34,7 @@ const { values: o, positionals: files } = parseArgs({
     camera: { type: "string", default: "0,10,10,0,1,0" },
     time: { type: "string", default: "1" },
     "no-normal-maps": { type: "boolean", default: false },
+    place: { type: "boolean", default: false },
   },
 });
 fs.mkdirSync(o.out, { recursive: true });
@@ -73,6 +79,14 @@ window.draw = async (url, o) => {
   scene.add(new THREE.HemisphereLight(linear(o.sky), linear(o.ground), Math.PI));
   const gltf = await new GLTFLoader().loadAsync(url);
   scene.add(gltf.scene);
+  if (o.place) {
+    gltf.scene.updateMatrixWorld(true);
+    if (!window.anchor) {
+      const box = new THREE.Box3().setFromObject(gltf.scene, true);
+      window.anchor = [(box.min.x + box.max.x) / 2, box.min.y, (box.min.z + box.max.z) / 2];
+    }
+    gltf.scene.position.set(-window.anchor[0], -window.anchor[1], -window.anchor[2]);
+  }
   gltf.scene.traverse((n) => {
     if (!n.isMesh) return;
     if (o.noNormalMaps) n.material.normalMap = null;
@@ -146,7 +160,7 @@ try {
     const r = await tab.evaluate(
       (url, opts) => window.draw(url, opts),
       url,
-      { width, height, camera, time: Number(o.time), sun, sky, ground, noNormalMaps: o["no-normal-maps"] },
+      { width, height, camera, time: Number(o.time), sun, sky, ground, noNormalMaps: o["no-normal-maps"], place: o.place },
     );
     const png = path.join(o.out, path.basename(file, path.extname(file)) + ".png");
     fs.writeFileSync(png, Buffer.from(r.png.split(",")[1], "base64"));
