@@ -32,6 +32,49 @@ pub struct ExportedLevel {
     pub chain_level: Option<usize>,
 }
 
+impl ExportedLevel {
+    /// Level `level` of `mesh`, of error `error` and hint `coverage`, written to `file` in
+    /// `bytes` bytes (a character's: no kind, no place in a tree's chain).
+    pub(crate) fn written(
+        level: usize,
+        mesh: &crate::model::SkinnedMesh,
+        (error, coverage): (f32, f32),
+        file: PathBuf,
+        bytes: usize,
+    ) -> ExportedLevel {
+        let most = (0..mesh.vertex_count())
+            .map(|v| mesh.influences_of(v).len())
+            .max()
+            .unwrap_or(0);
+        ExportedLevel {
+            level,
+            triangles: mesh.triangle_count(),
+            vertices: mesh.vertex_count(),
+            max_influences: most,
+            weight_sets: most.max(1).div_ceil(4),
+            error,
+            coverage,
+            file,
+            bytes,
+            kind: None,
+            chain_level: None,
+        }
+    }
+}
+
+/// Where each level hands over to the next, as its height in pixels on screen: where the next
+/// level's error (of `errors`, finest first, in scene units) projects to `tolerance` pixels on
+/// a model `height` high; 0 for the last.
+pub(crate) fn switch_px(errors: &[f32], tolerance: f32, height: f32) -> Vec<f32> {
+    (0..errors.len())
+        .map(|k| {
+            errors
+                .get(k + 1)
+                .map_or(0.0, |e| tolerance * height / e.max(1e-9))
+        })
+        .collect()
+}
+
 /// What an export wrote.
 #[derive(Clone, Debug, Serialize)]
 pub struct Exported {

@@ -17,7 +17,7 @@ use std::process::ExitCode;
 pub mod exported;
 pub mod tree;
 
-use exported::{Exported, ExportedLevel, coverage_hints, file_stem};
+use exported::{Exported, ExportedLevel, coverage_hints, file_stem, switch_px};
 
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::character::lod::{SkinnedLods, model_height};
@@ -96,14 +96,8 @@ pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Resu
     let meshes = level_meshes(&model, &lods);
     let kept = &lods.levels[..meshes.len()];
     let stem = file_stem(&model.name);
-    // The next level takes over where its error projects to the tolerance.
-    let switch_px: Vec<f32> = (0..kept.len())
-        .map(|k| {
-            kept.get(k + 1)
-                .map_or(0.0, |n| opts.tolerance * height / n.error.max(1e-9))
-        })
-        .collect();
-    let hints = coverage_hints(&switch_px, aspect);
+    let errors: Vec<f32> = kept.iter().map(|l| l.error).collect();
+    let hints = coverage_hints(&switch_px(&errors, opts.tolerance, height), aspect);
     let mut levels = Vec::with_capacity(meshes.len());
     for (k, (level, mesh)) in kept.iter().zip(&meshes).enumerate() {
         let next = hints[k];
@@ -112,23 +106,13 @@ pub fn run(opts: &ExportArgs, inputs: &crate::runtime::spec::BakeInputs) -> Resu
             .out
             .join(format!("{stem}-{}-lod{k}.glb", opts.method.name()));
         crate::atomic::write(&file, &bytes)?;
-        let most = (0..mesh.vertex_count())
-            .map(|v| mesh.influences_of(v).len())
-            .max()
-            .unwrap_or(0);
-        levels.push(ExportedLevel {
-            level: k,
-            triangles: mesh.triangle_count(),
-            vertices: mesh.vertex_count(),
-            max_influences: most,
-            weight_sets: most.max(1).div_ceil(4),
-            error: level.error,
-            coverage: next,
+        levels.push(ExportedLevel::written(
+            k,
+            mesh,
+            (level.error, next),
             file,
-            bytes: bytes.len(),
-            kind: None,
-            chain_level: None,
-        });
+            bytes.len(),
+        ));
     }
     let refs: Vec<&SkinnedMesh> = meshes.iter().collect();
     let generator = format!("lodlab export ({} levels)", opts.method.name());

@@ -17,7 +17,7 @@
 //! [`billboard_frame`]: crate::bake::foliage::billboard::atlas::billboard_frame
 //! [`skeleton_stand_in`]: crate::bake::foliage::billboard::chain::skeleton_stand_in
 
-use super::exported::{ExportedLevel, coverage_hints, file_stem};
+use super::exported::{ExportedLevel, coverage_hints, file_stem, switch_px};
 use crate::bake::cache::{LodCache, Origin};
 use crate::bake::foliage::billboard::atlas::billboard_frame;
 use crate::bake::foliage::billboard::chain::{
@@ -186,37 +186,24 @@ pub fn write_tree(
     let bounds = crate::model::Bounds::of(tree.mesh.positions.iter().copied())
         .ok_or_else(|| anyhow::anyhow!("{}: an empty mesh", tree.name))?;
     let aspect = bounds.size().x.max(bounds.size().z) / height.max(1e-6);
-    let switch_px: Vec<f32> = (0..levels.len())
-        .map(|k| {
-            levels
-                .get(k + 1)
-                .map_or(0.0, |n| tolerance * height / n.epsilon.max(1e-9))
-        })
-        .collect();
-    let hints = coverage_hints(&switch_px, aspect);
+    let epsilons: Vec<f32> = levels.iter().map(|l| l.epsilon).collect();
+    let hints = coverage_hints(&switch_px(&epsilons, tolerance, height), aspect);
     let generator = "lodlab export (billboard clouds)";
     let mut written = Vec::with_capacity(levels.len());
     for (k, level) in levels.iter().enumerate() {
         let bytes = to_glb_with(&level.model, &level.extra, generator);
         let file = out.join(format!("{stem}-clouds-lod{k}.glb"));
         crate::atomic::write(&file, &bytes)?;
-        let mesh = &level.model.mesh;
-        let most = (0..mesh.vertex_count())
-            .map(|v| mesh.influences_of(v).len())
-            .max()
-            .unwrap_or(0);
         written.push(ExportedLevel {
-            level: k,
-            triangles: mesh.triangle_count(),
-            vertices: mesh.vertex_count(),
-            max_influences: most,
-            weight_sets: most.max(1).div_ceil(4),
-            error: level.epsilon,
-            coverage: hints[k],
-            file,
-            bytes: bytes.len(),
             kind: Some(level.kind.clone()),
             chain_level: Some(level.chain_level),
+            ..ExportedLevel::written(
+                k,
+                &level.model.mesh,
+                (level.epsilon, hints[k]),
+                file,
+                bytes.len(),
+            )
         });
     }
     let all = combined(levels);
